@@ -1,0 +1,43 @@
+"""workbench: a kinematics workbench for the PUMA 560 and any URDF arm, on Pinocchio."""
+
+import logging
+
+from workbench.dh import DHJoint, DHTable
+from workbench.errors import (
+    DHTableError,
+    DimensionError,
+    FrameNotFoundError,
+    InfeasibleError,
+    InputError,
+    JointLimitError,
+    JointNotFoundError,
+    NonFiniteError,
+    RobotNotFoundError,
+    URDFLoadError,
+    WorkbenchError,
+)
+from workbench.loading import get_robot_names, load_robot
+from workbench.robot import Robot
+from workbench.urdf_generator import generate_urdf
+
+logging.getLogger(__name__).addHandler(logging.NullHandler())
+
+__all__ = [
+    "DHJoint",
+    "DHTable",
+    "DHTableError",
+    "DimensionError",
+    "FrameNotFoundError",
+    "InfeasibleError",
+    "InputError",
+    "JointLimitError",
+    "JointNotFoundError",
+    "NonFiniteError",
+    "Robot",
+    "RobotNotFoundError",
+    "URDFLoadError",
+    "WorkbenchError",
+    "generate_urdf",
+    "get_robot_names",
+    "load_robot",
+]
