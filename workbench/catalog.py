@@ -8,7 +8,8 @@ project's Python loaders. The workbench does not use those loaders: the
 so we read the current data files directly and keep the name table here.
 
 Robots that the loaders mount on a free flyer (legged, humanoid, flying) are
-loaded with a fixed base: this is a kinematics workbench for arms.
+loaded with a fixed base: this is a kinematics workbench for arms. The two
+joint-less drones (``hector``, ``iris``) are therefore left out.
 """
 
 from __future__ import annotations
@@ -75,13 +76,11 @@ CATALOG: dict[str, CatalogEntry] = {
     "g1_with_hands": CatalogEntry("g1_description/urdf/g1_29dof_with_hand_rev_1_0.urdf"),
     "go1": CatalogEntry("go1_description/urdf/go1.urdf"),
     "go2": CatalogEntry("go2_description/urdf/go2.urdf"),
-    "hector": CatalogEntry("hector_description/robots/quadrotor_base.urdf"),
     "hextilt": CatalogEntry("hextilt_description/urdf/hextilt_flying_arm_5.urdf"),
     "human": CatalogEntry("human_description/robots/human.urdf"),
     "hyq": CatalogEntry("hyq_description/robots/hyq_no_sensors.urdf"),
     "icub": CatalogEntry("icub_description/robots/icub.urdf"),
     "icub_reduced": CatalogEntry("icub_description/robots/icub_reduced.urdf"),
-    "iris": CatalogEntry("iris_description/robots/iris_simple.urdf"),
     "kinova": CatalogEntry("kinova_description/robots/kinova.urdf"),
     "laikago": CatalogEntry("laikago_description/urdf/laikago.urdf"),
     "panda": CatalogEntry("panda_description/urdf/panda.urdf", "panda_hand_tcp", _PANDA_FINGERS),

@@ -11,6 +11,7 @@ from pathlib import Path
 import pinocchio as pin
 
 from workbench.catalog import CATALOG, get_catalog_urdf
+from workbench.dh import DHTable
 from workbench.errors import JointNotFoundError, RobotNotFoundError, URDFLoadError
 from workbench.robot import Robot
 
@@ -42,10 +43,13 @@ def load_robot(name: str | Path, *, tool_frame: str | None = None) -> Robot:
     """
     key = str(name)
     entry = CATALOG.get(key)
+    dh_table = None
     if entry is not None:
         path = get_catalog_urdf(key)
         locked = entry.locked_joints
         tool_frame = tool_frame or entry.tool_frame
+        if entry.own:
+            dh_table = DHTable.from_json(path.with_name(f"{key}.dh.json"))
     else:
         path = Path(key).expanduser()
         if not (path.suffix.lower() == ".urdf" or path.exists()):
@@ -59,7 +63,7 @@ def load_robot(name: str | Path, *, tool_frame: str | None = None) -> Robot:
     if tool_frame is None:
         tool_frame = model.frames[len(model.frames) - 1].name
     package_dirs = [str(p) for p in (path.resolve().parent, *path.resolve().parents)]
-    return Robot(key, model, path, tool_frame, package_dirs=package_dirs)
+    return Robot(key, model, path, tool_frame, package_dirs=package_dirs, dh_table=dh_table)
 
 
 def _build_model(path: Path) -> pin.Model:
@@ -69,33 +73,36 @@ def _build_model(path: Path) -> pin.Model:
         raise URDFLoadError(f"cannot read URDF {path}: {err}") from err
     if "<robot" not in text:
         raise URDFLoadError(f"{path}: not a URDF (no <robot> element)")
-    with _captured_stderr() as captured:
-        try:
+    try:
+        with _stderr_captured() as captured:
             model = pin.buildModelFromXML(text)
-        except (ValueError, RuntimeError) as err:
-            error = err
-        else:
-            error = None
-    if error is not None:
-        details = [line.strip() for line in captured() if line.strip().startswith("Error:")]
-        reason = details[0].removeprefix("Error:").strip() if details else str(error)
-        raise URDFLoadError(f"{path}: malformed URDF: {reason}") from error
+    except (ValueError, RuntimeError) as err:
+        details = [line.strip() for line in captured if line.strip().startswith("Error:")]
+        reason = details[0].removeprefix("Error:").strip() if details else str(err)
+        raise URDFLoadError(f"{path}: malformed URDF: {reason}") from err
     if model.nq == 0:
         raise URDFLoadError(f"{path}: the URDF has no moving joint")
     return model
 
 
 @contextlib.contextmanager
-def _captured_stderr() -> Iterator[callable]:
-    """Capture what C++ code writes to file descriptor 2 (urdfdom's messages)."""
+def _stderr_captured() -> Iterator[list[str]]:
+    """Capture what C++ code writes to file descriptor 2 (urdfdom's messages).
+
+    Yields a list that holds the captured lines once the block has ended,
+    whether it ended normally or with an exception.
+    """
+    lines: list[str] = []
     with tempfile.TemporaryFile(mode="w+b") as sink:
         saved = os.dup(2)
         os.dup2(sink.fileno(), 2)
         try:
-            yield lambda: sink.seek(0) or sink.read().decode(errors="replace").splitlines()
+            yield lines
         finally:
             os.dup2(saved, 2)
             os.close(saved)
+            sink.seek(0)
+            lines.extend(sink.read().decode(errors="replace").splitlines())
 
 
 def _lock_joints(model: pin.Model, names: tuple[str, ...]) -> pin.Model:

@@ -9,6 +9,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from workbench.dh import DHTable
 from workbench.errors import DimensionError, FrameNotFoundError, InputError, URDFLoadError
 from workbench.validation import as_vector
 
@@ -51,6 +52,8 @@ class Robot:
         urdf_path: URDF file the model was built from.
         tool_frame: Name of the tool frame.
         tool_frame_id: Pinocchio frame index of the tool frame.
+        dh_table: The DH table the URDF was generated from (the PUMA models),
+            else None.
         lower, upper: Position limits, shape (nq,) [rad].
         velocity_limit: Speed limits, shape (nv,) [rad/s].
         acceleration_limit: Acceleration limits, shape (nv,) [rad/s²], inf
@@ -66,8 +69,10 @@ class Robot:
         *,
         package_dirs: list[str],
         acceleration_limit: npt.ArrayLike | None = None,
+        dh_table: DHTable | None = None,
     ):
         self.name = name
+        self.dh_table = dh_table
         self.model = model
         self.data = model.createData()
         self.urdf_path = urdf_path
@@ -111,6 +116,7 @@ class Robot:
             acceleration_limit=(
                 self.acceleration_limit if acceleration_limit is None else acceleration_limit
             ),
+            dh_table=self.dh_table,
         )
 
     def __repr__(self) -> str:

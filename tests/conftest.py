@@ -1,0 +1,39 @@
+"""Shared fixtures: session-scoped robots and a seeded random generator."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from workbench import Robot, load_robot
+
+PUMA_NAMES = ("puma560", "puma560-kang")
+
+
+@pytest.fixture(scope="session")
+def puma() -> Robot:
+    """Angeles' PUMA 560 (Table I)."""
+    return load_robot("puma560")
+
+
+@pytest.fixture(scope="session")
+def puma_kang() -> Robot:
+    """Kang's PUMA 560 (Table 1)."""
+    return load_robot("puma560-kang")
+
+
+@pytest.fixture(scope="session", params=PUMA_NAMES)
+def any_puma(request: pytest.FixtureRequest) -> Robot:
+    """Each PUMA model in turn."""
+    return load_robot(request.param)
+
+
+@pytest.fixture()
+def rng() -> np.random.Generator:
+    """A seeded generator (numpy seeding does not control pin.randomConfiguration)."""
+    return np.random.default_rng(0)
+
+
+def random_configurations(robot: Robot, rng: np.random.Generator, count: int) -> np.ndarray:
+    """``count`` configurations uniform within the joint limits, shape (count, nq)."""
+    return rng.uniform(robot.lower, robot.upper, size=(count, robot.nq))

@@ -1,0 +1,45 @@
+"""``workbench urdf from-dh``: a URDF from a standard DH table."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from workbench.cli._common import add_json_flag, print_json
+from workbench.dh import DHTable
+from workbench.errors import InputError
+from workbench.urdf_generator import generate_urdf
+
+
+def register(commands: argparse._SubParsersAction) -> None:
+    """Add the ``urdf`` command group."""
+    parser = commands.add_parser("urdf", help="URDF tools")
+    actions = parser.add_subparsers(dest="urdf_command", metavar="ACTION", required=True)
+    from_dh = actions.add_parser(
+        "from-dh",
+        help="generate a URDF from a DH table (JSON)",
+        description="Generate a URDF from a standard DH table in JSON (SI units); "
+        "see INTERFACE.md for the format.",
+    )
+    from_dh.add_argument("table", type=Path, metavar="TABLE", help="DH table, JSON")
+    from_dh.add_argument("--out", type=Path, required=True, help="URDF file to write")
+    add_json_flag(from_dh)
+    from_dh.set_defaults(run=run_from_dh)
+
+
+def run_from_dh(args: argparse.Namespace) -> int:
+    """Write the URDF; returns the exit code."""
+    table = DHTable.from_json(args.table)
+    text = generate_urdf(table)
+    try:
+        args.out.write_text(text, encoding="utf-8")
+    except OSError as err:
+        raise InputError(f"cannot write {args.out}: {err.strerror}") from err
+    if args.json:
+        print_json(
+            {"robot": table.name, "joints": table.nq, "tool_frame": table.tool_frame,
+             "out": str(args.out)}
+        )
+    else:
+        print(f"wrote {args.out} ({table.name}: {table.nq} joints, tool frame {table.tool_frame})")
+    return 0
