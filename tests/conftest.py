@@ -34,6 +34,8 @@ def rng() -> np.random.Generator:
     return np.random.default_rng(0)
 
 
-def random_configurations(robot: Robot, rng: np.random.Generator, count: int) -> np.ndarray:
+def random_configurations(
+    robot: Robot, rng: np.random.Generator, count: int
+) -> np.ndarray:
     """``count`` configurations uniform within the joint limits, shape (count, nq)."""
     return rng.uniform(robot.lower, robot.upper, size=(count, robot.nq))

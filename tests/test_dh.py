@@ -32,7 +32,10 @@ def test_fk_equals_dh_product(any_puma, rng) -> None:
     table = any_puma.dh_table
     for q in random_configurations(any_puma, rng, SAMPLES):
         np.testing.assert_allclose(
-            any_puma.fk(q).homogeneous, table.forward_kinematics(q), rtol=0, atol=ATOL_EXACT
+            any_puma.fk(q).homogeneous,
+            table.forward_kinematics(q),
+            rtol=0,
+            atol=ATOL_EXACT,
         )
 
 
@@ -41,7 +44,10 @@ def test_every_dh_frame_is_a_pinocchio_frame(any_puma, rng) -> None:
     frames = any_puma.dh_table.frame_transforms(q)
     for i, expected in enumerate(frames):
         np.testing.assert_allclose(
-            any_puma.fk(q, frame=f"frame{i}").homogeneous, expected, rtol=0, atol=ATOL_EXACT
+            any_puma.fk(q, frame=f"frame{i}").homogeneous,
+            expected,
+            rtol=0,
+            atol=ATOL_EXACT,
         )
 
 
@@ -61,7 +67,9 @@ def test_reference_frames_relate_by_adjoint(any_puma, rng) -> None:
     np.testing.assert_allclose(
         any_puma.jacobian(q), aligned.toActionMatrix() @ local, rtol=0, atol=ATOL_EXACT
     )
-    np.testing.assert_allclose(world, pose.toActionMatrix() @ local, rtol=0, atol=ATOL_EXACT)
+    np.testing.assert_allclose(
+        world, pose.toActionMatrix() @ local, rtol=0, atol=ATOL_EXACT
+    )
 
 
 def test_jacobian_equals_finite_differences(any_puma, rng) -> None:
@@ -84,7 +92,9 @@ def test_jacobian_time_derivative_equals_finite_differences(any_puma, rng) -> No
     h = 1e-6
     for q in random_configurations(any_puma, rng, 20):
         v = rng.uniform(-1.0, 1.0, any_puma.nv)
-        numeric = (any_puma.jacobian(q + h * v) - any_puma.jacobian(q - h * v)) / (2 * h)
+        numeric = (any_puma.jacobian(q + h * v) - any_puma.jacobian(q - h * v)) / (
+            2 * h
+        )
         np.testing.assert_allclose(
             any_puma.jacobian_time_derivative(q, v), numeric, rtol=0, atol=ATOL_FD
         )
@@ -92,11 +102,19 @@ def test_jacobian_time_derivative_equals_finite_differences(any_puma, rng) -> No
 
 def test_puma_limits_are_the_papers(puma, puma_kang) -> None:
     deg = np.rad2deg
-    np.testing.assert_allclose(deg(puma.lower), [-160, -225, -45, -170, -135, -170], atol=1e-12)
-    np.testing.assert_allclose(deg(puma.upper), [160, 45, 225, 170, 135, 170], atol=1e-12)
-    # Kang's joint zeros: theta2 shifted by 180 deg, theta5 sign flipped (urdf/README.md).
-    np.testing.assert_allclose(deg(puma_kang.lower), [-160, -45, -45, -170, -135, -170], atol=1e-12)
-    np.testing.assert_allclose(deg(puma_kang.upper), [160, 225, 225, 170, 135, 170], atol=1e-12)
+    np.testing.assert_allclose(
+        deg(puma.lower), [-160, -225, -45, -170, -135, -170], atol=1e-12
+    )
+    np.testing.assert_allclose(
+        deg(puma.upper), [160, 45, 225, 170, 135, 170], atol=1e-12
+    )
+    # Kang's zeros: theta2 + 180 deg, theta5 sign flipped (urdf/README.md).
+    np.testing.assert_allclose(
+        deg(puma_kang.lower), [-160, -45, -45, -170, -135, -170], atol=1e-12
+    )
+    np.testing.assert_allclose(
+        deg(puma_kang.upper), [160, 225, 225, 170, 135, 170], atol=1e-12
+    )
     assert np.all(np.isinf(puma.acceleration_limit))
 
 
@@ -123,18 +141,27 @@ def test_kang_model_is_angeles_model_in_other_joint_zeros(puma, puma_kang, rng) 
 
 def test_generator_handles_any_standard_table(tmp_path: Path, rng) -> None:
     rows = [
-        {"alpha": float(rng.uniform(-3, 3)), "a": float(rng.uniform(-1, 1)),
-         "d": float(rng.uniform(-1, 1)), "theta_offset": float(rng.uniform(-3, 3))}
+        {
+            "alpha": float(rng.uniform(-3, 3)),
+            "a": float(rng.uniform(-1, 1)),
+            "d": float(rng.uniform(-1, 1)),
+            "theta_offset": float(rng.uniform(-3, 3)),
+        }
         for _ in range(5)
     ]
-    table = DHTable.from_dict({"name": "random arm", "joints": rows, "tool_frame": "flange"})
+    table = DHTable.from_dict(
+        {"name": "random arm", "joints": rows, "tool_frame": "flange"}
+    )
     path = tmp_path / "arm.urdf"
     path.write_text(generate_urdf(table), encoding="utf-8")
     robot = load_robot(path)
     assert robot.tool_frame == "flange"
     for q in rng.uniform(-math.pi, math.pi, size=(50, 5)):
         np.testing.assert_allclose(
-            robot.fk(q).homogeneous, table.forward_kinematics(q), rtol=0, atol=ATOL_EXACT
+            robot.fk(q).homogeneous,
+            table.forward_kinematics(q),
+            rtol=0,
+            atol=ATOL_EXACT,
         )
     assert robot.velocity_limit.tolist() == [1.0] * 5  # stated default
 
@@ -155,7 +182,9 @@ def test_generator_handles_any_standard_table(tmp_path: Path, rng) -> None:
     ],
 )
 def test_malformed_dh_table_is_rejected(mutate, fragment) -> None:
-    raw = json.loads((get_own_urdf_dir() / "puma560.dh.json").read_text(encoding="utf-8"))
+    raw = json.loads(
+        (get_own_urdf_dir() / "puma560.dh.json").read_text(encoding="utf-8")
+    )
     mutate(raw)
     with pytest.raises(DHTableError, match=None) as info:
         DHTable.from_dict(raw)

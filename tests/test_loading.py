@@ -57,7 +57,9 @@ def test_urdf_path_with_package_uris_relative_to_its_parents(tmp_path: Path) -> 
     source = get_example_robot_data_dir()
     root = tmp_path / "share" / "example-robot-data" / "robots"
     shutil.copytree(source / "ur_description", root / "ur_description")
-    robot = load_robot(root / "ur_description" / "urdf" / "ur5_robot.urdf", tool_frame="tool0")
+    robot = load_robot(
+        root / "ur_description" / "urdf" / "ur5_robot.urdf", tool_frame="tool0"
+    )
     paths = [Path(g.meshPath) for g in robot.visual_model.geometryObjects if g.meshPath]
     assert paths and all(str(p).startswith(str(tmp_path)) for p in paths)
 
@@ -129,12 +131,12 @@ def test_missing_mesh_is_a_clear_error(tmp_path: Path) -> None:
         encoding="utf-8",
     )
     robot = load_robot(path)
-    with pytest.raises(URDFLoadError, match="b.stl"):
+    with pytest.raises(URDFLoadError, match=r"b\.stl"):
         _ = robot.visual_model
 
 
 def test_unknown_tool_frame_lists_frames() -> None:
-    with pytest.raises(FrameNotFoundError, match="valid frames: .*tool0"):
+    with pytest.raises(FrameNotFoundError, match=r"valid frames: .*tool0"):
         load_robot("ur5", tool_frame="flange")
 
 
@@ -150,7 +152,9 @@ def test_wrong_joint_count_and_nan(puma) -> None:
 def test_unknown_locked_joint_is_reported(monkeypatch) -> None:
     from workbench import catalog
 
-    entry = catalog.CatalogEntry("ur_description/urdf/ur5_robot.urdf", "tool0", ("gripper",))
+    entry = catalog.CatalogEntry(
+        "ur_description/urdf/ur5_robot.urdf", "tool0", ("gripper",)
+    )
     monkeypatch.setitem(catalog.CATALOG, "ur5_broken", entry)
     with pytest.raises(JointNotFoundError, match="joint 'gripper' not in the model"):
         load_robot("ur5_broken")

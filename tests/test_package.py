@@ -26,7 +26,9 @@ def test_core_import_does_not_pull_viewers_or_pyplot() -> None:
         "import sys, workbench, workbench.ik;"
         "print(any(m in sys.modules for m in ('matplotlib.pyplot', 'meshcat')))"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    )
     assert out.stdout.strip() == "False"
 
 

@@ -51,12 +51,20 @@ CATALOG: dict[str, CatalogEntry] = {
     "alex_nub_hands": CatalogEntry("alex_description/urdf/alex_nub_hands.urdf"),
     "alex_psyonic_hands": CatalogEntry("alex_description/urdf/alex_psyonic_hands.urdf"),
     "alex_sake_hands": CatalogEntry("alex_description/urdf/alex_sake_hands.urdf"),
-    "alexander": CatalogEntry("alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf"),
-    "allegro_left_hand": CatalogEntry("allegro_hand_description/urdf/allegro_left_hand.urdf"),
-    "allegro_right_hand": CatalogEntry("allegro_hand_description/urdf/allegro_right_hand.urdf"),
+    "alexander": CatalogEntry(
+        "alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf"
+    ),
+    "allegro_left_hand": CatalogEntry(
+        "allegro_hand_description/urdf/allegro_left_hand.urdf"
+    ),
+    "allegro_right_hand": CatalogEntry(
+        "allegro_hand_description/urdf/allegro_right_hand.urdf"
+    ),
     "anymal": CatalogEntry("anymal_b_simple_description/robots/anymal.urdf"),
     "anymal_c": CatalogEntry("anymal_c_simple_description/urdf/anymal.urdf"),
-    "anymal_kinova": CatalogEntry("anymal_b_simple_description/robots/anymal-kinova.urdf"),
+    "anymal_kinova": CatalogEntry(
+        "anymal_b_simple_description/robots/anymal-kinova.urdf"
+    ),
     "asr_twodof": CatalogEntry("asr_twodof_description/urdf/TwoDofs.urdf"),
     "b1": CatalogEntry("b1_description/urdf/b1.urdf"),
     "b1_z1": CatalogEntry("b1_description/urdf/b1-z1.urdf"),
@@ -64,7 +72,9 @@ CATALOG: dict[str, CatalogEntry] = {
     "bolt": CatalogEntry("bolt_description/robots/bolt.urdf"),
     "borinot": CatalogEntry("borinot_description/urdf/borinot_flying_arm_2.urdf"),
     "centauro": CatalogEntry("centauro_description/urdf/centauro.urdf"),
-    "double_pendulum": CatalogEntry("double_pendulum_description/urdf/double_pendulum.urdf"),
+    "double_pendulum": CatalogEntry(
+        "double_pendulum_description/urdf/double_pendulum.urdf"
+    ),
     "double_pendulum_continuous": CatalogEntry(
         "double_pendulum_description/urdf/double_pendulum_continuous.urdf"
     ),
@@ -73,7 +83,9 @@ CATALOG: dict[str, CatalogEntry] = {
     ),
     "finger_edu": CatalogEntry("finger_edu_description/robots/finger_edu.urdf"),
     "g1": CatalogEntry("g1_description/urdf/g1_29dof_rev_1_0.urdf"),
-    "g1_with_hands": CatalogEntry("g1_description/urdf/g1_29dof_with_hand_rev_1_0.urdf"),
+    "g1_with_hands": CatalogEntry(
+        "g1_description/urdf/g1_29dof_with_hand_rev_1_0.urdf"
+    ),
     "go1": CatalogEntry("go1_description/urdf/go1.urdf"),
     "go2": CatalogEntry("go2_description/urdf/go2.urdf"),
     "hextilt": CatalogEntry("hextilt_description/urdf/hextilt_flying_arm_5.urdf"),
@@ -83,14 +95,18 @@ CATALOG: dict[str, CatalogEntry] = {
     "icub_reduced": CatalogEntry("icub_description/robots/icub_reduced.urdf"),
     "kinova": CatalogEntry("kinova_description/robots/kinova.urdf"),
     "laikago": CatalogEntry("laikago_description/urdf/laikago.urdf"),
-    "panda": CatalogEntry("panda_description/urdf/panda.urdf", "panda_hand_tcp", _PANDA_FINGERS),
+    "panda": CatalogEntry(
+        "panda_description/urdf/panda.urdf", "panda_hand_tcp", _PANDA_FINGERS
+    ),
     "panda_collision": CatalogEntry(
         "panda_description/urdf/panda_collision.urdf", "panda_hand_tcp", _PANDA_FINGERS
     ),
     "pr2": CatalogEntry("pr2_description/urdf/pr2.urdf"),
     "quadruped": CatalogEntry("quadruped_description/urdf/quadruped.urdf"),
     "romeo": CatalogEntry("romeo_description/urdf/romeo.urdf"),
-    "simple_humanoid": CatalogEntry("simple_humanoid_description/urdf/simple_humanoid.urdf"),
+    "simple_humanoid": CatalogEntry(
+        "simple_humanoid_description/urdf/simple_humanoid.urdf"
+    ),
     "simple_humanoid_classical": CatalogEntry(
         "simple_humanoid_description/urdf/simple_humanoid_classical.urdf"
     ),
@@ -109,14 +125,22 @@ CATALOG: dict[str, CatalogEntry] = {
     "tiago_pro": CatalogEntry("tiago_pro_description/robots/tiago_pro.urdf"),
     "ur3": CatalogEntry("ur_description/urdf/ur3_robot.urdf", "tool0"),
     "ur3_gripper": CatalogEntry("ur_description/urdf/ur3_gripper.urdf", "tool0"),
-    "ur3_limited": CatalogEntry("ur_description/urdf/ur3_joint_limited_robot.urdf", "tool0"),
+    "ur3_limited": CatalogEntry(
+        "ur_description/urdf/ur3_joint_limited_robot.urdf", "tool0"
+    ),
     "ur5": CatalogEntry("ur_description/urdf/ur5_robot.urdf", "tool0"),
     "ur5_gripper": CatalogEntry("ur_description/urdf/ur5_gripper.urdf", "tool0"),
-    "ur5_limited": CatalogEntry("ur_description/urdf/ur5_joint_limited_robot.urdf", "tool0"),
+    "ur5_limited": CatalogEntry(
+        "ur_description/urdf/ur5_joint_limited_robot.urdf", "tool0"
+    ),
     "ur10": CatalogEntry("ur_description/urdf/ur10_robot.urdf", "tool0"),
-    "ur10_limited": CatalogEntry("ur_description/urdf/ur10_joint_limited_robot.urdf", "tool0"),
+    "ur10_limited": CatalogEntry(
+        "ur_description/urdf/ur10_joint_limited_robot.urdf", "tool0"
+    ),
     "xarm7": CatalogEntry("xarm_description/urdf/xarm7.urdf", "link_eef"),
-    "z1": CatalogEntry("z1_description/urdf/z1.urdf", "gripperStator", ("jointGripper",)),
+    "z1": CatalogEntry(
+        "z1_description/urdf/z1.urdf", "gripperStator", ("jointGripper",)
+    ),
 }
 
 
@@ -129,7 +153,9 @@ def get_own_urdf_dir() -> Path:
     for candidate in (_PACKAGE_ROOT.parent / "urdf", _PACKAGE_ROOT / "_urdf"):
         if candidate.is_dir():
             return candidate
-    raise URDFLoadError("the workbench's urdf/ folder is missing from this installation")
+    raise URDFLoadError(
+        "the workbench's urdf/ folder is missing from this installation"
+    )
 
 
 def get_example_robot_data_dir() -> Path:

@@ -21,7 +21,15 @@ from workbench.robot import Robot
 _log = logging.getLogger(__name__)
 
 #: Table II's row labels and the unit of each row as printed.
-TABLE2_ROWS = ("e_x sinφ", "e_y sinφ", "e_z sinφ", "cosφ", "p_x [mm]", "p_y [mm]", "p_z [mm]")
+TABLE2_ROWS = (
+    "e_x sinφ",
+    "e_y sinφ",
+    "e_z sinφ",
+    "cosφ",
+    "p_x [mm]",
+    "p_y [mm]",
+    "p_z [mm]",
+)
 _PRINTED_SCALE = np.array([1.0, 1.0, 1.0, 1.0, 1e3, 1e3, 1e3])
 
 
@@ -73,9 +81,11 @@ def compare_table2(robot: Robot) -> list[Table2Comparison]:
 
 def format_table2(rows: list[Table2Comparison]) -> str:
     """Markdown table: printed vs computed for each pose."""
-    header = "| coordinate | " + " | ".join(
-        f"{r.pose} printed | {r.pose} computed" for r in rows
-    ) + " |"
+    header = (
+        "| coordinate | "
+        + " | ".join(f"{r.pose} printed | {r.pose} computed" for r in rows)
+        + " |"
+    )
     lines = [header, "|---" * (1 + 2 * len(rows)) + "|"]
     for i, label in enumerate(TABLE2_ROWS):
         cells = " | ".join(f"{r.printed[i]:.2f} | {r.computed[i]:.4f}" for r in rows)
@@ -100,8 +110,12 @@ def run_demo(robot: Robot, out_dir: Path) -> dict[str, object]:
         "robot": robot.name,
         "out_dir": str(out_dir),
         "table2": {
-            r.pose: {"q_deg": r.q_deg, "printed": r.printed, "computed": r.computed,
-                     "matches_printed_precision": r.matches}
+            r.pose: {
+                "q_deg": r.q_deg,
+                "printed": r.printed,
+                "computed": r.computed,
+                "matches_printed_precision": r.matches,
+            }
             for r in rows
         },
         "table2_matches": all(r.matches for r in rows),

@@ -70,7 +70,13 @@ class DHTable:
     tool_frame: str = "tool"
     source: str = ""
     convention: ClassVar[str] = "standard"
-    _keys: ClassVar[tuple[str, ...]] = ("name", "convention", "joints", "tool_frame", "source")
+    _keys: ClassVar[tuple[str, ...]] = (
+        "name",
+        "convention",
+        "joints",
+        "tool_frame",
+        "source",
+    )
     _fields: ClassVar[tuple[str, ...]] = tuple(DHJoint.__dataclass_fields__)
     _required: ClassVar[tuple[str, ...]] = ("alpha", "a", "d")
 
@@ -145,7 +151,9 @@ class DHTable:
                 f"{where}: lower limit {joint.lower} > upper limit {joint.upper}"
             )
         if joint.velocity <= 0.0:
-            raise DHTableError(f"{where}: velocity limit must be > 0, got {joint.velocity}")
+            raise DHTableError(
+                f"{where}: velocity limit must be > 0, got {joint.velocity}"
+            )
         return joint
 
     @classmethod
@@ -164,7 +172,8 @@ class DHTable:
             raw = json.loads(text)
         except json.JSONDecodeError as err:
             raise DHTableError(
-                f"{path}: not valid JSON (line {err.lineno}, column {err.colno}: {err.msg})"
+                f"{path}: not valid JSON "
+                f"(line {err.lineno}, column {err.colno}: {err.msg})"
             ) from err
         return cls.from_dict(raw, source=str(path))
 
@@ -184,8 +193,18 @@ class DHTable:
         d = np.array([j.d for j in self.joints])
         ct, st, ca, sa = np.cos(theta), np.sin(theta), np.cos(alpha), np.sin(alpha)
         out = np.zeros((self.nq, 4, 4))
-        out[:, 0, 0], out[:, 0, 1], out[:, 0, 2], out[:, 0, 3] = ct, -st * ca, st * sa, a * ct
-        out[:, 1, 0], out[:, 1, 1], out[:, 1, 2], out[:, 1, 3] = st, ct * ca, -ct * sa, a * st
+        out[:, 0, 0], out[:, 0, 1], out[:, 0, 2], out[:, 0, 3] = (
+            ct,
+            -st * ca,
+            st * sa,
+            a * ct,
+        )
+        out[:, 1, 0], out[:, 1, 1], out[:, 1, 2], out[:, 1, 3] = (
+            st,
+            ct * ca,
+            -ct * sa,
+            a * st,
+        )
         out[:, 2, 1], out[:, 2, 2], out[:, 2, 3] = sa, ca, d
         out[:, 3, 3] = 1.0
         return out
@@ -220,4 +239,3 @@ class DHTable:
         o = frames[:-1, :3, 3]
         p = frames[-1, :3, 3]
         return np.vstack([np.cross(z, p - o).T, z.T])
-

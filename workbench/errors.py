@@ -73,7 +73,9 @@ class FrameNotFoundError(InputError):
     def __init__(self, name: str, valid: Iterable[str]):
         self.name = name
         self.valid = list(valid)
-        super().__init__(f"frame {name!r} not in the model; valid frames: {', '.join(self.valid)}")
+        super().__init__(
+            f"frame {name!r} not in the model; valid frames: {', '.join(self.valid)}"
+        )
 
 
 class JointNotFoundError(InputError):
@@ -82,7 +84,9 @@ class JointNotFoundError(InputError):
     def __init__(self, name: str, valid: Iterable[str]):
         self.name = name
         self.valid = list(valid)
-        super().__init__(f"joint {name!r} not in the model; valid joints: {', '.join(self.valid)}")
+        super().__init__(
+            f"joint {name!r} not in the model; valid joints: {', '.join(self.valid)}"
+        )
 
 
 class URDFLoadError(InputError):

@@ -63,7 +63,9 @@ def load_robot(name: str | Path, *, tool_frame: str | None = None) -> Robot:
     if tool_frame is None:
         tool_frame = model.frames[len(model.frames) - 1].name
     package_dirs = [str(p) for p in (path.resolve().parent, *path.resolve().parents)]
-    return Robot(key, model, path, tool_frame, package_dirs=package_dirs, dh_table=dh_table)
+    return Robot(
+        key, model, path, tool_frame, package_dirs=package_dirs, dh_table=dh_table
+    )
 
 
 def _build_model(path: Path) -> pin.Model:
@@ -77,7 +79,9 @@ def _build_model(path: Path) -> pin.Model:
         with _stderr_captured() as captured:
             model = pin.buildModelFromXML(text)
     except (ValueError, RuntimeError) as err:
-        details = [line.strip() for line in captured if line.strip().startswith("Error:")]
+        details = [
+            line.strip() for line in captured if line.strip().startswith("Error:")
+        ]
         reason = details[0].removeprefix("Error:").strip() if details else str(err)
         raise URDFLoadError(f"{path}: malformed URDF: {reason}") from err
     if model.nq == 0:

@@ -22,7 +22,9 @@ ANGELES_PICK_Q_DEG = np.array([0.0, 45.0, 200.0, -100.0, 30.0, 10.0])
 ANGELES_PLACE_Q_DEG = np.array([150.0, -100.0, -10.0, 100.0, -70.0, 170.0])
 
 #: Angeles Table II, pick pose as angeles7 [e sinφ (3), cosφ, p (3) in m].
-ANGELES_PICK_ANGELES7 = np.array([0.68, -0.49, -0.19, -0.52, -0.09407, 0.12540, -0.47055])
+ANGELES_PICK_ANGELES7 = np.array(
+    [0.68, -0.49, -0.19, -0.52, -0.09407, 0.12540, -0.47055]
+)
 #: Angeles Table II, place pose as angeles7 [e sinφ (3), cosφ, p (3) in m].
 ANGELES_PLACE_ANGELES7 = np.array([0.18, 0.29, 0.33, -0.88, 0.35928, -0.35223, 0.29546])
 
@@ -32,5 +34,5 @@ ANGELES_TABLE2_HALF_ULP = np.array([0.005] * 4 + [0.005e-3] * 3)
 #: Angeles' trajectory duration in Section V [s].
 ANGELES_DURATION = 10.0
 
-#: Kang Sec. 3: elbow singularity at θ3 = 87.308° or −92.692° (d4 = 0.4318, a3 = 0.0203 m).
+#: Kang Sec. 3: elbow-singular θ3 [deg] for d4 = 0.4318 m, a3 = 0.0203 m.
 KANG_ELBOW_THETA3_DEG = (87.308, -92.692)

@@ -10,7 +10,12 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.dh import DHTable
-from workbench.errors import DimensionError, FrameNotFoundError, InputError, URDFLoadError
+from workbench.errors import (
+    DimensionError,
+    FrameNotFoundError,
+    InputError,
+    URDFLoadError,
+)
 from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]
@@ -106,7 +111,9 @@ class Robot:
         """
         model = pin.Model(self.model)
         if velocity_limit is not None:
-            model.velocityLimit = _positive_limits(velocity_limit, self.nv, "velocity_limit")
+            model.velocityLimit = _positive_limits(
+                velocity_limit, self.nv, "velocity_limit"
+            )
         return Robot(
             self.name,
             model,
@@ -114,7 +121,9 @@ class Robot:
             self.tool_frame,
             package_dirs=self._package_dirs,
             acceleration_limit=(
-                self.acceleration_limit if acceleration_limit is None else acceleration_limit
+                self.acceleration_limit
+                if acceleration_limit is None
+                else acceleration_limit
             ),
             dh_table=self.dh_table,
         )
@@ -199,7 +208,9 @@ class Robot:
         pin.forwardKinematics(self.model, self.data, q)
         return pin.updateFramePlacement(self.model, self.data, frame_id).copy()
 
-    def _frame_jacobian(self, q: npt.ArrayLike, frame: str | None, reference: str) -> FloatArray:
+    def _frame_jacobian(
+        self, q: npt.ArrayLike, frame: str | None, reference: str
+    ) -> FloatArray:
         q = self.check_configuration(q)
         frame_id = self.get_frame_id(frame)
         return pin.computeFrameJacobian(
@@ -220,7 +231,7 @@ class Robot:
         return self._frame_jacobian(q, frame, "local_world_aligned")
 
     def jacobian_local(self, q: npt.ArrayLike, frame: str | None = None) -> FloatArray:
-        """Jacobian of a frame, LOCAL: the body twist in the frame's own axes, (6, nv)."""
+        """Jacobian of a frame, LOCAL: body twist in the frame's own axes, (6, nv)."""
         return self._frame_jacobian(q, frame, "local")
 
     def jacobian_world(self, q: npt.ArrayLike, frame: str | None = None) -> FloatArray:

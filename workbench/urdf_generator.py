@@ -23,7 +23,11 @@ from workbench.dh import DHTable
 
 #: Link radius as a fraction of the table's longest |a| or |d|.
 _LINK_RADIUS_RATIO = 0.06
-_MATERIALS = {"base": "0.25 0.27 0.3 1", "link": "0.85 0.86 0.88 1", "joint": "0.9 0.45 0.1 1"}
+_MATERIALS = {
+    "base": "0.25 0.27 0.3 1",
+    "link": "0.85 0.86 0.88 1",
+    "joint": "0.9 0.45 0.1 1",
+}
 
 
 def _num(x: float) -> str:
@@ -35,8 +39,13 @@ def _vec(*xs: float) -> str:
     return " ".join(_num(x) for x in xs)
 
 
-def _cylinder(xyz: tuple[float, float, float], rpy: tuple[float, float, float],
-              radius: float, length: float, material: str) -> str:
+def _cylinder(
+    xyz: tuple[float, float, float],
+    rpy: tuple[float, float, float],
+    radius: float,
+    length: float,
+    material: str,
+) -> str:
     return (
         f'    <visual>\n      <origin xyz="{_vec(*xyz)}" rpy="{_vec(*rpy)}"/>\n'
         f'      <geometry><cylinder radius="{_num(radius)}" length="{_num(length)}"/>'
@@ -46,11 +55,15 @@ def _cylinder(xyz: tuple[float, float, float], rpy: tuple[float, float, float],
 
 def _link_visuals(a: float, d: float, radius: float) -> str:
     """Joint housing on z, then a bar along z (offset d) and along x (length a)."""
-    out = _cylinder((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 1.5 * radius, 4.0 * radius, "joint")
+    out = _cylinder(
+        (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 1.5 * radius, 4.0 * radius, "joint"
+    )
     if d != 0.0:
         out += _cylinder((0.0, 0.0, d / 2), (0.0, 0.0, 0.0), radius, abs(d), "link")
     if a != 0.0:
-        out += _cylinder((a / 2, 0.0, d), (0.0, math.pi / 2, 0.0), radius, abs(a), "link")
+        out += _cylinder(
+            (a / 2, 0.0, d), (0.0, math.pi / 2, 0.0), radius, abs(a), "link"
+        )
     return out
 
 
@@ -66,7 +79,9 @@ def generate_urdf(table: DHTable) -> str:
     Returns:
         URDF XML text.
     """
-    scale = max([abs(j.a) for j in table.joints] + [abs(j.d) for j in table.joints] + [0.1])
+    scale = max(
+        [abs(j.a) for j in table.joints] + [abs(j.d) for j in table.joints] + [0.1]
+    )
     radius = _LINK_RADIUS_RATIO * scale
     parts = [
         '<?xml version="1.0"?>\n',
@@ -81,8 +96,13 @@ def generate_urdf(table: DHTable) -> str:
     pedestal = scale * 1.4
     parts.append(
         '  <link name="frame0">\n'
-        + _cylinder((0.0, 0.0, -pedestal / 2 - 2 * radius), (0.0, 0.0, 0.0),
-                    2.2 * radius, pedestal, "base")
+        + _cylinder(
+            (0.0, 0.0, -pedestal / 2 - 2 * radius),
+            (0.0, 0.0, 0.0),
+            2.2 * radius,
+            pedestal,
+            "base",
+        )
         + "  </link>\n"
     )
     for i, joint in enumerate(table.joints, 1):
@@ -94,16 +114,19 @@ def generate_urdf(table: DHTable) -> str:
             f'    <limit lower="{_num(joint.lower)}" upper="{_num(joint.upper)}" '
             f'velocity="{_num(joint.velocity)}" effort="0"/>\n'
             "  </joint>\n"
-            f'  <link name="link{i}">\n{_link_visuals(joint.a, joint.d, radius)}  </link>\n'
+            f'  <link name="link{i}">\n'
+            f"{_link_visuals(joint.a, joint.d, radius)}  </link>\n"
             f'  <joint name="dh{i}" type="fixed">\n'
             f'    <parent link="link{i}"/>\n    <child link="frame{i}"/>\n'
-            f'    <origin xyz="{_vec(joint.a, 0.0, joint.d)}" rpy="{_vec(joint.alpha, 0.0, 0.0)}"/>\n'
+            f'    <origin xyz="{_vec(joint.a, 0.0, joint.d)}" '
+            f'rpy="{_vec(joint.alpha, 0.0, 0.0)}"/>\n'
             "  </joint>\n"
             f'  <link name="frame{i}"/>\n'
         )
     parts.append(
         f'  <joint name="{table.tool_frame}_joint" type="fixed">\n'
-        f'    <parent link="frame{table.nq}"/>\n    <child link={quoteattr(table.tool_frame)}/>\n'
+        f'    <parent link="frame{table.nq}"/>\n'
+        f"    <child link={quoteattr(table.tool_frame)}/>\n"
         '    <origin xyz="0 0 0" rpy="0 0 0"/>\n'
         "  </joint>\n"
         f"  <link name={quoteattr(table.tool_frame)}>\n"

@@ -10,7 +10,9 @@ from workbench.errors import DimensionError, NonFiniteError
 FloatArray = npt.NDArray[np.float64]
 
 
-def as_finite_array(value: npt.ArrayLike, shape: tuple[int, ...], name: str) -> FloatArray:
+def as_finite_array(
+    value: npt.ArrayLike, shape: tuple[int, ...], name: str
+) -> FloatArray:
     """Return ``value`` as a finite float64 array of the given shape.
 
     Raises:

@@ -25,7 +25,7 @@ _COMMANDS = (fk, urdf, demo)
 class _Parser(argparse.ArgumentParser):
     """ArgumentParser whose errors are one line on stderr and exit code 2."""
 
-    def error(self, message: str) -> None:  # noqa: D102
+    def error(self, message: str) -> None:
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
 
 
@@ -33,7 +33,7 @@ def build_parser() -> argparse.ArgumentParser:
     """The top-level parser with every command registered."""
     parser = _Parser(
         prog="workbench",
-        description="Kinematics workbench for the PUMA 560 and any URDF arm (Pinocchio).",
+        description="Kinematics workbench for the PUMA 560 and any URDF arm.",
     )
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for module in _COMMANDS:

@@ -14,7 +14,9 @@ import numpy.typing as npt
 from workbench.errors import NonFiniteError
 
 
-def add_robot_argument(parser: argparse.ArgumentParser, default: str | None = None) -> None:
+def add_robot_argument(
+    parser: argparse.ArgumentParser, default: str | None = None
+) -> None:
     """``--robot NAME|PATH`` (required unless a default is given)."""
     parser.add_argument(
         "--robot",
@@ -35,11 +37,13 @@ def add_angle_arguments(parser: argparse.ArgumentParser, name: str = "q") -> Non
     unit = parser.add_mutually_exclusive_group(required=True)
     unit.add_argument("--deg", action="store_true", help="joint values in degrees")
     unit.add_argument("--rad", action="store_true", help="joint values in radians")
-    parser.add_argument(name, nargs="+", type=finite_float, metavar="Q", help="joint values")
+    parser.add_argument(
+        name, nargs="+", type=finite_float, metavar="Q", help="joint values"
+    )
 
 
 def finite_float(text: str) -> float:
-    """argparse type: a finite float."""
+    """Argparse type: a finite float."""
     try:
         value = float(text)
     except ValueError:
@@ -49,7 +53,9 @@ def finite_float(text: str) -> float:
     return value
 
 
-def joint_values_rad(args: argparse.Namespace, values: list[float]) -> npt.NDArray[np.float64]:
+def joint_values_rad(
+    args: argparse.Namespace, values: list[float]
+) -> npt.NDArray[np.float64]:
     """Joint values from the command line, converted to radians."""
     q = np.asarray(values, dtype=np.float64)
     if not np.all(np.isfinite(q)):
@@ -73,4 +79,6 @@ def _to_builtin(value: Any) -> Any:
 
 def format_vector(values: npt.ArrayLike, digits: int = 6) -> str:
     """Numbers on one line, fixed precision, sign-aligned."""
-    return "  ".join(f"{x: .{digits}f}" for x in np.asarray(values, dtype=float).ravel())
+    return "  ".join(
+        f"{x: .{digits}f}" for x in np.asarray(values, dtype=float).ravel()
+    )

@@ -15,11 +15,13 @@ def register(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
         "demo",
         help="the papers' examples end to end",
-        description="Reproduce the papers' examples (Angeles et al. Tables II/III, ...) "
+        description="Reproduce the papers' examples (Angeles et al. Tables II, III) "
         "and write the results into an output folder.",
     )
     parser.add_argument(
-        "--out", type=Path, default=Path("workbench-demo"),
+        "--out",
+        type=Path,
+        default=Path("workbench-demo"),
         help="output folder (default: ./workbench-demo)",
     )
     add_json_flag(parser)
@@ -33,8 +35,10 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print_json(summary)
         return 0
-    print("Angeles et al. (1988), Table II reproduced by FK of Table III "
-          "on the puma560 model (Table I):\n")
+    print(
+        "Angeles et al. (1988), Table II reproduced by FK of Table III "
+        "on the puma560 model (Table I):\n"
+    )
     print(summary["table2_markdown"])
     verdict = "match" if summary["table2_matches"] else "DO NOT match"
     print(f"\nAll values rounded to the paper's two decimals {verdict} Table II.")

@@ -54,7 +54,9 @@ def run(args: argparse.Namespace) -> int:
     print(f"robot     {robot.name}   frame {frame}")
     print(f"q [deg]   {format_vector(np.rad2deg(q), 4)}")
     print(f"position  {format_vector(pose.translation * 1e3, 3)}  [mm]")
-    print("rotation  " + "\n          ".join(format_vector(row) for row in pose.rotation))
+    print(
+        "rotation  " + "\n          ".join(format_vector(row) for row in pose.rotation)
+    )
     print(f"quat_wxyz {format_vector(result['quat_wxyz'])}")
     print(f"angeles7  e·sinφ {format_vector(a7[:3])}   cosφ {a7[3]: .6f}")
     return 0

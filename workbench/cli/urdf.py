@@ -14,7 +14,9 @@ from workbench.urdf_generator import generate_urdf
 def register(commands: argparse._SubParsersAction) -> None:
     """Add the ``urdf`` command group."""
     parser = commands.add_parser("urdf", help="URDF tools")
-    actions = parser.add_subparsers(dest="urdf_command", metavar="ACTION", required=True)
+    actions = parser.add_subparsers(
+        dest="urdf_command", metavar="ACTION", required=True
+    )
     from_dh = actions.add_parser(
         "from-dh",
         help="generate a URDF from a DH table (JSON)",
@@ -37,9 +39,16 @@ def run_from_dh(args: argparse.Namespace) -> int:
         raise InputError(f"cannot write {args.out}: {err.strerror}") from err
     if args.json:
         print_json(
-            {"robot": table.name, "joints": table.nq, "tool_frame": table.tool_frame,
-             "out": str(args.out)}
+            {
+                "robot": table.name,
+                "joints": table.nq,
+                "tool_frame": table.tool_frame,
+                "out": str(args.out),
+            }
         )
     else:
-        print(f"wrote {args.out} ({table.name}: {table.nq} joints, tool frame {table.tool_frame})")
+        print(
+            f"wrote {args.out} ({table.name}: {table.nq} joints, "
+            f"tool frame {table.tool_frame})"
+        )
     return 0

@@ -1,0 +1,136 @@
+"""The command line: fk, urdf from-dh, demo; exit codes and one-line errors."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from workbench import paper_data
+from workbench.catalog import get_own_urdf_dir
+from workbench.cli import EXIT_BAD_INPUT, main
+
+# Table II is printed to two decimals: a computed value matches when it rounds to it.
+PRINTED_DECIMALS = 2
+ATOL_PRINTED = 1e-9  # printed values converted mm -> m -> mm are not bit-exact
+
+
+def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    """Run the CLI in-process: (exit code, stdout, stderr)."""
+    try:
+        code = main(list(argv))
+    except SystemExit as exit_:  # argparse's own errors
+        code = int(exit_.code or 0)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.mark.parametrize(
+    ("q_deg", "printed"),
+    [
+        (paper_data.ANGELES_PICK_Q_DEG, paper_data.ANGELES_PICK_ANGELES7),
+        (paper_data.ANGELES_PLACE_Q_DEG, paper_data.ANGELES_PLACE_ANGELES7),
+    ],
+)
+def test_fk_json_reproduces_table2(capsys, q_deg, printed) -> None:
+    code, out, err = run(
+        capsys, "fk", "--robot", "puma560", "--deg", *map(str, q_deg), "--json"
+    )
+    assert (code, err) == (0, "")
+    result = json.loads(out)
+    assert set(result) >= {
+        "robot",
+        "frame",
+        "q",
+        "position",
+        "rotation",
+        "quat_wxyz",
+        "angeles7",
+    }
+    assert result["frame"] == "wrist_center"
+    computed = np.array(result["angeles7"]) * [1, 1, 1, 1, 1e3, 1e3, 1e3]
+    expected = printed * [1, 1, 1, 1, 1e3, 1e3, 1e3]
+    np.testing.assert_allclose(
+        np.round(computed, PRINTED_DECIMALS), expected, rtol=0, atol=ATOL_PRINTED
+    )
+    np.testing.assert_allclose(result["q"], np.deg2rad(q_deg), rtol=0, atol=1e-15)
+
+
+def test_fk_human_output_and_radians(capsys) -> None:
+    code, out, _ = run(capsys, "fk", "--robot", "puma560-kang", "--rad", *["0"] * 6)
+    assert code == 0
+    assert "position" in out and "452.100" in out and "angeles7" in out
+
+
+@pytest.mark.parametrize(
+    ("argv", "fragment"),
+    [
+        (("fk", "--robot", "puma56", "--deg", "0"), "valid names: "),
+        (("fk", "--robot", "puma560", "--deg", "0", "0"), "6 values expected, 2 given"),
+        (
+            ("fk", "--robot", "puma560", "--deg", *["0"] * 5, "nan"),
+            "not a finite number",
+        ),
+        (("fk", "--robot", "puma560", "--deg", *["0"] * 5, "abc"), "not a number"),
+        (("fk", "--robot", "puma560", *["0"] * 6), "one of the arguments --deg --rad"),
+        (("fk", "--robot", "nowhere/arm.urdf", "--rad", "0"), "URDF file not found"),
+        (
+            ("urdf", "from-dh", "missing.json", "--out", "x.urdf"),
+            "cannot read DH table",
+        ),
+    ],
+)
+def test_bad_input_exits_2_with_one_line(capsys, argv, fragment) -> None:
+    code, out, err = run(capsys, *argv)
+    assert code == EXIT_BAD_INPUT
+    assert out == ""
+    assert err.count("\n") == 1 and fragment in err, err
+
+
+def test_malformed_urdf_exits_2(capsys, tmp_path: Path) -> None:
+    bad = tmp_path / "bad.urdf"
+    bad.write_text("<robot name='x'><link", encoding="utf-8")
+    code, _, err = run(capsys, "fk", "--robot", str(bad), "--rad", "0")
+    assert code == EXIT_BAD_INPUT and "malformed URDF" in err and err.count("\n") == 1
+
+
+def test_malformed_dh_table_exits_2(capsys, tmp_path: Path) -> None:
+    table = tmp_path / "t.json"
+    table.write_text('{"name": "x", "joints": [{"alpha": 0}]}', encoding="utf-8")
+    code, _, err = run(
+        capsys, "urdf", "from-dh", str(table), "--out", str(tmp_path / "x")
+    )
+    assert code == EXIT_BAD_INPUT and "missing key(s) a, d" in err
+    assert not (tmp_path / "x").exists()
+
+
+def test_urdf_from_dh_regenerates_the_committed_file(capsys, tmp_path: Path) -> None:
+    out_file = tmp_path / "puma560.urdf"
+    table = get_own_urdf_dir() / "puma560.dh.json"
+    code, out, _ = run(
+        capsys, "urdf", "from-dh", str(table), "--out", str(out_file), "--json"
+    )
+    assert code == 0
+    assert json.loads(out) == {
+        "robot": "puma560",
+        "joints": 6,
+        "tool_frame": "wrist_center",
+        "out": str(out_file),
+    }
+    assert out_file.read_text() == (get_own_urdf_dir() / "puma560.urdf").read_text()
+
+
+def test_demo_reproduces_table2(capsys, tmp_path: Path) -> None:
+    code, out, _ = run(capsys, "demo", "--out", str(tmp_path / "demo"))
+    assert code == 0
+    assert "match Table II" in out and "DO NOT" not in out
+    summary = json.loads((tmp_path / "demo" / "summary.json").read_text())
+    assert summary["table2_matches"] is True
+    assert (tmp_path / "demo" / "table2.md").is_file()
+
+
+def test_demo_json(capsys, tmp_path: Path) -> None:
+    code, out, _ = run(capsys, "demo", "--out", str(tmp_path), "--json")
+    assert code == 0 and json.loads(out)["table2_matches"] is True
