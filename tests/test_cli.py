@@ -126,11 +126,18 @@ def test_demo_reproduces_table2(capsys, tmp_path: Path) -> None:
     code, out, _ = run(capsys, "demo", "--out", str(tmp_path / "demo"))
     assert code == 0
     assert "match Table II" in out and "DO NOT" not in out
+    assert "Pick and place (Sec. V), T = 10 s" in out and "minimum duration" in out
     summary = json.loads((tmp_path / "demo" / "summary.json").read_text())
     assert summary["table2_matches"] is True
     assert (tmp_path / "demo" / "table2.md").is_file()
+    figures = summary["pick_and_place"]["figures"]
+    assert len(figures) == 7
+    for path in figures.values():
+        assert Path(path).read_bytes()[:4] == b"\x89PNG"
+    assert (tmp_path / "demo" / "pick_and_place.csv").is_file()
 
 
 def test_demo_json(capsys, tmp_path: Path) -> None:
-    code, out, _ = run(capsys, "demo", "--out", str(tmp_path), "--json")
+    code, out, _ = run(capsys, "demo", "--out", str(tmp_path), "--json", "--no-plots")
     assert code == 0 and json.loads(out)["table2_matches"] is True
+    assert json.loads(out)["pick_and_place"]["figures"] == {}

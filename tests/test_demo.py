@@ -1,10 +1,15 @@
-"""Angeles et al. Table II from Table III through the Python API."""
+"""Angeles et al. Table II from Table III, and Section V end to end, via the API."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from workbench.demo import compare_table2, format_table2
+from workbench.demo_pick_and_place import (
+    format_pick_and_place,
+    run_pick_and_place_demo,
+)
 
 ATOL_PRINTED = 1e-9
 
@@ -23,3 +28,22 @@ def test_table2_markdown_lists_every_coordinate(puma) -> None:
     text = format_table2(compare_table2(puma))
     for label in ("e_x sinφ", "cosφ", "p_z [mm]", "-470.55", "295.46"):
         assert label in text
+
+
+def test_section5_end_to_end(puma, tmp_path) -> None:
+    result = run_pick_and_place_demo(puma, tmp_path, plots=False)
+    assert result["table3_violations"] == []
+    # IK of the 2-decimal Table II puts joint 2 a hair above 45 deg at t = 0
+    (v,) = result["violations"]
+    assert (v["joint"], v["kind"], v["t"]) == ("joint2", "position", 0.0)
+    assert 0 < np.rad2deg(v["value"] - v["limit"]) < 1e-3
+    assert result["pick"]["branch"] == "right/elbow-down/no-flip"
+    assert np.abs(result["place"]["minus_table3_deg"]).max() < 1.0
+    assert len(result["ik_branches"]["pick"]) == 8
+    assert result["table3_min_duration"] == pytest.approx(7.3304, abs=1e-4)
+    assert result["time_optimal_ratio"] == pytest.approx(2.0, abs=1e-4)
+    assert result["tool_end_rates_max"] <= 1e-9
+    assert result["amplitude"] == pytest.approx(6.2968, abs=1e-4)
+    text = format_pick_and_place(result)
+    assert "joint2 position 45.0005 deg at t = 0 s" in text
+    assert "time-optimal on the same path 3.6652 s (ratio 2.000)" in text

@@ -1,7 +1,10 @@
 """The papers' examples end to end, as used by ``workbench demo``.
 
-So far: Angeles et al. Table III through the forward kinematics of the
-``puma560`` model, compared with their Table II.
+Angeles et al. (1988): Table III through the forward kinematics of the
+``puma560`` model, compared with their Table II; then Section V end to end
+(:mod:`workbench.demo_pick_and_place`): IK of Table II, the normal-spline
+trajectory, limits, minimum duration, Cartesian histories, singularities and
+the figures.
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench import paper_data
+from workbench.demo_pick_and_place import run_pick_and_place_demo
 from workbench.poses import angeles7_from_se3
 from workbench.robot import Robot
 
@@ -93,8 +97,13 @@ def format_table2(rows: list[Table2Comparison]) -> str:
     return "\n".join(lines)
 
 
-def run_demo(robot: Robot, out_dir: Path) -> dict[str, object]:
+def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, object]:
     """Run the papers' examples and write the results into ``out_dir``.
+
+    Args:
+        robot: The ``puma560`` model (Angeles Table I).
+        out_dir: Output folder (created).
+        plots: Also write the PNG figures (the slow part, ~3 s).
 
     Returns:
         A JSON-ready summary (also written to ``out_dir/summary.json``).
@@ -120,6 +129,7 @@ def run_demo(robot: Robot, out_dir: Path) -> dict[str, object]:
         },
         "table2_matches": all(r.matches for r in rows),
         "table2_markdown": table,
+        "pick_and_place": run_pick_and_place_demo(robot, out_dir, plots=plots),
     }
     (out_dir / "summary.json").write_text(
         json.dumps(summary, indent=2, default=lambda a: np.asarray(a).tolist()) + "\n",

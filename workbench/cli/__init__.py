@@ -11,7 +11,7 @@ import os
 import sys
 from collections.abc import Sequence
 
-from workbench.cli import demo, fk, urdf
+from workbench.cli import demo, fishcut, fk, ik, plan, report, singularities, urdf, view
 from workbench.errors import InfeasibleError, InputError, WorkbenchError
 
 EXIT_OK = 0
@@ -19,7 +19,7 @@ EXIT_INTERNAL = 1
 EXIT_BAD_INPUT = 2
 EXIT_INFEASIBLE = 3
 
-_COMMANDS = (fk, urdf, demo)
+_COMMANDS = (fk, ik, urdf, demo, singularities, report, plan, view, fishcut)
 
 
 class _Parser(argparse.ArgumentParser):

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from workbench.cli._common import add_json_flag, print_json
 from workbench.demo import run_demo
+from workbench.demo_pick_and_place import format_pick_and_place
 from workbench.loading import load_robot
 
 
@@ -24,6 +25,9 @@ def register(commands: argparse._SubParsersAction) -> None:
         default=Path("workbench-demo"),
         help="output folder (default: ./workbench-demo)",
     )
+    parser.add_argument(
+        "--no-plots", action="store_true", help="skip the PNG figures (faster)"
+    )
     add_json_flag(parser)
     parser.set_defaults(run=run)
 
@@ -31,7 +35,7 @@ def register(commands: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the demo; returns the exit code."""
     robot = load_robot("puma560")
-    summary = run_demo(robot, args.out)
+    summary = run_demo(robot, args.out, plots=not args.no_plots)
     if args.json:
         print_json(summary)
         return 0
@@ -41,6 +45,7 @@ def run(args: argparse.Namespace) -> int:
     )
     print(summary["table2_markdown"])
     verdict = "match" if summary["table2_matches"] else "DO NOT match"
-    print(f"\nAll values rounded to the paper's two decimals {verdict} Table II.")
-    print(f"Results written to {args.out}/")
+    print(f"\nAll values rounded to the paper's two decimals {verdict} Table II.\n")
+    print(format_pick_and_place(summary["pick_and_place"]))
+    print(f"\nResults written to {args.out}/")
     return 0

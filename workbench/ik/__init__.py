@@ -3,3 +3,44 @@
 Public entry points (see INTERFACE.md): ``analytic``, ``analytic_batch``,
 ``numeric``, plus the damped-least-squares tools.
 """
+
+from workbench.ik.closed_form import (
+    BRANCHES,
+    WRIST_SINGULAR_TOL,
+    IKSolution,
+    UnreachableError,
+    UnsupportedRobotError,
+    analytic,
+    analytic_batch,
+    nearest,
+)
+from workbench.ik.damped import (
+    DLS_EPSILON,
+    DLS_LAMBDA_MAX,
+    QP_DAMPING,
+    DifferentialIKError,
+    dls_inverse,
+    dls_step,
+    qp_step,
+)
+from workbench.ik.numerical import IKResult, numeric
+
+__all__ = [
+    "BRANCHES",
+    "DLS_EPSILON",
+    "DLS_LAMBDA_MAX",
+    "QP_DAMPING",
+    "WRIST_SINGULAR_TOL",
+    "DifferentialIKError",
+    "IKResult",
+    "IKSolution",
+    "UnreachableError",
+    "UnsupportedRobotError",
+    "analytic",
+    "analytic_batch",
+    "dls_inverse",
+    "dls_step",
+    "nearest",
+    "numeric",
+    "qp_step",
+]

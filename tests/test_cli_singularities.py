@@ -1,0 +1,172 @@
+"""``workbench singularities`` and ``workbench report singularities``."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from workbench import load_robot
+from workbench.cli import EXIT_BAD_INPUT, main
+from workbench.singularities import compute_conditions, compute_det_j_analytic
+
+ATOL_DEG_INPUT = 1e-9  # degrees typed with 10 decimals, converted to rad
+REL_DET = 1e-9
+SMALL_GRID = ["--grid", "40", "--svd-grid", "12"]
+KEYS = {"robot", "det_j", "sigma_min", "manipulability", "condition_number", "near"}
+
+
+def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    """Run the CLI in-process: (exit code, stdout, stderr)."""
+    try:
+        code = main(list(argv))
+    except SystemExit as exit_:  # argparse's own errors
+        code = int(exit_.code or 0)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_singularities_json_at_kang_elbow_singularity(capsys) -> None:
+    q_deg = [10.0, 30.0, 87.3083636611, -20.0, 45.0, 5.0]
+    code, out, err = run(
+        capsys,
+        "singularities",
+        "--robot",
+        "puma560-kang",
+        "--deg",
+        *map(str, q_deg),
+        "--json",
+    )
+    assert (code, err) == (0, "")
+    result = json.loads(out)
+    assert set(result) >= KEYS
+    assert set(result["near"]) == {"shoulder", "elbow", "wrist"}
+    robot = load_robot("puma560-kang")
+    q = np.radians(q_deg)
+    expected = compute_conditions(robot, q).as_dict()
+    for kind, value in result["near"].items():
+        assert value == pytest.approx(float(expected[kind]), abs=1e-12)
+    assert abs(result["near"]["elbow"]) <= ATOL_DEG_INPUT
+    assert result["near"]["wrist"] == pytest.approx(math.sin(math.radians(45.0)))
+    assert result["singular"] == ["elbow"]
+    assert result["det_j"] == pytest.approx(
+        float(compute_det_j_analytic(robot, q)), rel=1e-6, abs=1e-12
+    )
+    assert result["sigma_min"] <= 1e-9
+
+
+def test_singularities_json_generic_puma(capsys) -> None:
+    q_text = ["0.1", "-0.7", "0.4", "0.2", "1.1", "0.3"]
+    code, out, _ = run(
+        capsys, "singularities", "--robot", "puma560", "--rad", *q_text, "--json"
+    )
+    result = json.loads(out)
+    assert code == 0
+    q = np.array([0.1, -0.7, 0.4, 0.2, 1.1, 0.3])
+    expected = float(compute_det_j_analytic(load_robot("puma560"), q))
+    assert result["det_j"] == pytest.approx(expected, rel=REL_DET)
+    assert result["singular"] == []
+    assert result["condition_number"] >= 1.0
+    assert result["manipulability"] == pytest.approx(abs(expected), rel=REL_DET)
+
+
+def test_singularities_text_output(capsys) -> None:
+    code, out, err = run(
+        capsys,
+        "singularities",
+        "--robot",
+        "puma560-kang",
+        "--deg",
+        "0",
+        "0",
+        "0",
+        "0",
+        "0",
+        "0",
+    )
+    assert (code, err) == (0, "")
+    assert "near wrist" in out and "singular         wrist" in out
+
+
+def test_singularities_of_a_non_puma_robot(capsys) -> None:
+    q_text = ["0", "-40", "70", "10", "60", "0"]
+    code, out, _ = run(
+        capsys, "singularities", "--robot", "ur5", "--deg", *q_text, "--json"
+    )
+    result = json.loads(out)
+    assert code == 0
+    assert result["near"] == {"shoulder": None, "elbow": None, "wrist": None}
+    assert result["sigma_min"] > 0.0 and result["det_j"] is not None
+
+
+def test_singularities_of_a_redundant_robot_has_null_det(capsys) -> None:
+    code, out, _ = run(
+        capsys, "singularities", "--robot", "panda", "--rad", *["0.3"] * 7, "--json"
+    )
+    assert code == 0
+    assert json.loads(out)["det_j"] is None
+
+
+@pytest.mark.parametrize(
+    ("argv", "fragment"),
+    [
+        (["--robot", "puma560", "--deg", "1", "2", "3"], "6 values expected, 3 given"),
+        (
+            ["--robot", "puma560", "--deg", "0", "0", "nan", "0", "0", "0"],
+            "not a finite",
+        ),
+        (["--robot", "nope", "--deg", "0", "0", "0", "0", "0", "0"], "unknown robot"),
+        (["--robot", "puma560", "0", "0", "0", "0", "0", "0"], "--deg"),
+    ],
+)
+def test_singularities_bad_input(capsys, argv, fragment) -> None:
+    code, out, err = run(capsys, "singularities", *argv, "--json")
+    assert code == EXIT_BAD_INPUT
+    assert out == ""
+    assert fragment in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_report_singularities_json(capsys, tmp_path) -> None:
+    html = tmp_path / "kang.html"
+    argv = ["--robot", "puma560-kang", "--out", str(html), *SMALL_GRID, "--json"]
+    code, out, err = run(capsys, "report", "singularities", *argv)
+    assert code == 0
+    summary = json.loads(out)
+    np.testing.assert_allclose(
+        summary["elbow_theta3_deg"], [87.308, -92.692], rtol=0, atol=5e-4
+    )
+    assert summary["out"] == str(html)
+    assert html.read_text(encoding="utf-8").startswith("<!DOCTYPE html>")
+    assert "100%" in err  # the progress bar, on stderr
+
+
+def test_report_singularities_text_and_no_progress(capsys, tmp_path) -> None:
+    html = tmp_path / "angeles.html"
+    argv = ["--robot", "puma560", "--out", str(html), *SMALL_GRID, "--no-progress"]
+    code, out, err = run(capsys, "report", "singularities", *argv)
+    assert (code, err) == (0, "")
+    assert "+87.474, -92.526" in out
+
+
+@pytest.mark.parametrize(
+    ("extra", "fragment"),
+    [
+        (["--out", "/nonexistent-dir/x.html"], "output folder does not exist"),
+        (
+            ["--out", "OUT", "--trajectory", "/nonexistent.csv"],
+            "cannot read trajectory",
+        ),
+        (["--out", "OUT", "--grid", "1"], "must be ≥ 2"),
+    ],
+)
+def test_report_bad_input(capsys, tmp_path, extra, fragment) -> None:
+    extra = [str(tmp_path / "r.html") if a == "OUT" else a for a in extra]
+    code, _, err = run(
+        capsys, "report", "singularities", "--robot", "puma560", *extra, "--no-progress"
+    )
+    assert code == EXIT_BAD_INPUT
+    assert fragment in err
+    assert len(err.strip().splitlines()) == 1

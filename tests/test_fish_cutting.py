@@ -1,0 +1,207 @@
+"""Kang's fish-cutting program on the simulated fish: limits, events, CLI."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from workbench import InfeasibleError, InputError
+from workbench.cli import main
+from workbench.tasks import (
+    FishCuttingSetup,
+    HorizontalCut,
+    SimulatedFish,
+    VerticalDownCut,
+    run_fish_cutting,
+)
+from workbench.tasks.fish_cutting import compute_waypoints
+from workbench.trajectory_csv import read_trajectory_csv
+
+SETUP = FishCuttingSetup()
+
+
+@pytest.fixture(scope="module")
+def run(puma_kang):
+    return run_fish_cutting(puma_kang, SimulatedFish(seed=0), SETUP)
+
+
+def _speed(run) -> np.ndarray:
+    return np.linalg.norm(run.velocity, axis=1)
+
+
+def test_every_servo_command_within_position_and_speed_limits(run, puma_kang):
+    q, qd = run.servo.q, run.servo.qd
+    assert np.all(q >= puma_kang.lower) and np.all(q <= puma_kang.upper)
+    assert np.all(np.abs(qd) <= puma_kang.velocity_limit)
+    assert run.max_joint_speed <= puma_kang.velocity_limit.max()
+
+
+def test_no_joint_jump_between_servo_samples(run, puma_kang):
+    dt = np.diff(run.servo.t)
+    np.testing.assert_allclose(dt, 1.0 / SETUP.servo_rate, atol=1e-12)
+    step = np.abs(np.diff(run.servo.q, axis=0))
+    assert np.all(step <= puma_kang.velocity_limit * dt[:, None] * (1 + 1e-9))
+    # the servo samples pass through the planning commands
+    m = round(SETUP.servo_rate / SETUP.planning_rate)
+    np.testing.assert_allclose(run.servo.q[::m], run.q, atol=0)
+
+
+def test_program_runs_through_and_returns_home(run):
+    np.testing.assert_allclose(run.position[-1], run.position[0], atol=1e-12)
+    # back at the (wrist-singular) home: theta4 + theta6 is what is defined there
+    np.testing.assert_allclose(
+        run.q[-1, [0, 1, 2, 4]], run.q[0, [0, 1, 2, 4]], atol=1e-9
+    )
+    assert run.q[-1, 3] + run.q[-1, 5] == pytest.approx(
+        run.q[0, 3] + run.q[0, 5], abs=1e-9
+    )
+    assert _speed(run)[-1] == 0.0
+
+
+def test_flesh_then_bone_at_every_vertical_cut(run):
+    vertical = [e.kind for e in run.events if e.primitive == "VerticalDownCut"]
+    assert vertical == ["flesh", "bone"] * SETUP.stations
+    assert any(e.primitive == "HorizontalCut" for e in run.events)
+
+
+def test_flesh_slows_to_cutting_speed_and_bone_stops_the_tool(run):
+    speed, dt = _speed(run), 1.0 / SETUP.planning_rate
+    a, cut = SETUP.max_acceleration, SETUP.cutting_speed
+    vertical = [e for e in run.events if e.primitive == "VerticalDownCut"]
+    for flesh, bone in zip(vertical[::2], vertical[1::2], strict=True):
+        k_f = round(flesh.t / dt)
+        k_b = round(bone.t / dt)
+        settle = k_f + math.ceil((SETUP.max_velocity - cut) / a / dt) + 1
+        if settle < k_b:
+            np.testing.assert_allclose(speed[settle : k_b + 1], cut, atol=1e-12)
+        # bone: full deceleration, straight down, to rest v^2 / (2 a) lower, in v / a
+        v = speed[k_b]
+        n = math.floor(v / a / dt - 1e-9)  # cycles inside the stop
+        expected = v - a * dt * np.arange(n + 1)
+        np.testing.assert_allclose(speed[k_b : k_b + n + 1], expected, atol=1e-12)
+        np.testing.assert_allclose(run.velocity[k_b : k_b + n + 1, :2], 0.0, atol=1e-12)
+        assert np.all(run.velocity[k_b : k_b + n + 1, 2] < 0.0)
+        lowest = run.position[k_b : k_b + n + 3, 2].min()
+        rest = bone.position[2] - v * v / (2 * a)
+        assert rest - 1e-12 <= lowest <= rest + a * dt * dt
+        assert run.velocity[k_b + n + 2, 2] > 0.0  # then back up to the retreat point
+
+
+def test_horizontal_cut_steps_up_over_the_bone(run):
+    steps = [e for e in run.events if e.primitive == "HorizontalCut"]
+    z_cut = run.fish.table_z + run.fish.bone_height
+    cutting = np.array([name == "HorizontalCut" for name in run.primitive])
+    z = run.position[cutting, 2]
+    step = SETUP.cutting_speed / SETUP.planning_rate
+    assert z[0] == pytest.approx(z_cut, abs=1e-12)
+    assert z[-1] == pytest.approx(z_cut + len(steps) * step, abs=1e-12)
+    assert np.all(np.diff(z) >= -1e-15)  # only up
+    horizontal = np.linalg.norm(run.velocity[cutting, :2], axis=1)
+    assert horizontal.max() == pytest.approx(SETUP.cutting_speed, abs=1e-12)
+    for e in steps:
+        assert e.position[2] <= run.fish.bone_top(e.position[0], e.position[1])
+
+
+def test_wrist_continuity_through_singularities(run):
+    assert run.wrist_flips == 0
+    assert run.wrist_singularity_crossings >= 1  # the cuts pass theta5 = 0
+    assert np.abs(np.diff(run.q[:, 3])).max() < 0.05
+    assert run.damped.any()
+
+
+def test_runs_are_deterministic_per_seed():
+    a, b, c = SimulatedFish(seed=5), SimulatedFish(seed=5), SimulatedFish(seed=6)
+    y = np.linspace(0.2, 0.62, 50)
+    np.testing.assert_array_equal(a.sample_profiles(y)[1], b.sample_profiles(y)[1])
+    assert not np.allclose(
+        a.sample_profiles(y)[1], c.sample_profiles(y)[1], equal_nan=True
+    )
+
+
+def test_fish_contacts():
+    fish = SimulatedFish(seed=1)
+    y = 0.4
+    bone, flesh = fish.bone_top(0.0, y), fish.flesh_top(0.0, y)
+    assert fish.table_z < bone < flesh
+    assert fish.get_contact([0.0, y, flesh + 1e-6]) is None
+    assert fish.get_contact([0.0, y, flesh - 1e-6]) == "flesh"
+    assert fish.get_contact([0.0, y, bone]) == "bone"
+    assert fish.get_contact([0.03, y, bone]) == "flesh"  # beside the backbone
+    assert fish.get_contact([0.0, 1.0, 0.0]) is None  # off the fish
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "fragment"),
+    [
+        ({"thickness": math.nan}, "thickness must be a finite number"),
+        ({"half_width": -0.1}, "half_width must be > 0"),
+        ({"tail_y": 0.1}, "must exceed head_y"),
+        ({"bone_height": 0.07}, "backbone must lie inside the flesh"),
+        ({"bone_variation": -1.0}, "bone_variation must be >= 0"),
+    ],
+)
+def test_bad_fish(kwargs, fragment):
+    with pytest.raises(InputError, match=fragment):
+        SimulatedFish(**kwargs)
+
+
+def test_bad_primitive_arguments():
+    with pytest.raises(InputError, match="cutting_speed"):
+        VerticalDownCut([0, 0, 0], [0, 0, 0], cutting_speed=0.0)
+    with pytest.raises(InputError, match="step_height"):
+        HorizontalCut([0, 0, 0], cutting_speed=0.1, step_height=math.nan)
+
+
+def test_unreachable_waypoint_is_rejected_before_running(puma_kang):
+    setup = FishCuttingSetup(station_spacing=0.4)
+    names = list(compute_waypoints(SimulatedFish(), setup))
+    assert "S3" in names
+    with pytest.raises(InfeasibleError, match="waypoint S"):
+        run_fish_cutting(puma_kang, setup=setup)
+    with pytest.raises(InputError, match="max_velocity must be > 0"):
+        run_fish_cutting(puma_kang, setup=FishCuttingSetup(max_velocity=-1.0))
+
+
+def test_cli_json_and_csv(tmp_path, capsys, run):
+    path = tmp_path / "fish.csv"
+    assert main(["fishcut", "--csv", str(path), "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    for key in (
+        "robot", "cycles", "servo_rate_hz", "planning_rate_hz", "events",
+        "latency_us", "max_joint_speed", "wrist_flips",
+    ):  # fmt: skip
+        assert key in result
+    assert result["robot"] == "puma560-kang"
+    assert result["cycles"] == len(run.t) - 1
+    assert set(result["latency_us"]) == {"median", "p99"}
+    assert [e["kind"] for e in result["events"]] == [e.kind for e in run.events]
+    assert result["wrist_flips"] == 0
+    samples = read_trajectory_csv(path, nq=6)
+    np.testing.assert_allclose(samples.q, run.servo.q, atol=0)
+    assert list(tmp_path.iterdir()) == [path]
+
+
+@pytest.mark.parametrize(
+    ("args", "code", "fragment"),
+    [
+        (["--max-velocity", "0.6"], 3, "velocity"),  # fails mid-run
+        (["--robot", "ur5"], 2, "closed-form IK"),
+        (["--servo-rate", "150"], 2, "integer multiple"),
+        (["--max-velocity", "nan"], 2, "max_velocity"),
+        (["--robot", "nope"], 2, "unknown robot"),
+    ],
+)
+def test_cli_bad_input_writes_nothing(tmp_path, capsys, args, code, fragment):
+    path = tmp_path / "fish.csv"
+    assert main(["fishcut", "--csv", str(path), *args]) == code
+    err = capsys.readouterr().err
+    assert fragment in err and err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []  # no partial CSV, no temporary file
+
+
+def test_cli_rejects_missing_folder(tmp_path, capsys):
+    assert main(["fishcut", "--csv", str(tmp_path / "no" / "x.csv")]) == 2
+    assert "does not exist" in capsys.readouterr().err

@@ -1,0 +1,273 @@
+"""Online planner: replanning continuity, stops, multi-rate, wrist singularity."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from workbench import (
+    InfeasibleError,
+    InputError,
+    JointLimitError,
+    NonFiniteError,
+    load_robot,
+)
+from workbench.ik.closed_form import analytic, nearest
+from workbench.poses import rotation_from_axis_angle
+from workbench.trajectory import (
+    CartesianLimits,
+    OnlinePlanner,
+    PointToPoint,
+    StraightLine,
+    interpolate_servo,
+)
+
+ATOL_EXACT = 1e-12
+Q_START = np.array([0.3, 0.4, 0.2, 0.3, 0.8, 0.2])  # away from every singularity
+LIMITS = CartesianLimits(0.1, 0.5, 0.4, 1.0)
+
+
+def _planner(robot, **kwargs) -> OnlinePlanner:
+    return OnlinePlanner(robot, Q_START, LIMITS, **kwargs)
+
+
+def _random_goal(planner: OnlinePlanner, rng: np.random.Generator):
+    state = planner.state
+    axis = rng.normal(size=3)
+    turn = rotation_from_axis_angle(axis / np.linalg.norm(axis), rng.uniform(0, 0.3))
+    return state.position + rng.uniform(-0.04, 0.04, 3), state.rotation @ turn
+
+
+def _assert_same_state(primitive, planner):
+    p, v, r, w = primitive.sample(planner.t)
+    s = planner.state
+    for a, b in (
+        (p, s.position),
+        (v, s.velocity),
+        (r, s.rotation),
+        (w, s.angular_velocity),
+    ):
+        np.testing.assert_allclose(a, b, rtol=0, atol=ATOL_EXACT)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_replanning_at_random_event_times_is_continuous(puma_kang, seed):
+    rng = np.random.default_rng(seed)
+    planner = _planner(puma_kang)
+    planner.append(PointToPoint(*_random_goal(planner, rng)))
+    event_cycles = set(rng.choice(np.arange(3, 120), size=4, replace=False).tolist())
+    positions, velocities, omegas = [], [], []
+    last_goal = None
+    while not planner.done:
+        sample = planner.step()
+        positions.append(sample.position)
+        velocities.append(sample.velocity)
+        omegas.append(sample.angular_velocity)
+        if planner.cycle in event_cycles:
+            if rng.uniform() < 0.3:
+                planner.stop()
+                last_goal = None
+            else:
+                last_goal = _random_goal(planner, rng)
+                planner.set_goal(*last_goal)
+            _assert_same_state(planner.active, planner)  # replanned from the state
+        assert planner.cycle < 2000
+    dt = planner.period
+    dp = np.linalg.norm(np.diff(positions, axis=0), axis=1)
+    dv = np.linalg.norm(np.diff(velocities, axis=0), axis=1)
+    dw = np.linalg.norm(np.diff(omegas, axis=0), axis=1)
+    # no jump: per cycle, position moves by at most the speed bound times dt and
+    # velocity by at most the acceleration bound times dt (x sqrt 2 with a residual;
+    # the turning residual adds a small cross term to the angular acceleration)
+    assert dp.max() <= math.sqrt(2) * LIMITS.max_velocity * dt * (1 + 1e-9)
+    assert dv.max() <= math.sqrt(2) * LIMITS.max_acceleration * dt * (1 + 1e-9)
+    assert dw.max() <= 1.5 * LIMITS.max_angular_acceleration * dt
+    np.testing.assert_allclose(velocities[-1], 0.0, atol=ATOL_EXACT)
+    if last_goal is not None:
+        np.testing.assert_allclose(planner.state.position, last_goal[0], atol=1e-12)
+        np.testing.assert_allclose(planner.state.rotation, last_goal[1], atol=1e-12)
+
+
+def test_stop_event_comes_to_rest_at_full_deceleration(puma_kang):
+    planner = _planner(puma_kang)
+    start = planner.state.position.copy()
+    planner.append(StraightLine(start + np.array([0.0, 0.0, -0.1])))
+    for _ in range(40):  # accelerate 0.2 s, then cruise
+        planner.step()
+    v0 = planner.state.speed
+    assert v0 == pytest.approx(LIMITS.max_velocity)
+    direction = planner.state.velocity / v0
+    planner.append(StraightLine(start))  # the stop clears the queue too
+    planner.stop()
+    speeds, points = [], []
+    while not planner.done:
+        s = planner.step()
+        speeds.append(np.linalg.norm(s.velocity))
+        points.append(s.position)
+    t = planner.period * np.arange(1, len(speeds) + 1)
+    expected = np.maximum(v0 - LIMITS.max_acceleration * t, 0.0)
+    np.testing.assert_allclose(speeds, expected, rtol=0, atol=1e-12)
+    at_rest = np.flatnonzero(np.asarray(speeds) < 1e-12)[0] + 1  # cycles to rest
+    assert at_rest == round(v0 / LIMITS.max_acceleration / planner.period)
+    travel = points[-1] - start  # still on the line
+    np.testing.assert_allclose(np.cross(travel, direction), 0.0, atol=1e-12)
+
+
+def test_joint_commands_track_the_cartesian_command(puma_kang):
+    planner = _planner(puma_kang)
+    planner.append(PointToPoint(*_random_goal(planner, np.random.default_rng(7))))
+    while not planner.done:
+        s = planner.step()
+        pose = puma_kang.fk(s.q)
+        np.testing.assert_allclose(pose.translation, s.position, atol=1e-12)
+        np.testing.assert_allclose(pose.rotation, s.rotation, atol=1e-12)
+        twist = np.concatenate([s.velocity, s.angular_velocity])
+        assert not s.damped  # far from singularities: J^-1 exactly
+        np.testing.assert_allclose(puma_kang.jacobian(s.q) @ s.qd, twist, atol=1e-12)
+
+
+def test_tool_and_world_frames(puma_kang):
+    tip = pin.SE3(
+        rotation_from_axis_angle([1.0, 0.0, 0.0], 0.3), np.array([0.0, 0.02, 0.1])
+    )
+    base = pin.SE3(
+        rotation_from_axis_angle([0.0, 0.0, 1.0], 0.5), np.array([1.0, 2.0, 0.7])
+    )
+    planner = _planner(
+        puma_kang, transform_tip_to_tool=tip, transform_base_to_world=base
+    )
+    expected = base * puma_kang.fk(Q_START) * tip
+    np.testing.assert_allclose(planner.state.position, expected.translation, atol=1e-12)
+    planner.append(PointToPoint(*_random_goal(planner, np.random.default_rng(3))))
+    while not planner.done:
+        s = planner.step()
+        pose = base * puma_kang.fk(s.q) * tip
+        np.testing.assert_allclose(pose.translation, s.position, atol=1e-12)
+        np.testing.assert_allclose(pose.rotation, s.rotation, atol=1e-12)
+        # tip twist from the joint velocity (world axes) equals the command
+        jac = puma_kang.jacobian(s.q)
+        w = base.rotation @ (jac[3:] @ s.qd)
+        lever = s.position - (base * puma_kang.fk(s.q)).translation
+        v = base.rotation @ (jac[:3] @ s.qd) + np.cross(w, lever)
+        np.testing.assert_allclose(v, s.velocity, atol=1e-12)
+        np.testing.assert_allclose(w, s.angular_velocity, atol=1e-12)
+
+
+def test_hermite_servo_interpolation_is_exact_on_cubics():
+    t = np.linspace(0.0, 0.5, 6)
+    coeffs = np.array([[0.3, -1.0, 2.0, 0.5], [1.0, 0.0, -3.0, 0.2]])  # 2 joints
+
+    def poly(x, d=0):
+        return np.stack([np.polyval(np.polyder(c, d), x) for c in coeffs], axis=-1)
+
+    servo = interpolate_servo(t, poly(t), poly(t, 1), 10)
+    assert servo.t.shape == (51,)
+    np.testing.assert_allclose(servo.t, np.linspace(0.0, 0.5, 51), atol=1e-15)
+    np.testing.assert_allclose(servo.q, poly(servo.t), atol=1e-12)
+    np.testing.assert_allclose(servo.qd, poly(servo.t, 1), atol=1e-12)
+    np.testing.assert_allclose(servo.qdd, poly(servo.t, 2), atol=1e-9)
+
+
+def test_multi_rate_servo_samples_from_a_run(puma_kang):
+    planner = _planner(puma_kang, planning_rate=50.0, servo_rate=500.0)
+    planner.append(StraightLine(planner.state.position + np.array([0.05, 0.0, 0.0])))
+    samples = [planner.step() for _ in range(30)]
+    t = np.array([s.t for s in samples])
+    np.testing.assert_allclose(np.diff(t), 0.02, atol=1e-15)
+    servo = interpolate_servo(t, [s.q for s in samples], [s.qd for s in samples], 10)
+    np.testing.assert_allclose(servo.q[::10], [s.q for s in samples], atol=0)
+    np.testing.assert_allclose(servo.qd[::10], [s.qd for s in samples], atol=0)
+
+
+def test_wrist_singularity_line_keeps_theta4_continuous_and_speeds_bounded(puma_kang):
+    """Straight line through θ5 = 0: no θ4 flip, bounded DLS rates, small task error.
+
+    The line (0.1 m in y at 0.1 m/s, orientation fixed) passes exactly through the
+    wrist singularity of q_mid. The closed-form IK keeps the commanded pose exact;
+    the DLS rates differ from the exact twist by at most ~2.5e-3 (m/s and rad/s,
+    2.5 % of the commanded speed), only inside the singular region.
+    """
+    q_mid = np.array([0.3, 0.5, 0.3, 0.6, 0.0, -0.2])
+    mid = puma_kang.fk(q_mid)
+    step = np.array([0.0, 0.05, 0.0])
+    start = pin.SE3(mid.rotation, mid.translation - step)
+    q0 = nearest(analytic(puma_kang, start, q_previous=q_mid), q_mid).q
+    planner = OnlinePlanner(puma_kang, q0, LIMITS)
+    planner.append(StraightLine(mid.translation + step))
+    samples = []
+    while not planner.done:
+        samples.append(planner.step())
+    q = np.array([s.q for s in samples])
+    qd = np.array([s.qd for s in samples])
+    k = int(np.argmin(np.abs(q[:, 4])))
+    assert abs(q[k, 4]) < 1e-9  # a sample sits on the singularity
+    assert np.sign(q[0, 4]) != np.sign(q[-1, 4])  # and θ5 changes sign
+    assert np.abs(np.diff(q[:, 3])).max() < 0.01  # θ4 continuous: no π flip
+    assert {s.branch.rsplit("/", 1)[1] for s in samples} == {"flip", "no-flip"}
+    assert np.all(np.abs(qd) <= puma_kang.velocity_limit)
+    for s in samples:  # the position command stays exact
+        np.testing.assert_allclose(
+            puma_kang.fk(s.q).translation, s.position, atol=1e-12
+        )
+    twist = np.array(
+        [np.concatenate([s.velocity, s.angular_velocity]) for s in samples]
+    )
+    error = np.array(
+        [
+            np.linalg.norm(puma_kang.jacobian(s.q) @ s.qd - w)
+            for s, w in zip(samples, twist, strict=True)
+        ]
+    )
+    damped = np.array([s.damped for s in samples])
+    assert damped[k] and error[k] > 0.0
+    assert error.max() <= 0.05 * LIMITS.max_velocity
+    assert np.all(error[~damped] < 1e-12)
+    # the plain inverse at the singular sample would command unbounded rates
+    exact = np.linalg.lstsq(puma_kang.jacobian(q[k]), twist[k], rcond=1e-20)[0]
+    assert np.linalg.norm(exact) > 100 * np.abs(qd).max()
+
+
+def test_events_and_goals_are_validated(puma_kang):
+    planner = _planner(puma_kang, check_speed=False)
+    with pytest.raises(NonFiniteError):
+        planner.set_goal([np.nan, 0.0, 0.0], np.eye(3))
+    with pytest.raises(InputError, match="not a MotionPrimitive"):
+        planner.append("PTP")
+    planner.set_goal([2.0, 0.0, 0.0], planner.state.rotation)  # out of reach
+    with pytest.raises(InfeasibleError, match="reach"):
+        for _ in range(2000):
+            planner.step()
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "fragment"),
+    [
+        ({"planning_rate": 0.0}, "planning_rate must be a finite number > 0"),
+        ({"servo_rate": math.nan}, "servo_rate must be a finite number > 0"),
+        ({"planning_rate": 300.0}, "integer multiple"),
+        ({"dls_epsilon": -1.0}, "epsilon"),
+    ],
+)
+def test_bad_planner_arguments(puma_kang, kwargs, fragment):
+    with pytest.raises(InputError, match=fragment):
+        _planner(puma_kang, **kwargs)
+
+
+@pytest.mark.parametrize(
+    "values", [(0.0, 1, 1, 1), (1, -1.0, 1, 1), (1, 1, math.nan, 1), (1, 1, 1, "x")]
+)
+def test_bad_cartesian_limits(values):
+    with pytest.raises(InputError):
+        CartesianLimits(*values)
+
+
+def test_start_outside_limits_and_robot_without_closed_form(puma_kang):
+    q = Q_START.copy()
+    q[1] = puma_kang.upper[1] + 0.1
+    with pytest.raises(JointLimitError, match="joint2"):
+        OnlinePlanner(puma_kang, q, LIMITS)
+    with pytest.raises(InputError, match="closed-form IK"):
+        OnlinePlanner(load_robot("ur5"), np.zeros(6), LIMITS)

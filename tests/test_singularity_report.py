@@ -1,0 +1,137 @@
+"""The singularity HTML report: self-contained, every figure embedded, key numbers."""
+
+from __future__ import annotations
+
+import base64
+import re
+import subprocess
+import sys
+from html.parser import HTMLParser
+
+import numpy as np
+import pytest
+
+from workbench import load_robot
+from workbench.reports.singularity_report import (
+    build_singularity_report,
+    write_singularity_report,
+)
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+DATA_URI = "data:image/png;base64,"
+SMALL = {"grid_size": 60, "svd_grid_size": 16, "samples": 200}
+REL_DET = 1e-9
+
+
+class _Sources(HTMLParser):
+    """Collect every src/href attribute of the document."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.images: list[str] = []
+        self.links: list[str] = []
+
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+        for name, value in attrs:
+            if name == "src":
+                self.images.append(value or "")
+            elif name == "href":
+                self.links.append(value or "")
+
+
+@pytest.fixture(scope="module")
+def kang_report(tmp_path_factory):
+    robot = load_robot("puma560-kang")
+    t = np.linspace(0.0, 1.0, 21)
+    q = np.tile(np.radians([0.0, 30.0, 40.0, 0.0, 20.0, 0.0]), (t.size, 1))
+    q[:, 4] = np.radians(np.linspace(20.0, -20.0, t.size))
+    path = tmp_path_factory.mktemp("report") / "kang.html"
+    report = write_singularity_report(robot, path, trajectory=(t, q), **SMALL)
+    return report, path.read_text(encoding="utf-8")
+
+
+def test_every_figure_is_an_embedded_png(kang_report) -> None:
+    report, text = kang_report
+    parser = _Sources()
+    parser.feed(text)
+    assert len(parser.images) == len(report.figures) >= 4
+    for src in parser.images:
+        assert src.startswith(DATA_URI)
+        assert base64.b64decode(src[len(DATA_URI) :]).startswith(PNG_MAGIC)
+    assert parser.links == []  # no stylesheet or script to fetch
+    assert "<script" not in text
+    assert set(report.summary["figures"]) >= {
+        "det_j_map",
+        "sigma_min_map",
+        "trajectory",
+    }
+
+
+def test_key_numbers_appear(kang_report) -> None:
+    report, text = kang_report
+    summary = report.summary
+    for value in ("+87.308°", "-92.692°", "+0.186657 m²"):
+        assert value in text
+    assert summary["elbow_theta3_deg"] == pytest.approx([87.308364, -92.691636])
+    assert summary["elbow_theta3_within_limits"] == [True, False]
+    assert summary["cross_check"]["max_relative_error"] <= REL_DET
+    assert f"{summary['cross_check']['max_relative_error']:.2e}" in text
+    assert summary["cross_check"]["subgrid_max_abs_error"] <= 1e-12
+    assert "a2 c2 + a3 c23 + d4 s23" in text
+    for record in summary["degenerate_directions"]:
+        assert record["residual"] <= 1e-9
+    assert summary["closest_approach"]["wrist"]["crossings"] == [pytest.approx(0.5)]
+
+
+def test_degenerate_directions_and_arms_sections(kang_report) -> None:
+    report, text = kang_report
+    assert "Degenerate directions" in text
+    assert text.count("<tr><td>") >= 5
+    if "arms" in report.figures:  # needs workbench.plot_arm
+        assert "arm in each singular configuration" in text
+
+
+def test_angeles_report_has_its_own_elbow_angles_and_progress() -> None:
+    stages: dict[str, tuple[int, int]] = {}
+    report = build_singularity_report(
+        load_robot("puma560"),
+        **SMALL,
+        progress=lambda stage, done, total: stages.__setitem__(stage, (done, total)),
+    )
+    assert "+87.474°" in report.html and "-92.526°" in report.html
+    assert report.summary["det_j_constant"] < 0.0
+    assert stages == {"det J map": (3600, 3600), "σmin map": (256, 256)}
+
+
+def test_report_of_a_robot_without_dh_table() -> None:
+    report = build_singularity_report(
+        load_robot("ur5"), grid_size=12, svd_grid_size=8, samples=10
+    )
+    assert report.summary["elbow_theta3_deg"] is None
+    assert report.summary["puma_type"] is False
+    assert set(report.figures) == {"det_j_map", "sigma_min_map"}
+    assert "numeric measures only" in report.html
+
+
+def test_core_modules_do_not_import_matplotlib() -> None:
+    code = (
+        "import sys, workbench.singularities, workbench.singularity_measures, "
+        "workbench.singularity_directions, workbench.singularity_trajectory, "
+        "workbench.cli.singularities, workbench.cli.report, workbench.reports; "
+        "bad = [m for m in sys.modules if re.match('matplotlib|meshcat', m)]; "
+        "assert not bad, bad"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", "import re; " + code],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr
+
+
+def test_html_has_title_and_units(kang_report) -> None:
+    _, text = kang_report
+    assert re.search(r"<title>Singularities of puma560-kang</title>", text)
+    assert "det J [m³]" not in text or "m³" in text
+    assert "[m/s; rad/s]" in text

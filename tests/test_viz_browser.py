@@ -1,0 +1,184 @@
+"""The exported page rendered offline in headless Chromium: the arm is drawn.
+
+Chromium comes from the system; when it is missing and we are root, the
+session fixture installs it (``apt-get install -y chromium``), else the tests
+skip and say why. WebGL runs on SwiftShader (software), no GPU needed.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from PIL import Image
+
+from workbench import Robot
+from workbench.viz import Viewer
+
+WIDTH, HEIGHT = 800, 600
+CHROMIUM_FLAGS = (
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--enable-unsafe-swiftshader",  # software WebGL, opted in explicitly
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+    "--hide-scrollbars",
+    "--force-device-scale-factor=1",
+    f"--window-size={WIDTH},{HEIGHT}",
+    "--virtual-time-budget=3000",  # let the page load and render [ms]
+)
+PIXEL_CHANGED = 40  # max |RGB difference| above which a pixel counts as changed
+Q1_DEG = [0.0, -45.0, 180.0, 0.0, 45.0, 0.0]
+Q2_DEG = [60.0, -90.0, 160.0, 30.0, 30.0, 0.0]
+
+
+def _apt_get(*args: str) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "DEBIAN_FRONTEND": "noninteractive"}
+    return subprocess.run(
+        ["apt-get", *args], env=env, capture_output=True, text=True, timeout=1200
+    )
+
+
+@pytest.fixture(scope="session")
+def chromium() -> str:
+    """Path of the chromium binary, installed with apt-get when missing (root)."""
+    found = shutil.which("chromium")
+    if found:
+        return found
+    if shutil.which("apt-get") is None:
+        pytest.skip("chromium is missing and there is no apt-get to install it")
+    if not hasattr(os, "geteuid") or os.geteuid() != 0:
+        pytest.skip(
+            "chromium is missing; installing it needs root: apt-get install -y chromium"
+        )
+    result = _apt_get("install", "-y", "chromium")
+    if result.returncode != 0:  # stale or empty package lists
+        _apt_get("update")
+        result = _apt_get("install", "-y", "chromium")
+    found = shutil.which("chromium")
+    if result.returncode != 0 or found is None:
+        reason = (result.stderr.strip().splitlines() or ["no output"])[-1]
+        pytest.skip(f"cannot install chromium with apt-get: {reason}")
+    return found
+
+
+def screenshot(chromium: str, page: str, path: Path) -> np.ndarray:
+    """Save ``page`` next to ``path``, render it offline, return RGB (H, W, 3)."""
+    html = path.with_suffix(".html")
+    html.write_text(page, encoding="utf-8")
+    command = [
+        chromium,
+        *CHROMIUM_FLAGS,
+        f"--user-data-dir={path.parent / (path.stem + '-profile')}",
+        f"--screenshot={path}",
+        html.as_uri(),
+    ]
+    result = subprocess.run(command, capture_output=True, text=True, timeout=180)
+    assert path.exists(), f"no screenshot: {result.stderr[-2000:]}"
+    image = np.asarray(Image.open(path).convert("RGB"), dtype=np.int16)
+    assert image.shape == (HEIGHT, WIDTH, 3)
+    return image
+
+
+def seek(page: str, t: float) -> str:
+    """The page with its animation paused at time ``t`` [s] (the scrubber's seek)."""
+    script = (
+        "<script>setTimeout(function () { viewer.animator.pause(); "
+        f"viewer.animator.seek({t}); }}, 300);</script>"
+    )
+    return page.replace("</body>", script + "</body>")
+
+
+def changed(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Boolean (H, W): pixels that differ between two screenshots."""
+    return np.abs(a - b).max(axis=2) > PIXEL_CHANGED
+
+
+def arm_region(robot: Robot, q: np.ndarray, viewer: Viewer) -> tuple[int, ...]:
+    """Pixel box (left, top, right, bottom) of the arm's geometry on screen.
+
+    Projects the corners of every geometry's bounding box with the page's
+    camera (pinhole, vertical field of view, z up), independently of the viewer.
+    """
+    data, gdata = robot.model.createData(), robot.visual_model.createData()
+    pin.forwardKinematics(robot.model, data, q)
+    pin.updateGeometryPlacements(robot.model, data, robot.visual_model, gdata)
+    corners = []
+    for geometry, placement in zip(
+        robot.visual_model.geometryObjects, gdata.oMg, strict=True
+    ):
+        geometry.geometry.computeLocalAABB()
+        box = geometry.geometry.aabb_local
+        lo, hi = np.array(box.min_), np.array(box.max_)
+        for corner in np.array(np.meshgrid(*zip(lo, hi, strict=True))).reshape(3, -1).T:
+            corners.append(placement.act(corner))
+    camera = viewer.get_camera()
+    eye, target = np.array(camera.position), np.array(camera.target)
+    forward = (target - eye) / np.linalg.norm(target - eye)
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    tan_half = np.tan(np.deg2rad(camera.fov_deg) / 2.0)
+    d = np.array(corners) - eye
+    depth = d @ forward
+    x = (d @ right) / (depth * tan_half * WIDTH / HEIGHT)
+    y = (d @ up) / (depth * tan_half)
+    cols, rows = (x + 1.0) / 2.0 * WIDTH, (1.0 - y) / 2.0 * HEIGHT
+    return (int(cols.min()), int(rows.min()), int(cols.max()) + 1, int(rows.max()) + 1)
+
+
+def test_arm_is_drawn_where_the_camera_frames_it(chromium, puma, tmp_path) -> None:
+    q = np.deg2rad(Q1_DEG)
+    viewer = Viewer(puma, q, color_by_singularity=True)
+    with_arm = screenshot(chromium, viewer.render_html(), tmp_path / "arm.png")
+    viewer.set_visible("robot", False)  # the same page without the robot
+    empty = screenshot(chromium, viewer.render_html(), tmp_path / "empty.png")
+
+    left, top, right, bottom = arm_region(puma, q, viewer)
+    # Sensible camera: the arm is whole on screen and fills a good part of it.
+    assert 0 <= left < right <= WIDTH and 0 <= top < bottom <= HEIGHT
+    assert (right - left) > 0.2 * WIDTH and (bottom - top) > 0.5 * HEIGHT
+
+    diff = changed(with_arm, empty)
+    inside = np.zeros_like(diff)
+    inside[top:bottom, left:right] = True
+    assert diff[inside].mean() > 0.1, "too few arm pixels where the arm stands"
+    margin = np.zeros_like(diff)  # tolerate antialiasing just outside the box
+    margin[max(top - 4, 0) : bottom + 4, max(left - 4, 0) : right + 4] = True
+    assert diff[~margin].sum() <= 0.01 * diff.sum(), "pixels changed off the arm"
+
+
+def test_two_configurations_give_two_images(chromium, puma, tmp_path) -> None:
+    viewer = Viewer(puma, np.deg2rad(Q1_DEG))
+    viewer.set_camera([1.8, 1.5, 0.8], [0.1, 0.0, -0.1])  # one camera for both
+    first = screenshot(chromium, viewer.render_html(), tmp_path / "q1.png")
+    viewer.display(np.deg2rad(Q2_DEG))
+    second = screenshot(chromium, viewer.render_html(), tmp_path / "q2.png")
+    assert changed(first, second).mean() > 0.01
+
+
+def test_animation_scrubs_pose_and_singularity_colour(chromium, puma, tmp_path) -> None:
+    t = np.linspace(0.0, 2.0, 61)  # [s]
+    q = np.tile(np.deg2rad(Q1_DEG), (t.size, 1))
+    q[:, 4] = np.deg2rad(45.0 - 45.0 * t)  # θ5 passes 0 (wrist singular) at 1 s
+    viewer = Viewer(puma, color_by_singularity=True)
+    viewer.play_trajectory(t, q)
+    page = viewer.render_html()
+    start = screenshot(chromium, seek(page, 0.0), tmp_path / "t0.png")
+    middle = screenshot(chromium, seek(page, 1.0), tmp_path / "t1.png")
+
+    def red(image: np.ndarray) -> float:
+        r, g, b = image[..., 0], image[..., 1], image[..., 2]
+        return float(((r > 150) & (g < 70) & (b < 70)).mean())
+
+    assert red(start) < 0.001  # far from singular: green links
+    assert red(middle) > 0.01  # singular: red links
+    assert changed(start, middle).mean() > 0.01

@@ -1,0 +1,145 @@
+"""``workbench ik``: closed-form inverse kinematics of the PUMA models."""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+
+from workbench.cli._common import (
+    add_json_flag,
+    add_robot_argument,
+    finite_float,
+    format_vector,
+    print_json,
+)
+from workbench.errors import InfeasibleError
+from workbench.ik.closed_form import IKSolution, analytic, nearest
+from workbench.loading import load_robot
+from workbench.poses import (
+    ANGELES7_PRINTED_TOL,
+    as_se3,
+    rotation_from_quat_wxyz,
+    se3_from_angeles7,
+)
+from workbench.robot import Robot
+
+#: Largest accepted | |q| - 1 | of a typed quaternion (then normalised): four
+#: decimals, as in "0.7071 0 0 0.7071", are enough.
+QUAT_TYPED_TOL = 1e-3
+
+_MM = 1e-3
+
+
+def register(commands: argparse._SubParsersAction) -> None:
+    """Add the ``ik`` command."""
+    parser = commands.add_parser(
+        "ik",
+        help="inverse kinematics (closed form, PUMA models)",
+        description="Joint values that put the tool frame (the wrist centre) at a "
+        "pose. Prints the branch within the joint limits nearest to q = 0, or with "
+        "--all every closed-form branch. residual = max(position error [m], "
+        "rotation error [rad]) of FK(q) against the target.",
+    )
+    add_robot_argument(parser)
+    pose = parser.add_mutually_exclusive_group(required=True)
+    pose.add_argument(
+        "--angeles7",
+        nargs=7,
+        type=finite_float,
+        metavar="X",
+        help="e_x sinφ, e_y sinφ, e_z sinφ, cosφ, p_x, p_y, p_z (Angeles et al.; "
+        f"numbers printed to 2 decimals are accepted, norm² within "
+        f"{ANGELES7_PRINTED_TOL:g} of 1)",
+    )
+    pose.add_argument(
+        "--matrix",
+        nargs=16,
+        type=finite_float,
+        metavar="M",
+        help="homogeneous 4x4 matrix, row by row (rotation orthonormal to 1e-6)",
+    )
+    pose.add_argument(
+        "--xyz-quat-wxyz",
+        nargs=7,
+        type=finite_float,
+        metavar="X",
+        help="position x y z, then unit quaternion w x y z (scalar first)",
+    )
+    parser.add_argument("--mm", action="store_true", help="positions are in mm")
+    parser.add_argument(
+        "--all", action="store_true", help="print every closed-form branch"
+    )
+    add_json_flag(parser)
+    parser.set_defaults(run=run)
+
+
+def target_from_args(args: argparse.Namespace) -> pin.SE3:
+    """The target pose of the command line, positions in metres.
+
+    Raises:
+        InputError: If the numbers do not make a rigid pose.
+    """
+    scale = _MM if args.mm else 1.0
+    if args.angeles7 is not None:
+        x = np.array(args.angeles7)
+        x[4:] *= scale
+        return se3_from_angeles7(x, tol=ANGELES7_PRINTED_TOL)
+    if args.matrix is not None:
+        m = np.array(args.matrix).reshape(4, 4)
+        m[:3, 3] *= scale
+        return as_se3(m)
+    x = np.array(args.xyz_quat_wxyz)
+    rotation = rotation_from_quat_wxyz(x[3:], tol=QUAT_TYPED_TOL)
+    return pin.SE3(rotation, x[:3] * scale)
+
+
+def residual(robot: Robot, q: npt.ArrayLike, target: pin.SE3) -> float:
+    """max(position error [m], rotation angle error [rad]) of FK(q) vs target."""
+    pose = robot.fk(q)
+    error = target.actInv(pose)
+    angle = float(np.linalg.norm(pin.log3(error.rotation)))
+    return max(float(np.linalg.norm(pose.translation - target.translation)), angle)
+
+
+def _pick(solutions: list[IKSolution], nq: int) -> IKSolution:
+    feasible = [s for s in solutions if s.within_limits]
+    if not feasible:
+        raise InfeasibleError(
+            "the pose is reachable, but none of the 8 closed-form branches is "
+            "within the joint limits (use --all to see them)"
+        )
+    return nearest(feasible, np.zeros(nq))
+
+
+def run(args: argparse.Namespace) -> int:
+    """Print the solution(s); returns the exit code."""
+    robot = load_robot(args.robot)
+    target = target_from_args(args)
+    solutions = analytic(robot, target)
+    if not args.all:
+        solutions = [_pick(solutions, robot.nq)]
+    rows = [
+        {
+            "branch": s.branch,
+            "q": s.q,
+            "q_deg": np.rad2deg(s.q),
+            "within_limits": s.within_limits,
+            "wrist_singular": s.wrist_singular,
+            "residual": residual(robot, s.q, target),
+        }
+        for s in solutions
+    ]
+    if args.json:
+        print_json({"robot": robot.name, "frame": robot.tool_frame, "solutions": rows})
+        return 0
+    print(f"robot {robot.name}   frame {robot.tool_frame}")
+    for row in rows:
+        flags = "" if row["within_limits"] else "  (outside joint limits)"
+        if row["wrist_singular"]:
+            flags += "  (wrist singular)"
+        print(f"{row['branch']:26s} q [deg] {format_vector(row['q_deg'], 3)}{flags}")
+        print(f"{'':26s} residual {row['residual']:.2e}")
+    return 0

@@ -1,0 +1,170 @@
+"""``workbench plan pick-place``: Angeles' normal-spline pick-and-place trajectory."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from workbench.cli._common import (
+    add_json_flag,
+    add_robot_argument,
+    finite_float,
+    print_json,
+)
+from workbench.errors import InputError
+from workbench.loading import load_robot
+from workbench.trajectory import minimum_duration, pick_and_place
+from workbench.trajectory.normal_spline import DEFAULT_N_POINTS
+from workbench.trajectory_csv import write_trajectory_csv
+
+EXIT_INFEASIBLE = 3
+DEFAULT_RATE_HZ = 100.0
+
+
+def register(commands: argparse._SubParsersAction) -> None:
+    """Add the ``plan`` command and its ``pick-place`` subcommand."""
+    parser = commands.add_parser(
+        "plan",
+        help="plan trajectories",
+        description="Plan joint trajectories.",
+    )
+    kinds = parser.add_subparsers(dest="plan_kind", metavar="KIND", required=True)
+    pick = kinds.add_parser(
+        "pick-place",
+        help="Angeles et al. (1988) normal-spline pick-and-place trajectory",
+        description="Rest-to-rest joint trajectory from the pick to the place "
+        "configuration along Angeles' normal spline; checks position, speed and "
+        "acceleration limits exactly and reports the minimum duration. Exit code "
+        "3 (after printing the result) when a limit is violated.",
+    )
+    add_robot_argument(pick)
+    pick.add_argument(
+        "--pick-deg",
+        nargs="+",
+        type=finite_float,
+        required=True,
+        metavar="Q",
+        help="pick configuration [deg]",
+    )
+    pick.add_argument(
+        "--place-deg",
+        nargs="+",
+        type=finite_float,
+        required=True,
+        metavar="Q",
+        help="place configuration [deg]",
+    )
+    pick.add_argument(
+        "--duration", type=finite_float, required=True, help="duration T [s], > 0"
+    )
+    pick.add_argument(
+        "--rate",
+        type=finite_float,
+        default=DEFAULT_RATE_HZ,
+        metavar="HZ",
+        help=f"sample rate of --csv [Hz] (default {DEFAULT_RATE_HZ:g})",
+    )
+    pick.add_argument(
+        "--n-points",
+        type=int,
+        default=DEFAULT_N_POINTS,
+        metavar="N",
+        help=f"knots of the normal spline (default {DEFAULT_N_POINTS}, as the paper)",
+    )
+    pick.add_argument(
+        "--csv", type=Path, metavar="FILE", help="write t,q..,qd..,qdd.. (SI units)"
+    )
+    pick.add_argument(
+        "--plot", type=Path, metavar="FILE.png", help="plot q, qd, qdd with limits"
+    )
+    add_json_flag(pick)
+    pick.set_defaults(run=run_pick_place)
+
+
+def run_pick_place(args: argparse.Namespace) -> int:
+    """Plan, check, write; returns the exit code (3 on a limit violation)."""
+    if args.rate <= 0.0:
+        raise InputError(f"--rate must be > 0 [Hz], got {args.rate:g}")
+    robot = load_robot(args.robot)
+    q_pick = np.deg2rad(np.asarray(args.pick_deg, dtype=np.float64))
+    q_place = np.deg2rad(np.asarray(args.place_deg, dtype=np.float64))
+    traj = pick_and_place(robot, q_pick, q_place, args.duration, n_points=args.n_points)
+    t_min = minimum_duration(robot, q_pick, q_place, n_points=args.n_points)
+    violations = traj.check_limits()
+    samples = traj.sample_uniform(args.rate) if args.csv else None
+    if samples is not None:
+        write_trajectory_csv(args.csv, samples)
+    if args.plot:
+        from workbench.trajectory_plots import plot_joint_trajectory
+
+        plot_joint_trajectory(
+            traj,
+            args.plot,
+            title=f"{robot.name}: pick-and-place, T = {traj.duration:g} s "
+            f"(minimum {t_min:.4g} s)",
+        )
+    speed = traj.get_extrema(1)
+    acc = traj.get_extrema(2)
+    result = {
+        "robot": robot.name,
+        "joint_names": robot.joint_names,
+        "duration": traj.duration,
+        "min_duration": t_min,
+        "n_points": traj.spline.n_points,
+        "amplitude": traj.spline.amplitude,
+        "q_pick": traj.q_pick,
+        "q_place": traj.q_place,
+        "peak_velocity": np.maximum(np.abs(speed.minimum), np.abs(speed.maximum)),
+        "peak_acceleration": np.maximum(np.abs(acc.minimum), np.abs(acc.maximum)),
+        "violations": [v.as_dict() for v in violations],
+        "csv": None if args.csv is None else str(args.csv),
+        "samples": 0 if samples is None else int(samples.t.size),
+        "plot": None if args.plot is None else str(args.plot),
+    }
+    if args.json:
+        print_json(result)
+    else:
+        _print_human(robot, traj, result)
+    if violations:
+        more = f" (and {len(violations) - 1} more)" if len(violations) > 1 else ""
+        print(f"workbench: error: {violations[0].message}{more}", file=sys.stderr)
+        return EXIT_INFEASIBLE
+    return 0
+
+
+def _print_human(robot, traj, result: dict) -> None:
+    print(
+        f"{robot.name}: pick-and-place in T = {traj.duration:g} s "
+        f"(minimum {result['min_duration']:.6g} s); normal spline N = "
+        f"{traj.spline.n_points}, A = {traj.spline.amplitude:.6g}"
+    )
+    print(
+        f"{'joint':<14}{'pick':>9}{'place':>9}{'peak speed':>12}{'limit':>9}"
+        f"{'peak acc':>11}{'limit':>9}"
+    )
+    print(
+        f"{'':<14}{'[deg]':>9}{'[deg]':>9}{'[deg/s]':>12}{'[deg/s]':>9}"
+        f"{'[deg/s²]':>11}{'[deg/s²]':>9}"
+    )
+    for i, name in enumerate(robot.joint_names):
+        print(
+            f"{name:<14}{np.rad2deg(traj.q_pick[i]):9.2f}"
+            f"{np.rad2deg(traj.q_place[i]):9.2f}"
+            f"{np.rad2deg(result['peak_velocity'][i]):12.3f}"
+            f"{np.rad2deg(robot.velocity_limit[i]):9.2f}"
+            f"{np.rad2deg(result['peak_acceleration'][i]):11.3f}"
+            f"{np.rad2deg(robot.acceleration_limit[i]):9.2f}"
+        )
+    if result["violations"]:
+        print(f"{len(result['violations'])} limit violation(s):")
+        for v in traj.check_limits():
+            print(f"  {v.message}")
+    else:
+        print("within every position, speed and acceleration limit")
+    if result["csv"]:
+        print(f"{result['samples']} samples written to {result['csv']}")
+    if result["plot"]:
+        print(f"plot written to {result['plot']}")

@@ -1,0 +1,129 @@
+"""``workbench report``: self-contained HTML reports (``report singularities``)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import TextIO
+
+from workbench.cli._common import add_json_flag, add_robot_argument, print_json
+from workbench.errors import InputError
+from workbench.loading import load_robot
+from workbench.trajectory_csv import read_trajectory_csv
+
+#: Width of the progress bar [characters].
+BAR_WIDTH = 30
+
+
+def register(commands: argparse._SubParsersAction) -> None:
+    """Add the ``report`` command group."""
+    parser = commands.add_parser(
+        "report",
+        help="self-contained HTML reports with plots",
+        description="Write an HTML report (figures embedded, no other files).",
+    )
+    kinds = parser.add_subparsers(dest="report", metavar="REPORT", required=True)
+    sing = kinds.add_parser(
+        "singularities",
+        help="singularity maps, loci, arm drawings, cross-checks",
+        description=(
+            "det J over (θ2, θ3) with the shoulder and elbow loci, σmin map, the "
+            "arm in each singular configuration, analytic vs Pinocchio check, "
+            "degenerate directions; numeric maps only for non-PUMA robots."
+        ),
+    )
+    add_robot_argument(sing)
+    sing.add_argument("--out", required=True, type=Path, help="HTML file to write")
+    sing.add_argument(
+        "--grid",
+        type=_positive_int,
+        default=1000,
+        help="points per axis of the det J map (default: 1000)",
+    )
+    sing.add_argument(
+        "--svd-grid",
+        type=_positive_int,
+        default=200,
+        help="points per axis of the σmin map (default: 200)",
+    )
+    sing.add_argument(
+        "--trajectory",
+        type=Path,
+        help="joint trajectory CSV (t,q1..qn,qd..,qdd..): closest approaches",
+    )
+    sing.add_argument(
+        "--no-progress", action="store_true", help="no progress bar on stderr"
+    )
+    add_json_flag(sing)
+    sing.set_defaults(run=run_singularities)
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"must be ≥ 2, got {value}")
+    return value
+
+
+class ProgressBar:
+    """A one-line progress bar on a stream, redrawn in place (carriage return)."""
+
+    def __init__(self, stream: TextIO):
+        self.stream = stream
+        self._stage: str | None = None
+
+    def __call__(self, stage: str, done: int, total: int) -> None:
+        """Draw ``done / total`` of ``stage``; a new line when a stage ends."""
+        filled = BAR_WIDTH * done // max(total, 1)
+        bar = "#" * filled + "." * (BAR_WIDTH - filled)
+        percent = 100 * done // max(total, 1)
+        self.stream.write(f"\r{stage:<10} [{bar}] {percent:3d}% ({done}/{total})")
+        if done >= total:
+            self.stream.write("\n")
+        self.stream.flush()
+
+
+def run_singularities(args: argparse.Namespace) -> int:
+    """Build and write the singularity report; returns the exit code."""
+    from workbench.reports.singularity_report import (
+        write_singularity_report,
+    )
+
+    robot = load_robot(args.robot)
+    trajectory = None
+    if args.trajectory is not None:
+        samples = read_trajectory_csv(args.trajectory, robot.nq)
+        trajectory = (samples.t, samples.q)
+    out = args.out
+    if not out.parent.is_dir():
+        raise InputError(f"output folder does not exist: {out.parent}")
+    report = write_singularity_report(
+        robot,
+        out,
+        grid_size=args.grid,
+        svd_grid_size=args.svd_grid,
+        trajectory=trajectory,
+        progress=None if args.no_progress else ProgressBar(sys.stderr),
+    )
+    summary = {"out": str(out), **report.summary}
+    if args.json:
+        print_json(summary)
+        return 0
+    print(f"wrote {out} ({out.stat().st_size / 1e6:.2f} MB)")
+    if summary["elbow_theta3_deg"] is not None:
+        elbow = ", ".join(f"{v:+.3f}" for v in summary["elbow_theta3_deg"])
+        print(f"elbow-singular θ3 [deg]: {elbow}")
+        print(f"det J constant K [m²]: {summary['det_j_constant']:+.6f}")
+        check = summary["cross_check"]
+        error = check["max_relative_error"]
+        print(
+            f"analytic vs Pinocchio: max relative error {error:.2e}"
+            f" over {check['samples']} configurations"
+        )
+    grid = summary["det_j_map"]
+    print(f"det J map {grid['shape'][0]}×{grid['shape'][1]}: {grid['seconds']:.3f} s")
+    return 0

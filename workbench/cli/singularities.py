@@ -1,0 +1,112 @@
+"""``workbench singularities``: singularity analysis at one configuration."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import Any
+
+import numpy as np
+
+from workbench.cli._common import (
+    add_angle_arguments,
+    add_json_flag,
+    add_robot_argument,
+    format_vector,
+    joint_values_rad,
+    print_json,
+)
+from workbench.loading import load_robot
+from workbench.robot import Robot
+from workbench.singularities import (
+    CONDITION_UNITS,
+    ELBOW_TOL,
+    SHOULDER_TOL,
+    SINGULARITY_KINDS,
+    WRIST_TOL,
+    NotPumaTypeError,
+    classify_configuration,
+    compute_conditions,
+    get_puma_factorisation,
+)
+from workbench.singularity_measures import compute_measures
+
+
+def register(commands: argparse._SubParsersAction) -> None:
+    """Add the ``singularities`` command."""
+    parser = commands.add_parser(
+        "singularities",
+        help="singularity analysis at one configuration",
+        description=(
+            "det J, singular values, manipulability and condition number of the "
+            "tool Jacobian (any robot), and for the PUMA models the signed "
+            "distances to the shoulder [m], elbow [sine] and wrist [sin θ5] loci. "
+            "In JSON an infinite condition number is null."
+        ),
+    )
+    add_robot_argument(parser)
+    add_angle_arguments(parser)
+    add_json_flag(parser)
+    parser.set_defaults(run=run)
+
+
+def analyse_configuration(robot: Robot, q: np.ndarray) -> dict[str, Any]:
+    """The JSON payload of the command for a validated ``q`` [rad]."""
+    measures = compute_measures(robot, q)
+    result: dict[str, Any] = {
+        "robot": robot.name,
+        "q": q,
+        "det_j": None if measures.det_j is None else float(measures.det_j),
+        "sigma_min": float(measures.sigma_min),
+        "manipulability": float(measures.manipulability),
+        "condition_number": _finite_or_none(float(measures.condition_number)),
+        "singular_values": measures.singular_values,
+        "near": dict.fromkeys(SINGULARITY_KINDS),
+        "near_units": CONDITION_UNITS,
+        "singular": None,
+        "tolerances": {
+            "shoulder": SHOULDER_TOL,
+            "elbow": ELBOW_TOL,
+            "wrist": WRIST_TOL,
+        },
+        "det_j_constant": None,
+    }
+    try:
+        conditions = compute_conditions(robot, q).as_dict()
+    except NotPumaTypeError:
+        return result
+    result["near"] = {kind: float(value) for kind, value in conditions.items()}
+    result["singular"] = list(classify_configuration(robot, q))
+    result["det_j_constant"] = get_puma_factorisation(robot).constant
+    return result
+
+
+def _finite_or_none(value: float) -> float | None:
+    return value if math.isfinite(value) else None
+
+
+def run(args: argparse.Namespace) -> int:
+    """Print the analysis; returns the exit code."""
+    robot = load_robot(args.robot)
+    q = robot.check_configuration(joint_values_rad(args, args.q))
+    result = analyse_configuration(robot, q)
+    if args.json:
+        print_json(result)
+        return 0
+    det = result["det_j"]
+    condition = result["condition_number"]
+    print(f"robot            {robot.name}")
+    print(f"q [deg]          {format_vector(np.rad2deg(q), 4)}")
+    print(f"det J            {'n/a (J not square)' if det is None else f'{det:.6e}'}")
+    print(f"singular values  {format_vector(result['singular_values'], 6)}")
+    print(f"sigma_min        {result['sigma_min']:.6e}")
+    print(f"manipulability   {result['manipulability']:.6e}")
+    print(f"condition number {'inf' if condition is None else f'{condition:.6g}'}")
+    if result["singular"] is None:
+        print("near             n/a (no PUMA-type DH table: numeric measures only)")
+        return 0
+    for kind in SINGULARITY_KINDS:
+        value, unit = result["near"][kind], CONDITION_UNITS[kind]
+        print(f"near {kind:<11} {value:+.6f}  [{unit}]")
+    print(f"singular         {', '.join(result['singular']) or 'none'}")
+    return 0

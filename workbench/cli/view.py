@@ -1,0 +1,144 @@
+"""``workbench view``: Meshcat 3D preview, as an offline HTML file or a live server."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+
+from workbench.cli._common import add_robot_argument, finite_float, joint_values_rad
+from workbench.errors import InputError
+from workbench.loading import load_robot
+from workbench.robot import Robot
+from workbench.trajectory_csv import (
+    JointTrajectorySamples,
+    TrajectoryFileError,
+    read_trajectory_csv,
+)
+
+
+def _port(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a port number: {text!r}") from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"port must be in 0..65535, got {value}")
+    return value
+
+
+def register(commands: argparse._SubParsersAction) -> None:
+    """Add the ``view`` command."""
+    parser = commands.add_parser(
+        "view",
+        help="Meshcat 3D preview (offline HTML file or live server)",
+        description="Show the robot at one configuration or play a joint "
+        "trajectory, coloured by distance to the nearest singularity, as a "
+        "self-contained HTML file (works offline) or served live on 127.0.0.1.",
+    )
+    add_robot_argument(parser)
+    unit = parser.add_mutually_exclusive_group()
+    unit.add_argument("--deg", action="store_true", help="joint values in degrees")
+    unit.add_argument("--rad", action="store_true", help="joint values in radians")
+    parser.add_argument(
+        "q",
+        nargs="*",
+        type=finite_float,
+        metavar="Q",
+        help="configuration to show (with --deg or --rad; default zeros)",
+    )
+    parser.add_argument(
+        "--trajectory",
+        type=Path,
+        metavar="FILE.csv",
+        help="play a trajectory CSV (t,q1..qn,qd1..qdn,qdd1..qddn, SI) as an animation",
+    )
+    parser.add_argument(
+        "--ik-branches",
+        action="store_true",
+        help="also draw every closed-form IK branch of the pose as ghost arms "
+        "(PUMA models; needs Q)",
+    )
+    parser.add_argument(
+        "--no-singularity-color",
+        dest="singularity_color",
+        action="store_false",
+        help="keep the URDF colours instead of colouring by singularity distance",
+    )
+    out = parser.add_mutually_exclusive_group(required=True)
+    out.add_argument("--html", type=Path, metavar="FILE.html", help="write the page")
+    out.add_argument(
+        "--serve",
+        action="store_true",
+        help="serve on http://127.0.0.1:PORT/ until interrupted (Ctrl-C)",
+    )
+    parser.add_argument(
+        "--port", type=_port, default=0, help="port for --serve (default: a free one)"
+    )
+    parser.set_defaults(run=run)
+
+
+def read_samples(path: Path, robot: Robot) -> JointTrajectorySamples:
+    """Read a trajectory CSV for ``robot``; errors name the file and line.
+
+    Raises:
+        TrajectoryFileError: If the file is unreadable or malformed, or its
+            joint count (line 1, the header) differs from the robot's.
+    """
+    samples = read_trajectory_csv(path)
+    if samples.nq != robot.nq:
+        raise TrajectoryFileError(
+            f"{path}, line 1: the header has {samples.nq} joints, "
+            f"robot {robot.name} has {robot.nq}"
+        )
+    return samples
+
+
+def _ik_branches(robot: Robot, q: npt.NDArray[np.float64]) -> tuple[list, list[str]]:
+    try:
+        from workbench.ik import analytic
+    except ImportError as err:
+        raise InputError(
+            "--ik-branches needs the closed-form IK (workbench.ik.analytic), "
+            "which this installation lacks"
+        ) from err
+    solutions = analytic(robot, robot.fk(q))
+    return [s.q for s in solutions], [s.branch for s in solutions]
+
+
+def run(args: argparse.Namespace) -> int:
+    """Write the page or serve it; returns the exit code."""
+    from workbench.viz import Viewer
+
+    unit = args.deg or args.rad
+    if args.q and not unit:
+        raise InputError("joint values need --deg or --rad")
+    if unit and not args.q:
+        raise InputError("--deg/--rad need joint values")
+    if args.q and args.trajectory:
+        raise InputError("give joint values or --trajectory, not both")
+    if args.ik_branches and not args.q:
+        raise InputError("--ik-branches needs joint values (the pose is their FK)")
+    robot = load_robot(args.robot)
+    samples = read_samples(args.trajectory, robot) if args.trajectory else None
+    q = robot.check_configuration(joint_values_rad(args, args.q)) if args.q else None
+    viewer = Viewer(robot, q, color_by_singularity=args.singularity_color)
+    viewer.show_frames()
+    if samples is not None:
+        viewer.play_trajectory(samples.t, samples.q)
+    if args.ik_branches and q is not None:
+        branches, labels = _ik_branches(robot, q)
+        viewer.show_ghosts(branches, labels=labels)
+    if args.html is not None:
+        path = viewer.save_html(args.html)
+        print(f"wrote {path}")
+        return 0
+    url = viewer.start_server(port=args.port)
+    print(f"workbench viewer at {url} (Ctrl-C to stop)", flush=True)
+    try:
+        viewer.serve_forever()
+    except KeyboardInterrupt:
+        pass
+    return 0

@@ -1,0 +1,319 @@
+r"""Constants of a PUMA-type arm read off its standard DH table, and its errors.
+
+A *PUMA-type* arm here is any 6R arm whose standard DH table
+(:math:`T_i = R_z(\theta_i) T_z(d_i) T_x(a_i) R_x(\alpha_i)`, with
+:math:`\theta_i = q_i + \theta_{0,i}`) has
+
+* :math:`a_1 = 0` and :math:`\alpha_1 = \pm 90°` (shoulder axis z1 meets the
+  base axis z0 at right angles, at height :math:`d_1`);
+* :math:`\alpha_2 = 0` (joints 2 and 3 parallel: a planar elbow);
+* :math:`\alpha_3, \alpha_4, \alpha_5 = \pm 90°` and
+  :math:`a_4 = a_5 = d_5 = a_6 = 0` (a spherical wrist centred at the origin of
+  frames 4 and 5; :math:`d_6` and :math:`\alpha_6` are free);
+* :math:`a_2 \ne 0` and a forearm :math:`(a_3, d_4) \ne 0`; the shoulder
+  offset :math:`D = d_2 + d_3` and every theta offset are free.
+
+Both PUMA models of the workbench are of this type, with opposite signs of
+:math:`\alpha_1, \alpha_4, \alpha_5`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+import numpy.typing as npt
+
+from workbench.dh import DHTable
+from workbench.errors import InfeasibleError, InputError
+from workbench.robot import Robot
+
+FloatArray = npt.NDArray[np.float64]
+
+TAU = 2.0 * math.pi
+
+#: Tolerance on the DH angles and lengths that must be exactly 0 or ±90°.
+_DH_TOL = 1e-12
+
+#: Joint values this far [rad] beyond a limit still count as within it, so that
+#: a configuration recovered to rounding from one at its limit is not rejected.
+LIMIT_TOL = 1e-9
+
+
+#: |sin θ5| at or below which the wrist counts as singular (z3 ∥ z5). θ4 and θ6
+#: are then split by continuity; the split costs at most this times π of
+#: orientation error, so the tolerance is kept below the 1e-9 accuracy goal.
+WRIST_SINGULAR_TOL = 1e-10
+
+
+class UnsupportedRobotError(InputError):
+    """The robot has no DH table of PUMA type, so there is no closed form."""
+
+
+class UnreachableError(InfeasibleError):
+    """The wrist centre of the target lies where the arm cannot put it.
+
+    Attributes:
+        distance: Distance [m] of the wrist centre from the shoulder (``kind``
+            ``"reach"``) or from the base axis (``kind`` ``"cylinder"``).
+        bounds: Reachable interval of that distance, ``(low, high)`` [m].
+        kind: ``"reach"`` (too far or too close to the shoulder) or
+            ``"cylinder"`` (inside the cylinder of radius |d2 + d3| around the
+            base axis that the shoulder offset keeps the wrist out of).
+    """
+
+    def __init__(self, distance: float, bounds: tuple[float, float], kind: str):
+        self.distance = distance
+        self.bounds = bounds
+        self.kind = kind
+        if kind == "cylinder":
+            message = (
+                f"out of reach: wrist centre at {distance:.6g} m from the base axis, "
+                f"inside the unreachable cylinder of radius {bounds[0]:.6g} m "
+                "(the shoulder offset d2 + d3) around it"
+            )
+        else:
+            message = (
+                f"out of reach: wrist centre at distance {distance:.6g} m from the "
+                f"shoulder, reach is [{bounds[0]:.6g}, {bounds[1]:.6g}] m"
+            )
+        super().__init__(message)
+
+
+@dataclass(frozen=True, slots=True)
+class PumaGeometry:
+    r"""What the closed form needs of one robot, computed once.
+
+    Signs :math:`\sigma_i = \operatorname{sign}\alpha_i` are ±1.0. The forearm,
+    seen in frame 2 at :math:`\theta_3 = 0`, is the vector
+    :math:`(a_3, -\sigma_3 d_4) = L(\cos\beta, \sin\beta)`.
+
+    Attributes:
+        sigma1, sigma3, sigma4, sigma5: Signs of alpha 1, 3, 4, 5.
+        d1: Shoulder height on the base axis [m].
+        offset: Shoulder offset :math:`D = d_2 + d_3` along z1 [m].
+        a2: Upper arm length [m].
+        forearm: :math:`L = \sqrt{a_3^2 + d_4^2}` [m].
+        cos_beta, sin_beta: Direction of the forearm in frame 2.
+        up_sign: Sign of :math:`\sin\gamma` (γ = θ3 + β) of the elbow-up
+            solution of a right arm; the left arm's is the opposite.
+        d6: Tool offset along z5 [m].
+        cos_alpha6, sin_alpha6: Twist of the last row.
+        theta_offset: Theta offsets, (6,) [rad].
+        lower, upper: Joint limits of the robot, (6,) [rad].
+        plain: Per joint, True when a value in (−π, π] needs no wrapping:
+            zero offset and limits inside [−π, π].
+        bounds: ``(lower - LIMIT_TOL, upper + LIMIT_TOL)``, the tests of
+            "within limits".
+        reach: Reachable distance of the wrist centre from the shoulder (the
+            point of the base axis at height d1), ``(low, high)`` [m].
+    """
+
+    sigma1: float
+    sigma3: float
+    sigma4: float
+    sigma5: float
+    d1: float
+    offset: float
+    a2: float
+    forearm: float
+    cos_beta: float
+    sin_beta: float
+    up_sign: float
+    d6: float
+    cos_alpha6: float
+    sin_alpha6: float
+    theta_offset: tuple[float, ...]
+    lower: tuple[float, ...]
+    upper: tuple[float, ...]
+    plain: tuple[bool, ...]
+    bounds: tuple[tuple[float, ...], tuple[float, ...]]
+    reach: tuple[float, float]
+
+
+def _sign_of_right_angle(alpha: float, name: str, robot: str) -> float:
+    for sign in (1.0, -1.0):
+        if abs(math.remainder(alpha - sign * math.pi / 2.0, TAU)) <= _DH_TOL:
+            return sign
+    raise UnsupportedRobotError(
+        f"robot {robot!r} is not PUMA-type: {name} = {math.degrees(alpha):.6g} deg, "
+        "closed-form IK needs ±90 deg"
+    )
+
+
+def _require_zero(value: float, name: str, robot: str) -> None:
+    if abs(value) > _DH_TOL:
+        raise UnsupportedRobotError(
+            f"robot {robot!r} is not PUMA-type: {name} = {value:.6g}, closed-form "
+            "IK needs 0"
+        )
+
+
+def geometry_from_dh(
+    table: DHTable, lower: npt.ArrayLike, upper: npt.ArrayLike
+) -> PumaGeometry:
+    """Check that ``table`` is PUMA-type and compute its constants.
+
+    Args:
+        table: Standard DH table of the arm.
+        lower: Lower joint limits, shape (6,) [rad].
+        upper: Upper joint limits, shape (6,) [rad].
+
+    Raises:
+        UnsupportedRobotError: If the table is not PUMA-type (the message names
+            the first offending parameter).
+    """
+    name = table.name
+    if table.nq != 6:
+        raise UnsupportedRobotError(
+            f"robot {name!r} has {table.nq} joints, closed-form IK needs 6"
+        )
+    j1, j2, j3, j4, j5, j6 = table.joints
+    sigma1 = _sign_of_right_angle(j1.alpha, "alpha1", name)
+    sigma3 = _sign_of_right_angle(j3.alpha, "alpha3", name)
+    sigma4 = _sign_of_right_angle(j4.alpha, "alpha4", name)
+    sigma5 = _sign_of_right_angle(j5.alpha, "alpha5", name)
+    _require_zero(math.remainder(j2.alpha, TAU), "alpha2", name)
+    for value, label in ((j1.a, "a1"), (j4.a, "a4"), (j5.a, "a5"), (j5.d, "d5")):
+        _require_zero(value, label, name)
+    _require_zero(j6.a, "a6", name)
+    forearm = math.hypot(j3.a, j4.d)
+    if abs(j2.a) <= _DH_TOL or forearm <= _DH_TOL:
+        raise UnsupportedRobotError(
+            f"robot {name!r} is not PUMA-type: needs a2 != 0 and (a3, d4) != 0"
+        )
+    offset = j2.d + j3.d
+    lower_t = tuple(float(x) for x in lower)
+    upper_t = tuple(float(x) for x in upper)
+    offsets = tuple(j.theta_offset for j in table.joints)
+    plain = tuple(
+        o == 0.0 and lo >= -math.pi and hi <= math.pi
+        for o, lo, hi in zip(offsets, lower_t, upper_t, strict=True)
+    )
+    return PumaGeometry(
+        sigma1=sigma1,
+        sigma3=sigma3,
+        sigma4=sigma4,
+        sigma5=sigma5,
+        d1=j1.d,
+        offset=offset,
+        a2=j2.a,
+        forearm=forearm,
+        cos_beta=j3.a / forearm,
+        sin_beta=-sigma3 * j4.d / forearm,
+        up_sign=-sigma1 * math.copysign(1.0, j2.a),
+        d6=j6.d,
+        cos_alpha6=math.cos(j6.alpha),
+        sin_alpha6=math.sin(j6.alpha),
+        theta_offset=offsets,
+        lower=lower_t,
+        upper=upper_t,
+        plain=plain,
+        bounds=(
+            tuple(x - LIMIT_TOL for x in lower_t),
+            tuple(x + LIMIT_TOL for x in upper_t),
+        ),
+        reach=(
+            math.hypot(abs(j2.a) - forearm, offset),
+            math.hypot(abs(j2.a) + forearm, offset),
+        ),
+    )
+
+
+@lru_cache(maxsize=16)
+def get_geometry(robot: Robot) -> PumaGeometry:
+    """The :class:`PumaGeometry` of a robot, built on first use and cached.
+
+    The cache is keyed by the robot object itself (identity), so a lookup costs
+    no hashing of the DH table; a robot with other limits
+    (:meth:`Robot.with_limits`) is another key. At most 16 robots are kept.
+
+    Raises:
+        UnsupportedRobotError: If the robot has no DH table, its tool frame is
+            not the table's last frame, or the table is not PUMA-type.
+    """
+    table = robot.dh_table
+    if table is None:
+        raise UnsupportedRobotError(
+            f"robot {robot.name!r} has no DH table: closed-form IK needs a "
+            "PUMA-type DH model (puma560, puma560-kang); use numerical IK"
+        )
+    if robot.tool_frame != table.tool_frame:
+        raise UnsupportedRobotError(
+            f"closed-form IK solves for the DH tool frame {table.tool_frame!r}, "
+            f"robot {robot.name!r} has tool frame {robot.tool_frame!r}"
+        )
+    return geometry_from_dh(table, robot.lower, robot.upper)
+
+
+def check_reach(geo: PumaGeometry, px: float, py: float, pz: float) -> None:
+    """Raise :class:`UnreachableError` unless the wrist centre can be reached.
+
+    Args:
+        geo: Arm constants.
+        px: Wrist centre x in the base frame [m].
+        py: Wrist centre y in the base frame [m].
+        pz: Wrist centre z in the base frame, from the shoulder height d1 [m].
+    """
+    r2 = px * px + py * py
+    distance = math.sqrt(r2 + pz * pz)
+    low, high = geo.reach
+    slack = 1e-12 * high
+    if not low - slack <= distance <= high + slack:
+        raise UnreachableError(distance, geo.reach, "reach")
+    radius = abs(geo.offset)
+    if r2 < radius * radius * (1.0 - 1e-12):
+        raise UnreachableError(math.sqrt(r2), (radius, radius), "cylinder")
+
+
+def wrap_to_limits(x: float, lower: float, upper: float) -> float:
+    """The representative of angle ``x`` (mod 2π) within [lower, upper].
+
+    Returns:
+        ``x + 2πk`` in (−π, π] when that is within the limits (±LIMIT_TOL),
+        else ``x + 2πk`` within them for k in ±1, ±2, else the one in (−π, π].
+    """
+    y = math.remainder(x, TAU)
+    if y <= -math.pi:
+        y += TAU
+    if lower - LIMIT_TOL <= y <= upper + LIMIT_TOL:
+        return y
+    for k in (1.0, -1.0, 2.0, -2.0):
+        z = y + k * TAU
+        if lower - LIMIT_TOL <= z <= upper + LIMIT_TOL:
+            return z
+    return y
+
+
+def wrap_array_to_limits(
+    x: FloatArray, lower: float, upper: float, *, reduced: bool = False
+) -> FloatArray:
+    """Vectorised :func:`wrap_to_limits` for one joint, in place.
+
+    Args:
+        x: Angles [rad], any shape; overwritten and returned.
+        lower: Lower limit of the joint [rad].
+        upper: Upper limit of the joint [rad].
+        reduced: True if ``x`` is already in [−π, π] (skips the reduction).
+    """
+    if not reduced:
+        x -= TAU * np.rint(x / TAU)
+    if x.size and x.min() <= -np.pi:
+        np.copyto(x, np.pi, where=x <= -np.pi)
+    lo, hi = lower - LIMIT_TOL, upper + LIMIT_TOL
+    below, above = np.nextafter(lo, -np.inf), np.nextafter(hi, np.inf)
+    for k in (1.0, -1.0, 2.0, -2.0):
+        # x out of [lo, hi] moves by k 2pi if that lands it in: k > 0 from below
+        # lo, k < 0 from above hi; an interval test on x in [-pi, pi]
+        shift = k * TAU
+        first = lo - shift if k > 0.0 else max(above, lo - shift)
+        last = min(below, hi - shift) if k > 0.0 else hi - shift
+        if first > np.pi or last < -np.pi or first > last:
+            continue
+        move = x <= last if first <= -np.pi else x >= first
+        if first > -np.pi and last < np.pi:
+            move &= x <= last
+        x += shift * move
+    return x

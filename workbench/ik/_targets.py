@@ -1,0 +1,110 @@
+"""Checks of target poses: shape, finiteness, rigidity (``poses.RIGIDITY_TOL``).
+
+Written for speed: plain floats for one pose, the transposed (16, n) layout of
+the batch solver for many, so the checks cost little next to the IK itself.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+
+from workbench.errors import DimensionError, InputError, NonFiniteError
+from workbench.poses import RIGIDITY_TOL
+
+FloatArray = npt.NDArray[np.float64]
+
+
+def pose_rows(target: pin.SE3 | npt.ArrayLike) -> list[list[float]]:
+    """Rows of the (4, 4) homogeneous matrix as floats, checked (scalar, fast).
+
+    Raises:
+        DimensionError: If ``target`` is not (4, 4).
+        NonFiniteError: If an entry is not a number, NaN or infinite.
+        InputError: If the bottom row is not [0, 0, 0, 1] or R is not a rotation.
+    """
+    if isinstance(target, pin.SE3):
+        rows = target.homogeneous.tolist()
+    else:
+        try:
+            arr = np.asarray(target, dtype=np.float64)
+        except (TypeError, ValueError) as err:
+            raise NonFiniteError(f"target must be numbers, got {target!r}") from err
+        if arr.shape != (4, 4):
+            raise DimensionError("target", (4, 4), arr.shape)
+        rows = arr.tolist()
+    if not math.isfinite(math.fsum(map(abs, (*rows[0], *rows[1], *rows[2], *rows[3])))):
+        raise NonFiniteError(f"target must be finite, got {rows}")
+    (r00, r01, r02, _), (r10, r11, r12, _), (r20, r21, r22, _), bottom = rows
+    if max(abs(bottom[0]), abs(bottom[1]), abs(bottom[2]), abs(bottom[3] - 1.0)) > (
+        RIGIDITY_TOL
+    ):
+        raise InputError(f"target must have bottom row [0, 0, 0, 1], got {bottom}")
+    err = max(
+        abs(r00 * r00 + r10 * r10 + r20 * r20 - 1.0),
+        abs(r01 * r01 + r11 * r11 + r21 * r21 - 1.0),
+        abs(r02 * r02 + r12 * r12 + r22 * r22 - 1.0),
+        abs(r00 * r01 + r10 * r11 + r20 * r21),
+        abs(r00 * r02 + r10 * r12 + r20 * r22),
+        abs(r01 * r02 + r11 * r12 + r21 * r22),
+    )
+    if err > RIGIDITY_TOL:
+        raise InputError(
+            f"target rotation is not orthonormal: max |R^T R - I| = {err:.3g} > "
+            f"tol = {RIGIDITY_TOL:g}"
+        )
+    det = (
+        r00 * (r11 * r22 - r12 * r21)
+        - r01 * (r10 * r22 - r12 * r20)
+        + r02 * (r10 * r21 - r11 * r20)
+    )
+    if det <= 0.0:
+        raise InputError(f"target rotation has det = {det:.6g} (a reflection)")
+    return rows
+
+
+def as_targets(targets: npt.ArrayLike) -> FloatArray:
+    """``targets`` as a float array of shape (N, 4, 4), not yet checked."""
+    try:
+        t = np.asarray(targets, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise NonFiniteError("targets must be numbers") from err
+    if t.ndim != 3 or t.shape[1:] != (4, 4):
+        expected = (t.shape[0] if t.ndim else 0, 4, 4)
+        raise DimensionError("targets", expected, t.shape)
+    return t
+
+
+def check_chunk(tt: FloatArray, start: int) -> None:
+    """Finite and rigid, on the (16, n) transposed layout of a chunk."""
+    finite = np.isfinite(tt).all(axis=0)
+    if not finite.all():
+        raise NonFiniteError(
+            f"targets must be finite: pose {start + int(np.argmin(finite))} has "
+            "NaN or inf"
+        )
+    c0, c1, c2 = tt[0:12:4], tt[1:12:4], tt[2:12:4]  # columns of R, (3, n)
+    err = np.abs(tt[15] - 1.0)
+    for k in (12, 13, 14):
+        np.maximum(err, np.abs(tt[k]), out=err)
+    for u, v, unit in (
+        (c0, c0, 1.0), (c1, c1, 1.0), (c2, c2, 1.0), (c0, c1, 0.0), (c0, c2, 0.0),
+        (c1, c2, 0.0),
+    ):  # fmt: skip
+        np.maximum(err, np.abs(u[0] * v[0] + u[1] * v[1] + u[2] * v[2] - unit), out=err)
+    det = (
+        c2[0] * (c0[1] * c1[2] - c0[2] * c1[1])
+        + c2[1] * (c0[2] * c1[0] - c0[0] * c1[2])
+        + c2[2] * (c0[0] * c1[1] - c0[1] * c1[0])
+    )
+    bad = (err > RIGIDITY_TOL) | (det <= 0.0)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise InputError(
+            f"targets must be rigid transforms: pose {start + i} is not "
+            f"(max |R^T R - I| or bottom-row error {err[i]:.3g} > "
+            f"{RIGIDITY_TOL:g}, or det R = {det[i]:.6g} <= 0)"
+        )

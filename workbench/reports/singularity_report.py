@@ -1,0 +1,260 @@
+"""The singularity report: one self-contained HTML file with embedded figures.
+
+matplotlib is imported lazily (Agg canvas, no pyplot), only when a report is
+built. For a PUMA-type robot the report holds the det J map over (θ2, θ3) with
+the shoulder and elbow loci, the σmin map, the arm in each singular
+configuration, the analytic factorisation checked against Pinocchio, the
+degenerate directions and, given a trajectory, its closest approaches. Other
+robots get the numeric maps and measures only.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from workbench.robot import Robot
+from workbench.singularities import (
+    NotPumaTypeError,
+    PumaFactorisation,
+    compute_conditions,
+    get_puma_factorisation,
+)
+from workbench.singularity_directions import compute_degenerate_direction
+from workbench.singularity_loci import (
+    compute_example_configurations,
+    get_elbow_singular_theta3,
+)
+from workbench.singularity_measures import (
+    compute_joint_grid,
+    compute_measures,
+    cross_check_det_j,
+)
+from workbench.singularity_trajectory import find_closest_approaches
+
+FloatArray = npt.NDArray[np.float64]
+#: ``progress(stage, done, total)``.
+ReportProgress = Callable[[str, int, int], None]
+
+#: Grid side for robots without the analytic determinant (one Pinocchio call
+#: per point), whatever ``grid_size`` asks.
+NUMERIC_GRID_MAX = 120
+#: Sub-grid stride for the check of the analytic det J map against Pinocchio.
+SUBGRID_STRIDE = 50
+#: Half width of the (θ2, θ3) maps around the middle of the joint limits [rad].
+MAP_HALF_WIDTH = np.radians(200.0)
+
+
+@dataclass(frozen=True, slots=True)
+class SingularityReport:
+    """A built report.
+
+    Attributes:
+        html: The whole HTML document.
+        summary: JSON-ready key numbers (what ``--json`` prints).
+        figures: PNG images by name, as embedded in ``html``.
+    """
+
+    html: str
+    summary: dict[str, Any]
+    figures: dict[str, bytes]
+
+
+def build_singularity_report(
+    robot: Robot,
+    *,
+    grid_size: int = 1000,
+    svd_grid_size: int = 200,
+    samples: int = 2000,
+    trajectory: tuple[npt.ArrayLike, npt.ArrayLike] | None = None,
+    progress: ReportProgress | None = None,
+    seed: int = 0,
+) -> SingularityReport:
+    """Compute everything and render the HTML.
+
+    Args:
+        robot: Any robot; PUMA-type ones get the analytic sections.
+        grid_size: Points per axis of the det J map.
+        svd_grid_size: Points per axis of the σmin map.
+        samples: Random configurations (within limits) of the det J check.
+        trajectory: Optional ``(t, q)``, shapes (K,) [s] and (K, nq) [rad].
+        progress: Called as ``progress(stage, done, total)`` during the grids.
+        seed: Seed of the random configurations.
+
+    Raises:
+        InputError: If the trajectory is malformed.
+    """
+    from workbench.reports import _singularity_figures as figs
+    from workbench.reports._singularity_html import render
+
+    try:
+        fac: PumaFactorisation | None = get_puma_factorisation(robot)
+    except NotPumaTypeError:
+        fac = None
+    if fac is None:
+        grid_size = min(grid_size, NUMERIC_GRID_MAX)
+        svd_grid_size = min(svd_grid_size, NUMERIC_GRID_MAX)
+    axes = [np.linspace(*_window(robot, j), grid_size) for j in (1, 2)]
+    svd_axes = [np.linspace(*_window(robot, j), svd_grid_size) for j in (1, 2)]
+    q_fixed = _fixed_joints(robot, fac, seed)
+
+    def stage(name: str) -> Callable[[int, int], None] | None:
+        return None if progress is None else (lambda d, n: progress(name, d, n))
+
+    det_grid = compute_joint_grid(
+        robot, *axes, q_fixed=q_fixed, progress=stage("det J map")
+    )
+    svd_grid = compute_joint_grid(
+        robot, *svd_axes, q_fixed=q_fixed, quantity="svd", progress=stage("σmin map")
+    )
+    data: dict[str, Any] = {"robot": robot, "fac": fac, "det_grid": det_grid}
+    data |= {"svd_grid": svd_grid, "examples": {}}
+    summary: dict[str, Any] = {
+        "robot": robot.name,
+        "puma_type": fac is not None,
+        "elbow_theta3_deg": None,
+        "det_j_map": _grid_summary(det_grid),
+        "sigma_min_map": _grid_summary(svd_grid),
+    }
+    overlay: dict[str, Any] = {"shoulder": None, "elbow_theta3": None, "examples": {}}
+    if fac is not None:
+        data |= _analytic_data(robot, fac, det_grid, samples, seed, summary)
+        sub = det_grid.configurations()[::2, ::2]
+        shoulder = compute_conditions(robot, sub).shoulder
+        overlay = {
+            "shoulder": (det_grid.x[::2], det_grid.y[::2], shoulder),
+            "elbow_theta3": data["elbow"],
+            "examples": data["examples"],
+        }
+    figures = {
+        "det_j_map": figs.figure_det_map(robot, det_grid, **overlay),
+        "sigma_min_map": figs.figure_sigma_map(robot, svd_grid, **overlay),
+    }
+    if fac is not None:
+        figures["arms"] = figs.figure_arms(robot, data["examples"], data["directions"])
+    if trajectory is not None:
+        t, q = (np.asarray(v, dtype=np.float64) for v in trajectory)
+        approaches = find_closest_approaches(robot, t, q)
+        signals = compute_conditions(robot, q).as_dict() if fac is not None else {}
+        signals["sigma_min"] = np.atleast_1d(compute_measures(robot, q).sigma_min)
+        figures["trajectory"] = figs.figure_trajectory(t, signals, approaches)
+        data["approaches"] = approaches
+        summary["closest_approach"] = {
+            kind: {"t": a.t, "distance": a.distance, "unit": a.unit}
+            | {"crossings": list(a.crossings)}
+            for kind, a in approaches.items()
+        }
+    summary["figures"] = list(figures)
+    return SingularityReport(render(data, summary, figures), summary, figures)
+
+
+def write_singularity_report(
+    robot: Robot, path: str | Path, **options: Any
+) -> SingularityReport:
+    """Build the report (see :func:`build_singularity_report`) and write it."""
+    report = build_singularity_report(robot, **options)
+    Path(path).write_text(report.html, encoding="utf-8")
+    return report
+
+
+def _analytic_data(
+    robot: Robot,
+    fac: PumaFactorisation,
+    det_grid: Any,
+    samples: int,
+    seed: int,
+    summary: dict[str, Any],
+) -> dict[str, Any]:
+    """Cross-checks, elbow angles and degenerate directions of a PUMA."""
+    rng = np.random.default_rng(seed)
+    start = time.perf_counter()
+    check = cross_check_det_j(
+        robot, rng.uniform(robot.lower, robot.upper, (samples, 6))
+    )
+    seconds = time.perf_counter() - start
+    sub_q = det_grid.configurations()[::SUBGRID_STRIDE, ::SUBGRID_STRIDE]
+    sub = cross_check_det_j(robot, sub_q.reshape(-1, 6))
+    sub_err = float(np.max(np.abs(sub.analytic - sub.pinocchio)))
+    elbow = get_elbow_singular_theta3(robot)
+    inside = [bool(robot.lower[2] <= v <= robot.upper[2]) for v in elbow]
+    examples = compute_example_configurations(robot)
+    directions = {
+        name: compute_degenerate_direction(robot, q, name.split(",")[0])
+        for name, q in examples.items()
+    }
+    described = fac.describe()
+    summary |= {
+        "elbow_theta3_deg": [round(float(v), 6) for v in np.degrees(elbow)],
+        "elbow_theta3_within_limits": inside,
+        "det_j_constant": fac.constant,
+        "factors": {k: described[k] for k in ("shoulder", "elbow", "wrist")},
+        "cross_check": {
+            "samples": samples,
+            "max_relative_error": check.max_relative_error,
+            "seconds": round(seconds, 3),
+            "subgrid_points": int(sub.q.shape[0]),
+            "subgrid_max_abs_error": sub_err,
+        },
+        "degenerate_directions": [
+            {
+                "name": name,
+                "q_deg": np.degrees(d.q).round(6).tolist(),
+                "sigma_min": d.sigma_min,
+                "direction": d.direction.tolist(),
+                "residual": d.residual,
+                "paper_axis": d.paper_axis,
+                "angle_to_paper_deg": d.angle_to_paper_deg,
+                "self_motion": d.self_motion.tolist(),
+            }
+            for name, d in directions.items()
+        ],
+    }
+    return {
+        "check": check,
+        "check_seconds": seconds,
+        "subgrid": (sub, sub_err),
+        "elbow": elbow,
+        "elbow_inside": inside,
+        "examples": examples,
+        "directions": directions,
+    }
+
+
+def _fixed_joints(robot: Robot, fac: PumaFactorisation | None, seed: int) -> FloatArray:
+    """Joints held fixed on the maps.
+
+    For a PUMA: 0, and θ5 = 90° so that the wrist factor is 1. Otherwise the
+    most manipulable of a few random configurations within the limits.
+    """
+    if fac is not None:
+        q = np.clip(np.zeros(robot.nq), robot.lower, robot.upper)
+        q[4] = np.pi / 2 - fac.theta_offset[4]
+        return q
+    lower = np.maximum(robot.lower, -np.pi)
+    upper = np.minimum(robot.upper, np.pi)
+    candidates = np.random.default_rng(seed).uniform(lower, upper, (64, robot.nq))
+    return candidates[np.argmax(compute_measures(robot, candidates).manipulability)]
+
+
+def _window(robot: Robot, joint: int) -> tuple[float, float]:
+    """A bit more than one turn, centred on the middle of the limits [rad].
+
+    The maps are 2π-periodic; the margin keeps loci near ±π off the edges.
+    """
+    lo, hi = robot.lower[joint], robot.upper[joint]
+    mid = 0.5 * (lo + hi) if np.isfinite(lo + hi) else 0.0
+    return mid - MAP_HALF_WIDTH, mid + MAP_HALF_WIDTH
+
+
+def _grid_summary(grid: Any) -> dict[str, Any]:
+    return {
+        "shape": [grid.y.size, grid.x.size],
+        "method": grid.method,
+        "seconds": round(grid.seconds, 4),
+    }
