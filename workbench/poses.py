@@ -19,7 +19,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from workbench.errors import InputError
+from workbench.errors import DimensionError, InputError, NonFiniteError
 from workbench.validation import as_finite_array, as_vector
 
 FloatArray = npt.NDArray[np.float64]
@@ -59,16 +59,7 @@ def _skew(v: FloatArray) -> FloatArray:
 def _as_rotation(rotation: npt.ArrayLike, tol: float, name: str) -> FloatArray:
     """Check a (3, 3) matrix is finite, orthonormal within ``tol`` and det +1."""
     r = as_finite_array(rotation, (3, 3), name)
-    err = float(np.max(np.abs(r.T @ r - np.eye(3))))
-    if err > tol:
-        raise InputError(
-            f"{name} is not orthonormal: max |R^T R - I| = {err:.3g} > tol = {tol:g}"
-        )
-    det = float(np.linalg.det(r))
-    if det <= 0.0:
-        raise InputError(
-            f"{name} has det = {det:.6g} (a reflection); a rotation needs det = +1"
-        )
+    _check_rigid(r.tolist(), [], tol, name)
     return r
 
 
@@ -124,7 +115,9 @@ def as_se3(target: pin.SE3 | npt.ArrayLike, *, tol: float = RIGIDITY_TOL) -> pin
             within ``tol``, or det R is not +1.
     """
     if isinstance(target, pin.SE3):
-        return se3_from_matrix(target.homogeneous, tol=tol)
+        rows = target.rotation.tolist()
+        _check_rigid(rows, target.translation.tolist(), tol, "rotation of the SE3")
+        return pin.SE3(target)
     return se3_from_matrix(target, tol=tol)
 
 
@@ -133,13 +126,56 @@ def se3_from_matrix(matrix: npt.ArrayLike, *, tol: float = RIGIDITY_TOL) -> pin.
 
     Same checks, tolerance and errors as :func:`as_se3`, for matrices only.
     """
-    m = as_finite_array(matrix, (4, 4), "homogeneous matrix")
-    if np.max(np.abs(m[3] - [0.0, 0.0, 0.0, 1.0])) > tol:
+    try:
+        m = np.asarray(matrix, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise NonFiniteError(
+            f"homogeneous matrix must be numbers, got {matrix!r}"
+        ) from err
+    if m.shape != (4, 4):
+        raise DimensionError("homogeneous matrix", (4, 4), m.shape)
+    rows = m.tolist()
+    if not all(math.isfinite(x) for x in rows[3]):
+        raise NonFiniteError(f"homogeneous matrix must be finite, got {rows[3]}")
+    if (
+        max(abs(x - y) for x, y in zip(rows[3], (0.0, 0.0, 0.0, 1.0), strict=True))
+        > tol
+    ):
         raise InputError(
-            f"homogeneous matrix must have bottom row [0, 0, 0, 1], got {m[3].tolist()}"
+            f"homogeneous matrix must have bottom row [0, 0, 0, 1], got {rows[3]}"
         )
-    rotation = _as_rotation(m[:3, :3], tol, "rotation part of the homogeneous matrix")
-    return pin.SE3(rotation.copy(), m[:3, 3].copy())
+    rotation = [row[:3] for row in rows[:3]]
+    translation = [row[3] for row in rows[:3]]
+    _check_rigid(rotation, translation, tol, "rotation part of the homogeneous matrix")
+    return pin.SE3(np.array(rotation), np.array(translation))
+
+
+def _check_rigid(
+    rotation: list[list[float]], translation: list[float], tol: float, name: str
+) -> None:
+    """Finite entries, rotation orthonormal within ``tol``, det +1 (plain floats)."""
+    (a, b, c), (d, e, f), (g, h, i) = rotation
+    if not all(math.isfinite(x) for x in (a, b, c, d, e, f, g, h, i, *translation)):
+        raise NonFiniteError(
+            f"{name}: pose must be finite, got R={rotation}, p={translation}"
+        )
+    err = max(  # entries of R^T R - I
+        abs(a * a + d * d + g * g - 1.0),
+        abs(b * b + e * e + h * h - 1.0),
+        abs(c * c + f * f + i * i - 1.0),
+        abs(a * b + d * e + g * h),
+        abs(a * c + d * f + g * i),
+        abs(b * c + e * f + h * i),
+    )
+    if err > tol:
+        raise InputError(
+            f"{name} is not orthonormal: max |R^T R - I| = {err:.3g} > tol = {tol:g}"
+        )
+    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    if det <= 0.0:
+        raise InputError(
+            f"{name} has det = {det:.6g} (a reflection); a rotation needs det = +1"
+        )
 
 
 def angeles4_from_rotation(

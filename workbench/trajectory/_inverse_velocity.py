@@ -15,9 +15,16 @@ has zero damping and *equals* :math:`J^{-1}`, so the exact block solve is used.
 Otherwise (near a singularity, or a Jacobian without the block structure) the
 DLS inverse is computed. The result is that of ``dls_inverse`` in every case;
 only the cost differs (a few µs instead of an SVD).
+
+Inside the singular region the planner damps about a reference velocity (the
+rate of its closed-form IK positions) rather than about zero, so that the
+joint velocity command stays consistent with the joint position command in
+the directions the damping suppresses (see :func:`solve_velocity`).
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import numpy as np
 import numpy.typing as npt
@@ -142,14 +149,28 @@ def solve_velocity(
     twist: list[float],
     epsilon: float,
     lambda_max: float,
+    reference: Callable[[], FloatArray] | None = None,
 ) -> tuple[FloatArray, bool]:
-    """Joint velocity ``J# twist`` (see the module docstring).
+    r"""Joint velocity: :math:`J^{-1}` outside the singular region, DLS inside.
+
+    Inside the singular region the damped-least-squares solution about a
+    reference velocity :math:`\dot q_r`,
+
+    .. math:: \dot q = \dot q_r + J^\# (\dot x - J \dot q_r)
+              = \arg\min \|J\dot q - \dot x\|^2 + \lambda^2 \|\dot q - \dot q_r\|^2,
+
+    with :math:`J^\#` of :func:`workbench.ik.dls_inverse`. With
+    :math:`\dot q_r = 0` it is the plain :math:`J^\# \dot x`. Outside the
+    region (no damping) the result is :math:`J^{-1}\dot x` whatever the
+    reference.
 
     Args:
         jacobian: Shape (6, nv), LOCAL_WORLD_ALIGNED, tool frame.
         twist: Six numbers [m/s, rad/s], linear first, base axes.
         epsilon: DLS singular-region size.
         lambda_max: DLS damping at a singularity.
+        reference: Returns the reference joint velocity (nv,) [rad/s] (called
+            only in the singular region), or None for zero.
 
     Returns:
         ``(qd, used_dls)``: shape (nv,) [rad/s], and True if the DLS inverse was
@@ -160,7 +181,11 @@ def solve_velocity(
         if qd is not None:
             return np.array(qd), False
     inverse = dls_inverse(jacobian, epsilon=epsilon, lambda_max=lambda_max)
-    return inverse @ np.array(twist, dtype=np.float64), True
+    xd = np.array(twist, dtype=np.float64)
+    if reference is None:
+        return inverse @ xd, True
+    qd_ref = reference()
+    return qd_ref + inverse @ (xd - jacobian @ qd_ref), True
 
 
 __all__ = ["BLOCK_TOL", "solve_velocity"]

@@ -163,6 +163,7 @@ class OnlinePlanner:
         q0 = robot.check_configuration(q_start)
         self._check_position(q0, 0.0)
         self._q = q0
+        self._q_before: FloatArray | None = None  # the command before self._q
         self._qd = np.zeros(robot.nv)
         self._cycle = 0
         self._frame_id = robot.tool_frame_id
@@ -280,8 +281,12 @@ class OnlinePlanner:
         p, v, rotation, omega = primitive.sample(t)
         r6, p6, twist = self._to_wrist_in_base(p, v, rotation, omega)
         q_prev = self._q
-        solutions = analytic(self.robot, pin.SE3(r6, p6), q_previous=q_prev)
-        solution = self._select(solutions, q_prev)
+        # continuity is measured from the configuration predicted by the last
+        # two commands, so that at a wrist singularity (theta4, theta6 free) the
+        # IK keeps the wrist moving as it was instead of splitting the step
+        q_pred = q_prev if self._q_before is None else 2.0 * q_prev - self._q_before
+        solutions = analytic(self.robot, pin.SE3(r6, p6), q_previous=q_pred)
+        solution = self._select(solutions, q_pred)
         q = solution.q
         if not solution.within_limits:
             self._check_position(q, t)
@@ -289,33 +294,47 @@ class OnlinePlanner:
             self.robot.model, self.robot.data, q, self._frame_id, _LWA
         )
         qd, damped = solve_velocity(
-            jacobian, twist, self.dls_epsilon, self.dls_lambda_max
+            jacobian,
+            twist,
+            self.dls_epsilon,
+            self.dls_lambda_max,
+            lambda: self._position_rate(q),
         )
         if self.check_speed and max(map(abs, qd.tolist())) > self._min_speed_limit:
             self._check_speed(qd, t)
         self._cycle += 1
-        self._q, self._qd, self._branch = q, qd, solution.index
+        self._q_before, self._q = q_prev, q
+        self._qd, self._branch = qd, solution.index
         self._state = CartesianState(p, v, rotation, omega)
         return PlannerSample(t, p, v, rotation, omega, q, qd, solution.branch, damped)
 
-    def _select(self, solutions: list[IKSolution], q_prev: FloatArray) -> IKSolution:
-        """The IK solution continuing ``q_prev`` (Kang's θ4 flip rule, generalised).
+    def _select(self, solutions: list[IKSolution], q_pred: FloatArray) -> IKSolution:
+        """The IK solution continuing the motion (Kang's θ4 flip rule, generalised).
 
         The two wrist twins of the previous branch are compared first; if the
         nearer one is within two cycles of joint-speed-limited motion it is the
         continuous choice, else every branch is compared (a shoulder or elbow
         singularity was crossed). ``analytic`` already returned each angle as
-        the representative nearest ``q_prev``, so the plain Euclidean distance
-        is that of :func:`workbench.ik.closed_form.nearest`.
+        the representative nearest the prediction ``q_pred``, so the plain
+        Euclidean distance is that of :func:`workbench.ik.closed_form.nearest`.
         """
         i = self._branch
         a, b = solutions[i & ~1], solutions[i | 1]
-        da, db = a.q - q_prev, b.q - q_prev
+        da, db = a.q - q_pred, b.q - q_pred
         na, nb = float(da @ da), float(db @ db)
         best, dist = (a, na) if na <= nb else (b, nb)
         if dist <= self._max_step2:
             return best
-        return nearest(solutions, q_prev)
+        return nearest(solutions, q_pred)
+
+    def _position_rate(self, q: FloatArray) -> FloatArray:
+        """Rate of the joint position commands ending at ``q``: the DLS reference.
+
+        Second-order backward difference (first order on the first cycle).
+        """
+        if self._q_before is None:
+            return (q - self._q) / self.period
+        return (3.0 * q - 4.0 * self._q + self._q_before) / (2.0 * self.period)
 
     def _check_speed(self, qd: FloatArray, t: float) -> None:
         ratio = np.abs(qd) / self._speed_limit
