@@ -135,9 +135,50 @@ def test_demo_reproduces_table2(capsys, tmp_path: Path) -> None:
     for path in figures.values():
         assert Path(path).read_bytes()[:4] == b"\x89PNG"
     assert (tmp_path / "demo" / "pick_and_place.csv").is_file()
+    preview = Path(summary["pages"]["preview"]).read_text(encoding="utf-8")
+    assert "<html" in preview.lower() and len(preview) > 100_000  # scene embedded
+    report = Path(summary["pages"]["singularity_report"]).read_text(encoding="utf-8")
+    assert report.count("data:image/png;base64,") >= 3
+    assert "3D preview (open in a browser)" in out
 
 
 def test_demo_json(capsys, tmp_path: Path) -> None:
     code, out, _ = run(capsys, "demo", "--out", str(tmp_path), "--json", "--no-plots")
     assert code == 0 and json.loads(out)["table2_matches"] is True
     assert json.loads(out)["pick_and_place"]["figures"] == {}
+
+
+def test_ik_falls_back_to_numerical_ik_for_other_arms(capsys) -> None:
+    from workbench import load_robot
+
+    q = np.array([0.1, -1.0, 1.0, 0.5, 0.3, 0.2])
+    matrix = load_robot("ur5").fk(q).homogeneous
+    code, out, _ = run(
+        capsys, "ik", "--robot", "ur5", "--matrix", *map(str, matrix.ravel()), "--json"
+    )
+    assert code == 0
+    (solution,) = json.loads(out)["solutions"]
+    assert solution["branch"] == "numeric" and solution["residual"] < 1e-9
+
+
+def test_ik_numerical_out_of_reach_exits_3(capsys) -> None:
+    far = [
+        "1",
+        "0",
+        "0",
+        "3",
+        "0",
+        "1",
+        "0",
+        "0",
+        "0",
+        "0",
+        "1",
+        "0",
+        "0",
+        "0",
+        "0",
+        "1",
+    ]
+    code, _, err = run(capsys, "ik", "--robot", "ur5", "--matrix", *far)
+    assert code == 3 and "no solution" in err and err.count("\n") == 1

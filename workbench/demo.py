@@ -21,6 +21,7 @@ from workbench import paper_data
 from workbench.demo_pick_and_place import run_pick_and_place_demo
 from workbench.poses import angeles7_from_se3
 from workbench.robot import Robot
+from workbench.trajectory_csv import read_trajectory_csv
 
 _log = logging.getLogger(__name__)
 
@@ -97,13 +98,28 @@ def format_table2(rows: list[Table2Comparison]) -> str:
     return "\n".join(lines)
 
 
+def _write_pages(robot: Robot, out_dir: Path) -> dict[str, str]:
+    """The 3D preview and the singularity report of the pick-and-place path."""
+    from workbench.reports.singularity_report import write_singularity_report
+    from workbench.viz import write_trajectory_html
+
+    samples = read_trajectory_csv(out_dir / "pick_and_place.csv", robot.nq)
+    preview = write_trajectory_html(
+        robot, samples, out_dir / "preview.html", title="Angeles et al. Sec. V"
+    )
+    report = out_dir / "singularities.html"
+    write_singularity_report(robot, report, trajectory=(samples.t, samples.q))
+    return {"preview": str(preview), "singularity_report": str(report)}
+
+
 def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, object]:
     """Run the papers' examples and write the results into ``out_dir``.
 
     Args:
         robot: The ``puma560`` model (Angeles Table I).
         out_dir: Output folder (created).
-        plots: Also write the PNG figures (the slow part, ~3 s).
+        plots: Also write the PNG figures, the 3D preview (``preview.html``)
+            and the singularity report (``singularities.html``): the slow part.
 
     Returns:
         A JSON-ready summary (also written to ``out_dir/summary.json``).
@@ -131,6 +147,8 @@ def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, ob
         "table2_markdown": table,
         "pick_and_place": run_pick_and_place_demo(robot, out_dir, plots=plots),
     }
+    if plots:
+        summary["pages"] = _write_pages(robot, out_dir)
     (out_dir / "summary.json").write_text(
         json.dumps(summary, indent=2, default=lambda a: np.asarray(a).tolist()) + "\n",
         encoding="utf-8",

@@ -47,5 +47,9 @@ def run(args: argparse.Namespace) -> int:
     verdict = "match" if summary["table2_matches"] else "DO NOT match"
     print(f"\nAll values rounded to the paper's two decimals {verdict} Table II.\n")
     print(format_pick_and_place(summary["pick_and_place"]))
+    pages = summary.get("pages", {})
+    if pages:
+        print(f"\n3D preview (open in a browser): {pages['preview']}")
+        print(f"Singularity report: {pages['singularity_report']}")
     print(f"\nResults written to {args.out}/")
     return 0

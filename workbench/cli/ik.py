@@ -1,4 +1,7 @@
-"""``workbench ik``: closed-form inverse kinematics of the PUMA models."""
+"""``workbench ik``: inverse kinematics, closed form for PUMA-type arms.
+
+Any other robot falls back to numerical IK (one solution, branch "numeric").
+"""
 
 from __future__ import annotations
 
@@ -16,7 +19,13 @@ from workbench.cli._common import (
     print_json,
 )
 from workbench.errors import InfeasibleError
-from workbench.ik.closed_form import IKSolution, analytic, nearest
+from workbench.ik.closed_form import (
+    IKSolution,
+    UnsupportedRobotError,
+    analytic,
+    nearest,
+)
+from workbench.ik.numerical import numeric
 from workbench.loading import load_robot
 from workbench.poses import (
     ANGELES7_PRINTED_TOL,
@@ -37,10 +46,11 @@ def register(commands: argparse._SubParsersAction) -> None:
     """Add the ``ik`` command."""
     parser = commands.add_parser(
         "ik",
-        help="inverse kinematics (closed form, PUMA models)",
+        help="inverse kinematics (closed form for PUMA models, else numerical)",
         description="Joint values that put the tool frame (the wrist centre) at a "
         "pose. Prints the branch within the joint limits nearest to q = 0, or with "
-        "--all every closed-form branch. residual = max(position error [m], "
+        "--all every closed-form branch. Robots that are not PUMA-type get one "
+        "numerical solution (branch 'numeric'). residual = max(position error [m], "
         "rotation error [rad]) of FK(q) against the target.",
     )
     add_robot_argument(parser)
@@ -114,24 +124,46 @@ def _pick(solutions: list[IKSolution], nq: int) -> IKSolution:
     return nearest(feasible, np.zeros(nq))
 
 
+def _numeric_row(robot: Robot, target: pin.SE3) -> dict[str, object]:
+    result = numeric(robot, target)
+    if not result.success:
+        raise InfeasibleError(
+            f"numerical IK found no solution for {robot.name} "
+            f"(best error {result.error:.3g} after {result.iterations} iterations, "
+            f"{result.restarts} restarts): the pose is probably out of reach"
+        )
+    return {
+        "branch": "numeric",
+        "q": result.q,
+        "q_deg": np.rad2deg(result.q),
+        "within_limits": True,
+        "wrist_singular": False,
+        "residual": residual(robot, result.q, target),
+    }
+
+
 def run(args: argparse.Namespace) -> int:
     """Print the solution(s); returns the exit code."""
     robot = load_robot(args.robot)
     target = target_from_args(args)
-    solutions = analytic(robot, target)
-    if not args.all:
-        solutions = [_pick(solutions, robot.nq)]
-    rows = [
-        {
-            "branch": s.branch,
-            "q": s.q,
-            "q_deg": np.rad2deg(s.q),
-            "within_limits": s.within_limits,
-            "wrist_singular": s.wrist_singular,
-            "residual": residual(robot, s.q, target),
-        }
-        for s in solutions
-    ]
+    try:
+        solutions = analytic(robot, target)
+    except UnsupportedRobotError:
+        rows = [_numeric_row(robot, target)]
+    else:
+        if not args.all:
+            solutions = [_pick(solutions, robot.nq)]
+        rows = [
+            {
+                "branch": s.branch,
+                "q": s.q,
+                "q_deg": np.rad2deg(s.q),
+                "within_limits": s.within_limits,
+                "wrist_singular": s.wrist_singular,
+                "residual": residual(robot, s.q, target),
+            }
+            for s in solutions
+        ]
     if args.json:
         print_json({"robot": robot.name, "frame": robot.tool_frame, "solutions": rows})
         return 0
