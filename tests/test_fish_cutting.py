@@ -17,7 +17,13 @@ from workbench.tasks import (
     VerticalDownCut,
     run_fish_cutting,
 )
-from workbench.tasks.fish_cutting import compute_waypoints
+from workbench.tasks.fish_program import (
+    KANG_BASE_HEIGHT,
+    KANG_HOME_ROTATION,
+    KANG_HOME_WRIST_CENTER,
+    compute_home_configuration,
+    compute_waypoints,
+)
 from workbench.trajectory_csv import read_trajectory_csv
 
 SETUP = FishCuttingSetup()
@@ -47,6 +53,13 @@ def test_no_joint_jump_between_servo_samples(run, puma_kang):
     # the servo samples pass through the planning commands
     m = round(SETUP.servo_rate / SETUP.planning_rate)
     np.testing.assert_allclose(run.servo.q[::m], run.q, atol=0)
+
+
+def test_joint_velocity_commands_agree_with_the_position_commands(run):
+    # also where DLS is active (about the rate of the IK positions): no ripple
+    central = (run.q[2:] - run.q[:-2]) * (SETUP.planning_rate / 2)
+    assert np.abs(run.qd[1:-1] - central).max() < 0.02  # [rad/s]
+    np.testing.assert_allclose(run.qd[-1], 0.0, atol=1e-12)  # at rest at home
 
 
 def test_program_runs_through_and_returns_home(run):
@@ -112,6 +125,19 @@ def test_wrist_continuity_through_singularities(run):
     assert run.damped.any()
 
 
+def test_home_is_kangs_q0_and_the_same_pose_on_angeles_model(puma_kang, puma):
+    np.testing.assert_allclose(
+        compute_home_configuration(puma_kang, SETUP), 0.0, atol=1e-12
+    )
+    q = compute_home_configuration(puma, SETUP)
+    pose = puma.fk(q)
+    np.testing.assert_allclose(pose.rotation, KANG_HOME_ROTATION, atol=1e-12)
+    lift = np.array([0.0, 0.0, KANG_BASE_HEIGHT])
+    np.testing.assert_allclose(
+        pose.translation + lift, KANG_HOME_WRIST_CENTER, atol=1e-12
+    )
+
+
 def test_runs_are_deterministic_per_seed():
     a, b, c = SimulatedFish(seed=5), SimulatedFish(seed=5), SimulatedFish(seed=6)
     y = np.linspace(0.2, 0.62, 50)
@@ -165,9 +191,9 @@ def test_unreachable_waypoint_is_rejected_before_running(puma_kang):
         run_fish_cutting(puma_kang, setup=FishCuttingSetup(max_velocity=-1.0))
 
 
-def test_cli_json_and_csv(tmp_path, capsys, run):
-    path = tmp_path / "fish.csv"
-    assert main(["fishcut", "--csv", str(path), "--json"]) == 0
+def test_cli_json_csv_and_html(tmp_path, capsys, run):
+    path, page = tmp_path / "fish.csv", tmp_path / "fish.html"
+    assert main(["fishcut", "--csv", str(path), "--html", str(page), "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
     for key in (
         "robot", "cycles", "servo_rate_hz", "planning_rate_hz", "events",
@@ -181,7 +207,8 @@ def test_cli_json_and_csv(tmp_path, capsys, run):
     assert result["wrist_flips"] == 0
     samples = read_trajectory_csv(path, nq=6)
     np.testing.assert_allclose(samples.q, run.servo.q, atol=0)
-    assert list(tmp_path.iterdir()) == [path]
+    assert "<html" in page.read_text(encoding="utf-8")[:200]
+    assert sorted(tmp_path.iterdir()) == [path, page]
 
 
 @pytest.mark.parametrize(

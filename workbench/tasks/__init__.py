@@ -2,13 +2,8 @@
 
 from workbench.tasks.cuts import HorizontalCut, VerticalDownCut
 from workbench.tasks.fish import SimulatedFish
-from workbench.tasks.fish_cutting import (
-    FishCuttingResult,
-    FishCuttingSetup,
-    FishEvent,
-    build_program,
-    run_fish_cutting,
-)
+from workbench.tasks.fish_cutting import FishCuttingResult, FishEvent, run_fish_cutting
+from workbench.tasks.fish_program import FishCuttingSetup, build_program
 
 __all__ = [
     "FishCuttingResult",

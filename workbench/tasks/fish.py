@@ -59,7 +59,7 @@ class SimulatedFish:
         self,
         seed: int = 0,
         *,
-        head_y: float = 0.21,
+        head_y: float = 0.17,
         tail_y: float = 0.61,
         center_x: float = 0.0,
         half_width: float = 0.05,

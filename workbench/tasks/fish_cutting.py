@@ -1,8 +1,9 @@
 r"""Kang's fish-cutting program (2007, Fig. 7) on a simulated fish, planned online.
 
 The program, in the world frame of Fig. 7 (z up, the robot base
-:data:`KANG_BASE_HEIGHT` above the world origin), with the fish stations
-``S_0 .. S_{n-1}`` along the backbone (``S_0`` is Kang's start pose ``A``)::
+:data:`~workbench.tasks.fish_program.KANG_BASE_HEIGHT` above the world origin),
+with the fish stations ``S_0 .. S_{n-1}`` along the backbone (``S_0`` is
+Kang's start pose ``A``), built by :func:`~workbench.tasks.fish_program.build_program`::
 
     PointToPoint(H -> S_0)                        # PTP(H, A)
     for each station i:
@@ -29,71 +30,20 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InfeasibleError
-from workbench.ik.closed_form import analytic, nearest
 from workbench.robot import Robot
-from workbench.tasks.cuts import HorizontalCut, VerticalDownCut
 from workbench.tasks.fish import SimulatedFish
-from workbench.trajectory.cartesian_paths import CartesianLimits
-from workbench.trajectory.motion_primitives import (
-    MotionPrimitive,
-    PointToPoint,
-    SemiCircleUp,
-    StraightLine,
+from workbench.tasks.fish_program import (
+    FishCuttingSetup,
+    build_program,
+    check_waypoints,
+    compute_home_configuration,
+    get_world_transforms,
 )
 from workbench.trajectory.online_planner import OnlinePlanner
 from workbench.trajectory.servo_interpolation import interpolate_servo
 from workbench.trajectory_csv import JointTrajectorySamples
 
 FloatArray = npt.NDArray[np.float64]
-
-#: Height [m] of the robot base frame above Kang's world origin: Fig. 7 puts the
-#: home wrist centre at world z = 0.24003 m (``H[2][3] + TOOL_LENGTH``), Table 1
-#: at base z = -0.4318 m, so 0.24003 + 0.4318.
-KANG_BASE_HEIGHT = 0.67183
-
-#: Kang's start pose ``A`` of Fig. 7 (world frame): tool z down, x along world y.
-KANG_START_ROTATION = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
-KANG_START_POSITION = np.array([0.0, 0.25, 0.3])
-KANG_START_ROTATION.setflags(write=False)
-KANG_START_POSITION.setflags(write=False)
-
-
-@dataclass(frozen=True, slots=True)
-class FishCuttingSetup:
-    """Parameters of the fish-cutting program (SI units).
-
-    Kang gives the poses ``H`` and ``A`` but not the tool length, speeds or
-    rates; the values here are assumptions that keep the PUMA 560 within its
-    (assumed) joint speed limits.
-    """
-
-    tool_length: float = 0.05  # [m] tool tip beyond the wrist centre, along z6
-    max_velocity: float = 0.15  # [m/s]
-    max_acceleration: float = 1.0  # [m/s²]
-    max_angular_velocity: float = 0.8  # [rad/s]
-    max_angular_acceleration: float = 2.0  # [rad/s²]
-    cutting_speed_ratio: float = 0.3  # Kang's "speed reducing rate"
-    planning_rate: float = 100.0  # [Hz]
-    servo_rate: float = 1000.0  # [Hz]
-    stations: int = 4
-    station_spacing: float = 0.08  # [m] along the fish (>= 2 v² / a for the arcs)
-    clearance: float = 0.01  # [m] retreat height above the nominal flesh
-    max_cycles: int = 20_000
-
-    @property
-    def limits(self) -> CartesianLimits:
-        """The Cartesian bounds."""
-        return CartesianLimits(
-            self.max_velocity,
-            self.max_acceleration,
-            self.max_angular_velocity,
-            self.max_angular_acceleration,
-        )
-
-    @property
-    def cutting_speed(self) -> float:
-        """Speed in the flesh [m/s]."""
-        return self.cutting_speed_ratio * self.max_velocity
 
 
 @dataclass(frozen=True, slots=True)
@@ -119,6 +69,8 @@ class FishCuttingResult:
 
     Attributes:
         t: (K,) [s]. position, velocity: (K, 3) tool tip, world frame.
+        rotation: (K, 3, 3) tool orientation, angular_velocity: (K, 3) [rad/s],
+            world frame.
         q, qd: (K, nq) joint commands [rad, rad/s]. damped: (K,) DLS used.
         branch: IK branch per cycle. primitive: Name of the primitive that
             produced each cycle's command. events: Touch events.
@@ -130,6 +82,8 @@ class FishCuttingResult:
     t: FloatArray
     position: FloatArray
     velocity: FloatArray
+    rotation: FloatArray
+    angular_velocity: FloatArray
     q: FloatArray
     qd: FloatArray
     damped: npt.NDArray[np.bool_]
@@ -158,101 +112,6 @@ class FishCuttingResult:
         return sum(a != b for a, b in itertools.pairwise(wrist))
 
 
-def _world_to_base(setup: FishCuttingSetup) -> tuple[pin.SE3, pin.SE3]:
-    tip = pin.SE3(np.eye(3), np.array([0.0, 0.0, setup.tool_length]))
-    base = pin.SE3(np.eye(3), np.array([0.0, 0.0, KANG_BASE_HEIGHT]))
-    return tip, base
-
-
-def compute_waypoints(
-    fish: SimulatedFish, setup: FishCuttingSetup
-) -> dict[str, FloatArray]:
-    """Named program waypoints (3,) [m], world frame, from the *nominal* fish.
-
-    Station ``i`` is ``KANG_START_POSITION`` moved ``i * station_spacing`` along
-    y. The bone guess is at the table (below any bone), the retreat point just
-    above the nominal flesh; the horizontal cut runs at the nominal backbone
-    height, from the last station back to the first.
-    """
-    a = KANG_START_POSITION
-    top = fish.table_z + fish.thickness + setup.clearance
-    points: dict[str, FloatArray] = {}
-    for i in range(setup.stations):
-        s = a + np.array([0.0, i * setup.station_spacing, 0.0])
-        points[f"S{i}"] = s
-        points[f"S{i}_bone_guess"] = np.array([s[0], s[1], fish.table_z])
-        points[f"S{i}_retreat"] = np.array([s[0], s[1], top])
-    cut_z = fish.table_z + fish.bone_height
-    last, first = points[f"S{setup.stations - 1}"], points["S0"]
-    points["Q_above"] = np.array([last[0], last[1], top])
-    points["Q"] = np.array([last[0], last[1], cut_z])
-    points["D"] = np.array([last[0], 0.5 * (last[1] + first[1]), cut_z])
-    points["C"] = np.array([first[0], first[1], cut_z])
-    points["C_above"] = np.array([first[0], first[1], top])
-    return points
-
-
-def build_program(
-    fish: SimulatedFish, setup: FishCuttingSetup, home: pin.SE3
-) -> list[MotionPrimitive]:
-    """Kang's Fig. 7 program as primitives (see the module docstring).
-
-    Args:
-        fish: The fish (only its nominal sizes are used).
-        setup: Program parameters.
-        home: Tool-tip home pose ``H``, world frame.
-    """
-    p = compute_waypoints(fish, setup)
-    rot, cut = KANG_START_ROTATION, setup.cutting_speed
-    program: list[MotionPrimitive] = [PointToPoint(p["S0"], rot)]
-    for i in range(setup.stations):
-        s = p[f"S{i}"]
-        last = i == setup.stations - 1
-        program += [
-            VerticalDownCut(
-                p[f"S{i}_bone_guess"], p[f"S{i}_retreat"], cutting_speed=cut
-            ),
-            StraightLine(s, end_at_speed=not last),
-        ]
-        if not last:
-            program.append(SemiCircleUp(p[f"S{i + 1}"]))
-    step = cut / setup.planning_rate
-    program += [
-        StraightLine(p["Q_above"]),
-        StraightLine(p["Q"]),
-        HorizontalCut(p["D"], cutting_speed=cut, step_height=step, end_at_speed=True),
-        HorizontalCut(p["C"], cutting_speed=cut, step_height=step),
-        StraightLine(p["C_above"]),
-        PointToPoint(home.translation, home.rotation),
-    ]
-    return program
-
-
-def check_waypoints(
-    robot: Robot, fish: SimulatedFish, setup: FishCuttingSetup, q_home: FloatArray
-) -> None:
-    """Check every waypoint has an IK solution within the joint limits.
-
-    Raises:
-        InfeasibleError: Naming the first waypoint out of reach or limits.
-    """
-    tip, base = _world_to_base(setup)
-    q = q_home
-    for name, point in compute_waypoints(fish, setup).items():
-        target = base.inverse() * pin.SE3(KANG_START_ROTATION, point) * tip.inverse()
-        try:
-            solutions = analytic(robot, target, q_previous=q)
-        except InfeasibleError as err:
-            raise InfeasibleError(f"waypoint {name} {point.tolist()}: {err}") from err
-        within = [s for s in solutions if s.within_limits]
-        if not within:
-            raise InfeasibleError(
-                f"waypoint {name} {point.tolist()} [m] has no IK solution within "
-                "the joint limits"
-            )
-        q = nearest(within, q).q
-
-
 def run_fish_cutting(
     robot: Robot,
     fish: SimulatedFish | None = None,
@@ -266,7 +125,8 @@ def run_fish_cutting(
         robot: A PUMA-type robot (default use: ``puma560-kang``).
         fish: The fish; default ``SimulatedFish(seed=0)``.
         setup: Program parameters; default :class:`FishCuttingSetup`.
-        q_home: Start (and end) configuration; default zeros (Kang's home).
+        q_home: Start (and end) configuration; default
+            :func:`compute_home_configuration` (zeros for ``puma560-kang``).
 
     Returns:
         The run: planning-rate commands, events, latencies, servo commands.
@@ -279,9 +139,12 @@ def run_fish_cutting(
     """
     fish = fish or SimulatedFish()
     setup = setup or FishCuttingSetup()
-    q0 = robot.check_configuration(np.zeros(robot.nq) if q_home is None else q_home)
+    if q_home is None:
+        q0 = compute_home_configuration(robot, setup)
+    else:
+        q0 = robot.check_configuration(q_home)
     check_waypoints(robot, fish, setup, q0)
-    tip, base = _world_to_base(setup)
+    tip, base = get_world_transforms(setup)
     planner = OnlinePlanner(
         robot,
         q0,
@@ -322,6 +185,10 @@ def run_fish_cutting(
         t=t,
         position=np.array([first.position] + [s.position for s in samples]),
         velocity=np.array([first.velocity] + [s.velocity for s in samples]),
+        rotation=np.array([first.rotation] + [s.rotation for s in samples]),
+        angular_velocity=np.array(
+            [first.angular_velocity] + [s.angular_velocity for s in samples]
+        ),
         q=q,
         qd=qd,
         damped=np.array([False] + [s.damped for s in samples]),
@@ -335,15 +202,4 @@ def run_fish_cutting(
     )
 
 
-__all__ = [
-    "KANG_BASE_HEIGHT",
-    "KANG_START_POSITION",
-    "KANG_START_ROTATION",
-    "FishCuttingResult",
-    "FishCuttingSetup",
-    "FishEvent",
-    "build_program",
-    "check_waypoints",
-    "compute_waypoints",
-    "run_fish_cutting",
-]
+__all__ = ["FishCuttingResult", "FishEvent", "run_fish_cutting"]

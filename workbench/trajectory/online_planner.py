@@ -5,13 +5,18 @@ Once per planning cycle, :meth:`OnlinePlanner.step` runs Kang's chain:
 1. Cartesian motion command of the tool tip (world frame) from the active
    :class:`~workbench.trajectory.motion_primitives.MotionPrimitive`;
 2. wrist-centre (robot tool frame) command, then the robot base frame;
-3. closed-form inverse kinematics, the branch nearest the previous command
-   (continuity, Kang's θ4 flip rule): joint position command;
+3. closed-form inverse kinematics, the branch nearest the configuration
+   extrapolated from the last two commands (continuity, Kang's θ4 flip rule,
+   and a smooth θ4/θ6 split at the wrist singularity itself): joint position
+   command;
 4. inverse velocity kinematics: joint velocity command. Outside the singular
-   region it is the exact :math:`J^{-1}`; inside it the damped-least-squares
-   inverse :func:`workbench.ik.dls_inverse` (Kang: "the damped least-squares
+   region it is the exact :math:`J^{-1}\dot x`; inside it the damped least
+   squares of :func:`workbench.ik.dls_inverse` (Kang: "the damped least-squares
    Jacobian inverse is adopted instead of the Jacobian inverse in the
-   neighborhood of kinematic singularities").
+   neighborhood of kinematic singularities"), damped about the rate of the
+   joint position commands rather than about zero, so that position and
+   velocity commands agree in the directions the damping suppresses (the
+   servo interpolation would otherwise ripple).
 
 Between cycles the caller may report what the tool touches
 (:meth:`~OnlinePlanner.notify`), stop the tool (:meth:`~OnlinePlanner.stop`)
@@ -298,7 +303,7 @@ class OnlinePlanner:
             twist,
             self.dls_epsilon,
             self.dls_lambda_max,
-            lambda: self._position_rate(q),
+            lambda: self._position_rate(q, twist),
         )
         if self.check_speed and max(map(abs, qd.tolist())) > self._min_speed_limit:
             self._check_speed(qd, t)
@@ -327,11 +332,14 @@ class OnlinePlanner:
             return best
         return nearest(solutions, q_pred)
 
-    def _position_rate(self, q: FloatArray) -> FloatArray:
+    def _position_rate(self, q: FloatArray, twist: list[float]) -> FloatArray:
         """Rate of the joint position commands ending at ``q``: the DLS reference.
 
-        Second-order backward difference (first order on the first cycle).
+        Second-order backward difference (first order on the first cycle);
+        zero when the tool is commanded at rest.
         """
+        if not any(twist):
+            return np.zeros_like(q)
         if self._q_before is None:
             return (q - self._q) / self.period
         return (3.0 * q - 4.0 * self._q + self._q_before) / (2.0 * self.period)
