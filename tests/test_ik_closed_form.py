@@ -580,8 +580,14 @@ def test_cli_no_branch_within_limits_and_non_puma(capsys, puma) -> None:
         "--all",
     )
     assert code == 0 and out.count("outside joint limits") == 8
-    path = puma.urdf_path  # a URDF path: no DH table
+    # A URDF path has no DH table: numerical IK, which keeps to the joint limits.
+    path = str(puma.urdf_path)
     code, _, err = run(
-        capsys, "ik", "--robot", str(path), "--matrix", *map(repr, numbers.tolist())
+        capsys, "ik", "--robot", path, "--matrix", *map(repr, numbers.tolist())
     )
-    assert code == EXIT_BAD_INPUT and "PUMA-type DH model" in err
+    assert code == EXIT_INFEASIBLE and "numerical IK found no solution" in err
+    inside = puma.fk(np.deg2rad([10.0, -40.0, 170.0, 20.0, 40.0, 30.0])).homogeneous
+    code, out, _ = run(
+        capsys, "ik", "--robot", path, "--matrix", *map(repr, inside.ravel())
+    )
+    assert code == 0 and "numeric" in out

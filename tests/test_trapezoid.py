@@ -89,7 +89,7 @@ def test_contract_entry_point_and_array_sampling():
 
 @settings(max_examples=150, deadline=None)
 @given(
-    distance=st.floats(min_value=0.0, max_value=3.0),
+    distance=st.floats(min_value=0.0, max_value=3.0, allow_subnormal=False),
     vmax=limits,
     amax=limits,
     fi=fractions,

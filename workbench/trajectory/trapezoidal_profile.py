@@ -159,7 +159,7 @@ def _build(
         velocities.append(v + a * dt)
         accelerations.append(a)
     velocities[-1] = vf  # remove the rounding of the sums: end exactly there
-    if distance is not None:
+    if distance is not None and len(positions) > 1:
         positions[-1] = distance
     return TrapezoidalProfile(
         tuple(times), tuple(positions), tuple(velocities), tuple(accelerations)
