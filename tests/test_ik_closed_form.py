@@ -588,6 +588,6 @@ def test_cli_no_branch_within_limits_and_non_puma(capsys, puma) -> None:
     assert code == EXIT_INFEASIBLE and "numerical IK found no solution" in err
     inside = puma.fk(np.deg2rad([10.0, -40.0, 170.0, 20.0, 40.0, 30.0])).homogeneous
     code, out, _ = run(
-        capsys, "ik", "--robot", path, "--matrix", *map(repr, inside.ravel())
+        capsys, "ik", "--robot", path, "--matrix", *map(repr, inside.ravel().tolist())
     )
     assert code == 0 and "numeric" in out
