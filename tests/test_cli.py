@@ -140,6 +140,11 @@ def test_demo_reproduces_table2(capsys, tmp_path: Path) -> None:
     report = Path(summary["pages"]["singularity_report"]).read_text(encoding="utf-8")
     assert report.count("data:image/png;base64,") >= 3
     assert "3D preview (open in a browser)" in out
+    fish = summary["fish_cutting"]
+    assert fish["robot"] == "puma560-kang" and fish["wrist_flips"] == 0
+    assert {e["kind"] for e in fish["events"]} == {"flesh", "bone"}
+    assert (tmp_path / "demo" / "fishcut.csv").is_file()
+    assert (tmp_path / "demo" / "fishcut.html").stat().st_size > 100_000
 
 
 def test_demo_json(capsys, tmp_path: Path) -> None:

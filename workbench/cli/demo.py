@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from workbench.cli._common import add_json_flag, print_json
-from workbench.demo import run_demo
+from workbench.demo import format_fish_cutting, run_demo
 from workbench.demo_pick_and_place import format_pick_and_place
 from workbench.loading import load_robot
 
@@ -47,9 +47,12 @@ def run(args: argparse.Namespace) -> int:
     verdict = "match" if summary["table2_matches"] else "DO NOT match"
     print(f"\nAll values rounded to the paper's two decimals {verdict} Table II.\n")
     print(format_pick_and_place(summary["pick_and_place"]))
+    print()
+    print(format_fish_cutting(summary["fish_cutting"]))
     pages = summary.get("pages", {})
     if pages:
         print(f"\n3D preview (open in a browser): {pages['preview']}")
         print(f"Singularity report: {pages['singularity_report']}")
+        print(f"Fish cutting preview: {args.out / 'fishcut.html'}")
     print(f"\nResults written to {args.out}/")
     return 0

@@ -9,13 +9,11 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-import numpy as np
-
 from workbench.cli._common import add_json_flag, add_robot_argument, print_json
 from workbench.errors import InputError
 from workbench.loading import load_robot
 from workbench.tasks import FishCuttingSetup, SimulatedFish, run_fish_cutting
-from workbench.tasks.fish_cutting import FishCuttingResult
+from workbench.tasks.fish_cutting import summarize_fish_cutting
 from workbench.trajectory_csv import write_trajectory_csv
 
 DEFAULT_ROBOT = "puma560-kang"
@@ -98,32 +96,6 @@ def _atomic_path(path: Path) -> Iterator[Path]:
         tmp.unlink(missing_ok=True)
 
 
-def _summary(result: FishCuttingResult, robot_name: str) -> dict:
-    latency = result.latency_us
-    setup = result.setup
-    return {
-        "robot": robot_name,
-        "cycles": len(result.t) - 1,
-        "servo_rate_hz": setup.servo_rate,
-        "planning_rate_hz": setup.planning_rate,
-        "duration": float(result.t[-1]),
-        "events": [
-            {"t": e.t, "kind": e.kind, "primitive": e.primitive, "position": e.position}
-            for e in result.events
-        ],
-        "latency_us": {
-            "median": float(np.median(latency)),
-            "p99": float(np.percentile(latency, 99)),
-        },
-        "max_joint_speed": result.max_joint_speed,
-        "wrist_flips": result.wrist_flips,
-        "wrist_singularity_crossings": result.wrist_singularity_crossings,
-        "dls_cycles": int(np.count_nonzero(result.damped)),
-        "seed": result.fish.seed,
-        "servo_samples": len(result.servo.t),
-    }
-
-
 def run(args: argparse.Namespace) -> int:
     """Run the program; write the CSV and the page only if it completes."""
     _check_writable(args.csv, "--csv")
@@ -148,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
     if args.csv is not None:
         with _atomic_path(args.csv) as tmp:
             write_trajectory_csv(tmp, result.servo)
-    summary = _summary(result, robot.name)
+    summary = summarize_fish_cutting(result, robot.name)
     if args.json:
         print_json(summary)
         return 0

@@ -203,3 +203,30 @@ def run_fish_cutting(
 
 
 __all__ = ["FishCuttingResult", "FishEvent", "run_fish_cutting"]
+
+
+def summarize_fish_cutting(result: FishCuttingResult, robot_name: str) -> dict:
+    """JSON-ready summary of a run (the keys of ``workbench fishcut --json``)."""
+    latency = result.latency_us
+    setup = result.setup
+    return {
+        "robot": robot_name,
+        "cycles": len(result.t) - 1,
+        "servo_rate_hz": setup.servo_rate,
+        "planning_rate_hz": setup.planning_rate,
+        "duration": float(result.t[-1]),
+        "events": [
+            {"t": e.t, "kind": e.kind, "primitive": e.primitive, "position": e.position}
+            for e in result.events
+        ],
+        "latency_us": {
+            "median": float(np.median(latency)),
+            "p99": float(np.percentile(latency, 99)),
+        },
+        "max_joint_speed": result.max_joint_speed,
+        "wrist_flips": result.wrist_flips,
+        "wrist_singularity_crossings": result.wrist_singularity_crossings,
+        "dls_cycles": int(np.count_nonzero(result.damped)),
+        "seed": result.fish.seed,
+        "servo_samples": len(result.servo.t),
+    }
