@@ -39,3 +39,15 @@ def random_configurations(
 ) -> np.ndarray:
     """``count`` configurations uniform within the joint limits, shape (count, nq)."""
     return rng.uniform(robot.lower, robot.upper, size=(count, robot.nq))
+
+
+def run_cli(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    """Run the command line in-process: (exit code, stdout, stderr)."""
+    from workbench.cli import main
+
+    try:
+        code = main(list(argv))
+    except SystemExit as exit_:  # argparse's own errors
+        code = int(exit_.code or 0)
+    out, err = capsys.readouterr()
+    return code, out, err

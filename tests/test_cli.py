@@ -8,23 +8,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.conftest import run_cli as run
 from workbench import paper_data
 from workbench.catalog import get_own_urdf_dir
-from workbench.cli import EXIT_BAD_INPUT, main
+from workbench.cli import EXIT_BAD_INPUT
 
 # Table II is printed to two decimals: a computed value matches when it rounds to it.
 PRINTED_DECIMALS = 2
 ATOL_PRINTED = 1e-9  # printed values converted mm -> m -> mm are not bit-exact
-
-
-def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    """Run the CLI in-process: (exit code, stdout, stderr)."""
-    try:
-        code = main(list(argv))
-    except SystemExit as exit_:  # argparse's own errors
-        code = int(exit_.code or 0)
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.mark.parametrize(

@@ -8,22 +8,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.conftest import run_cli as run
 from workbench import paper_data
-from workbench.cli import EXIT_BAD_INPUT, EXIT_INFEASIBLE, main
+from workbench.cli import EXIT_BAD_INPUT, EXIT_INFEASIBLE
 from workbench.trajectory_csv import read_trajectory_csv
 
 PICK = [str(x) for x in paper_data.ANGELES_PICK_Q_DEG]
 PLACE = [str(x) for x in paper_data.ANGELES_PLACE_Q_DEG]
 BASE = ("plan", "pick-place", "--robot", "puma560", "--pick-deg", *PICK)
-
-
-def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    try:
-        code = main(list(argv))
-    except SystemExit as exit_:
-        code = int(exit_.code or 0)
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def test_table3_json_csv_and_plot(capsys, tmp_path: Path) -> None:

@@ -8,24 +8,15 @@ import math
 import numpy as np
 import pytest
 
+from tests.conftest import run_cli as run
 from workbench import load_robot
-from workbench.cli import EXIT_BAD_INPUT, main
+from workbench.cli import EXIT_BAD_INPUT
 from workbench.singularities import compute_conditions, compute_det_j_analytic
 
 ATOL_DEG_INPUT = 1e-9  # degrees typed with 10 decimals, converted to rad
 REL_DET = 1e-9
 SMALL_GRID = ["--grid", "40", "--svd-grid", "12"]
 KEYS = {"robot", "det_j", "sigma_min", "manipulability", "condition_number", "near"}
-
-
-def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    """Run the CLI in-process: (exit code, stdout, stderr)."""
-    try:
-        code = main(list(argv))
-    except SystemExit as exit_:  # argparse's own errors
-        code = int(exit_.code or 0)
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def test_singularities_json_at_kang_elbow_singularity(capsys) -> None:

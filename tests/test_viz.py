@@ -20,9 +20,9 @@ import pinocchio as pin
 import pytest
 import umsgpack
 
-from tests.conftest import random_configurations
+from tests.conftest import random_configurations, run_cli
 from workbench import FrameNotFoundError, InputError, URDFLoadError, load_robot
-from workbench.cli import EXIT_BAD_INPUT, main
+from workbench.cli import EXIT_BAD_INPUT
 from workbench.errors import DimensionError
 from workbench.trajectory_csv import JointTrajectorySamples, write_trajectory_csv
 from workbench.viz import (
@@ -84,15 +84,6 @@ def by_path(commands: list[dict], kind: str) -> dict[str, dict]:
 
 def matrix(command: dict) -> np.ndarray:
     return np.array(command["matrix"]).reshape(4, 4).T
-
-
-def run_cli(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    try:
-        code = main(list(argv))
-    except SystemExit as exit_:
-        code = int(exit_.code or 0)
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 # -- scene contents ---------------------------------------------------------------
