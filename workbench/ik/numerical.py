@@ -87,7 +87,7 @@ _DAMPING_GAIN = 3e-2
 _DAMPING_FLOOR = 1e-9
 """lambda_0: keeps J J^T + lambda I positive definite at singularities."""
 
-_STALL_STEPS = 6
+_STALL_STEPS = 4
 """Restart when the error has not dropped by 10 % for this many steps."""
 
 _STALL_RATIO = 0.81
@@ -135,7 +135,7 @@ _frame_placement = pin.updateFramePlacement
 _frame_jacobian = pin.getFrameJacobian
 _log6 = pin.log6
 _LOCAL = pin.ReferenceFrame.LOCAL
-_dot, _maximum, _minimum = np.dot, np.maximum, np.minimum
+_maximum, _minimum, _hypot = np.maximum, np.minimum, math.hypot
 
 
 @dataclass(frozen=True, slots=True)
@@ -419,18 +419,15 @@ def _frozen_step(
     """Damped step (to subtract) with the joints ``q_next`` pushes out frozen.
 
     Their Jacobian columns are zeroed, so that the other joints of a redundant
-    arm take over the motion they cannot make.
+    arm take over the motion they cannot make; the step of a zeroed column
+    (and of its zeroed pull) is exactly 0.
     """
-    blocked = (q_next < setup.lower) | (q_next > setup.upper)
-    jac = jac.copy()
-    jac[:, blocked] = 0.0
+    free = (q_next >= setup.lower) & (q_next <= setup.upper)
+    jac = jac * free
     if pull is not None:
-        pull = pull.copy()
-        pull[blocked] = 0.0
+        pull = pull * free
     damping = _DAMPING_GAIN * err2 + _DAMPING_FLOOR
-    dq = _damped_step(jac, e, damping, setup.identity, pull)
-    dq[blocked] = 0.0
-    return dq
+    return _damped_step(jac, e, damping, setup.identity, pull)
 
 
 def _damped_step(
@@ -501,7 +498,7 @@ def _solve(
         _joint_jacobians(model, data, q)
         pose = act_inv(_frame_placement(model, data, frame_id))
         e = _log6(pose).vector
-        err2 = e.dot(e)
+        err2 = _hypot(*e.tolist()) ** 2  # a float: cheaper than e.dot(e) here
         if err2 < best_err2:
             best_q, best_err2, best_pose, best_e = q, err2, pose, e
             if err2 <= tol2:
@@ -531,7 +528,7 @@ def _solve(
         if square:
             lu_compute(jac)
             dq = lu_solve(e)
-            step2 = dq.dot(dq)
+            step2 = _hypot(*dq.tolist()) ** 2
             if not step2 < _SINGULAR_STEP2:  # near-singular (or NaN): damp
                 dq = None
             elif step2 > _MAX_STEP2:
@@ -541,7 +538,7 @@ def _solve(
             if nv < 6:
                 dq = _damped_step(jac, e, damping, identity, None)
             else:  # inlined _damped_step: the common path of redundant arms
-                normal = _dot(jac, jac.T)
+                normal = jac.dot(jac.T)
                 normal += damping * identity
                 llt_compute(normal)
                 if redundant and err2 > _NULL_OFF_ERROR2:
@@ -550,9 +547,9 @@ def _solve(
                         pull *= _NULL_GAIN
                     else:
                         pull = _NULL_GAIN * pin.difference(model, q, q_ref)
-                    dq = _dot(jac.T, llt_solve(e + _dot(jac, pull))) - pull
+                    dq = llt_solve(e + jac.dot(pull)).dot(jac) - pull  # J^T y - z
                 else:
-                    dq = _dot(jac.T, llt_solve(e))
+                    dq = llt_solve(e).dot(jac)  # J^T y
         if not vector_space:
             q = pin.integrate(model, q, -dq)
             _minimum(_maximum(q, lower, out=q), upper, out=q)
@@ -580,7 +577,6 @@ def _solve(
 
     # Every q above is a new array, never written to once evaluated.
     best_q.setflags(write=False)
-    best_err2 = float(best_err2)
     # The angular part of log6 is log3 of the rotation.
     return IKResult(
         q=best_q,
