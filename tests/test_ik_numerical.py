@@ -63,6 +63,45 @@ def test_converges_on_random_reachable_targets(
         assert np.all(result.q <= robot.upper)
 
 
+def test_random_targets_take_few_steps(robot: Robot, rng: np.random.Generator) -> None:
+    """The default first guess (nearest candidate) keeps the step count low."""
+    steps = []
+    for _ in range(100):
+        target = robot.fk(random_configuration(robot, rng))
+        result = numeric(robot, target, rng=rng)
+        assert result.success
+        steps.append(result.iterations)
+    assert np.median(steps) <= 8
+
+
+def test_replaced_limits_are_respected(rng: np.random.Generator) -> None:
+    """What is cached per robot follows new limit arrays."""
+    robot = load_robot("puma560")
+    q_true = np.array([0.3, -0.8, 0.6, 0.5, 0.9, 0.4])
+    # The wrist-flipped configuration reaches the same pose.
+    q_flip = q_true + np.array([0.0, 0.0, 0.0, -np.pi, -1.8, -np.pi])
+    target = robot.fk(q_true)
+    assert max(pose_errors(robot, q_flip, target)) <= ATOL_EXACT
+    assert numeric(robot, target, q_flip).success  # fills the cache
+    robot.lower, robot.upper = q_true - 0.3, q_true + 0.3
+    for q0 in (None, q_flip):
+        result = numeric(robot, target, q0, rng=rng)
+        assert result.success
+        assert np.all(result.q >= robot.lower)
+        assert np.all(result.q <= robot.upper)
+        np.testing.assert_allclose(result.q, q_true, rtol=0, atol=1e-8)
+
+
+def test_default_first_guess_is_repeatable(
+    robot: Robot, rng: np.random.Generator
+) -> None:
+    for _ in range(5):
+        target = robot.fk(random_configuration(robot, rng))
+        first, second = numeric(robot, target), numeric(robot, target)
+        np.testing.assert_array_equal(first.q, second.q)
+        assert first.iterations == second.iterations
+
+
 def test_reports_position_and_rotation_errors(
     robot: Robot, rng: np.random.Generator
 ) -> None:

@@ -312,7 +312,8 @@ class _Setup:
             self.identity,
             wide,
             wide_joints,
-            wide_joints or (vector_space and nv > 6),  # check_limits
+            # plain: q (+) v = q + v and limits are only clipped
+            vector_space and not wide_joints and nv <= 6,
             lu.compute,
             lu.solve,
             llt.compute,
@@ -477,7 +478,7 @@ def _solve(
         identity,
         wide,
         wide_joints,
-        check_limits,
+        plain,
         lu_compute,
         lu_solve,
         llt_compute,
@@ -490,8 +491,10 @@ def _solve(
 
     q = q_ref.copy() if q_start is None else q_start
     best_q, best_err2, best_pose, best_e = q, math.inf, None, None
-    steps = restarts = run_steps = stall_at = 0
-    run_best = math.inf
+    # Steps are counted over all runs; run_start and stall_at are step counts
+    # (start of the run, last 10 % fall of its error below stall_level).
+    steps = restarts = run_start = stall_at = 0
+    stall_level = math.inf
     while True:
         # computeJointJacobians also places the joints (forward kinematics):
         # the frame Jacobian is then read off without another pass.
@@ -503,11 +506,11 @@ def _solve(
             best_q, best_err2, best_pose, best_e = q, err2, pose, e
             if err2 <= tol2:
                 break
-        if err2 < _STALL_RATIO * run_best:
-            run_best, stall_at = err2, run_steps
+        if err2 < stall_level:
+            stall_level, stall_at = _STALL_RATIO * err2, steps
         if steps >= max_iterations:
             break
-        if run_steps - stall_at >= _STALL_STEPS or run_steps >= _RUN_STEPS:
+        if steps - stall_at >= _STALL_STEPS or steps - run_start >= _RUN_STEPS:
             # The clock only stops restarts: a run that converges is never
             # cut short, e.g. by the process being descheduled.
             if time.perf_counter() > deadline:
@@ -516,24 +519,25 @@ def _solve(
                 sample = _sampler(setup, rng)
             q = sample()
             restarts += 1
-            run_steps = stall_at = 0
-            run_best = math.inf
+            run_start = stall_at = steps
+            stall_level = math.inf
             continue
         steps += 1
-        run_steps += 1
 
         # The step dq is subtracted: q <- q (-) dq.
         jac = _frame_jacobian(model, data, frame_id, _LOCAL)
-        dq = pull = None
+        dq = None
         if square:
             lu_compute(jac)
             dq = lu_solve(e)
             step2 = _hypot(*dq.tolist()) ** 2
-            if not step2 < _SINGULAR_STEP2:  # near-singular (or NaN): damp
-                dq = None
-            elif step2 > _MAX_STEP2:
-                dq *= _MAX_STEP / math.sqrt(step2)
+            if not step2 <= _MAX_STEP2:  # long, near-singular or NaN
+                if step2 < _SINGULAR_STEP2:
+                    dq *= _MAX_STEP / math.sqrt(step2)
+                else:  # near-singular J (or NaN): damped step below
+                    dq = None
         if dq is None:
+            pull = None
             damping = _DAMPING_GAIN * err2 + _DAMPING_FLOOR
             if nv < 6:
                 dq = _damped_step(jac, e, damping, identity, None)
@@ -550,14 +554,15 @@ def _solve(
                     dq = llt_solve(e + jac.dot(pull)).dot(jac) - pull  # J^T y - z
                 else:
                     dq = llt_solve(e).dot(jac)  # J^T y
+        if plain:  # vector space, clipping only
+            q_next = q - dq
+            q = _minimum(_maximum(q_next, lower, out=q_next), upper, out=q_next)
+            continue
         if not vector_space:
             q = pin.integrate(model, q, -dq)
             _minimum(_maximum(q, lower, out=q), upper, out=q)
             continue
         q_next = q - dq
-        if not check_limits:
-            q = _minimum(_maximum(q_next, lower, out=q_next), upper, out=q_next)
-            continue
         q_clip = _minimum(_maximum(q_next, lower), upper)
         if wide_joints and q_clip.tobytes() != q_next.tobytes():
             # Full-turn revolute joints come back in at the other end.
