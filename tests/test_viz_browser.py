@@ -35,6 +35,8 @@ CHROMIUM_FLAGS = (
     f"--window-size={WIDTH},{HEIGHT}",
     "--virtual-time-budget=3000",  # let the page load and render [ms]
 )
+CHROMIUM_TIMEOUT = 120  # [s] per attempt
+CHROMIUM_ATTEMPTS = 2
 PIXEL_CHANGED = 40  # max |RGB difference| above which a pixel counts as changed
 Q1_DEG = [0.0, -45.0, 180.0, 0.0, 45.0, 0.0]
 Q2_DEG = [60.0, -90.0, 160.0, 30.0, 30.0, 0.0]
@@ -74,15 +76,26 @@ def screenshot(chromium: str, page: str, path: Path) -> np.ndarray:
     """Save ``page`` next to ``path``, render it offline, return RGB (H, W, 3)."""
     html = path.with_suffix(".html")
     html.write_text(page, encoding="utf-8")
-    command = [
-        chromium,
-        *CHROMIUM_FLAGS,
-        f"--user-data-dir={path.parent / (path.stem + '-profile')}",
-        f"--screenshot={path}",
-        html.as_uri(),
-    ]
-    result = subprocess.run(command, capture_output=True, text=True, timeout=180)
-    assert path.exists(), f"no screenshot: {result.stderr[-2000:]}"
+    stderr = ""
+    for attempt in range(CHROMIUM_ATTEMPTS):  # a loaded machine can hang Chromium
+        command = [
+            chromium,
+            *CHROMIUM_FLAGS,
+            f"--user-data-dir={path.parent / f'{path.stem}-profile{attempt}'}",
+            f"--screenshot={path}",
+            html.as_uri(),
+        ]
+        try:
+            result = subprocess.run(
+                command, capture_output=True, text=True, timeout=CHROMIUM_TIMEOUT
+            )
+        except subprocess.TimeoutExpired as err:
+            stderr = f"timed out after {err.timeout} s"
+            continue
+        stderr = result.stderr
+        if path.exists():
+            break
+    assert path.exists(), f"no screenshot: {stderr[-2000:]}"
     image = np.asarray(Image.open(path).convert("RGB"), dtype=np.int16)
     assert image.shape == (HEIGHT, WIDTH, 3)
     return image
