@@ -1,7 +1,18 @@
 """Vectorised closed-form IK: all eight branches of N poses at once (numpy).
 
 Same formulas, branch order and wrapping as :func:`workbench.ik.analytic`
-(without ``q_previous``), written over arrays of shape (arm, elbow, pose).
+(without ``q_previous``). A chunk of poses is solved with the pose as the
+last, contiguous axis, the four (arm, elbow) pairs as (arm, elbow, pose), and
+the joint values are written straight into the result, stored (arm, elbow,
+flip, joint, pose): ``q`` is the (N, 8, 6) view of that array, so no
+transposing copy is made (``np.ascontiguousarray(q)`` gives the pose-major
+layout if a consumer needs it).
+
+Written for throughput: few numpy calls per chunk (what can be stacked is:
+the rows of A, the entries of M, the two arguments of θ6), preallocated
+buffers for the large arrays, the ±1 signs of the DH table applied through
+the order of subtractions, and the symmetries of the branches used instead of
+recomputing (θ2 of the left arm from the right arm's, θ4, θ6 flipped by ±π).
 """
 
 from __future__ import annotations
@@ -21,8 +32,24 @@ from workbench.robot import Robot
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 
-#: Poses per chunk: the temporaries of one chunk stay in the CPU cache.
+#: Poses per chunk: the arrays of a chunk stay in the CPU cache (L2) and stay
+#: below the size at which malloc maps fresh pages for each temporary, while
+#: the ~110 numpy calls of a chunk are spread over enough poses.
 _CHUNK = 2048
+
+#: Rows of the elbow arrays (sign of sin γ) per (arm, elbow): the left arm's
+#: elbow-up has the right arm's elbow-down sign and vice versa.
+_ELBOW_ROWS = np.array([[0, 1], [1, 0]])
+
+
+class _Buffers:
+    """Arrays written once per chunk, allocated once per call."""
+
+    def __init__(self, n: int) -> None:
+        self.m = np.empty((2, 3, 2, n))  # m00, m01, m02 per (arm, ., elbow)
+        self.m_tmp = np.empty((2, 3, 2, n))
+        self.yx = np.empty((2, 2, 2, n))  # arguments of theta6
+        self.yx_tmp = np.empty((2, 2, 2, n))
 
 
 def analytic_batch(
@@ -41,7 +68,8 @@ def analytic_batch(
         (θ4 = 0 at a wrist singularity); and ``valid`` of shape (N, 8), True
         where the pose is reachable (then every branch reaches it). Rows of
         unreachable poses are NaN. Joint limits are not applied: test
-        ``(robot.lower <= q) & (q <= robot.upper)`` for that.
+        ``(robot.lower <= q) & (q <= robot.upper)`` for that. ``q`` is a view
+        with the pose axis fastest in memory (not C-contiguous).
 
     Raises:
         UnsupportedRobotError: If the robot has no PUMA-type DH table.
@@ -52,156 +80,237 @@ def analytic_batch(
     geo = get_geometry(robot)
     t = as_targets(targets)
     count = t.shape[0]
-    q = np.empty((count, 8, 6))
+    out = np.empty((2, 2, 2, 6, count))  # (arm, elbow, flip, joint, pose)
     valid = np.empty((count, 8), dtype=bool)
+    buffers = _Buffers(min(count, _CHUNK))
     for start in range(0, count, _CHUNK):
         stop = min(start + _CHUNK, count)
-        tt = np.ascontiguousarray(t[start:stop].reshape(stop - start, 16).T)
+        n = stop - start
+        tt = np.ascontiguousarray(t[start:stop].reshape(n, 16).T)
         check_chunk(tt, start)
-        valid[start:stop] = _solve_chunk(geo, tt, q[start:stop])[:, None]
-    return q, valid
+        res = out[..., start:stop]
+        ok = _solve_chunk(geo, tt, buffers, res)
+        if not ok.all():
+            res[..., ~ok] = np.nan
+        valid[start:stop] = ok[:, None]
+    return out.reshape(48, count).T.reshape(count, 8, 6), valid
 
 
-def _solve_chunk(geo: PumaGeometry, tt: FloatArray, q: FloatArray) -> BoolArray:
+def _solve_chunk(
+    geo: PumaGeometry, tt: FloatArray, buffers: _Buffers, res: FloatArray
+) -> BoolArray:
     """Solve a chunk given as (16, n), row 4 i + j = entry (i, j) of each pose.
 
-    Writes ``q`` (n, 8, 6) and returns the reachable mask (n,). Arrays are laid
-    out (arm, elbow, pose) so that every loop is contiguous.
+    Writes ``res`` (arm, elbow, flip, joint, n) and returns the reachable mask
+    (n,); the values of unreachable poses are meaningless.
     """
     n = tt.shape[1]
-    nx, ox, ax, px, ny, oy, ay, py, nz, oz, az, pz = tt[:12]
-    if geo.sin_alpha6 != 0.0:
+    # rows (x, y, z) of the columns n, o, a of R, each (3, n), and p
+    r0, r1, r2_ = tt[0:3], tt[4:7], tt[8:11]
+    p = tt[3:12:4]
+    if geo.sin_alpha6 != 0.0:  # R' = R Rx(-alpha6): its z column is z5
         ca, sa = geo.cos_alpha6, geo.sin_alpha6
-        ox, ax = ca * ox - sa * ax, sa * ox + ca * ax
-        oy, ay = ca * oy - sa * ay, sa * oy + ca * ay
-        oz, az = ca * oz - sa * az, sa * oz + ca * az
-    if geo.d6 != 0.0:
-        px, py, pz = px - geo.d6 * ax, py - geo.d6 * ay, pz - geo.d6 * az
-    pz = pz - geo.d1
+        r0, r1, r2_ = r0.copy(), r1.copy(), r2_.copy()
+        for row, src in ((r0, tt[0:3]), (r1, tt[4:7]), (r2_, tt[8:11])):
+            row[1] = ca * src[1] - sa * src[2]
+            row[2] = sa * src[1] + ca * src[2]
+    if geo.d6 != 0.0:  # wrist centre
+        p = p - geo.d6 * np.stack((r0[2], r1[2], r2_[2]))
+    px, py = p[0], p[1]
+    pz = p[2] - geo.d1
     s1g, s3g, a2, ell = geo.sigma1, geo.sigma3, geo.a2, geo.forearm
+    g = geo.sigma4 * geo.sigma5
     d2 = geo.offset * geo.offset
     sd = s1g * geo.offset
-    r2 = px * px + py * py
-    dist2 = r2 + pz * pz
-    low, high = geo.reach
-    ok = (dist2 >= low * low - 1e-12 * high * high) & (
-        dist2 <= high * high * (1 + 1e-12)
-    )
-    ok &= r2 >= d2 * (1.0 - 1e-12)
-    rho2 = np.maximum(r2 - d2, 0.0)
-    rho = np.sqrt(rho2)
-    k = (rho2 + pz * pz - (a2 * a2 + ell * ell)) * (0.5 / (a2 * ell))
-    np.clip(k, -1.0, 1.0, out=k)
-    sgm = np.sqrt(1.0 - k * k)
-    right = 1.0 if sd >= 0.0 else -1.0
+    right = 1.0 if sd >= 0.0 else -1.0  # sign of x1 on the right arm
 
-    # theta1: row 0 right arm (x1 = right rho), row 1 left arm
-    on_axis = r2 == 0.0
-    inv_r2 = 1.0 / np.where(on_axis, 1.0, r2)
-    u, w = (right * inv_r2) * rho * px, (right * inv_r2) * rho * py
-    v, z = (sd * inv_r2) * py, (sd * inv_r2) * px
+    r2 = px * px
+    r2 += py * py
+    pz2 = pz * pz
+    dist2 = r2 + pz2  # squared distance of the wrist centre from the shoulder
+    low, high = geo.reach
+    ok = dist2 >= low * low - 1e-12 * high * high
+    ok &= dist2 <= high * high * (1 + 1e-12)
+    ok &= r2 >= d2 * (1.0 - 1e-12)
+    rho2 = r2 - d2
+    np.maximum(rho2, 0.0, out=rho2)
+    rho = np.sqrt(rho2)
+    w2 = rho2 + pz2  # |x1 + i y1|^2, and |c2 + i s2| below (unless k is clipped)
+    k = w2 - (a2 * a2 + ell * ell)
+    k *= 0.5 / (a2 * ell)
+    np.minimum(k, 1.0, out=k)
+    np.maximum(k, -1.0, out=k)
+    sgm = k * k
+    np.subtract(1.0, sgm, out=sgm)
+    np.sqrt(sgm, out=sgm)
+
+    # theta1, (arm, n): c1 + i s1 = (px + i py)(x1 + i sd) / r2, x1 = +-rho
+    on_axis = None if r2.all() else r2 == 0.0
+    inv_r2 = 1.0 / (r2 if on_axis is None else np.where(on_axis, 1.0, r2))
+    x1r = rho * inv_r2
+    if right < 0.0:
+        np.negative(x1r, out=x1r)
+    uw = x1r * p[:2]  # x1 (px, py) / r2 of the right arm
+    vz = (sd * inv_r2) * p[1::-1]  # sd (py, px) / r2
+    diff, total = uw - vz, uw + vz
     c1, s1 = np.empty((2, n)), np.empty((2, n))
-    np.subtract(u, v, out=c1[0])
-    np.add(u, v, out=c1[1])
-    np.negative(c1[1], out=c1[1])
-    np.add(w, z, out=s1[0])
-    np.subtract(z, w, out=s1[1])
-    if on_axis.any():  # D = 0 and the wrist centre on the base axis: theta1 free
+    c1[0] = diff[0]
+    np.negative(total[0], out=c1[1])
+    s1[0] = total[1]
+    np.negative(diff[1], out=s1[1])
+    if on_axis is not None and on_axis.any():  # D = 0, wrist centre on z0
         c1[:, on_axis] = np.cos(geo.theta_offset[0])
         s1[:, on_axis] = np.sin(geo.theta_offset[0])
     t1 = np.arctan2(s1, c1)
 
-    # rows of A = Rx(alpha1)^T Rz(-theta1) R', shape (arm, 1, n) or (n,), with
-    # the signs that M = R36 Rx(alpha6)^T needs folded in: g = sigma4 sigma5
-    g = geo.sigma4 * geo.sigma5
-    s13 = s3g * s1g
-    a00 = (g * (c1 * nx + s1 * ny))[:, None]
-    a01 = (g * (c1 * ox + s1 * oy))[:, None]
-    a02 = (c1 * ax + s1 * ay)[:, None]
-    a02m = (-g * s3g) * a02
-    a10, a11 = (g * s1g) * nz, (g * s1g) * oz
-    a12, a12m = s1g * az, (-g * s3g * s1g) * az
-    m10 = ((g * s13) * (s1 * nx - c1 * ny))[:, None]
-    m11 = ((g * s13) * (s1 * ox - c1 * oy))[:, None]
-    m12 = np.empty((2, 2, n))
-    np.multiply(s13, s1 * ax - c1 * ay, out=m12[:, 0])
-    m12[:, 1] = m12[:, 0]
+    # rows of A = Rx(alpha1)^T Rz(-theta1) R', (arm, column, n): row 0
+    # c1 x + s1 y, row 1 sigma1 z, and sigma1 sigma3 (s1 x - c1 y) (rows 1 of
+    # M); the factor g = sigma4 sigma5 of columns n and o is applied to theta6
+    c1b, s1b = c1[:, None], s1[:, None]
+    a_0 = c1b * r0
+    a_0 += s1b * r1
+    a_1 = r2_ if s1g > 0.0 else -r2_
+    m_1 = s1b * r0
+    tmp = c1b * r1
+    if s3g * s1g > 0.0:
+        m_1 -= tmp
+    else:
+        np.subtract(tmp, m_1, out=m_1)
+    m12 = m_1[:, 2, None]  # (arm, 1, n)
 
-    # elbow, (arm, elbow, n): sin(gamma) = +base on (right, up), (left, down)
-    base = (geo.up_sign * right) * sgm
+    # elbow, (sign, n): c3 + i s3 = (k + i sin gamma)(cos beta - i sin beta),
+    # sin gamma = +base on the right arm elbow-up and the left arm elbow-down
+    base = sgm if geo.up_sign * right > 0.0 else -sgm
     cb, sb = geo.cos_beta, geo.sin_beta
-    c3, s3 = np.empty((2, 2, n)), np.empty((2, 2, n))
-    c3[0, 0] = k * cb + base * sb
-    c3[0, 1] = k * cb - base * sb
-    s3[0, 0] = base * cb - k * sb
-    s3[0, 1] = -base * cb - k * sb
-    c3[1, 0], c3[1, 1], s3[1, 0], s3[1, 1] = c3[0, 1], c3[0, 0], s3[0, 1], s3[0, 0]
-    t3 = np.arctan2(s3[0], c3[0])  # (+base, -base)
-    big_a = a2 + ell * k
-    w2 = rho2 + pz * pz  # |c2 + i s2| below, before scaling
-    inv_w2 = 1.0 / np.where(w2 == 0.0, 1.0, w2)
-    xa = (right * rho) * big_a  # x1 A, right arm
-    yb = (s1g * ell) * pz * base  # y1 B, (right, up)
-    ya = s1g * pz * big_a
-    xb = (right * ell) * rho * base  # x1 B, (right, up)
-    c2, s2 = np.empty((2, 2, n)), np.empty((2, 2, n))
+    kcb, ksb, bsb, bcb = k * cb, k * sb, base * sb, base * cb
+    c3pm, s3pm = np.empty((2, n)), np.empty((2, n))
+    np.add(kcb, bsb, out=c3pm[0])
+    np.subtract(kcb, bsb, out=c3pm[1])
+    np.subtract(bcb, ksb, out=s3pm[0])
+    np.add(bcb, ksb, out=s3pm[1])
+    np.negative(s3pm[1], out=s3pm[1])
+    t3 = np.arctan2(s3pm, c3pm)  # right arm (up, down), left arm (down, up)
+    c3, s3 = c3pm[_ELBOW_ROWS], s3pm[_ELBOW_ROWS]  # (arm, elbow, n)
+
+    # theta2, (arm, elbow, n): c2 + i s2 = (x1 + i y1)(A - i B) / w2 with
+    # A = a2 + L k, B = L sin gamma; the left arm has x1 and sin gamma negated,
+    # so its (c2, s2) is the right arm's (-c2, s2)
+    on_shoulder = None if w2.all() else w2 == 0.0
+    inv_w2 = 1.0 / (w2 if on_shoulder is None else np.where(on_shoulder, 1.0, w2))
+    rho *= inv_w2
+    pz *= inv_w2
+    big_a = k * ell
+    big_a += a2
+    xa, ya = rho * big_a, pz * big_a  # x1 A / w2, y1 A / w2 up to signs
+    xb, yb = rho * base, pz * base  # x1 B / (L w2), y1 B / (L w2) up to signs
+    xb *= right * ell
+    yb *= s1g * ell
+    if right < 0.0:
+        np.negative(xa, out=xa)
+    if s1g < 0.0:
+        np.negative(ya, out=ya)
+    c2, s2 = np.empty((2, 2, n)), np.empty((1, 2, n))
     np.add(xa, yb, out=c2[0, 0])
     np.subtract(xa, yb, out=c2[0, 1])
     np.negative(c2[0], out=c2[1])
     np.subtract(ya, xb, out=s2[0, 0])
     np.add(ya, xb, out=s2[0, 1])
-    s2[1] = s2[0]
-    t2 = np.arctan2(s2, c2)
-    c2 *= inv_w2
-    s2 *= inv_w2
-    if (w2 == 0.0).any():  # wrist centre on the shoulder axis: theta2 free
-        c2[:, :, w2 == 0.0] = 1.0
-    c23 = c2 * c3 - s2 * s3
-    s23 = s2 * c3 + c2 * s3
+    # atan2(s2, -c2) = copysign(pi, s2) - atan2(s2, c2) for the left arm
+    t2 = res[:, :, 0, 1]
+    np.arctan2(s2[0], c2[0], out=t2[0])
+    np.copysign(np.pi, s2[0], out=t2[1])
+    t2[1] -= t2[0]
+    if on_shoulder is not None and on_shoulder.any():  # theta2 free: 0
+        c2[:, :, on_shoulder] = 1.0
+    c23 = c2 * c3
+    tmp4 = s2 * s3
+    c23 -= tmp4
+    s23 = c2 * s3
+    np.multiply(s2, c3, out=tmp4)
+    s23 += tmp4
 
-    # wrist, from M = R36 Rx(alpha6)^T; t4 and t6 are scale-free, so the
-    # no-flip (c4, s4) = (m02, m12) / h enter unnormalised
-    m02 = c23 * a02 + s23 * a12
-    m00 = c23 * a00 + s23 * a10  # times g
-    m01 = c23 * a01 + s23 * a11  # times g
-    m22 = s23 * a02m - c23 * a12m  # times -g
-    t4 = np.arctan2(m12, m02)
-    t6 = np.arctan2(m12 * m00 - m02 * m10, m12 * m01 - m02 * m11)
-    h = np.sqrt(m02 * m02 + m12 * m12)
+    # wrist, from M = R36 Rx(alpha6)^T (without g in rows 0 and 1 of columns
+    # n and o): m0j = c23 a0j + s23 a1j, m22 = (-g sigma3)(s23 a02 - c23 a12)
+    m = buffers.m[..., :n]
+    m_tmp = buffers.m_tmp[..., :n]
+    np.multiply(c23[:, None], a_0[:, :, None], out=m)
+    np.multiply(s23[:, None], a_1[None, :, None], out=m_tmp)
+    m += m_tmp
+    m02 = m[:, 2]
+    m22 = s23 * a_0[:, 2, None]
+    np.multiply(c23, a_1[2], out=tmp4)
+    if -g * s3g > 0.0:
+        m22 -= tmp4
+    else:
+        np.subtract(tmp4, m22, out=m22)
+    # theta6 = atan2(g (m12 m00 - m02 m10), g (m12 m01 - m02 m11)): scale-free,
+    # so (c4, s4) = (m02, m12) / h enter unnormalised
+    yx = buffers.yx[..., :n]
+    yx_tmp = buffers.yx_tmp[..., :n]
+    np.multiply(m12[:, None], m[:, 0:2], out=yx)
+    np.multiply(m02[:, None], m_1[:, 0:2, None], out=yx_tmp)
+    if g > 0.0:
+        yx -= yx_tmp
+    else:
+        np.subtract(yx_tmp, yx, out=yx)
+    t4 = np.arctan2(m12, m02, out=res[:, :, 0, 3])
+    t6 = np.arctan2(yx[:, 0], yx[:, 1], out=res[:, :, 0, 5])
+    h = m02 * m02
+    h += m12 * m12
+    np.sqrt(h, out=h)
     if h.min() <= WRIST_SINGULAR_TOL:
-        sing = h <= WRIST_SINGULAR_TOL
-        t4[sing] = geo.theta_offset[3]
-        c4, s4 = np.cos(geo.theta_offset[3]), np.sin(geo.theta_offset[3])
-        t6[sing] = np.arctan2(s4 * m00 - c4 * m10, s4 * m01 - c4 * m11)[sing]
-        h[sing] = (c4 * m02 + s4 * m12)[sing]
-    if geo.sigma5 < 0.0:
-        np.negative(h, out=h)
-    t5 = np.arctan2(h, m22)
+        _singular_wrist(geo, h, m, m_1, t4, t6, g)
+    # sigma5 theta5 = atan2(h, m22): atan2 is odd in its first argument
+    if geo.sigma5 > 0.0:
+        np.arctan2(h, m22, out=res[:, :, 0, 4])
+        np.negative(res[:, :, 0, 4], out=res[:, :, 1, 4])
+    else:
+        np.arctan2(h, m22, out=res[:, :, 1, 4])
+        np.negative(res[:, :, 1, 4], out=res[:, :, 0, 4])
+    # flip twins of theta4 and theta6 at once: t - pi if t > 0 else t + pi
+    t46, flip46 = res[:, :, 0, 3::2], res[:, :, 1, 3::2]
+    np.copysign(np.pi, t46, out=flip46)
+    np.subtract(t46, flip46, out=flip46)
+    if not t46.all():  # copysign made +0 flip to -pi
+        flip46[t46 == 0.0] = np.pi
 
-    # joint values as (joint, arm, elbow, flip, n), wrapped, then transposed
-    res = np.empty((6, 2, 2, 2, n))
-    t1, t2, t3 = (_wrap(geo, j, t) for j, t in ((0, t1), (1, t2), (2, t3)))
-    res[0] = t1[:, None, None]
-    res[1] = t2[:, :, None]
-    res[2, 0, 0] = res[2, 1, 1] = t3[0]
-    res[2, 0, 1] = res[2, 1, 0] = t3[1]
-    res[3, :, :, 0] = _wrap(geo, 3, t4)
-    res[3, :, :, 1] = _wrap(geo, 3, np.where(t4 > 0.0, t4 - np.pi, t4 + np.pi))
-    res[4, :, :, 0] = _wrap(geo, 4, t5)
-    res[4, :, :, 1] = _wrap(geo, 4, -t5)
-    res[5, :, :, 0] = _wrap(geo, 5, t6)
-    res[5, :, :, 1] = _wrap(geo, 5, np.where(t6 > 0.0, t6 - np.pi, t6 + np.pi))
-    q[...] = res.reshape(6, 8, n).transpose(2, 1, 0)
-    if not ok.all():
-        q[~ok] = np.nan
+    # joint values: wrapped where not plain, shared ones broadcast
+    _wrap(geo, 0, t1)
+    _wrap(geo, 1, t2)
+    _wrap(geo, 2, t3)
+    res[:, :, :, 0] = t1[:, None, None]
+    res[:, :, 1, 1] = t2
+    res[0, :, :, 2] = t3[:, None]
+    res[1, :, :, 2] = t3[::-1, None]
+    for j in (3, 4, 5):
+        _wrap(geo, j, res[:, :, :, j])
     return ok
 
 
-def _wrap(geo: PumaGeometry, j: int, theta: FloatArray) -> FloatArray:
-    """Joint values of DH angles ``theta`` in [-pi, pi] of joint ``j``."""
+def _singular_wrist(
+    geo: PumaGeometry,
+    h: FloatArray,
+    m: FloatArray,
+    m_1: FloatArray,
+    t4: FloatArray,
+    t6: FloatArray,
+    g: float,
+) -> None:
+    """θ4 = offset where |sin θ5| <= tol: θ6 from it, h = c4 m02 + s4 m12."""
+    sing = h <= WRIST_SINGULAR_TOL
+    c4, s4 = np.cos(geo.theta_offset[3]), np.sin(geo.theta_offset[3])
+    m00, m01, m02 = (m[:, j][sing] for j in range(3))
+    m10, m11, m12 = (np.broadcast_to(m_1[:, j, None], h.shape)[sing] for j in range(3))
+    t4[sing] = geo.theta_offset[3]
+    t6[sing] = np.arctan2(g * (s4 * m00 - c4 * m10), g * (s4 * m01 - c4 * m11))
+    h[sing] = c4 * m02 + s4 * m12
+
+
+def _wrap(geo: PumaGeometry, j: int, theta: FloatArray) -> None:
+    """Joint values of DH angles ``theta`` in [-pi, pi] of joint ``j``, in place."""
     if geo.plain[j]:
-        return theta
+        return
     offset = geo.theta_offset[j]
-    return wrap_array_to_limits(
-        theta - offset, geo.lower[j], geo.upper[j], reduced=offset == 0.0
-    )
+    if offset != 0.0:
+        theta -= offset
+    wrap_array_to_limits(theta, geo.lower[j], geo.upper[j], reduced=offset == 0.0)

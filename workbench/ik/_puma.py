@@ -109,6 +109,15 @@ class PumaGeometry:
             "within limits".
         reach: Reachable distance of the wrist centre from the shoulder (the
             point of the base axis at height d1), ``(low, high)`` [m].
+        keep: Per joint, the interval ``(lo, hi)`` of DH angles in [−π, π]
+            that are their own joint value (the representative the wrapping
+            would return): all of them for a plain joint, the part of
+            (−π, π] within the limits for a joint with zero offset, none
+            (``(inf, -inf)``) with an offset.
+        wrist_plain: ``plain`` holds for joints 4, 5 and 6.
+        reach_test: ``(low, high, cylinder)``: the distance bounds of
+            :func:`check_reach` with its slack folded in, and the squared
+            radius below which the wrist centre is inside the cylinder.
     """
 
     sigma1: float
@@ -131,6 +140,9 @@ class PumaGeometry:
     plain: tuple[bool, ...]
     bounds: tuple[tuple[float, ...], tuple[float, ...]]
     reach: tuple[float, float]
+    keep: tuple[tuple[float, float], ...]
+    wrist_plain: bool
+    reach_test: tuple[float, float, float]
 
 
 def _sign_of_right_angle(alpha: float, name: str, robot: str) -> float:
@@ -192,6 +204,21 @@ def geometry_from_dh(
         o == 0.0 and lo >= -math.pi and hi <= math.pi
         for o, lo, hi in zip(offsets, lower_t, upper_t, strict=True)
     )
+    keep = tuple(
+        (-math.inf, math.inf)
+        if p
+        else (
+            (max(lo - LIMIT_TOL, math.nextafter(-math.pi, 0.0)), hi + LIMIT_TOL)
+            if o == 0.0
+            else (math.inf, -math.inf)
+        )
+        for p, o, lo, hi in zip(plain, offsets, lower_t, upper_t, strict=True)
+    )
+    reach = (
+        math.hypot(abs(j2.a) - forearm, offset),
+        math.hypot(abs(j2.a) + forearm, offset),
+    )
+    slack = 1e-12 * reach[1]
     return PumaGeometry(
         sigma1=sigma1,
         sigma3=sigma3,
@@ -215,9 +242,13 @@ def geometry_from_dh(
             tuple(x - LIMIT_TOL for x in lower_t),
             tuple(x + LIMIT_TOL for x in upper_t),
         ),
-        reach=(
-            math.hypot(abs(j2.a) - forearm, offset),
-            math.hypot(abs(j2.a) + forearm, offset),
+        reach=reach,
+        keep=keep,
+        wrist_plain=all(plain[3:]),
+        reach_test=(
+            reach[0] - slack,
+            reach[1] + slack,
+            abs(offset) * abs(offset) * (1.0 - 1e-12),
         ),
     )
 
@@ -302,8 +333,30 @@ def wrap_array_to_limits(
         x -= TAU * np.rint(x / TAU)
     if x.size and x.min() <= -np.pi:
         np.copyto(x, np.pi, where=x <= -np.pi)
+    for shift, first, last, from_below, both in _wrap_plan(float(lower), float(upper)):
+        move = x <= last if from_below else x >= first
+        if both:
+            move &= x <= last
+        np.add(x, shift, out=x, where=move)
+    return x
+
+
+@lru_cache(maxsize=64)
+def _wrap_plan(
+    lower: float, upper: float
+) -> tuple[tuple[float, float, float, bool, bool], ...]:
+    """The shifts of :func:`wrap_array_to_limits` and the intervals they move.
+
+    Returns:
+        ``(shift, first, last, from_below, both)`` per shift k 2π (k = 1, −1,
+        2, −2) that lands some x of [−π, π] in the limits: x moves if
+        ``x <= last`` (``from_below``) or ``x >= first``, and both if
+        ``both``. A value moved in lies within the limits and no later test
+        moves it again.
+    """
     lo, hi = lower - LIMIT_TOL, upper + LIMIT_TOL
     below, above = np.nextafter(lo, -np.inf), np.nextafter(hi, np.inf)
+    plan = []
     for k in (1.0, -1.0, 2.0, -2.0):
         # x out of [lo, hi] moves by k 2pi if that lands it in: k > 0 from below
         # lo, k < 0 from above hi; an interval test on x in [-pi, pi]
@@ -312,8 +365,13 @@ def wrap_array_to_limits(
         last = min(below, hi - shift) if k > 0.0 else hi - shift
         if first > np.pi or last < -np.pi or first > last:
             continue
-        move = x <= last if first <= -np.pi else x >= first
-        if first > -np.pi and last < np.pi:
-            move &= x <= last
-        x += shift * move
-    return x
+        plan.append(
+            (
+                shift,
+                float(first),
+                float(last),
+                bool(first <= -np.pi),
+                bool(first > -np.pi and last < np.pi),
+            )
+        )
+    return tuple(plan)

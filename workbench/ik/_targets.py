@@ -18,6 +18,18 @@ from workbench.poses import RIGIDITY_TOL
 FloatArray = npt.NDArray[np.float64]
 
 
+#: Fast acceptance of :func:`pose_rows`: columns x, y of R orthonormal and
+#: z = x × y, each to within _FAST_TOL (bottom row too), as one sum of squares.
+#: Then every entry of RᵀR − I is below 4·_FAST_TOL + O(_FAST_TOL²), well within
+#: RIGIDITY_TOL, and det R ≈ 1 > 0; anything else takes the full, exact checks
+#: (and their error messages).
+_FAST_TOL = RIGIDITY_TOL / 5.0
+_FAST_TOL2 = _FAST_TOL * _FAST_TOL
+
+_SE3 = pin.SE3
+_NDARRAY = np.ndarray
+
+
 def pose_rows(target: pin.SE3 | npt.ArrayLike) -> list[list[float]]:
     """Rows of the (4, 4) homogeneous matrix as floats, checked (scalar, fast).
 
@@ -26,6 +38,40 @@ def pose_rows(target: pin.SE3 | npt.ArrayLike) -> list[list[float]]:
         NonFiniteError: If an entry is not a number, NaN or infinite.
         InputError: If the bottom row is not [0, 0, 0, 1] or R is not a rotation.
     """
+    cls = type(target)
+    if cls is _SE3:
+        return rigid_rows(target.np.tolist())
+    if cls is _NDARRAY and target.shape == (4, 4) and target.dtype.char == "d":
+        return rigid_rows(target.tolist())
+    return _checked_rows(target)
+
+
+def rigid_rows(rows: list[list[float]]) -> list[list[float]]:
+    """``rows``, the four rows of a homogeneous matrix, if rigid; else raise.
+
+    The checks and errors of :func:`pose_rows` for a matrix already in floats.
+    """
+    # one pass that only accepts: finite (a NaN fails every comparison), rigid
+    (r00, r01, r02, px), (r10, r11, r12, py), (r20, r21, r22, pz), bottom = rows
+    e0 = r00 * r00 + r10 * r10 + r20 * r20 - 1.0
+    e1 = r01 * r01 + r11 * r11 + r21 * r21 - 1.0
+    e2 = r00 * r01 + r10 * r11 + r20 * r21
+    ex = r10 * r21 - r20 * r11 - r02  # x × y - z
+    ey = r20 * r01 - r00 * r21 - r12
+    ez = r00 * r11 - r10 * r01 - r22
+    b0, b1, b2, b3 = bottom
+    b3 -= 1.0
+    if (
+        e0 * e0 + e1 * e1 + e2 * e2 + ex * ex + ey * ey + ez * ez
+        + b0 * b0 + b1 * b1 + b2 * b2 + b3 * b3 <= _FAST_TOL2
+        and (px + py + pz) * 0.0 == 0.0
+    ):  # fmt: skip
+        return rows
+    return _checked_rows(rows)
+
+
+def _checked_rows(target: pin.SE3 | npt.ArrayLike) -> list[list[float]]:
+    """:func:`pose_rows` with every check made and reported."""
     if isinstance(target, pin.SE3):
         rows = target.homogeneous.tolist()
     else:
@@ -79,7 +125,37 @@ def as_targets(targets: npt.ArrayLike) -> FloatArray:
 
 
 def check_chunk(tt: FloatArray, start: int) -> None:
-    """Finite and rigid, on the (16, n) transposed layout of a chunk."""
+    """Finite and rigid, on the (16, n) transposed layout of a chunk.
+
+    The test of :func:`rigid_rows` on every pose (a sum of squares that only
+    accepts); if some pose fails it, the exact checks find and report it.
+    """
+    c0, c1, c2 = tt[0:12:4], tt[1:12:4], tt[2:12:4]  # columns of R, (3, n)
+    x, y = np.concatenate((c0, c0[:2])), np.concatenate((c1, c1[:2]))
+    err = x[1:4] * y[2:5]  # x × y - z
+    err -= x[2:5] * y[1:4]
+    err -= c2
+    err2 = np.einsum("ij,ij->j", err, err)
+    for u, v, unit in ((c0, c0, 1.0), (c1, c1, 1.0), (c0, c1, 0.0)):
+        d = np.einsum("ij,ij->j", u, v)
+        if unit:
+            d -= unit
+        d *= d
+        err2 += d
+    err2 += np.einsum("ij,ij->j", tt[12:15], tt[12:15])
+    d = tt[15] - 1.0
+    d *= d
+    err2 += d
+    d = tt[3] + tt[7]  # a NaN unless the translation is finite
+    d += tt[11]
+    d *= 0.0
+    err2 += d
+    if not (err2 <= _FAST_TOL2).all():
+        _check_chunk_exact(tt, start)
+
+
+def _check_chunk_exact(tt: FloatArray, start: int) -> None:
+    """:func:`check_chunk` with every check made and reported."""
     finite = np.isfinite(tt).all(axis=0)
     if not finite.all():
         raise NonFiniteError(

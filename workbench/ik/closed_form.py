@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import FrozenInstanceError
 
 import numpy as np
 import numpy.typing as npt
@@ -61,9 +61,8 @@ BRANCHES: tuple[str, ...] = tuple(
 )
 
 
-@dataclass(frozen=True, slots=True)
 class IKSolution:
-    """One closed-form branch.
+    """One closed-form branch (immutable).
 
     Attributes:
         q: Configuration, shape (6,) [rad], read-only; each angle is the
@@ -74,31 +73,101 @@ class IKSolution:
         within_limits: True if every joint of ``q`` is within its limits.
         wrist_singular: True if |sin θ5| <= :data:`WRIST_SINGULAR_TOL`; θ4 and θ6
             are then one member of a one-parameter family.
+
+    The eight solutions of one :func:`analytic` call share its results: the
+    joint values stay plain floats until a ``q`` is first read, then one
+    read-only (8, 6) array is made and each ``q`` is a row of it. That keeps a
+    call to a few microseconds when not every branch is looked at (building
+    eight dataclasses with eight arrays cost more than the IK itself).
+    Equality is identity.
     """
 
-    q: FloatArray
-    branch: str
+    __slots__ = ("_shared", "index")
+    _shared: list
     index: int
-    within_limits: bool
-    wrist_singular: bool
+
+    @property
+    def q(self) -> FloatArray:
+        """Configuration (6,) [rad], read-only."""
+        shared = self._shared
+        rows = shared[3]
+        if rows is None:
+            rows = shared[3] = _read_only_rows(shared[0])
+        return rows[self.index]
+
+    @property
+    def branch(self) -> str:
+        """Label, e.g. ``"right/elbow-up/no-flip"``."""
+        return BRANCHES[self.index]
+
+    @property
+    def within_limits(self) -> bool:
+        """True if every joint of ``q`` is within its limits."""
+        return self._shared[1][self.index]
+
+    @property
+    def wrist_singular(self) -> bool:
+        """True if |sin θ5| <= :data:`WRIST_SINGULAR_TOL`."""
+        return self._shared[2][self.index >> 1]
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise FrozenInstanceError(f"cannot assign to field {name!r}")
+
+    def __delattr__(self, name: str) -> None:
+        raise FrozenInstanceError(f"cannot delete field {name!r}")
+
+    def __repr__(self) -> str:
+        return (
+            f"IKSolution(q={self.q!r}, branch={self.branch!r}, index={self.index}, "
+            f"within_limits={self.within_limits}, "
+            f"wrist_singular={self.wrist_singular})"
+        )
+
+    def __reduce__(self) -> tuple[object, tuple[object, ...]]:
+        return (
+            _restore_solution,
+            (self.q.tolist(), self.index, self.within_limits, self.wrist_singular),
+        )
 
 
-# The generated __init__ of a frozen dataclass costs ~1 µs; writing the slots
-# through their descriptors costs a third of that and matters for 8 solutions.
-_SET_Q, _SET_BRANCH, _SET_INDEX, _SET_WITHIN, _SET_SINGULAR = (
-    IKSolution.__dict__[f].__set__ for f in IKSolution.__slots__
-)
+_SET_SHARED = IKSolution.__dict__["_shared"].__set__
+_SET_INDEX = IKSolution.__dict__["index"].__set__
+_INDICES = tuple(range(len(BRANCHES)))
 
 
-def _new_solution(
-    q: FloatArray, index: int, within_limits: bool, wrist_singular: bool
+def _read_only_rows(values: list[float]) -> list[FloatArray]:
+    q_all = np.array(values)
+    q_all.shape = (len(values) // 6, 6)
+    q_all.setflags(write=False)
+    return list(q_all)
+
+
+def _solutions(
+    values: list[float], within: list[bool], singular: list[bool]
+) -> list[IKSolution]:
+    """The eight :class:`IKSolution` of one result of :func:`_solve`."""
+    shared = [values, within, singular, None]
+    out = []
+    new = object.__new__
+    for i in _INDICES:
+        sol = new(IKSolution)
+        _SET_SHARED(sol, shared)
+        _SET_INDEX(sol, i)
+        out.append(sol)
+    return out
+
+
+def _restore_solution(
+    q: list[float], index: int, within_limits: bool, wrist_singular: bool
 ) -> IKSolution:
+    """Unpickle one :class:`IKSolution` (it alone, not its siblings)."""
+    within, singular = [False] * 8, [False] * 4
+    within[index], singular[index >> 1] = within_limits, wrist_singular
+    rows: list[FloatArray | None] = [None] * 8
+    rows[index] = _read_only_rows(q)[0]
     sol = object.__new__(IKSolution)
-    _SET_Q(sol, q)
-    _SET_BRANCH(sol, BRANCHES[index])
+    _SET_SHARED(sol, [None, within, singular, rows])
     _SET_INDEX(sol, index)
-    _SET_WITHIN(sol, within_limits)
-    _SET_SINGULAR(sol, wrist_singular)
     return sol
 
 
@@ -134,16 +203,22 @@ def analytic(
     """
     geo = get_geometry(robot)
     rows = pose_rows(target)
-    prev = (
-        None if q_previous is None else robot.check_configuration(q_previous).tolist()
-    )
-    values, within, singular = _solve(geo, rows, prev)
-    q_all = np.array(values)
-    q_all.shape = (8, 6)
-    q_all.setflags(write=False)
-    return [
-        _new_solution(q, i, within[i], singular[i >> 1]) for i, q in enumerate(q_all)
-    ]
+    prev = None if q_previous is None else _previous(robot, q_previous)
+    return _solutions(*_solve(geo, rows, prev))
+
+
+def _previous(robot: Robot, q_previous: npt.ArrayLike) -> list[float]:
+    """``q_previous`` checked (``Robot.check_configuration``), as floats."""
+    if (
+        type(q_previous) is np.ndarray
+        and q_previous.shape == (robot.nq,)
+        and q_previous.dtype.char == "d"
+    ):
+        prev = q_previous.tolist()
+        total = sum(prev)
+        if total - total == 0.0:  # finite (inf - inf and NaN are NaN)
+            return prev
+    return robot.check_configuration(q_previous).tolist()
 
 
 def nearest(solutions: Sequence[IKSolution], q_previous: npt.ArrayLike) -> IKSolution:
@@ -176,12 +251,21 @@ def nearest(solutions: Sequence[IKSolution], q_previous: npt.ArrayLike) -> IKSol
 
 
 def _solve(
-    geo: PumaGeometry, rows: list[list[float]], prev: list[float] | None
+    geo: PumaGeometry,
+    rows: list[list[float]],
+    prev: list[float] | None,
+    pair: int = -1,
 ) -> tuple[list[float], list[bool], list[bool]]:
     """Joint values (48, branch-major), within-limits (8) and singular (4) flags.
 
     Plain float arithmetic: for one pose this is several times faster than numpy.
-    The batch version in ``_closed_form_batch`` follows the same steps.
+    The batch version in ``_closed_form_batch`` follows the same steps. What the
+    branches share is computed once: the elbow angle θ3 takes two values (right
+    arm elbow-up = left arm elbow-down), θ1 and the rows of A one per arm.
+
+    With ``pair`` = i in 0..3 only the wrist twins ``2 i`` and ``2 i + 1`` of
+    :data:`BRANCHES` are solved (12 values, 2 and 1 flags), by the same
+    operations, so they equal those of the full solve bit for bit.
     """
     (nx, ox, ax, px), (ny, oy, ay, py), (nz, oz, az, pz) = rows[:3]
     if geo.sin_alpha6 != 0.0:  # R' = R Rx(-alpha6): its z column is z5
@@ -192,49 +276,92 @@ def _solve(
     if geo.d6 != 0.0:  # wrist centre
         px, py, pz = px - geo.d6 * ax, py - geo.d6 * ay, pz - geo.d6 * az
     pz -= geo.d1
-    check_reach(geo, px, py, pz)
+    r2 = px * px + py * py
+    low, high, cylinder = geo.reach_test
+    if not (low <= math.sqrt(r2 + pz * pz) <= high and r2 >= cylinder):
+        check_reach(geo, px, py, pz)  # raises UnreachableError
     s1g, s3g, a2, ell = geo.sigma1, geo.sigma3, geo.a2, geo.forearm
     g, sigma5 = geo.sigma4 * geo.sigma5, geo.sigma5
+    mg = -g
     sd = s1g * geo.offset
-    r2 = px * px + py * py
-    rho2 = max(r2 - geo.offset * geo.offset, 0.0)
+    rho2 = r2 - geo.offset * geo.offset
+    if rho2 < 0.0:
+        rho2 = 0.0
     rho, y1 = math.sqrt(rho2), s1g * pz
     k = (rho2 + pz * pz - a2 * a2 - ell * ell) / (2.0 * a2 * ell)
-    k = min(max(k, -1.0), 1.0)
+    if k > 1.0:
+        k = 1.0
+    elif k < -1.0:
+        k = -1.0
     sgm = math.sqrt(1.0 - k * k)
     cb, sb = geo.cos_beta, geo.sin_beta
     big_a = a2 + ell * k
     right = 1.0 if sd >= 0.0 else -1.0  # sign of x1 on the right arm
-    pi, atan2 = math.pi, math.atan2
-    # joint value of DH angle t: as is when plain, else _joint(geo, j, t, prev)
-    p1, p2, p3, p4, p5, p6 = geo.plain if prev is None else (False,) * 6
+    pi, atan2, sqrt, rem = math.pi, math.atan2, math.sqrt, math.remainder
     (l1, l2, l3, l4, l5, l6), (u1, u2, u3, u4, u5, u6) = geo.bounds
+    # a DH angle t of joint j in [k_j, K_j] is its own joint value (no wrapping)
+    (k1, kk1), (k2, kk2), (k3, kk3), (k4, kk4), (k5, kk5), (k6, kk6) = geo.keep
+    wrist_plain = geo.wrist_plain
+    if prev is not None:  # joint value near prev: n + remainder(t - offset - n)
+        n1, n2, n3, n4, n5, n6 = prev
+        o1, o2, o3, o4, o5, o6 = geo.theta_offset
+    # elbow: sin(gamma) = +sg on the right arm elbow-up and left arm elbow-down
+    kcb, ksb, y1a = k * cb, k * sb, y1 * big_a
+    sg_up = geo.up_sign * right * sgm  # sin(gamma) of the right arm elbow-up
+    if pair < 0:
+        signs: tuple[float, ...] = (sg_up, -sg_up)
+    else:  # the sign is -sg_up on right/elbow-down and left/elbow-up
+        signs = (-sg_up,) if (pair ^ (pair >> 1)) & 1 else (sg_up,)
+    elbows = []
+    for sg in signs:
+        c3, s3 = kcb + sg * sb, sg * cb - ksb
+        t3 = atan2(s3, c3)
+        if prev is not None:
+            q3 = n3 + rem(t3 - o3 - n3, TAU)
+        elif k3 <= t3 <= kk3:
+            q3 = t3
+        else:
+            q3 = _wrap(geo, 2, t3)
+        big_b = ell * sg
+        elbows.append((c3, s3, q3, l3 <= q3 <= u3, big_b, y1 * big_b))
+    if pair < 0:
+        up, down = elbows
+        arms: tuple[tuple[float, tuple[tuple[float, ...], ...]], ...] = (
+            (right * rho, (up, down)),
+            (-right * rho, (down, up)),
+        )
+    else:
+        arms = (((right if pair < 2 else -right) * rho, (elbows[0],)),)
+    a10, a11, a12 = s1g * nz, s1g * oz, s1g * az
+    s13 = s3g * s1g
+    pysd, pxsd = py * sd, px * sd
     values: list[float] = []
     within: list[bool] = []
     singular: list[bool] = []
-    for xs in (right, -right):
-        x1 = xs * rho
+    for x1, arm in arms:
         if r2 > 0.0:
-            c1, s1 = (px * x1 - py * sd) / r2, (py * x1 + px * sd) / r2
+            c1, s1 = (px * x1 - pysd) / r2, (py * x1 + pxsd) / r2
         else:  # wrist centre on the base axis (D = 0): theta1 is free
             t1 = geo.theta_offset[0] + (prev[0] if prev is not None else 0.0)
             c1, s1 = math.cos(t1), math.sin(t1)
         t1 = atan2(s1, c1)
-        q1 = t1 if p1 else _joint(geo, 0, t1, prev)
+        if prev is not None:
+            q1 = n1 + rem(t1 - o1 - n1, TAU)
+        elif k1 <= t1 <= kk1:
+            q1 = t1
+        else:
+            q1 = _wrap(geo, 0, t1)
         ok1 = l1 <= q1 <= u1
         # rows of A = Rx(alpha1)^T Rz(-theta1) R'
         a00, a01, a02 = c1 * nx + s1 * ny, c1 * ox + s1 * oy, c1 * ax + s1 * ay
-        a10, a11, a12 = s1g * nz, s1g * oz, s1g * az
-        m10 = s3g * s1g * (s1 * nx - c1 * ny)
-        m11 = s3g * s1g * (s1 * ox - c1 * oy)
-        m12 = s3g * s1g * (s1 * ax - c1 * ay)
-        for elbow in (1.0, -1.0):
-            sg = geo.up_sign * xs * elbow * sgm
-            c3, s3 = k * cb + sg * sb, sg * cb - k * sb
-            big_b = ell * sg
-            c2, s2 = x1 * big_a + y1 * big_b, y1 * big_a - x1 * big_b
-            t2, t3 = atan2(s2, c2), atan2(s3, c3)
-            norm = math.sqrt(c2 * c2 + s2 * s2)
+        m10 = s13 * (s1 * nx - c1 * ny)
+        m11 = s13 * (s1 * ox - c1 * oy)
+        m12 = s13 * (s1 * ax - c1 * ay)
+        xa = x1 * big_a
+        for c3, s3, q3, ok3, big_b, yb in arm:
+            c2, s2 = xa + yb, y1a - x1 * big_b
+            t2 = atan2(s2, c2)
+            norm = sqrt(c2 * c2 + s2 * s2)
             if norm > 0.0:
                 c2, s2 = c2 / norm, s2 / norm
             else:  # wrist centre on the shoulder axis: theta2 is free
@@ -244,11 +371,11 @@ def _solve(
             m02 = c23 * a02 + s23 * a12
             m22 = s3g * (s23 * a02 - c23 * a12)
             m00, m01 = c23 * a00 + s23 * a10, c23 * a01 + s23 * a11
-            h = math.sqrt(m02 * m02 + m12 * m12)
+            h = sqrt(m02 * m02 + m12 * m12)
             if h > WRIST_SINGULAR_TOL:  # (c4, s4) = (m02, m12) / h, scale-free
                 t4 = atan2(m12, m02)
                 t6 = atan2(g * (m12 * m00 - m02 * m10), g * (m12 * m01 - m02 * m11))
-                t5 = atan2(sigma5 * h, -g * m22)
+                t5 = atan2(sigma5 * h, mg * m22)
                 singular.append(False)
             else:
                 t4, t5, t6 = _singular_wrist(
@@ -257,30 +384,52 @@ def _solve(
                 singular.append(True)
             t4f = t4 - pi if t4 > 0.0 else t4 + pi
             t6f = t6 - pi if t6 > 0.0 else t6 + pi
-            q2 = t2 if p2 else _joint(geo, 1, t2, prev)
-            q3 = t3 if p3 else _joint(geo, 2, t3, prev)
-            q4, q4f = (
-                (t4, t4f)
-                if p4
-                else (_joint(geo, 3, t4, prev), _joint(geo, 3, t4f, prev))
-            )
-            q5, q5f = (
-                (t5, -t5)
-                if p5
-                else (_joint(geo, 4, t5, prev), _joint(geo, 4, -t5, prev))
-            )
-            q6, q6f = (
-                (t6, t6f)
-                if p6
-                else (_joint(geo, 5, t6, prev), _joint(geo, 5, t6f, prev))
-            )
+            if prev is not None:
+                q2 = n2 + rem(t2 - o2 - n2, TAU)
+                q4 = n4 + rem(t4 - o4 - n4, TAU)
+                q4f = n4 + rem(t4f - o4 - n4, TAU)
+                q5 = n5 + rem(t5 - o5 - n5, TAU)
+                q5f = n5 + rem(-t5 - o5 - n5, TAU)
+                q6 = n6 + rem(t6 - o6 - n6, TAU)
+                q6f = n6 + rem(t6f - o6 - n6, TAU)
+            elif wrist_plain:
+                q2 = t2 if k2 <= t2 <= kk2 else _wrap(geo, 1, t2)
+                q4, q4f, q5, q5f, q6, q6f = t4, t4f, t5, -t5, t6, t6f
+            else:
+                q2 = t2 if k2 <= t2 <= kk2 else _wrap(geo, 1, t2)
+                q4 = t4 if k4 <= t4 <= kk4 else _wrap(geo, 3, t4)
+                q4f = t4f if k4 <= t4f <= kk4 else _wrap(geo, 3, t4f)
+                q5 = t5 if k5 <= t5 <= kk5 else _wrap(geo, 4, t5)
+                q5f = -t5 if k5 <= -t5 <= kk5 else _wrap(geo, 4, -t5)
+                q6 = t6 if k6 <= t6 <= kk6 else _wrap(geo, 5, t6)
+                q6f = t6f if k6 <= t6f <= kk6 else _wrap(geo, 5, t6f)
             values += (q1, q2, q3, q4, q5, q6, q1, q2, q3, q4f, q5f, q6f)
-            ok = ok1 and l2 <= q2 <= u2 and l3 <= q3 <= u3
+            ok = ok1 and ok3 and l2 <= q2 <= u2
             within.append(ok and l4 <= q4 <= u4 and l5 <= q5 <= u5 and l6 <= q6 <= u6)
             within.append(
                 ok and l4 <= q4f <= u4 and l5 <= q5f <= u5 and l6 <= q6f <= u6
             )
     return values, within, singular
+
+
+def _wrap(geo: PumaGeometry, j: int, theta: float) -> float:
+    """Joint value of DH angle ``theta`` in [−π, π] outside ``geo.keep[j]``.
+
+    :func:`wrap_to_limits` of ``theta - offset``; with a zero offset the
+    remainder is ``theta`` itself (or π for −π), so only the shifts by
+    multiples of 2π are tried.
+    """
+    if geo.theta_offset[j] != 0.0:
+        return wrap_to_limits(theta - geo.theta_offset[j], geo.lower[j], geo.upper[j])
+    if theta <= -math.pi:
+        theta += TAU
+    lo, hi = geo.bounds[0][j], geo.bounds[1][j]
+    if lo <= theta <= hi:
+        return theta
+    for z in (theta + TAU, theta - TAU, theta + 2.0 * TAU, theta - 2.0 * TAU):
+        if lo <= z <= hi:
+            return z
+    return theta
 
 
 def _joint(geo: PumaGeometry, j: int, theta: float, prev: list[float] | None) -> float:

@@ -144,6 +144,45 @@ def _block_solve(
     ]
 
 
+def solve_velocity_list(
+    jacobian: FloatArray,
+    twist: list[float],
+    epsilon: float,
+    lambda_max: float,
+    reference: Callable[[], FloatArray] | None = None,
+) -> tuple[list[float], bool]:
+    """:func:`solve_velocity` with ``qd`` as a list of floats.
+
+    ``epsilon`` and ``lambda_max`` are taken as valid (the planner checks them
+    once), so the singular region skips the argument checks of
+    :func:`~workbench.ik.dls_inverse`; the arithmetic is the same.
+    """
+    if jacobian.shape == (6, 6):
+        qd = _block_solve(jacobian.tolist(), twist, epsilon)
+        if qd is not None:
+            return qd, False
+    inverse = _dls_inverse(jacobian, epsilon, lambda_max)
+    xd = np.array(twist, dtype=np.float64)
+    if reference is None:
+        return (inverse @ xd).tolist(), True
+    qd_ref = reference()
+    return (qd_ref + inverse @ (xd - jacobian @ qd_ref)).tolist(), True
+
+
+def _dls_inverse(jacobian: FloatArray, epsilon: float, lambda_max: float) -> FloatArray:
+    """:func:`~workbench.ik.dls_inverse` of a finite (m, n) float array, unchecked."""
+    u, sigma, vt = np.linalg.svd(jacobian, full_matrices=False)
+    sigma_min = sigma[-1] if sigma.size else 0.0
+    lambda2 = 0.0
+    if sigma_min < epsilon:
+        lambda2 = (1.0 - (sigma_min / epsilon) ** 2) * lambda_max**2
+    denominator = sigma * sigma + lambda2
+    gain = np.divide(
+        sigma, denominator, out=np.zeros_like(sigma), where=denominator > 0.0
+    )
+    return (vt.T * gain) @ u.T
+
+
 def solve_velocity(
     jacobian: FloatArray,
     twist: list[float],
@@ -188,4 +227,4 @@ def solve_velocity(
     return qd_ref + inverse @ (xd - jacobian @ qd_ref), True
 
 
-__all__ = ["BLOCK_TOL", "solve_velocity"]
+__all__ = ["BLOCK_TOL", "solve_velocity", "solve_velocity_list"]

@@ -38,10 +38,18 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InputError, JointLimitError
-from workbench.ik.closed_form import IKSolution, analytic, nearest
+from workbench.ik._puma import get_geometry
+from workbench.ik._targets import pose_rows, rigid_rows
+from workbench.ik.closed_form import (
+    BRANCHES,
+    _solutions,
+    _solve,
+    analytic,
+    nearest,
+)
 from workbench.ik.damped import DLS_EPSILON, DLS_LAMBDA_MAX, dls_inverse
 from workbench.robot import Robot
-from workbench.trajectory._inverse_velocity import solve_velocity
+from workbench.trajectory._inverse_velocity import solve_velocity_list
 from workbench.trajectory.cartesian_paths import (
     ZERO_TOL,
     CartesianLimits,
@@ -87,6 +95,31 @@ class PlannerSample:
     qd: FloatArray
     branch: str
     damped: bool
+
+
+# Frozen slots dataclasses: their generated __init__ goes through
+# object.__setattr__ per field (~2 µs for nine); the slot descriptors are
+# written directly instead, once per planning cycle.
+_SAMPLE_SETTERS = tuple(
+    PlannerSample.__dict__[f].__set__ for f in PlannerSample.__slots__
+)
+_STATE_SETTERS = tuple(
+    CartesianState.__dict__[f].__set__ for f in CartesianState.__slots__
+)
+
+
+def _new_sample(*values: object) -> PlannerSample:
+    sample = object.__new__(PlannerSample)
+    for set_field, value in zip(_SAMPLE_SETTERS, values):  # noqa: B905
+        set_field(sample, value)
+    return sample
+
+
+def _new_state(*values: object) -> CartesianState:
+    state = object.__new__(CartesianState)
+    for set_field, value in zip(_STATE_SETTERS, values):  # noqa: B905
+        set_field(state, value)
+    return state
 
 
 def _rigid(value: pin.SE3 | None) -> tuple[FloatArray, FloatArray] | None:
@@ -169,6 +202,8 @@ class OnlinePlanner:
         self._check_position(q0, 0.0)
         self._q = q0
         self._q_before: FloatArray | None = None  # the command before self._q
+        self._qf = q0.tolist()  # self._q and self._q_before as floats
+        self._qf_before: list[float] | None = None
         self._qd = np.zeros(robot.nv)
         self._cycle = 0
         self._frame_id = robot.tool_frame_id
@@ -182,6 +217,11 @@ class OnlinePlanner:
             tip_rotates = bool(np.any(self._tip[0] != np.eye(3)))
             self._tip_rt = self._tip[0].T.copy() if tip_rotates else None
             self._tip_back = -self._tip[1]
+        # the planning cycle works on floats when neither transform rotates
+        self._geo = get_geometry(robot)
+        self._frames_fixed = self._tip_rt is None and not self._base_rotates
+        self._tip_back_f = self._tip_back.tolist()
+        self._base_p = [0.0, 0.0, 0.0] if self._base is None else self._base[1].tolist()
         oMf = robot.fk(q0)
         p, rotation = oMf.translation, oMf.rotation
         if self._tip is not None:
@@ -284,53 +324,69 @@ class OnlinePlanner:
                 primitive.begin(end, t_end, self.limits)
         self._active = primitive
         p, v, rotation, omega = primitive.sample(t)
-        r6, p6, twist = self._to_wrist_in_base(p, v, rotation, omega)
-        q_prev = self._q
+        rows, twist = self._to_wrist_in_base(p, v, rotation, omega)
         # continuity is measured from the configuration predicted by the last
         # two commands, so that at a wrist singularity (theta4, theta6 free) the
         # IK keeps the wrist moving as it was instead of splitting the step
-        q_pred = q_prev if self._q_before is None else 2.0 * q_prev - self._q_before
-        solutions = analytic(self.robot, pin.SE3(r6, p6), q_previous=q_pred)
-        solution = self._select(solutions, q_pred)
-        q = solution.q
-        if not solution.within_limits:
+        before = self._qf_before
+        q_pred = (
+            self._qf
+            if before is None
+            else [2.0 * a - b for a, b in zip(self._qf, before)]  # noqa: B905
+        )
+        q, index, within = self._solve_ik(rows, q_pred)
+        qf = q.tolist()
+        if not within:
             self._check_position(q, t)
         jacobian = pin.computeFrameJacobian(
             self.robot.model, self.robot.data, q, self._frame_id, _LWA
         )
-        qd, damped = solve_velocity(
+        qd_list, damped = solve_velocity_list(
             jacobian,
             twist,
             self.dls_epsilon,
             self.dls_lambda_max,
             lambda: self._position_rate(q, twist),
         )
-        if self.check_speed and max(map(abs, qd.tolist())) > self._min_speed_limit:
+        qd = np.array(qd_list)
+        if self.check_speed and max(map(abs, qd_list)) > self._min_speed_limit:
             self._check_speed(qd, t)
         self._cycle += 1
-        self._q_before, self._q = q_prev, q
-        self._qd, self._branch = qd, solution.index
-        self._state = CartesianState(p, v, rotation, omega)
-        return PlannerSample(t, p, v, rotation, omega, q, qd, solution.branch, damped)
+        self._q_before, self._q = self._q, q
+        self._qf_before, self._qf = self._qf, qf
+        self._qd, self._branch = qd, index
+        self._state = _new_state(p, v, rotation, omega)
+        return _new_sample(t, p, v, rotation, omega, q, qd, BRANCHES[index], damped)
 
-    def _select(self, solutions: list[IKSolution], q_pred: FloatArray) -> IKSolution:
+    def _solve_ik(
+        self, rows: list[list[float]], q_pred: list[float]
+    ) -> tuple[FloatArray, int, bool]:
         """The IK solution continuing the motion (Kang's θ4 flip rule, generalised).
 
-        The two wrist twins of the previous branch are compared first; if the
+        The two wrist twins of the previous branch are solved first; if the
         nearer one is within two cycles of joint-speed-limited motion it is the
-        continuous choice, else every branch is compared (a shoulder or elbow
-        singularity was crossed). ``analytic`` already returned each angle as
-        the representative nearest the prediction ``q_pred``, so the plain
-        Euclidean distance is that of :func:`workbench.ik.closed_form.nearest`.
+        continuous choice, else every branch is solved and compared (a
+        shoulder or elbow singularity was crossed). The closed form returns
+        each angle as the representative nearest the prediction ``q_pred``, so
+        the plain Euclidean distance is that of
+        :func:`workbench.ik.closed_form.nearest`.
+
+        Returns:
+            ``(q, branch index, within limits)``, ``q`` read-only.
         """
-        i = self._branch
-        a, b = solutions[i & ~1], solutions[i | 1]
-        da, db = a.q - q_pred, b.q - q_pred
-        na, nb = float(da @ da), float(db @ db)
-        best, dist = (a, na) if na <= nb else (b, nb)
-        if dist <= self._max_step2:
-            return best
-        return nearest(solutions, q_pred)
+        pair = self._branch >> 1
+        values, within, _ = _solve(self._geo, rows, q_pred, pair)
+        na = nb = 0.0
+        for x, y, p in zip(values, values[6:], q_pred):  # noqa: B905
+            na += (x - p) * (x - p)
+            nb += (y - p) * (y - p)
+        flip = 0 if na <= nb else 1
+        if (na if flip == 0 else nb) <= self._max_step2:
+            q = np.array(values[6 * flip : 6 * flip + 6])
+            q.setflags(write=False)
+            return q, 2 * pair + flip, within[flip]
+        solution = nearest(_solutions(*_solve(self._geo, rows, q_pred)), q_pred)
+        return solution.q, solution.index, solution.within_limits
 
     def _position_rate(self, q: FloatArray, twist: list[float]) -> FloatArray:
         """Rate of the joint position commands ending at ``q``: the DLS reference.
@@ -354,10 +410,48 @@ class OnlinePlanner:
 
     def _to_wrist_in_base(
         self, p: FloatArray, v: FloatArray, rotation: FloatArray, omega: FloatArray
-    ) -> tuple[FloatArray, FloatArray, list[float]]:
-        """Tip command (world) -> wrist-centre pose (base) and twist (base axes)."""
+    ) -> tuple[list[list[float]], list[float]]:
+        """Tip command (world) -> wrist-centre pose (base) and twist (base axes).
+
+        Returns:
+            The first three rows of the homogeneous matrix of the wrist centre
+            in the base frame, checked like any IK target, and the twist.
+        """
         vx, vy, vz = v.tolist()
         wx, wy, wz = omega.tolist()
+        if not self._frames_fixed:
+            return self._to_wrist_rotating(p, (vx, vy, vz), rotation, (wx, wy, wz))
+        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rows = rotation.tolist()
+        px, py, pz = p.tolist()
+        if self._tip is not None:  # p6 = p + lever, v6 = v + omega x lever
+            bx, by, bz = self._tip_back_f
+            lx = r00 * bx + r01 * by + r02 * bz
+            ly = r10 * bx + r11 * by + r12 * bz
+            lz = r20 * bx + r21 * by + r22 * bz
+            px, py, pz = px + lx, py + ly, pz + lz
+            vx, vy, vz = (
+                vx + wy * lz - wz * ly,
+                vy + wz * lx - wx * lz,
+                vz + wx * ly - wy * lx,
+            )
+        if self._base is not None:
+            bx, by, bz = self._base_p
+            px, py, pz = px - bx, py - by, pz - bz
+        rows[0].append(px)
+        rows[1].append(py)
+        rows[2].append(pz)
+        rows.append([0.0, 0.0, 0.0, 1.0])
+        return rigid_rows(rows), [vx, vy, vz, wx, wy, wz]
+
+    def _to_wrist_rotating(
+        self,
+        p: FloatArray,
+        v: tuple[float, float, float],
+        rotation: FloatArray,
+        omega: tuple[float, float, float],
+    ) -> tuple[list[list[float]], list[float]]:
+        """:meth:`_to_wrist_in_base` when the tip or the base frame rotates."""
+        (vx, vy, vz), (wx, wy, wz) = v, omega
         r6, p6 = rotation, p
         if self._tip is not None:  # p6 = p + lever, v6 = v + omega x lever
             r6 = rotation if self._tip_rt is None else rotation @ self._tip_rt
@@ -369,14 +463,15 @@ class OnlinePlanner:
                 vy + wz * lx - wx * lz,
                 vz + wx * ly - wy * lx,
             )
-        if self._base is None:
-            return r6, p6, [vx, vy, vz, wx, wy, wz]
-        rb, pb = self._base
-        if self._base_rotates:
-            rbt = rb.T
-            twist = (rbt @ [vx, vy, vz]).tolist() + (rbt @ [wx, wy, wz]).tolist()
-            return rbt @ r6, rbt @ (p6 - pb), twist
-        return r6, p6 - pb, [vx, vy, vz, wx, wy, wz]
+        twist = [vx, vy, vz, wx, wy, wz]
+        if self._base is not None:
+            rb, pb = self._base
+            p6 = p6 - pb
+            if self._base_rotates:
+                rbt = rb.T
+                twist = (rbt @ [vx, vy, vz]).tolist() + (rbt @ [wx, wy, wz]).tolist()
+                r6, p6 = rbt @ r6, rbt @ p6
+        return pose_rows(pin.SE3(r6, p6)), twist
 
     def _check_position(self, q: FloatArray, t: float) -> None:
         lower, upper = self.robot.lower, self.robot.upper
