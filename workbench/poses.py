@@ -59,7 +59,7 @@ def _skew(v: FloatArray) -> FloatArray:
 def _as_rotation(rotation: npt.ArrayLike, tol: float, name: str) -> FloatArray:
     """Check a (3, 3) matrix is finite, orthonormal within ``tol`` and det +1."""
     r = as_finite_array(rotation, (3, 3), name)
-    _check_rigid(r.tolist(), [], tol, name)
+    check_rigid_rows(r.tolist(), [], tol, name)
     return r
 
 
@@ -116,7 +116,7 @@ def as_se3(target: pin.SE3 | npt.ArrayLike, *, tol: float = RIGIDITY_TOL) -> pin
     """
     if isinstance(target, pin.SE3):
         rows = target.rotation.tolist()
-        _check_rigid(rows, target.translation.tolist(), tol, "rotation of the SE3")
+        check_rigid_rows(rows, target.translation.tolist(), tol, "rotation of the SE3")
         return pin.SE3(target)
     return se3_from_matrix(target, tol=tol)
 
@@ -146,14 +146,27 @@ def se3_from_matrix(matrix: npt.ArrayLike, *, tol: float = RIGIDITY_TOL) -> pin.
         )
     rotation = [row[:3] for row in rows[:3]]
     translation = [row[3] for row in rows[:3]]
-    _check_rigid(rotation, translation, tol, "rotation part of the homogeneous matrix")
+    check_rigid_rows(
+        rotation, translation, tol, "rotation part of the homogeneous matrix"
+    )
     return pin.SE3(np.array(rotation), np.array(translation))
 
 
-def _check_rigid(
+def check_rigid_rows(
     rotation: list[list[float]], translation: list[float], tol: float, name: str
 ) -> None:
-    """Finite entries, rotation orthonormal within ``tol``, det +1 (plain floats)."""
+    """Check a pose given as plain floats (fast: no numpy).
+
+    Args:
+        rotation: Rows of R, 3 lists of 3 floats.
+        translation: p as floats [m] (may be empty: rotation only).
+        tol: Tolerance on ``max |R^T R - I|``.
+        name: What the pose is, for the messages.
+
+    Raises:
+        NonFiniteError: If an entry is NaN or infinite.
+        InputError: If R is not orthonormal within ``tol`` or det R <= 0.
+    """
     (a, b, c), (d, e, f), (g, h, i) = rotation
     if not all(math.isfinite(x) for x in (a, b, c, d, e, f, g, h, i, *translation)):
         raise NonFiniteError(

@@ -13,7 +13,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import DimensionError, InputError, NonFiniteError
-from workbench.poses import RIGIDITY_TOL
+from workbench.poses import RIGIDITY_TOL, check_rigid_rows
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -84,31 +84,15 @@ def _checked_rows(target: pin.SE3 | npt.ArrayLike) -> list[list[float]]:
         rows = arr.tolist()
     if not math.isfinite(math.fsum(map(abs, (*rows[0], *rows[1], *rows[2], *rows[3])))):
         raise NonFiniteError(f"target must be finite, got {rows}")
-    (r00, r01, r02, _), (r10, r11, r12, _), (r20, r21, r22, _), bottom = rows
+    bottom = rows[3]
     if max(abs(bottom[0]), abs(bottom[1]), abs(bottom[2]), abs(bottom[3] - 1.0)) > (
         RIGIDITY_TOL
     ):
         raise InputError(f"target must have bottom row [0, 0, 0, 1], got {bottom}")
-    err = max(
-        abs(r00 * r00 + r10 * r10 + r20 * r20 - 1.0),
-        abs(r01 * r01 + r11 * r11 + r21 * r21 - 1.0),
-        abs(r02 * r02 + r12 * r12 + r22 * r22 - 1.0),
-        abs(r00 * r01 + r10 * r11 + r20 * r21),
-        abs(r00 * r02 + r10 * r12 + r20 * r22),
-        abs(r01 * r02 + r11 * r12 + r21 * r22),
+    rotation = [row[:3] for row in rows[:3]]
+    check_rigid_rows(
+        rotation, [row[3] for row in rows[:3]], RIGIDITY_TOL, "target rotation"
     )
-    if err > RIGIDITY_TOL:
-        raise InputError(
-            f"target rotation is not orthonormal: max |R^T R - I| = {err:.3g} > "
-            f"tol = {RIGIDITY_TOL:g}"
-        )
-    det = (
-        r00 * (r11 * r22 - r12 * r21)
-        - r01 * (r10 * r22 - r12 * r20)
-        + r02 * (r10 * r21 - r11 * r20)
-    )
-    if det <= 0.0:
-        raise InputError(f"target rotation has det = {det:.6g} (a reflection)")
     return rows
 
 
