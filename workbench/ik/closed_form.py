@@ -412,6 +412,109 @@ def _solve(
     return values, within, singular
 
 
+def _solve_twins(
+    geo: PumaGeometry, rows: list[list[float]], prev: list[float], pair: int
+) -> tuple[list[float], list[float], bool, bool]:
+    """The wrist twins ``2 pair`` and ``2 pair + 1`` near ``prev``, for tracking.
+
+    The operations of :func:`_solve` for that one (arm, elbow) pair with
+    ``prev`` given, written out straight, so the values are bit for bit those
+    of the full solve at a third of its cost (the online planner's cycle).
+
+    Returns:
+        Joint values of the no-flip and flip twin and their within-limits flags.
+    """
+    (nx, ox, ax, px), (ny, oy, ay, py), (nz, oz, az, pz) = rows[:3]
+    if geo.sin_alpha6 != 0.0:  # R' = R Rx(-alpha6): its z column is z5
+        ca, sa = geo.cos_alpha6, geo.sin_alpha6
+        ox, ax = ca * ox - sa * ax, sa * ox + ca * ax
+        oy, ay = ca * oy - sa * ay, sa * oy + ca * ay
+        oz, az = ca * oz - sa * az, sa * oz + ca * az
+    if geo.d6 != 0.0:  # wrist centre
+        px, py, pz = px - geo.d6 * ax, py - geo.d6 * ay, pz - geo.d6 * az
+    pz -= geo.d1
+    r2 = px * px + py * py
+    low, high, cylinder = geo.reach_test
+    if not (low <= math.sqrt(r2 + pz * pz) <= high and r2 >= cylinder):
+        check_reach(geo, px, py, pz)  # raises UnreachableError
+    s1g, s3g, a2, ell = geo.sigma1, geo.sigma3, geo.a2, geo.forearm
+    g, sigma5 = geo.sigma4 * geo.sigma5, geo.sigma5
+    sd = s1g * geo.offset
+    rho2 = r2 - geo.offset * geo.offset
+    if rho2 < 0.0:
+        rho2 = 0.0
+    rho, y1 = math.sqrt(rho2), s1g * pz
+    k = (rho2 + pz * pz - a2 * a2 - ell * ell) / (2.0 * a2 * ell)
+    if k > 1.0:
+        k = 1.0
+    elif k < -1.0:
+        k = -1.0
+    sgm = math.sqrt(1.0 - k * k)
+    cb, sb = geo.cos_beta, geo.sin_beta
+    big_a = a2 + ell * k
+    right = 1.0 if sd >= 0.0 else -1.0
+    atan2, rem, pi = math.atan2, math.remainder, math.pi
+    n1, n2, n3, n4, n5, n6 = prev
+    o1, o2, o3, o4, o5, o6 = geo.theta_offset
+    # elbow
+    sg_up = geo.up_sign * right * sgm
+    sg = -sg_up if (pair ^ (pair >> 1)) & 1 else sg_up
+    kcb, ksb, y1a = k * cb, k * sb, y1 * big_a
+    c3, s3 = kcb + sg * sb, sg * cb - ksb
+    q3 = n3 + rem(atan2(s3, c3) - o3 - n3, TAU)
+    big_b = ell * sg
+    yb = y1 * big_b
+    # arm
+    x1 = (right if pair < 2 else -right) * rho
+    if r2 > 0.0:
+        c1, s1 = (px * x1 - py * sd) / r2, (py * x1 + px * sd) / r2
+    else:  # wrist centre on the base axis (D = 0): theta1 is free
+        t1 = o1 + n1
+        c1, s1 = math.cos(t1), math.sin(t1)
+    q1 = n1 + rem(atan2(s1, c1) - o1 - n1, TAU)
+    s13 = s3g * s1g
+    a00, a01, a02 = c1 * nx + s1 * ny, c1 * ox + s1 * oy, c1 * ax + s1 * ay
+    a10, a11, a12 = s1g * nz, s1g * oz, s1g * az
+    m10 = s13 * (s1 * nx - c1 * ny)
+    m11 = s13 * (s1 * ox - c1 * oy)
+    m12 = s13 * (s1 * ax - c1 * ay)
+    # shoulder and wrist
+    c2, s2 = x1 * big_a + yb, y1a - x1 * big_b
+    q2 = n2 + rem(atan2(s2, c2) - o2 - n2, TAU)
+    norm = math.sqrt(c2 * c2 + s2 * s2)
+    if norm > 0.0:
+        c2, s2 = c2 / norm, s2 / norm
+    else:  # wrist centre on the shoulder axis: theta2 is free
+        c2, s2 = 1.0, 0.0
+    c23, s23 = c2 * c3 - s2 * s3, s2 * c3 + c2 * s3
+    m02 = c23 * a02 + s23 * a12
+    m22 = s3g * (s23 * a02 - c23 * a12)
+    m00, m01 = c23 * a00 + s23 * a10, c23 * a01 + s23 * a11
+    h = math.sqrt(m02 * m02 + m12 * m12)
+    if h > WRIST_SINGULAR_TOL:
+        t4 = atan2(m12, m02)
+        t6 = atan2(g * (m12 * m00 - m02 * m10), g * (m12 * m01 - m02 * m11))
+        t5 = atan2(sigma5 * h, -g * m22)
+    else:
+        t4, t5, t6 = _singular_wrist(geo, m00, m01, m02, m10, m11, m12, m22, prev)
+    t4f = t4 - pi if t4 > 0.0 else t4 + pi
+    t6f = t6 - pi if t6 > 0.0 else t6 + pi
+    q4 = n4 + rem(t4 - o4 - n4, TAU)
+    q4f = n4 + rem(t4f - o4 - n4, TAU)
+    q5 = n5 + rem(t5 - o5 - n5, TAU)
+    q5f = n5 + rem(-t5 - o5 - n5, TAU)
+    q6 = n6 + rem(t6 - o6 - n6, TAU)
+    q6f = n6 + rem(t6f - o6 - n6, TAU)
+    (l1, l2, l3, l4, l5, l6), (u1, u2, u3, u4, u5, u6) = geo.bounds
+    ok = l1 <= q1 <= u1 and l3 <= q3 <= u3 and l2 <= q2 <= u2
+    return (
+        [q1, q2, q3, q4, q5, q6],
+        [q1, q2, q3, q4f, q5f, q6f],
+        ok and l4 <= q4 <= u4 and l5 <= q5 <= u5 and l6 <= q6 <= u6,
+        ok and l4 <= q4f <= u4 and l5 <= q5f <= u5 and l6 <= q6f <= u6,
+    )
+
+
 def _wrap(geo: PumaGeometry, j: int, theta: float) -> float:
     """Joint value of DH angle ``theta`` in [−π, π] outside ``geo.keep[j]``.
 

@@ -35,19 +35,24 @@ FloatArray = npt.NDArray[np.float64]
 
 #: |J[0:3, 3:6]| entries at or below this count as zero (rounding of FK).
 BLOCK_TOL = 1e-12
+_BLOCK_TOL2 = BLOCK_TOL * BLOCK_TOL
 
 
 def _block_solve(
     rows: list[list[float]], twist: list[float], epsilon: float
 ) -> list[float] | None:
     """Exact solve if J is block triangular and sigma_min >= epsilon, else None."""
-    (a0, a1, a2, z0, z1, z2), (a3, a4, a5, z3, z4, z5), (a6, a7, a8, z6, z7, z8) = rows[
-        :3
-    ]
-    (b0, b1, b2, c0, c1, c2), (b3, b4, b5, c3, c4, c5), (b6, b7, b8, c6, c7, c8) = rows[
-        3:
-    ]
-    if (
+    (
+        (a0, a1, a2, z0, z1, z2),
+        (a3, a4, a5, z3, z4, z5),
+        (a6, a7, a8, z6, z7, z8),
+        (b0, b1, b2, c0, c1, c2),
+        (b3, b4, b5, c3, c4, c5),
+        (b6, b7, b8, c6, c7, c8),
+    ) = rows
+    # max |z| <= BLOCK_TOL, decided by a sum of squares when that is clear
+    zz = z0 * z0 + z1 * z1 + z2 * z2 + z3 * z3 + z4 * z4 + z5 * z5 + z6 * z6
+    if not zz + z7 * z7 + z8 * z8 <= _BLOCK_TOL2 and (
         max(
             abs(z0),
             abs(z1),
@@ -77,6 +82,30 @@ def _block_solve(
     j0, j1, j2 = m0 * rc, (c2 * c7 - c1 * c8) * rc, (c1 * c5 - c2 * c4) * rc
     j3, j4, j5 = m3 * rc, (c0 * c8 - c2 * c6) * rc, (c2 * c3 - c0 * c5) * rc
     j6, j7, j8 = m6 * rc, (c1 * c6 - c0 * c7) * rc, (c0 * c4 - c1 * c3) * rc
+    # ||J^-1||_F^2 summed in order: when the A^-1 and C^-1 terms alone pass the
+    # bound (rounding is monotone), D is not needed to know the answer
+    frob2 = (
+        i0 * i0
+        + i1 * i1
+        + i2 * i2
+        + i3 * i3
+        + i4 * i4
+        + i5 * i5
+        + i6 * i6
+        + i7 * i7
+        + i8 * i8
+        + j0 * j0
+        + j1 * j1
+        + j2 * j2
+        + j3 * j3
+        + j4 * j4
+        + j5 * j5
+        + j6 * j6
+        + j7 * j7
+        + j8 * j8
+    )
+    if frob2 * epsilon * epsilon > 1.0:
+        return None
     # E = C^-1 B, then D = E A^-1 (the lower-left block of J^-1, negated)
     e0 = j0 * b0 + j1 * b3 + j2 * b6
     e1 = j0 * b1 + j1 * b4 + j2 * b7
@@ -103,24 +132,7 @@ def _block_solve(
         e6 * i2 + e7 * i5 + e8 * i8,
     )
     frob2 = (
-        i0 * i0
-        + i1 * i1
-        + i2 * i2
-        + i3 * i3
-        + i4 * i4
-        + i5 * i5
-        + i6 * i6
-        + i7 * i7
-        + i8 * i8
-        + j0 * j0
-        + j1 * j1
-        + j2 * j2
-        + j3 * j3
-        + j4 * j4
-        + j5 * j5
-        + j6 * j6
-        + j7 * j7
-        + j8 * j8
+        frob2
         + d0 * d0
         + d1 * d1
         + d2 * d2
@@ -170,17 +182,35 @@ def solve_velocity_list(
 
 
 def _dls_inverse(jacobian: FloatArray, epsilon: float, lambda_max: float) -> FloatArray:
-    """:func:`~workbench.ik.dls_inverse` of a finite (m, n) float array, unchecked."""
-    u, sigma, vt = np.linalg.svd(jacobian, full_matrices=False)
+    """:func:`~workbench.ik.dls_inverse` of a finite (m, n) float array, unchecked.
+
+    The same SVD (numpy's LAPACK gufunc, called directly when numpy exposes
+    it) and arithmetic, without the argument checks and wrappers.
+    """
+    u = None
+    if _SVD_GUFUNC is not None:
+        u, sigma, vt = _SVD_GUFUNC(jacobian, signature="d->ddd")
+        if not np.isfinite(sigma[-1]):  # no convergence: let numpy report it
+            u = None
+    if u is None:
+        u, sigma, vt = np.linalg.svd(jacobian, full_matrices=False)
     sigma_min = sigma[-1] if sigma.size else 0.0
     lambda2 = 0.0
     if sigma_min < epsilon:
         lambda2 = (1.0 - (sigma_min / epsilon) ** 2) * lambda_max**2
-    denominator = sigma * sigma + lambda2
-    gain = np.divide(
-        sigma, denominator, out=np.zeros_like(sigma), where=denominator > 0.0
-    )
-    return (vt.T * gain) @ u.T
+    gain = []
+    for s in sigma.tolist():
+        denominator = s * s + lambda2
+        gain.append(s / denominator if denominator > 0.0 else 0.0)
+    return (vt.T * np.array(gain)) @ u.T
+
+
+try:  # the gufunc np.linalg.svd(a, full_matrices=False) runs for float64 input
+    from numpy.linalg import _umath_linalg
+
+    _SVD_GUFUNC = _umath_linalg.svd_s
+except (ImportError, AttributeError):  # pragma: no cover - other numpy builds
+    _SVD_GUFUNC = None
 
 
 def solve_velocity(

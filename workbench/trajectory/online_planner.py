@@ -30,7 +30,9 @@ planning instants with cubic Hermite polynomials
 from __future__ import annotations
 
 import math
+import struct
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,6 +46,7 @@ from workbench.ik.closed_form import (
     BRANCHES,
     _solutions,
     _solve,
+    _solve_twins,
     analytic,
     nearest,
 )
@@ -68,6 +71,8 @@ FloatArray = npt.NDArray[np.float64]
 SPEED_RTOL = 1e-9
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+_PACK6 = struct.Struct("6d").pack
+_frombuffer = np.frombuffer
 
 
 @dataclass(frozen=True, slots=True)
@@ -98,28 +103,71 @@ class PlannerSample:
 
 
 # Frozen slots dataclasses: their generated __init__ goes through
-# object.__setattr__ per field (~2 µs for nine); the slot descriptors are
-# written directly instead, once per planning cycle.
-_SAMPLE_SETTERS = tuple(
-    PlannerSample.__dict__[f].__set__ for f in PlannerSample.__slots__
-)
-_STATE_SETTERS = tuple(
-    CartesianState.__dict__[f].__set__ for f in CartesianState.__slots__
-)
+# object.__setattr__ per field (~2 µs for nine). Once per planning cycle the
+# instances are built as a plain twin class with the same slots, whose
+# __init__ stores them directly, and then given their class (same layout).
+class _SampleTwin:
+    __slots__ = (
+        "angular_velocity",
+        "branch",
+        "damped",
+        "position",
+        "q",
+        "qd",
+        "rotation",
+        "t",
+        "velocity",
+    )
+
+    def __init__(
+        self,
+        t: float,
+        p: FloatArray,
+        v: FloatArray,
+        rotation: FloatArray,
+        omega: FloatArray,
+        q: FloatArray,
+        qd: FloatArray,
+        branch: str,
+        damped: bool,
+    ) -> None:
+        self.t = t
+        self.position = p
+        self.velocity = v
+        self.rotation = rotation
+        self.angular_velocity = omega
+        self.q = q
+        self.qd = qd
+        self.branch = branch
+        self.damped = damped
 
 
-def _new_sample(*values: object) -> PlannerSample:
-    sample = object.__new__(PlannerSample)
-    for set_field, value in zip(_SAMPLE_SETTERS, values):  # noqa: B905
-        set_field(sample, value)
-    return sample
+class _StateTwin:
+    __slots__ = ("angular_velocity", "position", "rotation", "velocity")
+
+    def __init__(
+        self, p: FloatArray, v: FloatArray, rotation: FloatArray, omega: FloatArray
+    ) -> None:
+        self.position = p
+        self.velocity = v
+        self.rotation = rotation
+        self.angular_velocity = omega
 
 
-def _new_state(*values: object) -> CartesianState:
-    state = object.__new__(CartesianState)
-    for set_field, value in zip(_STATE_SETTERS, values):  # noqa: B905
-        set_field(state, value)
-    return state
+def _twin_builder(cls: type, twin: type) -> Callable[..., object] | None:
+    """``twin(*fields)`` turned into a ``cls``, or None if the layouts differ."""
+    if sorted(cls.__slots__) != sorted(twin.__slots__):  # (CPython sorts them)
+        return None
+    probe = twin(*range(len(twin.__slots__)))
+    try:
+        probe.__class__ = cls
+    except TypeError:
+        return None
+    return twin
+
+
+_SAMPLE_TWIN = _twin_builder(PlannerSample, _SampleTwin)
+_STATE_TWIN = _twin_builder(CartesianState, _StateTwin)
 
 
 def _rigid(value: pin.SE3 | None) -> tuple[FloatArray, FloatArray] | None:
@@ -329,13 +377,19 @@ class OnlinePlanner:
         # two commands, so that at a wrist singularity (theta4, theta6 free) the
         # IK keeps the wrist moving as it was instead of splitting the step
         before = self._qf_before
-        q_pred = (
-            self._qf
-            if before is None
-            else [2.0 * a - b for a, b in zip(self._qf, before)]  # noqa: B905
-        )
-        q, index, within = self._solve_ik(rows, q_pred)
-        qf = q.tolist()
+        if before is None:
+            q_pred = self._qf
+        else:
+            (a0, a1, a2, a3, a4, a5), (b0, b1, b2, b3, b4, b5) = self._qf, before
+            q_pred = [
+                2.0 * a0 - b0,
+                2.0 * a1 - b1,
+                2.0 * a2 - b2,
+                2.0 * a3 - b3,
+                2.0 * a4 - b4,
+                2.0 * a5 - b5,
+            ]
+        q, qf, index, within = self._solve_ik(rows, q_pred)
         if not within:
             self._check_position(q, t)
         jacobian = pin.computeFrameJacobian(
@@ -346,21 +400,35 @@ class OnlinePlanner:
             twist,
             self.dls_epsilon,
             self.dls_lambda_max,
-            lambda: self._position_rate(q, twist),
+            lambda: self._position_rate(qf, twist),
         )
         qd = np.array(qd_list)
-        if self.check_speed and max(map(abs, qd_list)) > self._min_speed_limit:
+        if self.check_speed and (
+            max(qd_list) > self._min_speed_limit
+            or min(qd_list) < -self._min_speed_limit
+        ):
             self._check_speed(qd, t)
         self._cycle += 1
         self._q_before, self._q = self._q, q
         self._qf_before, self._qf = self._qf, qf
         self._qd, self._branch = qd, index
-        self._state = _new_state(p, v, rotation, omega)
-        return _new_sample(t, p, v, rotation, omega, q, qd, BRANCHES[index], damped)
+        if _STATE_TWIN is not None:
+            state = _STATE_TWIN(p, v, rotation, omega)
+            state.__class__ = CartesianState
+        else:
+            state = CartesianState(p, v, rotation, omega)
+        self._state = state
+        if _SAMPLE_TWIN is None:
+            return PlannerSample(
+                t, p, v, rotation, omega, q, qd, BRANCHES[index], damped
+            )
+        sample = _SAMPLE_TWIN(t, p, v, rotation, omega, q, qd, BRANCHES[index], damped)
+        sample.__class__ = PlannerSample
+        return sample
 
     def _solve_ik(
         self, rows: list[list[float]], q_pred: list[float]
-    ) -> tuple[FloatArray, int, bool]:
+    ) -> tuple[FloatArray, list[float], int, bool]:
         """The IK solution continuing the motion (Kang's θ4 flip rule, generalised).
 
         The two wrist twins of the previous branch are solved first; if the
@@ -372,33 +440,44 @@ class OnlinePlanner:
         :func:`workbench.ik.closed_form.nearest`.
 
         Returns:
-            ``(q, branch index, within limits)``, ``q`` read-only.
+            ``(q, q as floats, branch index, within limits)``, ``q`` read-only.
         """
         pair = self._branch >> 1
-        values, within, _ = _solve(self._geo, rows, q_pred, pair)
-        na = nb = 0.0
-        for x, y, p in zip(values, values[6:], q_pred):  # noqa: B905
-            na += (x - p) * (x - p)
-            nb += (y - p) * (y - p)
-        flip = 0 if na <= nb else 1
-        if (na if flip == 0 else nb) <= self._max_step2:
-            q = np.array(values[6 * flip : 6 * flip + 6])
-            q.setflags(write=False)
-            return q, 2 * pair + flip, within[flip]
+        a, b, within_a, within_b = _solve_twins(self._geo, rows, q_pred, pair)
+        # squared distances; the twins share q1..q3, so their terms once
+        (a0, a1, a2, a3, a4, a5), (b3, b4, b5) = a, b[3:]
+        p0, p1, p2, p3, p4, p5 = q_pred
+        shared = (a0 - p0) * (a0 - p0) + (a1 - p1) * (a1 - p1) + (a2 - p2) * (a2 - p2)
+        na = shared + (a3 - p3) * (a3 - p3) + (a4 - p4) * (a4 - p4)
+        na += (a5 - p5) * (a5 - p5)
+        nb = shared + (b3 - p3) * (b3 - p3) + (b4 - p4) * (b4 - p4)
+        nb += (b5 - p5) * (b5 - p5)
+        if na <= nb:
+            if na <= self._max_step2:  # a read-only array straight from bytes
+                return _frombuffer(_PACK6(*a)), a, 2 * pair, within_a
+        elif nb <= self._max_step2:
+            return _frombuffer(_PACK6(*b)), b, 2 * pair + 1, within_b
         solution = nearest(_solutions(*_solve(self._geo, rows, q_pred)), q_pred)
-        return solution.q, solution.index, solution.within_limits
+        return solution.q, solution.q.tolist(), solution.index, solution.within_limits
 
-    def _position_rate(self, q: FloatArray, twist: list[float]) -> FloatArray:
+    def _position_rate(self, q: list[float], twist: list[float]) -> FloatArray:
         """Rate of the joint position commands ending at ``q``: the DLS reference.
 
         Second-order backward difference (first order on the first cycle);
         zero when the tool is commanded at rest.
         """
         if not any(twist):
-            return np.zeros_like(q)
-        if self._q_before is None:
-            return (q - self._q) / self.period
-        return (3.0 * q - 4.0 * self._q + self._q_before) / (2.0 * self.period)
+            return np.zeros(len(q))
+        if self._qf_before is None:
+            period = self.period
+            return np.array([(a - b) / period for a, b in zip(q, self._qf)])  # noqa: B905
+        two_periods = 2.0 * self.period
+        return np.array(
+            [
+                (3.0 * a - 4.0 * b + c) / two_periods
+                for a, b, c in zip(q, self._qf, self._qf_before)  # noqa: B905
+            ]
+        )
 
     def _check_speed(self, qd: FloatArray, t: float) -> None:
         ratio = np.abs(qd) / self._speed_limit
@@ -415,7 +494,7 @@ class OnlinePlanner:
 
         Returns:
             The first three rows of the homogeneous matrix of the wrist centre
-            in the base frame, checked like any IK target, and the twist.
+            in the base frame and the twist.
         """
         vx, vy, vz = v.tolist()
         wx, wy, wz = omega.tolist()
@@ -440,8 +519,12 @@ class OnlinePlanner:
         rows[0].append(px)
         rows[1].append(py)
         rows[2].append(pz)
-        rows.append([0.0, 0.0, 0.0, 1.0])
-        return rigid_rows(rows), [vx, vy, vz, wx, wy, wz]
+        # the rotation comes from a motion primitive, rigid by construction:
+        # only finiteness is checked (any error reported as pose_rows would)
+        total = r00 + r01 + r02 + r10 + r11 + r12 + r20 + r21 + r22 + px + py + pz
+        if total - total != 0.0:
+            rigid_rows([*rows, [0.0, 0.0, 0.0, 1.0]])
+        return rows, [vx, vy, vz, wx, wy, wz]
 
     def _to_wrist_rotating(
         self,
