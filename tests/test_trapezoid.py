@@ -16,7 +16,7 @@ ATOL_EXACT = 1e-12
 RTOL_LIMIT = 1e-9
 
 limits = st.floats(min_value=0.05, max_value=5.0)
-fractions = st.floats(min_value=0.0, max_value=1.0)
+fractions = st.floats(min_value=0.0, max_value=1.0, allow_subnormal=False)
 
 
 def _check_profile(prof, vmax: float, amax: float, v_bound: float | None = None):
@@ -119,11 +119,11 @@ def test_trapezoid_properties(distance, vmax, amax, fi, ff):
 
 @settings(max_examples=150, deadline=None)
 @given(
-    distance=st.floats(min_value=-2.0, max_value=2.0),
+    distance=st.floats(min_value=-2.0, max_value=2.0, allow_subnormal=False),
     vmax=limits,
     amax=limits,
-    v0=st.floats(min_value=-6.0, max_value=6.0),
-    ff=st.floats(min_value=-1.0, max_value=1.0),
+    v0=st.floats(min_value=-6.0, max_value=6.0, allow_subnormal=False),
+    ff=st.floats(min_value=-1.0, max_value=1.0, allow_subnormal=False),
 )
 def test_replan_reaches_any_state_within_bounds(distance, vmax, amax, v0, ff):
     vf = ff * vmax
