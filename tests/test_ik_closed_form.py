@@ -591,3 +591,87 @@ def test_cli_no_branch_within_limits_and_non_puma(capsys, puma) -> None:
         capsys, "ik", "--robot", path, "--matrix", *map(repr, inside.ravel().tolist())
     )
     assert code == 0 and "numeric" in out
+
+
+# -- fast paths (performance work) agree with the general ones ----------------------
+
+
+def test_twin_solve_equals_the_full_solve_bit_for_bit(rng) -> None:
+    """The planner's one-pair solve is the full solve restricted to that pair."""
+    from workbench.ik._puma import get_geometry
+    from workbench.ik._targets import pose_rows
+    from workbench.ik.closed_form import _solve, _solve_twins
+
+    robots = [load_robot("puma560"), load_robot("puma560-kang")]
+    robots += [robot_from_table(t) for t in _puma_type_tables(rng, 4)]
+    for robot in robots:
+        geo = get_geometry(robot)
+        qs = rng.uniform(robot.lower, robot.upper, size=(40, 6))
+        qs[:8, 4] = 0.0  # wrist singular: theta4/theta6 split by continuity
+        for q in qs:
+            rows = pose_rows(robot.fk(q))
+            prev = (q + rng.normal(0.0, 0.05, 6)).tolist()
+            values, within, _ = _solve(geo, rows, prev)
+            for pair in range(4):
+                a, b, within_a, within_b = _solve_twins(geo, rows, prev, pair)
+                assert a + b == values[12 * pair : 12 * pair + 12]
+                assert [within_a, within_b] == within[2 * pair : 2 * pair + 2]
+
+
+def test_solution_fields_are_read_only_and_pickle(puma) -> None:
+    import pickle
+
+    solutions = analytic(puma, puma.fk(np.array([0.2, -0.7, 1.1, 0.4, 0.9, -0.3])))
+    for s in solutions:
+        for field in ("q", "branch", "index", "within_limits", "wrist_singular"):
+            with pytest.raises(FrozenInstanceError):
+                setattr(s, field, None)
+        copy = pickle.loads(pickle.dumps(s))
+        assert (copy.branch, copy.index) == (s.branch, s.index)
+        assert (copy.within_limits, copy.wrist_singular) == (
+            s.within_limits,
+            s.wrist_singular,
+        )
+        np.testing.assert_array_equal(copy.q, s.q)
+        assert repr(copy) == repr(s)
+    assert [s.q.base is solutions[0].q.base for s in solutions] == [True] * 8
+
+
+def test_targets_near_the_rigidity_tolerance(puma) -> None:
+    """Poses the quick acceptance test leaves to the exact checks: same answer."""
+    good = puma.fk(np.array([0.2, -0.7, 1.1, 0.4, 0.9, -0.3])).homogeneous
+    for scale, ok in ((1.0 + 2e-7, True), (1.0 + 4.5e-7, True), (1.0 + 6e-7, False)):
+        target = good.copy()
+        target[:3, 0] *= scale  # |x| - 1 between the two tolerances, or beyond
+        if ok:
+            single = np.array([s.q for s in analytic(puma, target)])
+            batch, valid = analytic_batch(puma, target[None])
+            assert valid.all()
+            np.testing.assert_allclose(batch[0], single, rtol=0, atol=ATOL_BATCH)
+        else:
+            with pytest.raises(InputError, match="orthonormal"):
+                analytic(puma, target)
+            with pytest.raises(InputError, match="pose 0 is not"):
+                analytic_batch(puma, target[None])
+    flipped = good.copy()
+    flipped[:3, 2] *= -1.0  # a reflection: orthonormal, det -1
+    with pytest.raises(InputError, match="reflection"):
+        analytic(puma, flipped)
+    with pytest.raises(InputError, match="pose 0 is not"):
+        analytic_batch(puma, flipped[None])
+    with pytest.raises(NonFiniteError):
+        analytic(puma, pin.SE3(good[:3, :3], np.array([np.nan, 0.0, 0.0])))
+
+
+def test_batch_result_layout(puma, rng) -> None:
+    """q is a view with the pose axis fastest; values as the single solve's."""
+    qs = rng.uniform(puma.lower, puma.upper, size=(5000, 6))  # several chunks
+    targets = np.array([puma.fk(q).homogeneous for q in qs])
+    q_batch, valid = analytic_batch(puma, targets)
+    assert q_batch.shape == (5000, 8, 6) and valid.all()
+    dense = np.ascontiguousarray(q_batch)
+    for i in (0, 2047, 2048, 4999):
+        single = np.array([s.q for s in analytic(puma, targets[i])])
+        np.testing.assert_allclose(dense[i], single, rtol=0, atol=ATOL_BATCH)
+    q_batch[3] = 0.0  # writable, like any result array
+    assert not q_batch[3].any()

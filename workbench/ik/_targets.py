@@ -39,8 +39,21 @@ def pose_rows(target: pin.SE3 | npt.ArrayLike) -> list[list[float]]:
         InputError: If the bottom row is not [0, 0, 0, 1] or R is not a rotation.
     """
     cls = type(target)
-    if cls is _SE3:
-        return rigid_rows(target.np.tolist())
+    if cls is _SE3:  # its bottom row is [0, 0, 0, 1] by construction
+        rows = target.np.tolist()
+        (r00, r01, r02, px), (r10, r11, r12, py), (r20, r21, r22, pz), _ = rows
+        e0 = r00 * r00 + r10 * r10 + r20 * r20 - 1.0
+        e1 = r01 * r01 + r11 * r11 + r21 * r21 - 1.0
+        e2 = r00 * r01 + r10 * r11 + r20 * r21
+        ex = r10 * r21 - r20 * r11 - r02  # x × y - z
+        ey = r20 * r01 - r00 * r21 - r12
+        ez = r00 * r11 - r10 * r01 - r22
+        if (
+            e0 * e0 + e1 * e1 + e2 * e2 + ex * ex + ey * ey + ez * ez <= _FAST_TOL2
+            and (px + py + pz) * 0.0 == 0.0
+        ):
+            return rows
+        return _checked_rows(rows)
     if cls is _NDARRAY and target.shape == (4, 4) and target.dtype.char == "d":
         return rigid_rows(target.tolist())
     return _checked_rows(target)

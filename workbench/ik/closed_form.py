@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import FrozenInstanceError
+from itertools import repeat
 
 import numpy as np
 import numpy.typing as npt
@@ -79,12 +80,16 @@ class IKSolution:
     read-only (8, 6) array is made and each ``q`` is a row of it. That keeps a
     call to a few microseconds when not every branch is looked at (building
     eight dataclasses with eight arrays cost more than the IK itself).
-    Equality is identity.
+    Equality is identity; the fields are read-only properties (assigning one
+    raises ``dataclasses.FrozenInstanceError``).
     """
 
-    __slots__ = ("_shared", "index")
-    _shared: list
-    index: int
+    __slots__ = ("_index", "_shared")
+
+    def __init__(self, shared: list, index: int) -> None:
+        # private: built by analytic() with the results shared by the eight
+        self._shared = shared
+        self._index = index
 
     @property
     def q(self) -> FloatArray:
@@ -93,28 +98,27 @@ class IKSolution:
         rows = shared[3]
         if rows is None:
             rows = shared[3] = _read_only_rows(shared[0])
-        return rows[self.index]
+        return rows[self._index]
 
     @property
     def branch(self) -> str:
         """Label, e.g. ``"right/elbow-up/no-flip"``."""
-        return BRANCHES[self.index]
+        return BRANCHES[self._index]
+
+    @property
+    def index(self) -> int:
+        """Position of ``branch`` in :data:`BRANCHES`."""
+        return self._index
 
     @property
     def within_limits(self) -> bool:
         """True if every joint of ``q`` is within its limits."""
-        return self._shared[1][self.index]
+        return self._shared[1][self._index]
 
     @property
     def wrist_singular(self) -> bool:
         """True if |sin θ5| <= :data:`WRIST_SINGULAR_TOL`."""
-        return self._shared[2][self.index >> 1]
-
-    def __setattr__(self, name: str, value: object) -> None:
-        raise FrozenInstanceError(f"cannot assign to field {name!r}")
-
-    def __delattr__(self, name: str) -> None:
-        raise FrozenInstanceError(f"cannot delete field {name!r}")
+        return self._shared[2][self._index >> 1]
 
     def __repr__(self) -> str:
         return (
@@ -130,8 +134,20 @@ class IKSolution:
         )
 
 
-_SET_SHARED = IKSolution.__dict__["_shared"].__set__
-_SET_INDEX = IKSolution.__dict__["index"].__set__
+def _frozen_field(name: str) -> property:
+    """``IKSolution.<name>`` with a setter and deleter that raise, as frozen."""
+    getter = IKSolution.__dict__[name].fget
+
+    def refuse(self: IKSolution, *value: object) -> None:
+        raise FrozenInstanceError(f"cannot assign to field {name!r}")
+
+    return property(getter, refuse, refuse, getter.__doc__)
+
+
+for _name in ("q", "branch", "index", "within_limits", "wrist_singular"):
+    setattr(IKSolution, _name, _frozen_field(_name))
+del _name
+
 _INDICES = tuple(range(len(BRANCHES)))
 
 
@@ -146,15 +162,7 @@ def _solutions(
     values: list[float], within: list[bool], singular: list[bool]
 ) -> list[IKSolution]:
     """The eight :class:`IKSolution` of one result of :func:`_solve`."""
-    shared = [values, within, singular, None]
-    out = []
-    new = object.__new__
-    for i in _INDICES:
-        sol = new(IKSolution)
-        _SET_SHARED(sol, shared)
-        _SET_INDEX(sol, i)
-        out.append(sol)
-    return out
+    return list(map(IKSolution, repeat([values, within, singular, None], 8), _INDICES))
 
 
 def _restore_solution(
@@ -165,10 +173,7 @@ def _restore_solution(
     within[index], singular[index >> 1] = within_limits, wrist_singular
     rows: list[FloatArray | None] = [None] * 8
     rows[index] = _read_only_rows(q)[0]
-    sol = object.__new__(IKSolution)
-    _SET_SHARED(sol, [None, within, singular, rows])
-    _SET_INDEX(sol, index)
-    return sol
+    return IKSolution([None, within, singular, rows], index)
 
 
 def analytic(
@@ -251,10 +256,7 @@ def nearest(solutions: Sequence[IKSolution], q_previous: npt.ArrayLike) -> IKSol
 
 
 def _solve(
-    geo: PumaGeometry,
-    rows: list[list[float]],
-    prev: list[float] | None,
-    pair: int = -1,
+    geo: PumaGeometry, rows: list[list[float]], prev: list[float] | None
 ) -> tuple[list[float], list[bool], list[bool]]:
     """Joint values (48, branch-major), within-limits (8) and singular (4) flags.
 
@@ -262,12 +264,9 @@ def _solve(
     The batch version in ``_closed_form_batch`` follows the same steps. What the
     branches share is computed once: the elbow angle θ3 takes two values (right
     arm elbow-up = left arm elbow-down), θ1 and the rows of A one per arm.
-
-    With ``pair`` = i in 0..3 only the wrist twins ``2 i`` and ``2 i + 1`` of
-    :data:`BRANCHES` are solved (12 values, 2 and 1 flags), by the same
-    operations, so they equal those of the full solve bit for bit.
+    :func:`_solve_twins` does the same for one (arm, elbow), bit for bit.
     """
-    (nx, ox, ax, px), (ny, oy, ay, py), (nz, oz, az, pz) = rows[:3]
+    (nx, ox, ax, px), (ny, oy, ay, py), (nz, oz, az, pz), _ = rows
     if geo.sin_alpha6 != 0.0:  # R' = R Rx(-alpha6): its z column is z5
         ca, sa = geo.cos_alpha6, geo.sin_alpha6
         ox, ax = ca * ox - sa * ax, sa * ox + ca * ax
@@ -278,7 +277,8 @@ def _solve(
     pz -= geo.d1
     r2 = px * px + py * py
     low, high, cylinder = geo.reach_test
-    if not (low <= math.sqrt(r2 + pz * pz) <= high and r2 >= cylinder):
+    distance = math.sqrt(r2 + pz * pz)
+    if not (low <= distance and distance <= high and r2 >= cylinder):
         check_reach(geo, px, py, pz)  # raises UnreachableError
     s1g, s3g, a2, ell = geo.sigma1, geo.sigma3, geo.a2, geo.forearm
     g, sigma5 = geo.sigma4 * geo.sigma5, geo.sigma5
@@ -308,37 +308,27 @@ def _solve(
     # elbow: sin(gamma) = +sg on the right arm elbow-up and left arm elbow-down
     kcb, ksb, y1a = k * cb, k * sb, y1 * big_a
     sg_up = geo.up_sign * right * sgm  # sin(gamma) of the right arm elbow-up
-    if pair < 0:
-        signs: tuple[float, ...] = (sg_up, -sg_up)
-    else:  # the sign is -sg_up on right/elbow-down and left/elbow-up
-        signs = (-sg_up,) if (pair ^ (pair >> 1)) & 1 else (sg_up,)
     elbows = []
-    for sg in signs:
+    for sg in (sg_up, -sg_up):
         c3, s3 = kcb + sg * sb, sg * cb - ksb
         t3 = atan2(s3, c3)
         if prev is not None:
             q3 = n3 + rem(t3 - o3 - n3, TAU)
-        elif k3 <= t3 <= kk3:
+        elif k3 <= t3 and t3 <= kk3:
             q3 = t3
         else:
             q3 = _wrap(geo, 2, t3)
         big_b = ell * sg
-        elbows.append((c3, s3, q3, l3 <= q3 <= u3, big_b, y1 * big_b))
-    if pair < 0:
-        up, down = elbows
-        arms: tuple[tuple[float, tuple[tuple[float, ...], ...]], ...] = (
-            (right * rho, (up, down)),
-            (-right * rho, (down, up)),
-        )
-    else:
-        arms = (((right if pair < 2 else -right) * rho, (elbows[0],)),)
+        ok3 = True if l3 <= q3 and q3 <= u3 else False
+        elbows.append((c3, s3, q3, ok3, big_b, y1 * big_b))
+    up, down = elbows
     a10, a11, a12 = s1g * nz, s1g * oz, s1g * az
     s13 = s3g * s1g
     pysd, pxsd = py * sd, px * sd
     values: list[float] = []
     within: list[bool] = []
     singular: list[bool] = []
-    for x1, arm in arms:
+    for x1, arm in ((right * rho, (up, down)), (-right * rho, (down, up))):
         if r2 > 0.0:
             c1, s1 = (px * x1 - pysd) / r2, (py * x1 + pxsd) / r2
         else:  # wrist centre on the base axis (D = 0): theta1 is free
@@ -347,11 +337,11 @@ def _solve(
         t1 = atan2(s1, c1)
         if prev is not None:
             q1 = n1 + rem(t1 - o1 - n1, TAU)
-        elif k1 <= t1 <= kk1:
+        elif k1 <= t1 and t1 <= kk1:
             q1 = t1
         else:
             q1 = _wrap(geo, 0, t1)
-        ok1 = l1 <= q1 <= u1
+        ok1 = True if l1 <= q1 and q1 <= u1 else False
         # rows of A = Rx(alpha1)^T Rz(-theta1) R'
         a00, a01, a02 = c1 * nx + s1 * ny, c1 * ox + s1 * oy, c1 * ax + s1 * ay
         m10 = s13 * (s1 * nx - c1 * ny)
@@ -393,22 +383,41 @@ def _solve(
                 q6 = n6 + rem(t6 - o6 - n6, TAU)
                 q6f = n6 + rem(t6f - o6 - n6, TAU)
             elif wrist_plain:
-                q2 = t2 if k2 <= t2 <= kk2 else _wrap(geo, 1, t2)
+                q2 = t2 if k2 <= t2 and t2 <= kk2 else _wrap(geo, 1, t2)
                 q4, q4f, q5, q5f, q6, q6f = t4, t4f, t5, -t5, t6, t6f
             else:
-                q2 = t2 if k2 <= t2 <= kk2 else _wrap(geo, 1, t2)
-                q4 = t4 if k4 <= t4 <= kk4 else _wrap(geo, 3, t4)
-                q4f = t4f if k4 <= t4f <= kk4 else _wrap(geo, 3, t4f)
-                q5 = t5 if k5 <= t5 <= kk5 else _wrap(geo, 4, t5)
-                q5f = -t5 if k5 <= -t5 <= kk5 else _wrap(geo, 4, -t5)
-                q6 = t6 if k6 <= t6 <= kk6 else _wrap(geo, 5, t6)
-                q6f = t6f if k6 <= t6f <= kk6 else _wrap(geo, 5, t6f)
+                q2 = t2 if k2 <= t2 and t2 <= kk2 else _wrap(geo, 1, t2)
+                q4 = t4 if k4 <= t4 and t4 <= kk4 else _wrap(geo, 3, t4)
+                q4f = t4f if k4 <= t4f and t4f <= kk4 else _wrap(geo, 3, t4f)
+                q5 = t5 if k5 <= t5 and t5 <= kk5 else _wrap(geo, 4, t5)
+                q5f = -t5 if k5 <= -t5 and -t5 <= kk5 else _wrap(geo, 4, -t5)
+                q6 = t6 if k6 <= t6 and t6 <= kk6 else _wrap(geo, 5, t6)
+                q6f = t6f if k6 <= t6f and t6f <= kk6 else _wrap(geo, 5, t6f)
             values += (q1, q2, q3, q4, q5, q6, q1, q2, q3, q4f, q5f, q6f)
-            ok = ok1 and ok3 and l2 <= q2 <= u2
-            within.append(ok and l4 <= q4 <= u4 and l5 <= q5 <= u5 and l6 <= q6 <= u6)
-            within.append(
-                ok and l4 <= q4f <= u4 and l5 <= q5f <= u5 and l6 <= q6f <= u6
-            )
+            # (comparisons in a condition, where CPython specialises them)
+            if ok1 and ok3 and l2 <= q2 and q2 <= u2:
+                within.append(
+                    True
+                    if l4 <= q4
+                    and q4 <= u4
+                    and l5 <= q5
+                    and q5 <= u5
+                    and l6 <= q6
+                    and q6 <= u6
+                    else False
+                )
+                within.append(
+                    True
+                    if l4 <= q4f
+                    and q4f <= u4
+                    and l5 <= q5f
+                    and q5f <= u5
+                    and l6 <= q6f
+                    and q6f <= u6
+                    else False
+                )
+            else:
+                within += (False, False)
     return values, within, singular
 
 
@@ -424,7 +433,7 @@ def _solve_twins(
     Returns:
         Joint values of the no-flip and flip twin and their within-limits flags.
     """
-    (nx, ox, ax, px), (ny, oy, ay, py), (nz, oz, az, pz) = rows[:3]
+    (nx, ox, ax, px), (ny, oy, ay, py), (nz, oz, az, pz), _ = rows
     if geo.sin_alpha6 != 0.0:  # R' = R Rx(-alpha6): its z column is z5
         ca, sa = geo.cos_alpha6, geo.sin_alpha6
         ox, ax = ca * ox - sa * ax, sa * ox + ca * ax
@@ -435,7 +444,8 @@ def _solve_twins(
     pz -= geo.d1
     r2 = px * px + py * py
     low, high, cylinder = geo.reach_test
-    if not (low <= math.sqrt(r2 + pz * pz) <= high and r2 >= cylinder):
+    distance = math.sqrt(r2 + pz * pz)
+    if not (low <= distance and distance <= high and r2 >= cylinder):
         check_reach(geo, px, py, pz)  # raises UnreachableError
     s1g, s3g, a2, ell = geo.sigma1, geo.sigma3, geo.a2, geo.forearm
     g, sigma5 = geo.sigma4 * geo.sigma5, geo.sigma5
@@ -506,13 +516,26 @@ def _solve_twins(
     q6 = n6 + rem(t6 - o6 - n6, TAU)
     q6f = n6 + rem(t6f - o6 - n6, TAU)
     (l1, l2, l3, l4, l5, l6), (u1, u2, u3, u4, u5, u6) = geo.bounds
-    ok = l1 <= q1 <= u1 and l3 <= q3 <= u3 and l2 <= q2 <= u2
-    return (
-        [q1, q2, q3, q4, q5, q6],
-        [q1, q2, q3, q4f, q5f, q6f],
-        ok and l4 <= q4 <= u4 and l5 <= q5 <= u5 and l6 <= q6 <= u6,
-        ok and l4 <= q4f <= u4 and l5 <= q5f <= u5 and l6 <= q6f <= u6,
-    )
+    # (comparisons in a condition, where CPython specialises them)
+    if l1 <= q1 and q1 <= u1 and l3 <= q3 and q3 <= u3 and l2 <= q2 and q2 <= u2:
+        within = (
+            True
+            if l4 <= q4 and q4 <= u4 and l5 <= q5 and q5 <= u5 and l6 <= q6 and q6 <= u6
+            else False
+        )
+        within_f = (
+            True
+            if l4 <= q4f
+            and q4f <= u4
+            and l5 <= q5f
+            and q5f <= u5
+            and l6 <= q6f
+            and q6f <= u6
+            else False
+        )
+    else:
+        within = within_f = False
+    return [q1, q2, q3, q4, q5, q6], [q1, q2, q3, q4f, q5f, q6f], within, within_f
 
 
 def _wrap(geo: PumaGeometry, j: int, theta: float) -> float:

@@ -72,6 +72,7 @@ SPEED_RTOL = 1e-9
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _PACK6 = struct.Struct("6d").pack
+_BOTTOM = [0.0, 0.0, 0.0, 1.0]  # bottom row of the IK targets (never modified)
 _frombuffer = np.frombuffer
 
 
@@ -493,8 +494,8 @@ class OnlinePlanner:
         """Tip command (world) -> wrist-centre pose (base) and twist (base axes).
 
         Returns:
-            The first three rows of the homogeneous matrix of the wrist centre
-            in the base frame and the twist.
+            The rows of the homogeneous matrix of the wrist centre in the base
+            frame and the twist.
         """
         vx, vy, vz = v.tolist()
         wx, wy, wz = omega.tolist()
@@ -519,11 +520,12 @@ class OnlinePlanner:
         rows[0].append(px)
         rows[1].append(py)
         rows[2].append(pz)
+        rows.append(_BOTTOM)
         # the rotation comes from a motion primitive, rigid by construction:
         # only finiteness is checked (any error reported as pose_rows would)
         total = r00 + r01 + r02 + r10 + r11 + r12 + r20 + r21 + r22 + px + py + pz
         if total - total != 0.0:
-            rigid_rows([*rows, [0.0, 0.0, 0.0, 1.0]])
+            rigid_rows(rows)
         return rows, [vx, vy, vz, wx, wy, wz]
 
     def _to_wrist_rotating(
