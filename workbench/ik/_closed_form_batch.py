@@ -23,6 +23,7 @@ import numpy.typing as npt
 from workbench.ik._puma import (
     WRIST_SINGULAR_TOL,
     PumaGeometry,
+    _wrap_plan,
     get_geometry,
     wrap_array_to_limits,
 )
@@ -32,10 +33,10 @@ from workbench.robot import Robot
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 
-#: Poses per chunk: the arrays of a chunk stay in the CPU cache (L2) and stay
-#: below the size at which malloc maps fresh pages for each temporary, while
-#: the ~110 numpy calls of a chunk are spread over enough poses.
-_CHUNK = 2048
+#: Poses per chunk: the ~110 numpy calls of a chunk are spread over enough
+#: poses that their overhead is small, the arrays of a chunk stay in the CPU
+#: caches (measured best between 3072 and 8192 on a 2 MB L2).
+_CHUNK = 4096
 
 #: Rows of the elbow arrays (sign of sin γ) per (arm, elbow): the left arm's
 #: elbow-up has the right arm's elbow-down sign and vice versa.
@@ -81,7 +82,7 @@ def analytic_batch(
     t = as_targets(targets)
     count = t.shape[0]
     out = np.empty((2, 2, 2, 6, count))  # (arm, elbow, flip, joint, pose)
-    valid = np.empty((count, 8), dtype=bool)
+    reachable = np.empty(count, dtype=bool)
     buffers = _Buffers(min(count, _CHUNK))
     for start in range(0, count, _CHUNK):
         stop = min(start + _CHUNK, count)
@@ -92,7 +93,14 @@ def analytic_batch(
         ok = _solve_chunk(geo, tt, buffers, res)
         if not ok.all():
             res[..., ~ok] = np.nan
-        valid[start:stop] = ok[:, None]
+        reachable[start:stop] = ok
+    # the 8 flags of a pose are 8 bytes: written as one uint64 each
+    valid = np.empty((count, 8), dtype=bool)
+    np.multiply(
+        reachable.view(np.uint8),
+        np.uint64(0x0101010101010101),
+        out=valid.view(np.uint64).reshape(count),
+    )
     return out.reshape(48, count).T.reshape(count, 8, 6), valid
 
 
@@ -307,10 +315,45 @@ def _singular_wrist(
 
 
 def _wrap(geo: PumaGeometry, j: int, theta: FloatArray) -> None:
-    """Joint values of DH angles ``theta`` in [-pi, pi] of joint ``j``, in place."""
+    """Joint values of DH angles ``theta`` in [-pi, pi] of joint ``j``, in place.
+
+    :func:`wrap_array_to_limits`; with a zero offset its interval tests are
+    made by arithmetic instead of masked adds (those are slow on strided
+    arrays): ``floor((x - first) / s) + 1`` is exactly 1 if x >= first and 0
+    otherwise while |x - first| < s, so x + shift * that is x + shift or x.
+    """
     if geo.plain[j]:
         return
     offset = geo.theta_offset[j]
-    if offset != 0.0:
-        theta -= offset
-    wrap_array_to_limits(theta, geo.lower[j], geo.upper[j], reduced=offset == 0.0)
+    plan = _wrap_plan(geo.lower[j], geo.upper[j]) if offset == 0.0 else None
+    if (
+        plan is None
+        or not all(_SAFE_LOW <= abs(first if not below else last) <= np.pi
+                   for _, first, last, below, both in plan if not both)
+        or any(both for *_, both in plan)
+        or max(abs(geo.lower[j]), abs(geo.upper[j])) > 6.0 * np.pi
+        or theta.min() <= -np.pi
+    ):  # fmt: skip
+        if offset != 0.0:
+            theta -= offset
+        wrap_array_to_limits(theta, geo.lower[j], geo.upper[j], reduced=offset == 0.0)
+        return
+    step = np.empty_like(theta)
+    for shift, first, last, from_below, _ in plan:
+        if from_below:  # moves x <= last
+            np.subtract(last, theta, out=step)
+        else:  # moves x >= first
+            np.subtract(theta, first, out=step)
+        step *= _SCALE
+        np.floor(step, out=step)
+        step += 1.0
+        step *= shift
+        theta += step
+
+
+#: x within [-6 pi, 6 pi] (in [-pi, pi] or moved into the limits) and the
+#: thresholds in [-pi, pi]: |x - threshold| < 8 pi = 1 / _SCALE.
+_SCALE = 1.0 / (8.0 * np.pi)
+#: Thresholds at least this far from 0, so that (x - threshold) * _SCALE never
+#: underflows to a zero of the wrong sign.
+_SAFE_LOW = 1e-3
