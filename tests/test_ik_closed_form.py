@@ -22,7 +22,8 @@ from workbench.errors import (
     InputError,
     NonFiniteError,
 )
-from workbench.ik._puma import wrap_array_to_limits, wrap_to_limits
+from workbench.ik import _puma_kernel as kernel
+from workbench.ik._puma import LIMIT_TOL, geometry_from_dh
 from workbench.ik.closed_form import (
     BRANCHES,
     WRIST_SINGULAR_TOL,
@@ -37,8 +38,8 @@ from workbench.urdf_generator import generate_urdf
 
 ATOL_FK = 1e-9  # every branch reproduces the target (observed ~1e-15)
 ATOL_SAME_Q = 1e-6  # [rad] the generating q is among the branches
-# Batch (numpy) and single (math) differ in the last bits of atan2; next to a
-# wrist singularity theta4/theta6 amplify that by 1/|sin theta5|.
+# Batch (numpy's SIMD atan2) and single (libm's) differ in the last bits; next to
+# a wrist singularity theta4/theta6 amplify that by 1/|sin theta5|.
 ATOL_BATCH = 1e-9
 TABLE3_TOL_DEG = 1.0  # Table II is printed to 2 decimals
 N_RANDOM = 2000
@@ -130,17 +131,45 @@ def test_angles_wrapped_into_the_joint_range(any_puma, rng) -> None:
             assert s.within_limits == bool(inside.all())
 
 
-def test_vectorised_wrap_matches_scalar(rng) -> None:
-    for trial in range(500):
+def _wrap_reference(x: float, lower: float, upper: float) -> float:
+    """The documented representative of angle x within [lower, upper], by math."""
+    y = math.remainder(x, TWO_PI)
+    y = math.pi if y <= -math.pi else y
+    for z in (y, y + TWO_PI, y - TWO_PI, y + 2 * TWO_PI, y - 2 * TWO_PI):
+        if lower - LIMIT_TOL <= z <= upper + LIMIT_TOL:
+            return z
+    return y
+
+
+def test_kernel_wraps_as_documented(rng) -> None:
+    """Joint values of DH angles for random limits and offsets (kernel vs math)."""
+    none = np.empty(0)
+    table = _puma_type_tables(rng, 1)[0]
+    for trial in range(300):
         lo = rng.uniform(-12.0, 3.0)
         hi = lo + rng.uniform(0.0, 15.0)
         if trial % 5 == 0:
             lo, hi = -math.pi, math.pi
-        x = rng.uniform(-20.0, 20.0, 30)
-        x[:3] = lo, hi, -math.pi
-        expected = [wrap_to_limits(v, lo, hi) for v in x]
-        got = wrap_array_to_limits(x.copy(), lo, hi)
-        np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
+        offset = 0.0 if trial % 3 else rng.uniform(-4.0, 4.0)
+        joints = list(table.joints)
+        joints[3] = replace(joints[3], theta_offset=offset)
+        lower, upper = np.full(6, -math.pi), np.full(6, math.pi)
+        lower[3], upper[3] = lo, hi
+        geo = geometry_from_dh(replace(table, joints=tuple(joints)), lower, upper)
+        record = kernel.pack_geometry(geo)[0]
+        thetas = rng.uniform(-math.pi, math.pi, 30)
+        thetas[:3] = -math.pi, math.pi, offset
+        for theta in thetas:
+            got = kernel._joint_value(record, 3, theta, none, False)
+            assert got == pytest.approx(
+                _wrap_reference(theta - offset, lo, hi), abs=1e-12
+            )
+
+
+@given(st.floats(-1e6, 1e6))
+def test_kernel_remainder_is_ieee(x: float) -> None:
+    r = kernel._remainder(x)
+    assert r == math.remainder(x, TWO_PI) or abs(r) == pytest.approx(math.pi)
 
 
 def test_solution_is_frozen_and_read_only(puma) -> None:
@@ -596,26 +625,22 @@ def test_cli_no_branch_within_limits_and_non_puma(capsys, puma) -> None:
 # -- fast paths (performance work) agree with the general ones ----------------------
 
 
-def test_twin_solve_equals_the_full_solve_bit_for_bit(rng) -> None:
-    """The planner's one-pair solve is the full solve restricted to that pair."""
-    from workbench.ik._puma import get_geometry
-    from workbench.ik._targets import pose_rows
-    from workbench.ik.closed_form import _solve, _solve_twins
-
-    robots = [load_robot("puma560"), load_robot("puma560-kang")]
-    robots += [robot_from_table(t) for t in _puma_type_tables(rng, 4)]
-    for robot in robots:
-        geo = get_geometry(robot)
-        qs = rng.uniform(robot.lower, robot.upper, size=(40, 6))
-        qs[:8, 4] = 0.0  # wrist singular: theta4/theta6 split by continuity
-        for q in qs:
-            rows = pose_rows(robot.fk(q))
-            prev = (q + rng.normal(0.0, 0.05, 6)).tolist()
-            values, within, _ = _solve(geo, rows, prev)
-            for pair in range(4):
-                a, b, within_a, within_b = _solve_twins(geo, rows, prev, pair)
-                assert a + b == values[12 * pair : 12 * pair + 12]
-                assert [within_a, within_b] == within[2 * pair : 2 * pair + 2]
+def test_continuing_branch_is_nearest_or_stays_on_the_twins(rng) -> None:
+    """The planner's branch choice: a twin of the previous pair when near enough."""
+    robot = load_robot("puma560")
+    for q in rng.uniform(robot.lower, robot.upper, size=(100, 6)):
+        prev = q + rng.normal(0.0, 0.05, 6)
+        solutions = analytic(robot, robot.fk(q), q_previous=prev)
+        q_all = np.array([s.q for s in solutions])
+        best = nearest(solutions, prev).index
+        assert kernel.continuing_branch(q_all, prev, best >> 1, 1.0) == best
+        for pair in range(4):  # not near enough: the nearest of all eight
+            assert kernel.continuing_branch(q_all, prev, pair, 0.0) == best
+        step2 = ((q_all - prev) ** 2).sum(axis=1)
+        twin = 2 * (best >> 1) ^ 2  # another pair, within a generous step
+        chosen = kernel.continuing_branch(q_all, prev, twin >> 1, 100.0)
+        assert chosen in (twin, twin + 1)
+        assert step2[chosen] == step2[twin : twin + 2].min()
 
 
 def test_solution_fields_are_read_only_and_pickle(puma) -> None:
@@ -664,14 +689,14 @@ def test_targets_near_the_rigidity_tolerance(puma) -> None:
 
 
 def test_batch_result_layout(puma, rng) -> None:
-    """q is a view with the pose axis fastest; values as the single solve's."""
+    """Several chunks; values as the single solve's; arrays of the caller's."""
     qs = rng.uniform(puma.lower, puma.upper, size=(5000, 6))  # several chunks
     targets = np.array([puma.fk(q).homogeneous for q in qs])
     q_batch, valid = analytic_batch(puma, targets)
     assert q_batch.shape == (5000, 8, 6) and valid.all()
-    dense = np.ascontiguousarray(q_batch)
+    assert q_batch.flags.c_contiguous
     for i in (0, 2047, 2048, 4999):
         single = np.array([s.q for s in analytic(puma, targets[i])])
-        np.testing.assert_allclose(dense[i], single, rtol=0, atol=ATOL_BATCH)
+        np.testing.assert_allclose(q_batch[i], single, rtol=0, atol=ATOL_BATCH)
     q_batch[3] = 0.0  # writable, like any result array
     assert not q_batch[3].any()

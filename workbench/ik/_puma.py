@@ -109,12 +109,6 @@ class PumaGeometry:
             "within limits".
         reach: Reachable distance of the wrist centre from the shoulder (the
             point of the base axis at height d1), ``(low, high)`` [m].
-        keep: Per joint, the interval ``(lo, hi)`` of DH angles in [−π, π]
-            that are their own joint value (the representative the wrapping
-            would return): all of them for a plain joint, the part of
-            (−π, π] within the limits for a joint with zero offset, none
-            (``(inf, -inf)``) with an offset.
-        wrist_plain: ``plain`` holds for joints 4, 5 and 6.
         reach_test: ``(low, high, cylinder)``: the distance bounds of
             :func:`check_reach` with its slack folded in, and the squared
             radius below which the wrist centre is inside the cylinder.
@@ -140,8 +134,6 @@ class PumaGeometry:
     plain: tuple[bool, ...]
     bounds: tuple[tuple[float, ...], tuple[float, ...]]
     reach: tuple[float, float]
-    keep: tuple[tuple[float, float], ...]
-    wrist_plain: bool
     reach_test: tuple[float, float, float]
 
 
@@ -204,16 +196,6 @@ def geometry_from_dh(
         o == 0.0 and lo >= -math.pi and hi <= math.pi
         for o, lo, hi in zip(offsets, lower_t, upper_t, strict=True)
     )
-    keep = tuple(
-        (-math.inf, math.inf)
-        if p
-        else (
-            (max(lo - LIMIT_TOL, math.nextafter(-math.pi, 0.0)), hi + LIMIT_TOL)
-            if o == 0.0
-            else (math.inf, -math.inf)
-        )
-        for p, o, lo, hi in zip(plain, offsets, lower_t, upper_t, strict=True)
-    )
     reach = (
         math.hypot(abs(j2.a) - forearm, offset),
         math.hypot(abs(j2.a) + forearm, offset),
@@ -243,8 +225,6 @@ def geometry_from_dh(
             tuple(x + LIMIT_TOL for x in upper_t),
         ),
         reach=reach,
-        keep=keep,
-        wrist_plain=all(plain[3:]),
         reach_test=(
             reach[0] - slack,
             reach[1] + slack,
@@ -297,81 +277,3 @@ def check_reach(geo: PumaGeometry, px: float, py: float, pz: float) -> None:
     radius = abs(geo.offset)
     if r2 < radius * radius * (1.0 - 1e-12):
         raise UnreachableError(math.sqrt(r2), (radius, radius), "cylinder")
-
-
-def wrap_to_limits(x: float, lower: float, upper: float) -> float:
-    """The representative of angle ``x`` (mod 2π) within [lower, upper].
-
-    Returns:
-        ``x + 2πk`` in (−π, π] when that is within the limits (±LIMIT_TOL),
-        else ``x + 2πk`` within them for k in ±1, ±2, else the one in (−π, π].
-    """
-    y = math.remainder(x, TAU)
-    if y <= -math.pi:
-        y += TAU
-    if lower - LIMIT_TOL <= y <= upper + LIMIT_TOL:
-        return y
-    for k in (1.0, -1.0, 2.0, -2.0):
-        z = y + k * TAU
-        if lower - LIMIT_TOL <= z <= upper + LIMIT_TOL:
-            return z
-    return y
-
-
-def wrap_array_to_limits(
-    x: FloatArray, lower: float, upper: float, *, reduced: bool = False
-) -> FloatArray:
-    """Vectorised :func:`wrap_to_limits` for one joint, in place.
-
-    Args:
-        x: Angles [rad], any shape; overwritten and returned.
-        lower: Lower limit of the joint [rad].
-        upper: Upper limit of the joint [rad].
-        reduced: True if ``x`` is already in [−π, π] (skips the reduction).
-    """
-    if not reduced:
-        x -= TAU * np.rint(x / TAU)
-    if x.size and x.min() <= -np.pi:
-        np.copyto(x, np.pi, where=x <= -np.pi)
-    for shift, first, last, from_below, both in _wrap_plan(float(lower), float(upper)):
-        move = x <= last if from_below else x >= first
-        if both:
-            move &= x <= last
-        np.add(x, shift, out=x, where=move)
-    return x
-
-
-@lru_cache(maxsize=64)
-def _wrap_plan(
-    lower: float, upper: float
-) -> tuple[tuple[float, float, float, bool, bool], ...]:
-    """The shifts of :func:`wrap_array_to_limits` and the intervals they move.
-
-    Returns:
-        ``(shift, first, last, from_below, both)`` per shift k 2π (k = 1, −1,
-        2, −2) that lands some x of [−π, π] in the limits: x moves if
-        ``x <= last`` (``from_below``) or ``x >= first``, and both if
-        ``both``. A value moved in lies within the limits and no later test
-        moves it again.
-    """
-    lo, hi = lower - LIMIT_TOL, upper + LIMIT_TOL
-    below, above = np.nextafter(lo, -np.inf), np.nextafter(hi, np.inf)
-    plan = []
-    for k in (1.0, -1.0, 2.0, -2.0):
-        # x out of [lo, hi] moves by k 2pi if that lands it in: k > 0 from below
-        # lo, k < 0 from above hi; an interval test on x in [-pi, pi]
-        shift = k * TAU
-        first = lo - shift if k > 0.0 else max(above, lo - shift)
-        last = min(below, hi - shift) if k > 0.0 else hi - shift
-        if first > np.pi or last < -np.pi or first > last:
-            continue
-        plan.append(
-            (
-                shift,
-                float(first),
-                float(last),
-                bool(first <= -np.pi),
-                bool(first > -np.pi and last < np.pi),
-            )
-        )
-    return tuple(plan)

@@ -121,34 +121,13 @@ def as_targets(targets: npt.ArrayLike) -> FloatArray:
     return t
 
 
-def check_chunk(tt: FloatArray, start: int) -> None:
-    """Finite and rigid, on the (16, n) transposed layout of a chunk.
+def check_poses(poses: FloatArray, start: int) -> None:
+    """Raise unless every pose of ``poses`` (n, 4, 4) is finite and rigid.
 
-    The test of :func:`rigid_rows` on every pose (a sum of squares that only
-    accepts); if some pose fails it, the exact checks find and report it.
+    The exact checks of :func:`pose_rows`, vectorised; ``start`` is the index
+    of ``poses[0]`` in the caller's batch, for the message.
     """
-    c0, c1, c2 = tt[0:12:4], tt[1:12:4], tt[2:12:4]  # columns of R, (3, n)
-    x, y = np.concatenate((c0, c0[:2])), np.concatenate((c1, c1[:2]))
-    err = x[1:4] * y[2:5]  # x × y - z
-    err -= x[2:5] * y[1:4]
-    err -= c2
-    err2 = np.einsum("ij,ij->j", err, err)
-    for u, v, unit in ((c0, c0, 1.0), (c1, c1, 1.0), (c0, c1, 0.0)):
-        d = np.einsum("ij,ij->j", u, v)
-        if unit:
-            d -= unit
-        d *= d
-        err2 += d
-    err2 += np.einsum("ij,ij->j", tt[12:15], tt[12:15])
-    d = tt[15] - 1.0
-    d *= d
-    err2 += d
-    d = tt[3] + tt[7]  # a NaN unless the translation is finite
-    d += tt[11]
-    d *= 0.0
-    err2 += d
-    if not (err2 <= _FAST_TOL2).all():
-        _check_chunk_exact(tt, start)
+    _check_chunk_exact(poses.reshape(len(poses), 16).T, start)
 
 
 def _check_chunk_exact(tt: FloatArray, start: int) -> None:

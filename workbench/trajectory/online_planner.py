@@ -40,16 +40,9 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InputError, JointLimitError
-from workbench.ik._puma import get_geometry
+from workbench.ik import _puma_kernel as kernel
 from workbench.ik._targets import pose_rows, rigid_rows
-from workbench.ik.closed_form import (
-    BRANCHES,
-    _solutions,
-    _solve,
-    _solve_twins,
-    analytic,
-    nearest,
-)
+from workbench.ik.closed_form import BRANCHES, analytic, nearest, solve_one
 from workbench.ik.damped import DLS_EPSILON, DLS_LAMBDA_MAX, dls_inverse
 from workbench.robot import Robot
 from workbench.trajectory._inverse_velocity import solve_velocity_list
@@ -267,7 +260,7 @@ class OnlinePlanner:
             self._tip_rt = self._tip[0].T.copy() if tip_rotates else None
             self._tip_back = -self._tip[1]
         # the planning cycle works on floats when neither transform rotates
-        self._geo = get_geometry(robot)
+        self._geometry = kernel.packed_geometry(robot)
         self._frames_fixed = self._tip_rt is None and not self._base_rotates
         self._tip_back_f = self._tip_back.tolist()
         self._base_p = [0.0, 0.0, 0.0] if self._base is None else self._base[1].tolist()
@@ -432,34 +425,23 @@ class OnlinePlanner:
     ) -> tuple[FloatArray, list[float], int, bool]:
         """The IK solution continuing the motion (Kang's θ4 flip rule, generalised).
 
-        The two wrist twins of the previous branch are solved first; if the
-        nearer one is within two cycles of joint-speed-limited motion it is the
-        continuous choice, else every branch is solved and compared (a
-        shoulder or elbow singularity was crossed). The closed form returns
-        each angle as the representative nearest the prediction ``q_pred``, so
-        the plain Euclidean distance is that of
-        :func:`workbench.ik.closed_form.nearest`.
+        The nearer wrist twin of the previous branch if it is within two
+        cycles of joint-speed-limited motion of the prediction ``q_pred``,
+        else (a shoulder or elbow singularity was crossed) the nearest of all
+        eight branches (``_puma_kernel.continuing_branch``). The closed form
+        returns each angle as the representative nearest ``q_pred``.
 
         Returns:
             ``(q, q as floats, branch index, within limits)``, ``q`` read-only.
         """
-        pair = self._branch >> 1
-        a, b, within_a, within_b = _solve_twins(self._geo, rows, q_pred, pair)
-        # squared distances; the twins share q1..q3, so their terms once
-        (a0, a1, a2, a3, a4, a5), (b3, b4, b5) = a, b[3:]
-        p0, p1, p2, p3, p4, p5 = q_pred
-        shared = (a0 - p0) * (a0 - p0) + (a1 - p1) * (a1 - p1) + (a2 - p2) * (a2 - p2)
-        na = shared + (a3 - p3) * (a3 - p3) + (a4 - p4) * (a4 - p4)
-        na += (a5 - p5) * (a5 - p5)
-        nb = shared + (b3 - p3) * (b3 - p3) + (b4 - p4) * (b4 - p4)
-        nb += (b5 - p5) * (b5 - p5)
-        if na <= nb:
-            if na <= self._max_step2:  # a read-only array straight from bytes
-                return _frombuffer(_PACK6(*a)), a, 2 * pair, within_a
-        elif nb <= self._max_step2:
-            return _frombuffer(_PACK6(*b)), b, 2 * pair + 1, within_b
-        solution = nearest(_solutions(*_solve(self._geo, rows, q_pred)), q_pred)
-        return solution.q, solution.q.tolist(), solution.index, solution.within_limits
+        reference = np.array(q_pred)
+        q_all, flags = solve_one(self.robot, self._geometry, np.array(rows), reference)
+        index = kernel.continuing_branch(
+            q_all, reference, self._branch >> 1, self._max_step2
+        )
+        q = q_all[index]
+        q.setflags(write=False)
+        return q, q.tolist(), index, bool(flags[index])
 
     def _position_rate(self, q: list[float], twist: list[float]) -> FloatArray:
         """Rate of the joint position commands ending at ``q``: the DLS reference.

@@ -1,0 +1,505 @@
+r"""Compiled closed form of PUMA-type arms: one pose, all eight branches.
+
+The one implementation of the formulas that :func:`~workbench.ik.analytic`,
+:func:`~workbench.ik.analytic_batch` and the online planner share, compiled
+with Numba (``cache=True``: compiled once per machine, then loaded). The
+derivation is in ``docs/errata-kang-ik.md``; the constants of an arm come from
+:class:`~workbench.ik._puma.PumaGeometry`, packed by :func:`pack_geometry` into
+one record (:data:`GEOMETRY_DTYPE`).
+
+Conventions of every function here:
+
+* a pose is a (4, 4) homogeneous matrix of the tool frame in the base frame
+  [m];
+* ``q`` is (8, 6) [rad], branch ``b`` = 4·left + 2·down + flip (the order of
+  ``closed_form.BRANCHES``), joint values (DH angle minus theta offset);
+* without a previous configuration each joint value is the representative
+  (mod 2π) in (−π, π] if it is within the limits, else the first of ±2π,
+  ±4π that is (else the one in (−π, π]); with one, the representative
+  nearest it.
+
+The status codes tell the Python side which error to raise; it then runs the
+slow, exact checks that word the message.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import numba
+import numpy as np
+import numpy.typing as npt
+
+from workbench.ik._puma import WRIST_SINGULAR_TOL, PumaGeometry, get_geometry
+from workbench.poses import RIGIDITY_TOL
+from workbench.robot import Robot
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Status codes of :func:`solve_pose`.
+OK, NOT_RIGID, OUT_OF_REACH, IN_CYLINDER = 0, 1, 2, 3
+
+#: The record of arm constants the kernels read (see ``PumaGeometry``).
+GEOMETRY_DTYPE = np.dtype(
+    [
+        ("sigma1", "f8"),
+        ("sigma3", "f8"),
+        ("sigma4", "f8"),
+        ("sigma5", "f8"),
+        ("d1", "f8"),
+        ("offset", "f8"),
+        ("a2", "f8"),
+        ("forearm", "f8"),
+        ("cos_beta", "f8"),
+        ("sin_beta", "f8"),
+        ("up_sign", "f8"),
+        ("d6", "f8"),
+        ("cos_alpha6", "f8"),
+        ("sin_alpha6", "f8"),
+        ("reach_low", "f8"),  # slack folded in, as check_reach
+        ("reach_high", "f8"),
+        ("cylinder2", "f8"),  # squared radius of the unreachable cylinder
+        ("theta_offset", "f8", 6),
+        ("plain", "f8", 6),  # see PumaGeometry.plain (1.0 or 0.0)
+        ("lower", "f8", 6),  # limits widened by LIMIT_TOL
+        ("upper", "f8", 6),
+    ],
+    align=True,
+)
+
+#: Fast acceptance of a pose: columns x, y of R orthonormal and z = x × y, and
+#: the bottom row, each to within RIGIDITY_TOL / 5, as one sum of squares (then
+#: every entry of RᵀR − I is well within RIGIDITY_TOL and det R > 0). A pose
+#: that fails it takes the exact checks of ``_targets``.
+_FAST_TOL2 = (RIGIDITY_TOL / 5.0) ** 2
+
+_PI = math.pi
+_TAU = 2.0 * math.pi
+
+
+@lru_cache(maxsize=16)
+def packed_geometry(robot: Robot) -> np.ndarray:
+    """The constants of a robot's closed form, a read-only (1,) record array.
+
+    Cached per robot object, like :func:`~workbench.ik._puma.get_geometry`.
+
+    Raises:
+        UnsupportedRobotError: If the robot has no PUMA-type DH table.
+    """
+    return pack_geometry(get_geometry(robot))
+
+
+def pack_geometry(geo: PumaGeometry) -> np.ndarray:
+    """The constants of ``geo`` as a read-only (1,) :data:`GEOMETRY_DTYPE` array."""
+    packed = np.zeros(1, dtype=GEOMETRY_DTYPE)
+    for name in GEOMETRY_DTYPE.names:
+        if name in PumaGeometry.__slots__:
+            packed[name] = getattr(geo, name)
+    packed["reach_low"], packed["reach_high"], packed["cylinder2"] = geo.reach_test
+    packed["lower"], packed["upper"] = geo.bounds
+    packed.setflags(write=False)
+    return packed
+
+
+_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+_jit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+
+
+@_jit_inline
+def _remainder(x: float) -> float:
+    """IEEE remainder of ``x`` by 2π, in [−π, π] (exact; ties may keep ±π)."""
+    if -_PI <= x <= _PI:
+        return x
+    if -3.0 * _PI <= x <= 3.0 * _PI:  # one turn off: x ∓ 2π is exact
+        return x - _TAU if x > 0.0 else x + _TAU
+    r = np.fmod(x, _TAU)  # exact, then at most one exact turn
+    if r > _PI:
+        return r - _TAU
+    if r < -_PI:
+        return r + _TAU
+    return r
+
+
+@_jit_inline
+def _joint_value(geo, j: int, theta: float, prev: FloatArray, has_prev: bool) -> float:
+    """Joint value of DH angle ``theta``: near ``prev[j]`` if given, else wrapped."""
+    if has_prev:
+        return prev[j] + _remainder(theta - geo.theta_offset[j] - prev[j])
+    if geo.plain[j] != 0.0:  # theta in [-pi, pi] is its own value, but -pi is pi
+        return theta if theta > -_PI else _PI
+    y = _remainder(theta - geo.theta_offset[j])
+    if y <= -_PI:
+        y += _TAU
+    lo, hi = geo.lower[j], geo.upper[j]
+    if lo <= y <= hi:
+        return y
+    for turns in (1.0, -1.0, 2.0, -2.0):
+        z = y + turns * _TAU
+        if lo <= z <= hi:
+            return z
+    return y
+
+
+@_jit_inline
+def wrist_centre(geo, pose: FloatArray) -> tuple[float, float, float]:
+    """Wrist centre (x, y, z − d1) [m] in the base frame: z relative to the shoulder."""
+    ax, ay, az = pose[0, 2], pose[1, 2], pose[2, 2]
+    if geo.sin_alpha6 != 0.0:  # z column of R Rx(-alpha6), that is z5
+        ca, sa = geo.cos_alpha6, geo.sin_alpha6
+        ax = sa * pose[0, 1] + ca * ax
+        ay = sa * pose[1, 1] + ca * ay
+        az = sa * pose[2, 1] + ca * az
+    return (
+        pose[0, 3] - geo.d6 * ax,
+        pose[1, 3] - geo.d6 * ay,
+        pose[2, 3] - geo.d6 * az - geo.d1,
+    )
+
+
+@_jit_inline
+def _roughly_rigid(pose: FloatArray) -> bool:
+    """The fast acceptance test (finite, rigid to RIGIDITY_TOL / 5)."""
+    r00, r01, r02 = pose[0, 0], pose[0, 1], pose[0, 2]
+    r10, r11, r12 = pose[1, 0], pose[1, 1], pose[1, 2]
+    r20, r21, r22 = pose[2, 0], pose[2, 1], pose[2, 2]
+    e0 = r00 * r00 + r10 * r10 + r20 * r20 - 1.0
+    e1 = r01 * r01 + r11 * r11 + r21 * r21 - 1.0
+    e2 = r00 * r01 + r10 * r11 + r20 * r21
+    ex = r10 * r21 - r20 * r11 - r02  # x × y - z
+    ey = r20 * r01 - r00 * r21 - r12
+    ez = r00 * r11 - r10 * r01 - r22
+    b0, b1, b2, b3 = pose[3, 0], pose[3, 1], pose[3, 2], pose[3, 3] - 1.0
+    err2 = e0 * e0 + e1 * e1 + e2 * e2 + ex * ex + ey * ey + ez * ez
+    err2 += b0 * b0 + b1 * b1 + b2 * b2 + b3 * b3
+    # a NaN fails the comparison; an infinite translation makes the sum NaN
+    return err2 <= _FAST_TOL2 and (pose[0, 3] + pose[1, 3] + pose[2, 3]) * 0.0 == 0.0
+
+
+#: Slots of the 20 angles of one pose that come from an atan2: θ1 per arm;
+#: θ3 per sign of sin γ (+: right arm elbow-up and left arm elbow-down); θ2,
+#: θ4, θ5 (of the no-flip twin) and θ6 per (arm, elbow) pair = 2·left + down.
+T1, T3, T2, T4, T5, T6 = 0, 2, 4, 8, 12, 16
+N_ANGLES = 20
+
+
+@_jit_inline
+def angle_arguments(
+    geo, pose: FloatArray, prev: FloatArray, y: FloatArray, x: FloatArray
+) -> tuple[int, int]:
+    """The arguments (y, x) of the atan2 of each angle slot of one pose.
+
+    Everything of the closed form but the atan2 calls, so that a batch can make
+    those in one vectorised call. A slot whose angle is known without atan2
+    (θ1 with the wrist centre on the base axis, θ4 at a wrist singularity) has
+    its bit set in the returned mask and holds the angle itself in ``y``.
+
+    Args:
+        geo: The arm's record (:data:`GEOMETRY_DTYPE`).
+        pose: (4, 4) target pose, already checked rigid and finite.
+        prev: (6,) previous configuration [rad], or (0,) for none.
+        y: (N_ANGLES,) output, first arguments of the atan2.
+        x: (N_ANGLES,) output, second arguments.
+
+    Returns:
+        ``(status, exact)``: :data:`OK`, :data:`OUT_OF_REACH` or
+        :data:`IN_CYLINDER` (``y``, ``x`` then undefined), and the bit mask of the
+        slots that hold their angle; bit ``T4 + pair`` also marks a singular
+        wrist.
+    """
+    has_prev = prev.shape[0] != 0
+    nx, ny, nz = pose[0, 0], pose[1, 0], pose[2, 0]
+    ox, oy, oz = pose[0, 1], pose[1, 1], pose[2, 1]
+    ax, ay, az = pose[0, 2], pose[1, 2], pose[2, 2]
+    if geo.sin_alpha6 != 0.0:  # R' = R Rx(-alpha6): its z column is z5
+        ca, sa = geo.cos_alpha6, geo.sin_alpha6
+        ox, ax = ca * ox - sa * ax, sa * ox + ca * ax
+        oy, ay = ca * oy - sa * ay, sa * oy + ca * ay
+        oz, az = ca * oz - sa * az, sa * oz + ca * az
+    px, py, pz = wrist_centre(geo, pose)
+    r2 = px * px + py * py
+    distance = math.sqrt(r2 + pz * pz)
+    if not (geo.reach_low <= distance <= geo.reach_high):
+        return OUT_OF_REACH, 0
+    if r2 < geo.cylinder2:
+        return IN_CYLINDER, 0
+
+    s1g, s3g, a2, ell = geo.sigma1, geo.sigma3, geo.a2, geo.forearm
+    g, sigma5 = geo.sigma4 * geo.sigma5, geo.sigma5
+    sd = s1g * geo.offset
+    right = 1.0 if sd >= 0.0 else -1.0  # sign of x1 on the right arm
+    # planar arm in the plane of z1: wrist centre at (x1, y1) = (+-rho, s1 pz)
+    rho2 = max(r2 - geo.offset * geo.offset, 0.0)
+    rho, y1 = math.sqrt(rho2), s1g * pz
+    k = (rho2 + pz * pz - a2 * a2 - ell * ell) / (2.0 * a2 * ell)
+    k = min(max(k, -1.0), 1.0)  # cos(gamma), gamma = theta3 + beta
+    big_a = a2 + ell * k
+    # elbow: sin(gamma) = +sg on the right arm elbow-up and left arm elbow-down
+    sg = geo.up_sign * right * math.sqrt(1.0 - k * k)
+    c3p, s3p = (
+        k * geo.cos_beta + sg * geo.sin_beta,
+        sg * geo.cos_beta - k * geo.sin_beta,
+    )
+    c3m, s3m = (
+        k * geo.cos_beta - sg * geo.sin_beta,
+        -sg * geo.cos_beta - k * geo.sin_beta,
+    )
+    y[T3], x[T3], y[T3 + 1], x[T3 + 1] = s3p, c3p, s3m, c3m
+    # rows of A = Rx(alpha1)^T Rz(-theta1) R' that do not depend on theta1
+    a10, a11, a12 = s1g * nz, s1g * oz, s1g * az
+    s13 = s3g * s1g
+    exact = 0
+    for arm in range(2):  # right, left
+        x1 = right * rho if arm == 0 else -right * rho
+        if r2 > 0.0:
+            c1, s1 = (px * x1 - py * sd) / r2, (py * x1 + px * sd) / r2
+            y[T1 + arm], x[T1 + arm] = s1, c1
+        else:  # wrist centre on the base axis (D = 0): theta1 is free
+            t1 = geo.theta_offset[0] + (prev[0] if has_prev else 0.0)
+            c1, s1 = math.cos(t1), math.sin(t1)
+            y[T1 + arm] = t1
+            exact |= 1 << (T1 + arm)
+        a00, a01, a02 = c1 * nx + s1 * ny, c1 * ox + s1 * oy, c1 * ax + s1 * ay
+        m10 = s13 * (s1 * nx - c1 * ny)
+        m11 = s13 * (s1 * ox - c1 * oy)
+        m12 = s13 * (s1 * ax - c1 * ay)
+        for elbow in range(2):  # up, down
+            pair = 2 * arm + elbow
+            if arm == elbow:
+                c3, s3, big_b = c3p, s3p, ell * sg
+            else:
+                c3, s3, big_b = c3m, s3m, -ell * sg
+            c2, s2 = x1 * big_a + y1 * big_b, y1 * big_a - x1 * big_b
+            y[T2 + pair], x[T2 + pair] = s2, c2
+            norm = math.sqrt(c2 * c2 + s2 * s2)
+            if norm > 0.0:
+                c2, s2 = c2 / norm, s2 / norm
+            else:  # wrist centre on the shoulder axis: theta2 is free
+                c2, s2 = 1.0, 0.0
+            c23, s23 = c2 * c3 - s2 * s3, s2 * c3 + c2 * s3
+            # M = R36 Rx(alpha6)^T = Rx(alpha3)^T Rz(-theta23) A
+            m02 = c23 * a02 + s23 * a12
+            m22 = s3g * (s23 * a02 - c23 * a12)
+            m00, m01 = c23 * a00 + s23 * a10, c23 * a01 + s23 * a11
+            h = math.sqrt(m02 * m02 + m12 * m12)
+            if h > WRIST_SINGULAR_TOL:  # (c4, s4) = (m02, m12) / h, scale-free
+                y[T4 + pair], x[T4 + pair] = m12, m02
+                c4, s4 = m02, m12
+            else:  # theta4 free: 0, or split by continuity with prev
+                t4 = geo.theta_offset[3] + (prev[3] if has_prev else 0.0)
+                c4, s4 = math.cos(t4), math.sin(t4)
+                if has_prev:  # move theta4 and theta6 by the same amount
+                    t6 = math.atan2(
+                        g * (s4 * m00 - c4 * m10), g * (s4 * m01 - c4 * m11)
+                    )
+                    # z5 along +z3 (m22 > 0): theta4 + theta6 fixed, else the
+                    # difference
+                    kappa = -1.0 if m22 > 0.0 else 1.0
+                    t4 -= kappa * _remainder(t6 - geo.theta_offset[5] - prev[5]) / 2.0
+                    c4, s4 = math.cos(t4), math.sin(t4)
+                y[T4 + pair] = t4
+                exact |= 1 << (T4 + pair)
+                h = c4 * m02 + s4 * m12
+            y[T5 + pair], x[T5 + pair] = sigma5 * h, -g * m22
+            y[T6 + pair] = g * (s4 * m00 - c4 * m10)
+            x[T6 + pair] = g * (s4 * m01 - c4 * m11)
+    return OK, exact
+
+
+@_jit_inline
+def assemble(
+    geo,
+    angles: FloatArray,
+    prev: FloatArray,
+    q: FloatArray,
+    within: npt.NDArray[np.bool_],
+) -> None:
+    """Joint values of the eight branches from the 20 DH angles of a pose.
+
+    Args:
+        geo: The arm's record.
+        angles: (N_ANGLES,) DH angles [rad] in the slots of
+            :func:`angle_arguments`, each in [−π, π].
+        prev: (6,) previous configuration [rad], or (0,) for none.
+        q: (8, 6) output [rad].
+        within: (8,) output, branch within the limits (± LIMIT_TOL); or (0,)
+            to skip the tests.
+    """
+    has_prev = prev.shape[0] != 0
+    for arm in range(2):
+        q1 = _joint_value(geo, 0, angles[T1 + arm], prev, has_prev)
+        for elbow in range(2):
+            pair = 2 * arm + elbow
+            q2 = _joint_value(geo, 1, angles[T2 + pair], prev, has_prev)
+            q3 = _joint_value(
+                geo, 2, angles[T3 if arm == elbow else T3 + 1], prev, has_prev
+            )
+            t4, t5, t6 = angles[T4 + pair], angles[T5 + pair], angles[T6 + pair]
+            # the flip twin: (theta4 + pi, -theta5, theta6 + pi)
+            t4f = t4 - _PI if t4 > 0.0 else t4 + _PI
+            t6f = t6 - _PI if t6 > 0.0 else t6 + _PI
+            for flip in range(2):
+                b = 2 * pair + flip
+                q[b, 0], q[b, 1], q[b, 2] = q1, q2, q3
+                q[b, 3] = _joint_value(geo, 3, t4f if flip else t4, prev, has_prev)
+                q[b, 4] = _joint_value(geo, 4, -t5 if flip else t5, prev, has_prev)
+                q[b, 5] = _joint_value(geo, 5, t6f if flip else t6, prev, has_prev)
+                if within.shape[0]:
+                    ok = True
+                    for j in range(6):
+                        ok &= geo.lower[j] <= q[b, j] <= geo.upper[j]
+                    within[b] = ok
+
+
+@_jit
+def solve_pose(
+    geometry: np.ndarray,
+    pose: FloatArray,
+    prev: FloatArray,
+    q: FloatArray,
+    flags: npt.NDArray[np.bool_],
+    check: bool = True,
+) -> int:
+    """All eight branches of one pose.
+
+    Args:
+        geometry: (1,) record array of :data:`GEOMETRY_DTYPE`.
+        pose: (4, 4) target pose.
+        prev: (6,) previous configuration [rad]: each angle is then the
+            representative nearest it, and a free θ4/θ6 split by continuity;
+            or (0,) for none.
+        q: (8, 6) output, joint values [rad].
+        flags: (12,) output: per branch, within the limits (8), then per
+            (arm, elbow) pair, wrist singular (4).
+        check: Run the fast rigidity test first (False once the exact
+            checks of ``_targets`` accepted the pose).
+
+    Returns:
+        :data:`OK`, or :data:`NOT_RIGID`, :data:`OUT_OF_REACH`,
+        :data:`IN_CYLINDER` (outputs then undefined).
+    """
+    geo = geometry[0]
+    if check and not _roughly_rigid(pose):
+        return NOT_RIGID
+    y, x = np.empty(N_ANGLES), np.empty(N_ANGLES)
+    status, exact = angle_arguments(geo, pose, prev, y, x)
+    if status != OK:
+        return status
+    angles = np.empty(N_ANGLES)
+    for slot in range(N_ANGLES):
+        if exact >> slot & 1:
+            angles[slot] = y[slot]
+        else:
+            angles[slot] = math.atan2(y[slot], x[slot])
+    assemble(geo, angles, prev, q, flags[:8])
+    for pair in range(4):
+        flags[8 + pair] = exact >> (T4 + pair) & 1
+    return OK
+
+
+@_jit
+def batch_arguments(
+    geometry: np.ndarray,
+    poses: FloatArray,
+    y: FloatArray,
+    x: FloatArray,
+    status: npt.NDArray[np.int8],
+    exact: npt.NDArray[np.int32],
+    check: bool = True,
+) -> int:
+    """Stage 1 of a batch: :func:`angle_arguments` of N poses, checked.
+
+    Args:
+        geometry: (1,) record array of :data:`GEOMETRY_DTYPE`.
+        poses: (N, 4, 4) target poses.
+        y: (N, N_ANGLES) output, first arguments of the atan2.
+        x: (N, N_ANGLES) output, second arguments.
+        status: (N,) output status per pose.
+        exact: (N,) output bit masks.
+        check: Run the fast rigidity test on each pose.
+
+    Returns:
+        −1, or the index of the first pose that fails the fast rigidity test
+        (nothing written from it on).
+    """
+    geo = geometry[0]
+    none = np.empty(0)
+    for i in range(poses.shape[0]):
+        if check and not _roughly_rigid(poses[i]):
+            return i
+        status[i], exact[i] = angle_arguments(geo, poses[i], none, y[i], x[i])
+    return -1
+
+
+@_jit
+def batch_assemble(
+    geometry: np.ndarray,
+    angles: FloatArray,
+    y: FloatArray,
+    status: npt.NDArray[np.int8],
+    exact: npt.NDArray[np.int32],
+    q: FloatArray,
+    valid: npt.NDArray[np.bool_],
+) -> None:
+    """Stage 3 of a batch: joint values from ``angles = arctan2(y, x)``.
+
+    Args:
+        geometry: (1,) record array of :data:`GEOMETRY_DTYPE`.
+        angles: (N, N_ANGLES) ``arctan2(y, x)`` (slots in ``exact`` ignored).
+        y: (N, N_ANGLES), from :func:`batch_arguments`.
+        status: (N,), from :func:`batch_arguments`.
+        exact: (N,), from :func:`batch_arguments`.
+        q: (N, 8, 6) output [rad]; NaN for a pose whose status is not OK.
+        valid: (N, 8) output, True where the status is OK.
+    """
+    geo = geometry[0]
+    none, no_within = np.empty(0), np.empty(0, dtype=np.bool_)
+    for i in range(angles.shape[0]):
+        reachable = status[i] == OK
+        valid[i] = reachable
+        if not reachable:
+            q[i] = np.nan
+            continue
+        mask = exact[i]
+        if mask:
+            for slot in range(N_ANGLES):
+                if mask >> slot & 1:
+                    angles[i, slot] = y[i, slot]
+        assemble(geo, angles[i], none, q[i], no_within)
+
+
+@_jit
+def _distance2(a: FloatArray, b: FloatArray) -> float:
+    d2 = 0.0
+    for j in range(a.shape[0]):
+        d = a[j] - b[j]
+        d2 += d * d
+    return d2
+
+
+@_jit
+def continuing_branch(
+    q: FloatArray, q_reference: FloatArray, pair: int, max_step2: float
+) -> int:
+    """The branch continuing a motion at ``q_reference`` (Kang's θ4 rule).
+
+    The nearer of the two wrist twins of ``pair`` (branches ``2 pair`` and
+    ``2 pair + 1``, the previous cycle's) if its squared distance is at most
+    ``max_step2``; else, after a shoulder or elbow singularity, the nearest of
+    all eight (the first on a tie). Distances are plain Euclidean: ``q`` holds
+    the representatives nearest ``q_reference`` (``solve_pose`` with it as
+    ``prev``), so they equal those of ``closed_form.nearest``.
+    """
+    twin = 2 * pair
+    d_a, d_b = _distance2(q[twin], q_reference), _distance2(q[twin + 1], q_reference)
+    if d_a <= d_b:
+        if d_a <= max_step2:
+            return twin
+    elif d_b <= max_step2:
+        return twin + 1
+    best, best_d2 = 0, math.inf
+    for b in range(8):
+        d2 = _distance2(q[b], q_reference)
+        if d2 < best_d2:
+            best, best_d2 = b, d2
+    return best
