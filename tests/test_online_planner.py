@@ -274,10 +274,7 @@ def test_start_outside_limits_and_robot_without_closed_form(puma_kang):
         OnlinePlanner(load_robot("ur5"), np.zeros(6), LIMITS)
 
 
-def test_samples_and_states_are_the_frozen_dataclasses(puma_kang):
-    """The cycle builds them without their __init__: still the same classes."""
-    import dataclasses
-
+def test_samples_and_states_are_immutable(puma_kang):
     from workbench.trajectory import PlannerSample
     from workbench.trajectory.cartesian_paths import CartesianState
 
@@ -286,8 +283,8 @@ def test_samples_and_states_are_the_frozen_dataclasses(puma_kang):
     sample = planner.step()
     assert type(sample) is PlannerSample and type(planner.state) is CartesianState
     for obj in (sample, planner.state):
-        with pytest.raises(dataclasses.FrozenInstanceError):
+        with pytest.raises(AttributeError):
             obj.position = None
-    assert dataclasses.asdict(sample)["branch"] == sample.branch
+    assert sample._asdict()["branch"] == sample.branch
     assert not sample.q.flags.writeable
     np.testing.assert_array_equal(planner.state.position, sample.position)

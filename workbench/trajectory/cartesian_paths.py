@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -29,9 +29,10 @@ _ZERO3 = np.zeros(3)
 _ZERO3.setflags(write=False)
 
 
-@dataclass(frozen=True, slots=True)
-class CartesianState:
+class CartesianState(NamedTuple):
     """Pose and twist of the tool tip, all in one frame (world or base).
+
+    Immutable (a named tuple: built once per planning cycle, so cheap to make).
 
     Attributes:
         position: Shape (3,) [m].

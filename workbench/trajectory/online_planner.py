@@ -30,10 +30,8 @@ planning instants with cubic Hermite polynomials
 from __future__ import annotations
 
 import math
-import struct
 from collections import deque
-from collections.abc import Callable
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -41,11 +39,11 @@ import pinocchio as pin
 
 from workbench.errors import InputError, JointLimitError
 from workbench.ik import _puma_kernel as kernel
-from workbench.ik._targets import pose_rows, rigid_rows
 from workbench.ik.closed_form import BRANCHES, analytic, nearest, solve_one
 from workbench.ik.damped import DLS_EPSILON, DLS_LAMBDA_MAX, dls_inverse
 from workbench.robot import Robot
-from workbench.trajectory._inverse_velocity import solve_velocity_list
+from workbench.trajectory._inverse_velocity import solve_velocity
+from workbench.trajectory._tracking import track, wrist_command
 from workbench.trajectory.cartesian_paths import (
     ZERO_TOL,
     CartesianLimits,
@@ -64,14 +62,10 @@ FloatArray = npt.NDArray[np.float64]
 SPEED_RTOL = 1e-9
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-_PACK6 = struct.Struct("6d").pack
-_BOTTOM = [0.0, 0.0, 0.0, 1.0]  # bottom row of the IK targets (never modified)
-_frombuffer = np.frombuffer
 
 
-@dataclass(frozen=True, slots=True)
-class PlannerSample:
-    """The commands of one planning cycle.
+class PlannerSample(NamedTuple):
+    """The commands of one planning cycle (immutable, a named tuple).
 
     Attributes:
         t: Time [s].
@@ -94,74 +88,6 @@ class PlannerSample:
     qd: FloatArray
     branch: str
     damped: bool
-
-
-# Frozen slots dataclasses: their generated __init__ goes through
-# object.__setattr__ per field (~2 µs for nine). Once per planning cycle the
-# instances are built as a plain twin class with the same slots, whose
-# __init__ stores them directly, and then given their class (same layout).
-class _SampleTwin:
-    __slots__ = (
-        "angular_velocity",
-        "branch",
-        "damped",
-        "position",
-        "q",
-        "qd",
-        "rotation",
-        "t",
-        "velocity",
-    )
-
-    def __init__(
-        self,
-        t: float,
-        p: FloatArray,
-        v: FloatArray,
-        rotation: FloatArray,
-        omega: FloatArray,
-        q: FloatArray,
-        qd: FloatArray,
-        branch: str,
-        damped: bool,
-    ) -> None:
-        self.t = t
-        self.position = p
-        self.velocity = v
-        self.rotation = rotation
-        self.angular_velocity = omega
-        self.q = q
-        self.qd = qd
-        self.branch = branch
-        self.damped = damped
-
-
-class _StateTwin:
-    __slots__ = ("angular_velocity", "position", "rotation", "velocity")
-
-    def __init__(
-        self, p: FloatArray, v: FloatArray, rotation: FloatArray, omega: FloatArray
-    ) -> None:
-        self.position = p
-        self.velocity = v
-        self.rotation = rotation
-        self.angular_velocity = omega
-
-
-def _twin_builder(cls: type, twin: type) -> Callable[..., object] | None:
-    """``twin(*fields)`` turned into a ``cls``, or None if the layouts differ."""
-    if sorted(cls.__slots__) != sorted(twin.__slots__):  # (CPython sorts them)
-        return None
-    probe = twin(*range(len(twin.__slots__)))
-    try:
-        probe.__class__ = cls
-    except TypeError:
-        return None
-    return twin
-
-
-_SAMPLE_TWIN = _twin_builder(PlannerSample, _SampleTwin)
-_STATE_TWIN = _twin_builder(CartesianState, _StateTwin)
 
 
 def _rigid(value: pin.SE3 | None) -> tuple[FloatArray, FloatArray] | None:
@@ -244,8 +170,6 @@ class OnlinePlanner:
         self._check_position(q0, 0.0)
         self._q = q0
         self._q_before: FloatArray | None = None  # the command before self._q
-        self._qf = q0.tolist()  # self._q and self._q_before as floats
-        self._qf_before: list[float] | None = None
         self._qd = np.zeros(robot.nv)
         self._cycle = 0
         self._frame_id = robot.tool_frame_id
@@ -262,8 +186,7 @@ class OnlinePlanner:
         # the planning cycle works on floats when neither transform rotates
         self._geometry = kernel.packed_geometry(robot)
         self._frames_fixed = self._tip_rt is None and not self._base_rotates
-        self._tip_back_f = self._tip_back.tolist()
-        self._base_p = [0.0, 0.0, 0.0] if self._base is None else self._base[1].tolist()
+        self._base_position = np.zeros(3) if self._base is None else self._base[1]
         oMf = robot.fk(q0)
         p, rotation = oMf.translation, oMf.rotation
         if self._tip is not None:
@@ -366,101 +289,59 @@ class OnlinePlanner:
                 primitive.begin(end, t_end, self.limits)
         self._active = primitive
         p, v, rotation, omega = primitive.sample(t)
-        rows, twist = self._to_wrist_in_base(p, v, rotation, omega)
-        # continuity is measured from the configuration predicted by the last
-        # two commands, so that at a wrist singularity (theta4, theta6 free) the
-        # IK keeps the wrist moving as it was instead of splitting the step
-        before = self._qf_before
-        if before is None:
-            q_pred = self._qf
-        else:
-            (a0, a1, a2, a3, a4, a5), (b0, b1, b2, b3, b4, b5) = self._qf, before
-            q_pred = [
-                2.0 * a0 - b0,
-                2.0 * a1 - b1,
-                2.0 * a2 - b2,
-                2.0 * a3 - b3,
-                2.0 * a4 - b4,
-                2.0 * a5 - b5,
-            ]
-        q, qf, index, within = self._solve_ik(rows, q_pred)
+        pose, twist = self._to_wrist_in_base(p, v, rotation, omega)
+        q, index, within = self._solve_ik(pose)
         if not within:
             self._check_position(q, t)
         jacobian = pin.computeFrameJacobian(
             self.robot.model, self.robot.data, q, self._frame_id, _LWA
         )
-        qd_list, damped = solve_velocity_list(
+        qd, damped = solve_velocity(
             jacobian,
             twist,
             self.dls_epsilon,
             self.dls_lambda_max,
-            lambda: self._position_rate(qf, twist),
+            lambda: self._position_rate(q, twist),
         )
-        qd = np.array(qd_list)
-        if self.check_speed and (
-            max(qd_list) > self._min_speed_limit
-            or min(qd_list) < -self._min_speed_limit
-        ):
+        if self.check_speed and max(map(abs, qd.tolist())) > self._min_speed_limit:
             self._check_speed(qd, t)
         self._cycle += 1
         self._q_before, self._q = self._q, q
-        self._qf_before, self._qf = self._qf, qf
         self._qd, self._branch = qd, index
-        if _STATE_TWIN is not None:
-            state = _STATE_TWIN(p, v, rotation, omega)
-            state.__class__ = CartesianState
-        else:
-            state = CartesianState(p, v, rotation, omega)
-        self._state = state
-        if _SAMPLE_TWIN is None:
-            return PlannerSample(
-                t, p, v, rotation, omega, q, qd, BRANCHES[index], damped
-            )
-        sample = _SAMPLE_TWIN(t, p, v, rotation, omega, q, qd, BRANCHES[index], damped)
-        sample.__class__ = PlannerSample
-        return sample
+        self._state = CartesianState(p, v, rotation, omega)
+        return PlannerSample(t, p, v, rotation, omega, q, qd, BRANCHES[index], damped)
 
-    def _solve_ik(
-        self, rows: list[list[float]], q_pred: list[float]
-    ) -> tuple[FloatArray, list[float], int, bool]:
-        """The IK solution continuing the motion (Kang's θ4 flip rule, generalised).
-
-        The nearer wrist twin of the previous branch if it is within two
-        cycles of joint-speed-limited motion of the prediction ``q_pred``,
-        else (a shoulder or elbow singularity was crossed) the nearest of all
-        eight branches (``_puma_kernel.continuing_branch``). The closed form
-        returns each angle as the representative nearest ``q_pred``.
+    def _solve_ik(self, pose: FloatArray) -> tuple[FloatArray, int, bool]:
+        """The IK solution continuing the motion (``_tracking.track``).
 
         Returns:
-            ``(q, q as floats, branch index, within limits)``, ``q`` read-only.
+            ``(q, branch index, within limits)``, ``q`` read-only.
         """
-        reference = np.array(q_pred)
-        q_all, flags = solve_one(self.robot, self._geometry, np.array(rows), reference)
-        index = kernel.continuing_branch(
-            q_all, reference, self._branch >> 1, self._max_step2
+        q_before = self._q if self._q_before is None else self._q_before
+        pair = self._branch >> 1
+        status, q, index, within = track(
+            self._geometry, pose, self._q, q_before, pair, self._max_step2
         )
-        q = q_all[index]
+        if status != kernel.OK:  # raise the error, or solve a pose that only
+            # the exact rigidity checks accept
+            q_pred = 2.0 * self._q - q_before
+            q_all, flags = solve_one(self.robot, self._geometry, pose, q_pred)
+            index = kernel.continuing_branch(q_all, q_pred, pair, self._max_step2)
+            q, within = q_all[index], bool(flags[index])
         q.setflags(write=False)
-        return q, q.tolist(), index, bool(flags[index])
+        return q, index, within
 
-    def _position_rate(self, q: list[float], twist: list[float]) -> FloatArray:
+    def _position_rate(self, q: FloatArray, twist: FloatArray) -> FloatArray:
         """Rate of the joint position commands ending at ``q``: the DLS reference.
 
         Second-order backward difference (first order on the first cycle);
         zero when the tool is commanded at rest.
         """
-        if not any(twist):
+        if not twist.any():
             return np.zeros(len(q))
-        if self._qf_before is None:
-            period = self.period
-            return np.array([(a - b) / period for a, b in zip(q, self._qf)])  # noqa: B905
-        two_periods = 2.0 * self.period
-        return np.array(
-            [
-                (3.0 * a - 4.0 * b + c) / two_periods
-                for a, b, c in zip(q, self._qf, self._qf_before)  # noqa: B905
-            ]
-        )
+        if self._q_before is None:
+            return (q - self._q) / self.period
+        return (3.0 * q - 4.0 * self._q + self._q_before) / (2.0 * self.period)
 
     def _check_speed(self, qd: FloatArray, t: float) -> None:
         ratio = np.abs(qd) / self._speed_limit
@@ -472,73 +353,36 @@ class OnlinePlanner:
 
     def _to_wrist_in_base(
         self, p: FloatArray, v: FloatArray, rotation: FloatArray, omega: FloatArray
-    ) -> tuple[list[list[float]], list[float]]:
+    ) -> tuple[FloatArray, FloatArray]:
         """Tip command (world) -> wrist-centre pose (base) and twist (base axes).
 
         Returns:
-            The rows of the homogeneous matrix of the wrist centre in the base
-            frame and the twist.
+            The (4, 4) homogeneous matrix of the wrist centre in the base frame
+            and the twist (6,) [m/s, rad/s], linear first.
         """
-        vx, vy, vz = v.tolist()
-        wx, wy, wz = omega.tolist()
         if not self._frames_fixed:
-            return self._to_wrist_rotating(p, (vx, vy, vz), rotation, (wx, wy, wz))
-        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rows = rotation.tolist()
-        px, py, pz = p.tolist()
-        if self._tip is not None:  # p6 = p + lever, v6 = v + omega x lever
-            bx, by, bz = self._tip_back_f
-            lx = r00 * bx + r01 * by + r02 * bz
-            ly = r10 * bx + r11 * by + r12 * bz
-            lz = r20 * bx + r21 * by + r22 * bz
-            px, py, pz = px + lx, py + ly, pz + lz
-            vx, vy, vz = (
-                vx + wy * lz - wz * ly,
-                vy + wz * lx - wx * lz,
-                vz + wx * ly - wy * lx,
-            )
-        if self._base is not None:
-            bx, by, bz = self._base_p
-            px, py, pz = px - bx, py - by, pz - bz
-        rows[0].append(px)
-        rows[1].append(py)
-        rows[2].append(pz)
-        rows.append(_BOTTOM)
-        # the rotation comes from a motion primitive, rigid by construction:
-        # only finiteness is checked (any error reported as pose_rows would)
-        total = r00 + r01 + r02 + r10 + r11 + r12 + r20 + r21 + r22 + px + py + pz
-        if total - total != 0.0:
-            rigid_rows(rows)
-        return rows, [vx, vy, vz, wx, wy, wz]
+            return self._to_wrist_rotating(p, v, rotation, omega)
+        pose, twist = np.empty((4, 4)), np.empty(6)
+        wrist_command(
+            rotation, p, v, omega, self._tip_back, self._base_position, pose, twist
+        )
+        return pose, twist
 
     def _to_wrist_rotating(
-        self,
-        p: FloatArray,
-        v: tuple[float, float, float],
-        rotation: FloatArray,
-        omega: tuple[float, float, float],
-    ) -> tuple[list[list[float]], list[float]]:
+        self, p: FloatArray, v: FloatArray, rotation: FloatArray, omega: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
         """:meth:`_to_wrist_in_base` when the tip or the base frame rotates."""
-        (vx, vy, vz), (wx, wy, wz) = v, omega
         r6, p6 = rotation, p
         if self._tip is not None:  # p6 = p + lever, v6 = v + omega x lever
             r6 = rotation if self._tip_rt is None else rotation @ self._tip_rt
             lever = r6 @ self._tip_back
-            p6 = p + lever
-            lx, ly, lz = lever.tolist()
-            vx, vy, vz = (
-                vx + wy * lz - wz * ly,
-                vy + wz * lx - wx * lz,
-                vz + wx * ly - wy * lx,
-            )
-        twist = [vx, vy, vz, wx, wy, wz]
+            p6, v = p + lever, v + np.cross(omega, lever)
         if self._base is not None:
             rb, pb = self._base
             p6 = p6 - pb
             if self._base_rotates:
-                rbt = rb.T
-                twist = (rbt @ [vx, vy, vz]).tolist() + (rbt @ [wx, wy, wz]).tolist()
-                r6, p6 = rbt @ r6, rbt @ p6
-        return pose_rows(pin.SE3(r6, p6)), twist
+                r6, p6, v, omega = rb.T @ r6, rb.T @ p6, rb.T @ v, rb.T @ omega
+        return pin.SE3(r6, p6).homogeneous, np.concatenate([v, omega])
 
     def _check_position(self, q: FloatArray, t: float) -> None:
         lower, upper = self.robot.lower, self.robot.upper
