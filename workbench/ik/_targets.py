@@ -1,7 +1,8 @@
-"""Checks of target poses: shape, finiteness, rigidity (``poses.RIGIDITY_TOL``).
+"""Exact checks of IK targets: shape, finiteness, rigidity (``poses.RIGIDITY_TOL``).
 
-Written for speed: plain floats for one pose, the transposed (16, n) layout of
-the batch solver for many, so the checks cost little next to the IK itself.
+The compiled kernel (``_puma_kernel``) accepts a rigid pose by a quick test;
+a pose that fails it comes here, to be rejected with a clear message (or, if
+it is rigid within the tolerance after all, solved).
 """
 
 from __future__ import annotations
@@ -18,73 +19,17 @@ from workbench.poses import RIGIDITY_TOL, check_rigid_rows
 FloatArray = npt.NDArray[np.float64]
 
 
-#: Fast acceptance of :func:`pose_rows`: columns x, y of R orthonormal and
-#: z = x × y, each to within _FAST_TOL (bottom row too), as one sum of squares.
-#: Then every entry of RᵀR − I is below 4·_FAST_TOL + O(_FAST_TOL²), well within
-#: RIGIDITY_TOL, and det R ≈ 1 > 0; anything else takes the full, exact checks
-#: (and their error messages).
-_FAST_TOL = RIGIDITY_TOL / 5.0
-_FAST_TOL2 = _FAST_TOL * _FAST_TOL
-
-_SE3 = pin.SE3
-_NDARRAY = np.ndarray
-
-
 def pose_rows(target: pin.SE3 | npt.ArrayLike) -> list[list[float]]:
-    """Rows of the (4, 4) homogeneous matrix as floats, checked (scalar, fast).
+    """Rows of the (4, 4) homogeneous matrix as floats, every check made.
+
+    The exact checks behind the kernel's quick acceptance test
+    (``_puma_kernel``), which decide and word the error.
 
     Raises:
         DimensionError: If ``target`` is not (4, 4).
         NonFiniteError: If an entry is not a number, NaN or infinite.
         InputError: If the bottom row is not [0, 0, 0, 1] or R is not a rotation.
     """
-    cls = type(target)
-    if cls is _SE3:  # its bottom row is [0, 0, 0, 1] by construction
-        rows = target.np.tolist()
-        (r00, r01, r02, px), (r10, r11, r12, py), (r20, r21, r22, pz), _ = rows
-        e0 = r00 * r00 + r10 * r10 + r20 * r20 - 1.0
-        e1 = r01 * r01 + r11 * r11 + r21 * r21 - 1.0
-        e2 = r00 * r01 + r10 * r11 + r20 * r21
-        ex = r10 * r21 - r20 * r11 - r02  # x × y - z
-        ey = r20 * r01 - r00 * r21 - r12
-        ez = r00 * r11 - r10 * r01 - r22
-        if (
-            e0 * e0 + e1 * e1 + e2 * e2 + ex * ex + ey * ey + ez * ez <= _FAST_TOL2
-            and (px + py + pz) * 0.0 == 0.0
-        ):
-            return rows
-        return _checked_rows(rows)
-    if cls is _NDARRAY and target.shape == (4, 4) and target.dtype.char == "d":
-        return rigid_rows(target.tolist())
-    return _checked_rows(target)
-
-
-def rigid_rows(rows: list[list[float]]) -> list[list[float]]:
-    """``rows``, the four rows of a homogeneous matrix, if rigid; else raise.
-
-    The checks and errors of :func:`pose_rows` for a matrix already in floats.
-    """
-    # one pass that only accepts: finite (a NaN fails every comparison), rigid
-    (r00, r01, r02, px), (r10, r11, r12, py), (r20, r21, r22, pz), bottom = rows
-    e0 = r00 * r00 + r10 * r10 + r20 * r20 - 1.0
-    e1 = r01 * r01 + r11 * r11 + r21 * r21 - 1.0
-    e2 = r00 * r01 + r10 * r11 + r20 * r21
-    ex = r10 * r21 - r20 * r11 - r02  # x × y - z
-    ey = r20 * r01 - r00 * r21 - r12
-    ez = r00 * r11 - r10 * r01 - r22
-    b0, b1, b2, b3 = bottom
-    b3 -= 1.0
-    if (
-        e0 * e0 + e1 * e1 + e2 * e2 + ex * ex + ey * ey + ez * ez
-        + b0 * b0 + b1 * b1 + b2 * b2 + b3 * b3 <= _FAST_TOL2
-        and (px + py + pz) * 0.0 == 0.0
-    ):  # fmt: skip
-        return rows
-    return _checked_rows(rows)
-
-
-def _checked_rows(target: pin.SE3 | npt.ArrayLike) -> list[list[float]]:
-    """:func:`pose_rows` with every check made and reported."""
     if isinstance(target, pin.SE3):
         rows = target.homogeneous.tolist()
     else:
