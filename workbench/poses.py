@@ -47,11 +47,6 @@ UNIT_NORM_TOL = 1e-9
 """Tolerance on ``| |x| - 1 |`` for quaternions and rotation axes."""
 
 
-def _vect(rotation: FloatArray) -> FloatArray:
-    r = rotation
-    return 0.5 * np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])
-
-
 def _skew(v: FloatArray) -> FloatArray:
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
@@ -83,18 +78,31 @@ def _direction(x: FloatArray) -> FloatArray:
 
 
 def _axis_sin_cos(rotation: FloatArray) -> tuple[FloatArray, float, float]:
-    """Unit axis e, sin(phi) >= 0 and cos(phi) of a rotation, phi in [0, pi]."""
-    w = _vect(rotation)
+    """Unit axis e, sin(phi) >= 0 and cos(phi) of a rotation, phi in [0, pi].
+
+    Plain floats (a few µs, where numpy calls on 3-vectors cost tens).
+    """
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rows = rotation.tolist()
+    w = (0.5 * (r21 - r12), 0.5 * (r02 - r20), 0.5 * (r10 - r01))  # vect(R)
     norm_w = math.hypot(*w)  # scaled internally: |w|^2 would underflow
-    c = float(np.trace(rotation) - 1.0) / 2.0
+    c = (r00 + r11 + r22 - 1.0) / 2.0
     h = math.hypot(norm_w, c)
     s, c = norm_w / h, c / h
     if c >= 0.0:  # phi <= pi/2: the skew part fixes the axis well
-        return (_direction(w) if norm_w > 0.0 else np.array([1.0, 0.0, 0.0])), s, c
-    sym = 0.5 * (rotation + rotation.T) - c * np.eye(3)  # = (1 - c) e e^T
-    col = sym[:, int(np.argmax(np.diag(sym)))]
-    e = col / math.hypot(*col)  # largest component of e positive
-    return (-e if e @ w < 0.0 else e), s, c
+        if norm_w == 0.0:
+            return np.array([1.0, 0.0, 0.0]), s, c
+        largest = max(map(abs, w))  # exact even for subnormal entries
+        y = [x / largest for x in w]
+        norm_y = math.hypot(*y)
+        return np.array([x / norm_y for x in y]), s, c
+    # sym = (R + R^T) / 2 - c I = (1 - c) e e^T: its column of largest diagonal
+    k = max(range(3), key=lambda j: rows[j][j])
+    col = [0.5 * (rows[i][k] + rows[k][i]) - (c if i == k else 0.0) for i in range(3)]
+    norm = math.hypot(*col)
+    e = [x / norm for x in col]  # largest component of e positive
+    if e[0] * w[0] + e[1] * w[1] + e[2] * w[2] < 0.0:
+        e = [-x for x in e]
+    return np.array(e), s, c
 
 
 def as_se3(target: pin.SE3 | npt.ArrayLike, *, tol: float = RIGIDITY_TOL) -> pin.SE3:
@@ -298,13 +306,15 @@ def se3_from_angeles7(angeles7: npt.ArrayLike, *, tol: float = ANGELES7_TOL) -> 
 
 
 def axis_angle_from_rotation(
-    rotation: npt.ArrayLike, *, tol: float = RIGIDITY_TOL
+    rotation: npt.ArrayLike, *, tol: float = RIGIDITY_TOL, check: bool = True
 ) -> tuple[FloatArray, float]:
     """Unit axis and angle of a rotation, robust at 0 and at pi.
 
     Args:
         rotation: Shape (3, 3), orthonormal with det +1.
         tol: Orthonormality tolerance.
+        check: Validate ``rotation``; False skips that for a float (3, 3)
+            array known to be a rotation (e.g. computed from rotations).
 
     Returns:
         Axis e, shape (3,), unit, in the parent frame (= child frame), and angle
@@ -314,8 +324,10 @@ def axis_angle_from_rotation(
     Raises:
         InputError: As :func:`angeles4_from_rotation`.
     """
-    e, s, c = _axis_sin_cos(_as_rotation(rotation, tol, "rotation"))
-    return e, float(np.arctan2(s, c))
+    if check:
+        rotation = _as_rotation(rotation, tol, "rotation")
+    e, s, c = _axis_sin_cos(rotation)
+    return e, math.atan2(s, c)
 
 
 def rotation_from_axis_angle(

@@ -45,6 +45,7 @@ from workbench.trajectory.cartesian_paths import (
 )
 from workbench.trajectory.orientation_profile import (
     OrientationProfile,
+    as_rotation,
     compute_relative_axis_angle,
 )
 from workbench.trajectory.trapezoidal_profile import (
@@ -108,8 +109,13 @@ def plan_rotation(
     max_velocity: float,
     max_acceleration: float,
 ) -> OrientationPath:
-    """Shortest rotation from the state's orientation to ``goal`` (3, 3), at rest."""
-    axis, angle = compute_relative_axis_angle(state.rotation, goal)
+    """Shortest rotation from the state's orientation to ``goal`` (3, 3), at rest.
+
+    ``state.rotation`` is taken as a rotation (the planner's own state); the
+    goal is checked (``InputError`` if it is not a rotation).
+    """
+    goal = as_rotation(goal, "goal rotation")
+    axis, angle = compute_relative_axis_angle(state.rotation, goal, check=False)
     omega = state.angular_velocity
     if angle <= ZERO_TOL and math.hypot(*omega) > ZERO_TOL:
         axis, _ = _unit(state.rotation.T @ omega)
@@ -120,7 +126,7 @@ def plan_rotation(
     )
     path: OrientationPath = OrientationProfile(
         state.rotation.copy(),
-        np.array(goal, dtype=np.float64),
+        goal.copy(),
         axis,
         axis_base,
         angle,

@@ -15,7 +15,6 @@ explains why the quaternion is taken with ``+u``, not Kang's ``−u``.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,7 +22,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InputError
-from workbench.poses import RIGIDITY_TOL, quat_wxyz_from_rotation
+from workbench.poses import RIGIDITY_TOL, axis_angle_from_rotation, check_rigid_rows
 from workbench.trajectory.trapezoidal_profile import TrapezoidalProfile, trapezoid
 from workbench.validation import as_finite_array
 
@@ -43,25 +42,26 @@ def _read_only(a: FloatArray) -> FloatArray:
     return a
 
 
-def _rotation(value: npt.ArrayLike, name: str) -> FloatArray:
+def as_rotation(value: npt.ArrayLike, name: str) -> FloatArray:
+    """``value`` as a (3, 3) float array if it is a rotation, else InputError."""
     r = as_finite_array(value, (3, 3), name)
-    err = float(np.max(np.abs(r.T @ r - np.eye(3))))
-    if err > RIGIDITY_TOL or np.linalg.det(r) <= 0.0:
-        raise InputError(
-            f"{name} is not a rotation: max |R^T R - I| = {err:.3g}, "
-            f"det = {np.linalg.det(r):.6g}"
-        )
+    try:
+        check_rigid_rows(r.tolist(), [], RIGIDITY_TOL, name)
+    except InputError as err:
+        raise InputError(f"{name} is not a rotation: {err}") from None
     return r
 
 
 def compute_relative_axis_angle(
-    rotation_start: npt.ArrayLike, rotation_goal: npt.ArrayLike
+    rotation_start: npt.ArrayLike, rotation_goal: npt.ArrayLike, *, check: bool = True
 ) -> tuple[FloatArray, float]:
     """Axis and angle of the shortest rotation from one orientation to another.
 
     Args:
         rotation_start: ``R_1``, shape (3, 3), tool frame in base frame.
         rotation_goal: ``R_2``, shape (3, 3).
+        check: Validate both; False skips that for float (3, 3) arrays known
+            to be rotations (the planner's replanning path).
 
     Returns:
         ``(u, angle)``: unit axis, shape (3,), in the axes of the start frame,
@@ -72,15 +72,16 @@ def compute_relative_axis_angle(
     Raises:
         InputError: If a matrix is not a rotation (NaN, shape, not orthonormal).
     """
-    r1 = _rotation(rotation_start, "rotation_start")
-    r2 = _rotation(rotation_goal, "rotation_goal")
-    quat_wxyz = quat_wxyz_from_rotation(r1.T @ r2)  # w >= 0: shortest path
-    vec = quat_wxyz[1:]
-    sin_half = math.hypot(*vec)
-    angle = 2.0 * math.atan2(sin_half, quat_wxyz[0])
+    r1, r2 = rotation_start, rotation_goal
+    if check:
+        r1 = as_rotation(rotation_start, "rotation_start")
+        r2 = as_rotation(rotation_goal, "rotation_goal")
+    # the quaternion with w = cos(angle / 2) >= 0 is the shortest path: its
+    # axis and angle in [0, pi] are those of the rotation matrix itself
+    axis, angle = axis_angle_from_rotation(r1.T @ r2, check=False)
     if angle <= ANGLE_EPS:
         return np.array([1.0, 0.0, 0.0]), 0.0
-    return vec / sin_half, angle
+    return axis, angle
 
 
 @dataclass(frozen=True, slots=True)
