@@ -288,3 +288,16 @@ def test_samples_and_states_are_immutable(puma_kang):
     assert sample._asdict()["branch"] == sample.branch
     assert not sample.q.flags.writeable
     np.testing.assert_array_equal(planner.state.position, sample.position)
+
+
+def test_samples_say_which_cycles_planned_a_motion(puma_kang):
+    """``replanned``: a primitive began or changed stage, or a stop/goal/event."""
+    planner = _planner(puma_kang)
+    assert not planner.step().replanned  # holding at rest
+    planner.append(PointToPoint(*_random_goal(planner, np.random.default_rng(3))))
+    flags = [planner.step().replanned for _ in range(5)]
+    assert flags == [True, False, False, False, False]
+    planner.stop()
+    assert planner.step().replanned and not planner.step().replanned
+    planner.set_goal(*_random_goal(planner, np.random.default_rng(4)))
+    assert planner.step().replanned

@@ -74,7 +74,9 @@ class FishCuttingResult:
         q, qd: (K, nq) joint commands [rad, rad/s]. damped: (K,) DLS used.
         branch: IK branch per cycle. primitive: Name of the primitive that
             produced each cycle's command. events: Touch events.
-        latency_us: (K,) time of each planning cycle [µs].
+        latency_us: Time of each planning cycle [µs], one per cycle (K - 1).
+        replanned: Per cycle (as ``latency_us``), True if a new motion was
+            planned in it (``PlannerSample.replanned``).
         servo: Joint commands at the servo rate (Hermite interpolation).
         setup: The parameters. fish: The fish.
     """
@@ -91,6 +93,7 @@ class FishCuttingResult:
     primitive: tuple[str, ...]
     events: tuple[FishEvent, ...]
     latency_us: FloatArray
+    replanned: npt.NDArray[np.bool_]
     servo: JointTrajectorySamples
     setup: FishCuttingSetup
     fish: SimulatedFish = field(repr=False)
@@ -196,6 +199,7 @@ def run_fish_cutting(
         primitive=tuple(names[:1] + names),
         events=tuple(events),
         latency_us=np.array(latency) * 1e6,
+        replanned=np.array([s.replanned for s in samples]),
         servo=interpolate_servo(t, q, qd, m),
         setup=setup,
         fish=fish,

@@ -77,6 +77,10 @@ class PlannerSample(NamedTuple):
         qd: Joint velocity command (nv,) [rad/s].
         branch: IK branch of ``q``, e.g. ``"right/elbow-up/no-flip"``.
         damped: True if the DLS inverse was used (singular region).
+        replanned: True if a new motion was planned for this cycle: a
+            primitive began or went on to its next stage, or a reaction to
+            :meth:`OnlinePlanner.notify`, ``stop`` or ``set_goal`` since the
+            last cycle.
     """
 
     t: float
@@ -88,6 +92,7 @@ class PlannerSample(NamedTuple):
     qd: FloatArray
     branch: str
     damped: bool
+    replanned: bool = False
 
 
 def _rigid(value: pin.SE3 | None) -> tuple[FloatArray, FloatArray] | None:
@@ -197,6 +202,7 @@ class OnlinePlanner:
         self._state = CartesianState(p, zero, rotation, zero)
         start = analytic(robot, oMf, q_previous=q0)  # fails early for a non-PUMA arm
         self._branch = nearest(start, q0).index
+        self._replanned = False  # by notify, stop or set_goal since the last step
         self._queue: deque[MotionPrimitive] = deque()
         self._active: MotionPrimitive = Hold()
         self._active.begin(self._state, 0.0, limits)
@@ -246,7 +252,9 @@ class OnlinePlanner:
         Returns:
             The event name if the primitive replanned, else None.
         """
-        return self._active.on_contact(contact, self.t, self._state, self.limits)
+        event = self._active.on_contact(contact, self.t, self._state, self.limits)
+        self._replanned |= event is not None
+        return event
 
     def stop(self) -> None:
         """Stop event: come to rest at full deceleration; the queue is cleared."""
@@ -260,6 +268,7 @@ class OnlinePlanner:
     def _replace(self, primitive: MotionPrimitive) -> None:
         primitive.begin(self._state, self.t, self.limits)
         self._active = primitive
+        self._replanned = True
 
     def _next_primitive(self, state: CartesianState) -> MotionPrimitive:
         if self._queue:
@@ -278,10 +287,13 @@ class OnlinePlanner:
         """
         t = (self._cycle + 1) * self.period
         primitive = self._active
+        replanned, self._replanned = self._replanned, False
         if self._queue and isinstance(primitive, Hold):  # new work after a hold
             primitive = self._queue.popleft()
             primitive.begin(self._state, self.t, self.limits)
+            replanned = True
         while t >= primitive.end_time:
+            replanned = True
             t_end = primitive.end_time
             end = primitive.get_state(t_end)
             if not primitive.advance(t_end, end, self.limits):
@@ -309,7 +321,9 @@ class OnlinePlanner:
         self._q_before, self._q = self._q, q
         self._qd, self._branch = qd, index
         self._state = CartesianState(p, v, rotation, omega)
-        return PlannerSample(t, p, v, rotation, omega, q, qd, BRANCHES[index], damped)
+        return PlannerSample(
+            t, p, v, rotation, omega, q, qd, BRANCHES[index], damped, replanned
+        )
 
     def _solve_ik(self, pose: FloatArray) -> tuple[FloatArray, int, bool]:
         """The IK solution continuing the motion (``_tracking.track``).
