@@ -20,6 +20,10 @@ Conventions of every function here:
 
 The status codes tell the Python side which error to raise; it then runs the
 slow, exact checks that word the message.
+
+A batch (:func:`batch_arguments`, ``numpy.arctan2``, :func:`batch_assemble`)
+leaves the atan2 calls to numpy, whose SIMD version is several times faster
+than libm's; :func:`solve_pose` does all of it for one pose.
 """
 
 from __future__ import annotations
@@ -103,6 +107,8 @@ def pack_geometry(geo: PumaGeometry) -> np.ndarray:
 
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+#: For the helpers called per angle or per pose inside the batch loops: inlined
+#: into their callers (measured: the batch's joint-value stage 3x faster).
 _jit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
 
 
