@@ -13,8 +13,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from tests.conftest import run_cli as run
 from workbench import Robot, load_robot, paper_data
-from workbench.cli import EXIT_BAD_INPUT, EXIT_INFEASIBLE, main
+from workbench.cli import EXIT_BAD_INPUT, EXIT_INFEASIBLE
 from workbench.dh import DHJoint, DHTable
 from workbench.errors import (
     DimensionError,
@@ -511,15 +512,6 @@ def test_unsupported_robots(puma) -> None:
 
 
 # -- command line ----------------------------------------------------------------
-
-
-def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    try:
-        code = main(list(argv))
-    except SystemExit as exit_:  # argparse's own errors
-        code = int(exit_.code or 0)
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def test_cli_all_branches_recover_table3(capsys) -> None:
