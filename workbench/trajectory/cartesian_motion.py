@@ -30,6 +30,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
+from workbench.poses import as_rotation
 from workbench.trajectory.cartesian_paths import (
     ZERO_TOL,
     CartesianLimits,
@@ -45,7 +46,6 @@ from workbench.trajectory.cartesian_paths import (
 )
 from workbench.trajectory.orientation_profile import (
     OrientationProfile,
-    as_rotation,
     compute_relative_axis_angle,
 )
 from workbench.trajectory.trapezoidal_profile import (

@@ -22,7 +22,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InputError
-from workbench.poses import RIGIDITY_TOL, axis_angle_from_rotation, check_rigid_rows
+from workbench.poses import as_rotation, axis_angle_from_rotation
 from workbench.trajectory.trapezoidal_profile import TrapezoidalProfile, trapezoid
 from workbench.validation import as_finite_array
 
@@ -42,14 +42,13 @@ def _read_only(a: FloatArray) -> FloatArray:
     return a
 
 
-def as_rotation(value: npt.ArrayLike, name: str) -> FloatArray:
-    """``value`` as a (3, 3) float array if it is a rotation, else InputError."""
-    r = as_finite_array(value, (3, 3), name)
+def _rotation(value: npt.ArrayLike, name: str) -> FloatArray:
+    """:func:`~workbench.poses.as_rotation`, a non-rotation worded as such."""
+    r = as_finite_array(value, (3, 3), name)  # NaN and shape errors as they are
     try:
-        check_rigid_rows(r.tolist(), [], RIGIDITY_TOL, name)
+        return as_rotation(r, name)
     except InputError as err:
         raise InputError(f"{name} is not a rotation: {err}") from None
-    return r
 
 
 def compute_relative_axis_angle(
@@ -74,8 +73,8 @@ def compute_relative_axis_angle(
     """
     r1, r2 = rotation_start, rotation_goal
     if check:
-        r1 = as_rotation(rotation_start, "rotation_start")
-        r2 = as_rotation(rotation_goal, "rotation_goal")
+        r1 = _rotation(rotation_start, "rotation_start")
+        r2 = _rotation(rotation_goal, "rotation_goal")
     # the quaternion with w = cos(angle / 2) >= 0 is the shortest path: its
     # axis and angle in [0, pi] are those of the rotation matrix itself
     axis, angle = axis_angle_from_rotation(r1.T @ r2, check=False)
