@@ -72,11 +72,7 @@ def check_poses(poses: FloatArray, start: int) -> None:
     The exact checks of :func:`pose_rows`, vectorised; ``start`` is the index
     of ``poses[0]`` in the caller's batch, for the message.
     """
-    _check_chunk_exact(poses.reshape(len(poses), 16).T, start)
-
-
-def _check_chunk_exact(tt: FloatArray, start: int) -> None:
-    """:func:`check_chunk` with every check made and reported."""
+    tt = poses.reshape(len(poses), 16).T  # row 4 i + j: entry (i, j) of each pose
     finite = np.isfinite(tt).all(axis=0)
     if not finite.all():
         raise NonFiniteError(

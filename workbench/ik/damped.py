@@ -42,6 +42,7 @@ from __future__ import annotations
 import importlib.metadata
 import math
 
+import numba
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
@@ -110,15 +111,34 @@ def dls_inverse(
     _check_positive(epsilon, "epsilon", strict=True)
     _check_positive(lambda_max, "lambda_max", strict=False)
     u, sigma, vt = np.linalg.svd(jac, full_matrices=False)
-    sigma_min = sigma[-1] if sigma.size else 0.0
+    return (vt.T * dls_gains(sigma, float(epsilon), float(lambda_max))) @ u.T
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def dls_gains(sigma: FloatArray, epsilon: float, lambda_max: float) -> FloatArray:
+    r"""The factors :math:`\sigma_i / (\sigma_i^2 + \lambda^2)` of :math:`J^\#`.
+
+    The damping law of the module docstring, shared by :func:`dls_inverse`
+    and the online planner's compiled velocity step.
+
+    Args:
+        sigma: Singular values of J, descending, shape (k,).
+        epsilon: Size of the singular region, > 0.
+        lambda_max: Damping at a singularity, >= 0.
+
+    Returns:
+        Shape (k,); 0 where :math:`\sigma_i^2 + \lambda^2 = 0`.
+    """
     lambda2 = 0.0
+    sigma_min = sigma[-1] if sigma.size else 0.0
     if sigma_min < epsilon:
         lambda2 = (1.0 - (sigma_min / epsilon) ** 2) * lambda_max**2
-    denominator = sigma * sigma + lambda2
-    gain = np.divide(
-        sigma, denominator, out=np.zeros_like(sigma), where=denominator > 0.0
-    )
-    return (vt.T * gain) @ u.T
+    gains = np.zeros_like(sigma)
+    for k in range(sigma.size):
+        denominator = sigma[k] * sigma[k] + lambda2
+        if denominator > 0.0:
+            gains[k] = sigma[k] / denominator
+    return gains
 
 
 def dls_step(

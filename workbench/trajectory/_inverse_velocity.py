@@ -33,6 +33,8 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
+from workbench.ik.damped import dls_gains
+
 FloatArray = npt.NDArray[np.float64]
 
 #: |J[0:3, 3:6]| entries at or below this count as zero (rounding of FK).
@@ -126,8 +128,8 @@ def damped_solve(
 ) -> None:
     r"""DLS solution about a reference: :math:`\dot q_r + J^\#(\dot x - J\dot q_r)`.
 
-    :math:`J^\#` as :func:`workbench.ik.dls_inverse` (SVD; damping
-    :math:`\lambda^2 = (1 - (\sigma_\min/\epsilon)^2)\lambda_\max^2` below ε).
+    :math:`J^\#` as :func:`workbench.ik.dls_inverse` (SVD, the damping law of
+    :func:`workbench.ik.damped.dls_gains`).
 
     Args:
         jacobian: (6, nv).
@@ -138,15 +140,8 @@ def damped_solve(
         qd: (nv,) output [rad/s].
     """
     u, sigma, vt = np.linalg.svd(jacobian, full_matrices=False)
-    sigma_min = sigma[-1]
-    lambda2 = 0.0
-    if sigma_min < epsilon:
-        lambda2 = (1.0 - (sigma_min / epsilon) ** 2) * lambda_max**2
     residual = u.T @ (twist - jacobian @ qd_reference)
-    for k in range(sigma.shape[0]):
-        denominator = sigma[k] * sigma[k] + lambda2
-        residual[k] *= sigma[k] / denominator if denominator > 0.0 else 0.0
-    qd[:] = qd_reference + vt.T @ residual
+    qd[:] = qd_reference + vt.T @ (dls_gains(sigma, epsilon, lambda_max) * residual)
 
 
 def solve_velocity(

@@ -25,43 +25,74 @@ def wrist_command(
     position: FloatArray,
     velocity: FloatArray,
     angular_velocity: FloatArray,
+    tip_rotation_t: FloatArray,
     tip_back: FloatArray,
+    base_rotation: FloatArray,
     base_position: FloatArray,
     pose: FloatArray,
     twist: FloatArray,
 ) -> None:
     """Tool-tip command (world frame) -> wrist-centre command (base frame).
 
-    For a tip frame and a base frame that are translated, not rotated: the
-    wrist centre is ``p + R tip_back``, moving at ``v + ω × (R tip_back)``.
+    The wrist frame is ``R6 = R tip_rotation_t`` at ``p + R6 tip_back``, moving
+    at ``v + ω × (R6 tip_back)``; all of it is then expressed in the base
+    frame (``base_rotation``, ``base_position`` in the world frame).
 
     Args:
-        rotation: (3, 3) tool orientation, world frame.
+        rotation: (3, 3) tool-tip orientation, world frame.
         position: (3,) tool-tip position [m], world frame.
         velocity: (3,) [m/s], world axes.
         angular_velocity: (3,) [rad/s], world axes.
+        tip_rotation_t: (3, 3) transpose of the tip's rotation in the tool frame.
         tip_back: (3,) from the tip to the wrist centre [m], tool axes.
-        base_position: (3,) robot base origin in the world frame [m].
+        base_rotation: (3, 3) base orientation in the world frame.
+        base_position: (3,) base origin in the world frame [m].
         pose: (4, 4) output, wrist-centre pose in the base frame.
         twist: (6,) output [m/s, rad/s], linear first, base axes.
     """
-    w0, w1, w2 = angular_velocity[0], angular_velocity[1], angular_velocity[2]
-    lever = np.empty(3)
+    r6 = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            r6[i, j] = (
+                rotation[i, 0] * tip_rotation_t[0, j]
+                + rotation[i, 1] * tip_rotation_t[1, j]
+                + rotation[i, 2] * tip_rotation_t[2, j]
+            )
+    lever, p6, v6 = np.empty(3), np.empty(3), np.empty(3)
     for i in range(3):
         lever[i] = (
-            rotation[i, 0] * tip_back[0]
-            + rotation[i, 1] * tip_back[1]
-            + rotation[i, 2] * tip_back[2]
+            r6[i, 0] * tip_back[0] + r6[i, 1] * tip_back[1] + r6[i, 2] * tip_back[2]
         )
+        p6[i] = position[i] + lever[i] - base_position[i]
+    w0, w1, w2 = angular_velocity[0], angular_velocity[1], angular_velocity[2]
+    v6[0] = velocity[0] + w1 * lever[2] - w2 * lever[1]
+    v6[1] = velocity[1] + w2 * lever[0] - w0 * lever[2]
+    v6[2] = velocity[2] + w0 * lever[1] - w1 * lever[0]
+    # in base axes: multiply by base_rotation^T
+    for i in range(3):
         for j in range(3):
-            pose[i, j] = rotation[i, j]
-        pose[i, 3] = position[i] + lever[i] - base_position[i]
+            pose[i, j] = (
+                base_rotation[0, i] * r6[0, j]
+                + base_rotation[1, i] * r6[1, j]
+                + base_rotation[2, i] * r6[2, j]
+            )
+        pose[i, 3] = (
+            base_rotation[0, i] * p6[0]
+            + base_rotation[1, i] * p6[1]
+            + base_rotation[2, i] * p6[2]
+        )
+        twist[i] = (
+            base_rotation[0, i] * v6[0]
+            + base_rotation[1, i] * v6[1]
+            + base_rotation[2, i] * v6[2]
+        )
+        twist[3 + i] = (
+            base_rotation[0, i] * w0
+            + base_rotation[1, i] * w1
+            + base_rotation[2, i] * w2
+        )
         pose[3, i] = 0.0
     pose[3, 3] = 1.0
-    twist[0] = velocity[0] + w1 * lever[2] - w2 * lever[1]
-    twist[1] = velocity[1] + w2 * lever[0] - w0 * lever[2]
-    twist[2] = velocity[2] + w0 * lever[1] - w1 * lever[0]
-    twist[3], twist[4], twist[5] = w0, w1, w2
 
 
 @_jit
@@ -72,6 +103,7 @@ def track(
     q_before: FloatArray,
     pair: int,
     max_step2: float,
+    check: bool = True,
 ) -> tuple[int, FloatArray, int, bool]:
     """The IK solution that continues a motion (Kang's θ4 flip rule, generalised).
 
@@ -87,6 +119,7 @@ def track(
         q_before: (6,) the one before it [rad] (``q`` on the first cycle).
         pair: (Arm, elbow) pair of the last command's branch, ``index >> 1``.
         max_step2: Largest squared joint step [rad²] that keeps the pair.
+        check: Run the kernel's quick rigidity test on ``pose``.
 
     Returns:
         ``(status, q_new, index, within)``: ``_puma_kernel`` status (the rest
@@ -96,7 +129,7 @@ def track(
     q_pred = 2.0 * q - q_before
     q_all = np.empty((8, 6))
     flags = np.empty(12, dtype=np.bool_)
-    status = kernel.solve_pose(geometry, pose, q_pred, q_all, flags)
+    status = kernel.solve_pose(geometry, pose, q_pred, q_all, flags, check)
     if status != kernel.OK:
         return status, q_pred, -1, False
     index = kernel.continuing_branch(q_all, q_pred, pair, max_step2)

@@ -95,13 +95,12 @@ class PlannerSample(NamedTuple):
     replanned: bool = False
 
 
-def _rigid(value: pin.SE3 | None) -> tuple[FloatArray, FloatArray] | None:
+def _rigid(value: pin.SE3 | None) -> tuple[FloatArray, FloatArray]:
+    """Rotation and translation of a transform; None is the identity."""
     if value is None:
-        return None
+        return np.eye(3), np.zeros(3)
     if not isinstance(value, pin.SE3):
         raise InputError(f"expected a pinocchio.SE3, got {type(value).__name__}")
-    if np.allclose(value.homogeneous, np.eye(4), rtol=0.0, atol=0.0):
-        return None
     return value.rotation.copy(), value.translation.copy()
 
 
@@ -166,11 +165,8 @@ class OnlinePlanner:
         self.dls_lambda_max = dls_lambda_max
         self.check_speed = check_speed
         dls_inverse(np.eye(6), epsilon=dls_epsilon, lambda_max=dls_lambda_max)
-        self._tip = _rigid(transform_tip_to_tool)
-        self._base = _rigid(transform_base_to_world)
-        self._base_rotates = self._base is not None and bool(
-            np.any(self._base[0] != np.eye(3))
-        )
+        tip = _rigid(transform_tip_to_tool)  # (rotation, translation)
+        base = _rigid(transform_base_to_world)
         q0 = robot.check_configuration(q_start)
         self._check_position(q0, 0.0)
         self._q = q0
@@ -182,22 +178,14 @@ class OnlinePlanner:
         self._min_speed_limit = float(self._speed_limit.min())
         # squared joint step of two cycles at the speed limits (branch selection)
         self._max_step2 = float(np.sum((2.0 * self.period * robot.velocity_limit) ** 2))
-        self._tip_rt = None
-        self._tip_back = np.zeros(3)
-        if self._tip is not None:
-            tip_rotates = bool(np.any(self._tip[0] != np.eye(3)))
-            self._tip_rt = self._tip[0].T.copy() if tip_rotates else None
-            self._tip_back = -self._tip[1]
-        # the planning cycle works on floats when neither transform rotates
+        # the frames of _tracking.wrist_command
+        self._tip_rotation_t, self._tip_back = tip[0].T.copy(), -tip[1]
+        self._base_rotation, self._base_position = base
         self._geometry = kernel.packed_geometry(robot)
-        self._frames_fixed = self._tip_rt is None and not self._base_rotates
-        self._base_position = np.zeros(3) if self._base is None else self._base[1]
         oMf = robot.fk(q0)
-        p, rotation = oMf.translation, oMf.rotation
-        if self._tip is not None:
-            p, rotation = p + rotation @ self._tip[1], rotation @ self._tip[0]
-        if self._base is not None:
-            p, rotation = self._base[0] @ p + self._base[1], self._base[0] @ rotation
+        p = oMf.translation + oMf.rotation @ tip[1]
+        rotation = oMf.rotation @ tip[0]
+        p, rotation = base[0] @ p + base[1], base[0] @ rotation
         zero = np.zeros(3)
         self._state = CartesianState(p, zero, rotation, zero)
         start = analytic(robot, oMf, q_previous=q0)  # fails early for a non-PUMA arm
@@ -336,12 +324,12 @@ class OnlinePlanner:
         status, q, index, within = track(
             self._geometry, pose, self._q, q_before, pair, self._max_step2
         )
-        if status != kernel.OK:  # raise the error, or solve a pose that only
-            # the exact rigidity checks accept
-            q_pred = 2.0 * self._q - q_before
-            q_all, flags = solve_one(self.robot, self._geometry, pose, q_pred)
-            index = kernel.continuing_branch(q_all, q_pred, pair, self._max_step2)
-            q, within = q_all[index], bool(flags[index])
+        if status != kernel.OK:  # solve_one raises the error, or accepts a pose
+            # that only the exact rigidity checks pass: solve it unchecked
+            solve_one(self.robot, self._geometry, pose, self._q)
+            status, q, index, within = track(
+                self._geometry, pose, self._q, q_before, pair, self._max_step2, False
+            )
         q.setflags(write=False)
         return q, index, within
 
@@ -374,29 +362,20 @@ class OnlinePlanner:
             The (4, 4) homogeneous matrix of the wrist centre in the base frame
             and the twist (6,) [m/s, rad/s], linear first.
         """
-        if not self._frames_fixed:
-            return self._to_wrist_rotating(p, v, rotation, omega)
         pose, twist = np.empty((4, 4)), np.empty(6)
         wrist_command(
-            rotation, p, v, omega, self._tip_back, self._base_position, pose, twist
+            rotation,
+            p,
+            v,
+            omega,
+            self._tip_rotation_t,
+            self._tip_back,
+            self._base_rotation,
+            self._base_position,
+            pose,
+            twist,
         )
         return pose, twist
-
-    def _to_wrist_rotating(
-        self, p: FloatArray, v: FloatArray, rotation: FloatArray, omega: FloatArray
-    ) -> tuple[FloatArray, FloatArray]:
-        """:meth:`_to_wrist_in_base` when the tip or the base frame rotates."""
-        r6, p6 = rotation, p
-        if self._tip is not None:  # p6 = p + lever, v6 = v + omega x lever
-            r6 = rotation if self._tip_rt is None else rotation @ self._tip_rt
-            lever = r6 @ self._tip_back
-            p6, v = p + lever, v + np.cross(omega, lever)
-        if self._base is not None:
-            rb, pb = self._base
-            p6 = p6 - pb
-            if self._base_rotates:
-                r6, p6, v, omega = rb.T @ r6, rb.T @ p6, rb.T @ v, rb.T @ omega
-        return pin.SE3(r6, p6).homogeneous, np.concatenate([v, omega])
 
     def _check_position(self, q: FloatArray, t: float) -> None:
         lower, upper = self.robot.lower, self.robot.upper
