@@ -115,11 +115,20 @@ def dls_inverse(
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
+def dls_damping(sigma_min2: float, epsilon: float, lambda_max: float) -> float:
+    r"""The damping :math:`\lambda^2` (module docstring) given :math:`\sigma_\min^2`.
+
+    The damping law in one place: :func:`dls_gains` (hence
+    :func:`dls_inverse`) and the online planner's compiled velocity step use it.
+    """
+    if sigma_min2 < epsilon * epsilon:
+        return (1.0 - sigma_min2 / (epsilon * epsilon)) * lambda_max * lambda_max
+    return 0.0
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def dls_gains(sigma: FloatArray, epsilon: float, lambda_max: float) -> FloatArray:
     r"""The factors :math:`\sigma_i / (\sigma_i^2 + \lambda^2)` of :math:`J^\#`.
-
-    The damping law of the module docstring, shared by :func:`dls_inverse`
-    and the online planner's compiled velocity step.
 
     Args:
         sigma: Singular values of J, descending, shape (k,).
@@ -129,10 +138,8 @@ def dls_gains(sigma: FloatArray, epsilon: float, lambda_max: float) -> FloatArra
     Returns:
         Shape (k,); 0 where :math:`\sigma_i^2 + \lambda^2 = 0`.
     """
-    lambda2 = 0.0
     sigma_min = sigma[-1] if sigma.size else 0.0
-    if sigma_min < epsilon:
-        lambda2 = (1.0 - (sigma_min / epsilon) ** 2) * lambda_max**2
+    lambda2 = dls_damping(sigma_min * sigma_min, epsilon, lambda_max)
     gains = np.zeros_like(sigma)
     for k in range(sigma.size):
         denominator = sigma[k] * sigma[k] + lambda2

@@ -25,7 +25,7 @@ import numpy.typing as npt
 
 from workbench.errors import InputError
 from workbench.tasks.fish import BONE, FLESH
-from workbench.trajectory.cartesian_motion import plan_line, plan_rotation, plan_stop
+from workbench.trajectory.cartesian_motion import hold_rotation, plan_line, plan_stop
 from workbench.trajectory.cartesian_paths import (
     CartesianLimits,
     CartesianMotion,
@@ -33,7 +33,7 @@ from workbench.trajectory.cartesian_paths import (
     OffsetPath,
 )
 from workbench.trajectory.motion_primitives import MotionPrimitive
-from workbench.trajectory.trapezoidal_profile import trapezoid
+from workbench.trajectory.trapezoidal_profile import replan_trapezoid
 from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]
@@ -60,11 +60,8 @@ def _line(
         plan_line(
             state, goal, vmax, limits.max_acceleration, final_velocity=final_velocity
         ),
-        plan_rotation(
-            state,
-            state.rotation,
-            limits.max_angular_velocity,
-            limits.max_angular_acceleration,
+        hold_rotation(
+            state, limits.max_angular_velocity, limits.max_angular_acceleration
         ),
     )
 
@@ -175,7 +172,13 @@ class HorizontalCut(MotionPrimitive):
         if contact != BONE or t < self._rising_until:
             return None
         vmax = min(self.cutting_speed, limits.max_velocity)
-        rise = trapezoid(self.step_height, vmax, limits.max_acceleration)
+        rise = replan_trapezoid(  # from rest to rest, upwards (checked inputs)
+            self.step_height,
+            vmax,
+            limits.max_acceleration,
+            initial_velocity=0.0,
+            check=False,
+        )
         elapsed = t - self.start_time
         motion = self.motion
         position = OffsetPath(motion.position, _UP, rise, elapsed)

@@ -13,7 +13,8 @@ and two 3 × 3 inverses give :math:`\dot q`. The smallest singular value obeys
 is at least ε the damped-least-squares inverse of :func:`workbench.ik.dls_inverse`
 has zero damping and *equals* :math:`J^{-1}`, so the exact block solve is used.
 Otherwise (near a singularity, or a Jacobian without the block structure) the
-DLS solution is computed from an SVD, with the damping law of ``dls_inverse``.
+DLS solution is computed from a one-sided Jacobi SVD, with the damping law of
+``dls_inverse``.
 The result is that of ``dls_inverse`` in every case (to rounding); only the
 cost differs. Both solves are compiled with Numba: they run once per planning
 cycle of the online planner.
@@ -33,12 +34,17 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-from workbench.ik.damped import dls_gains
+from workbench.ik.damped import dls_damping
 
 FloatArray = npt.NDArray[np.float64]
 
 #: |J[0:3, 3:6]| entries at or below this count as zero (rounding of FK).
 BLOCK_TOL = 1e-12
+
+#: Columns count as orthogonal when |w_p . w_q| <= JACOBI_TOL |w_p| |w_q|.
+JACOBI_TOL = 1e-15
+#: Sweeps of the Jacobi SVD at most (6 × 6 Jacobians converge in 5 to 8).
+JACOBI_MAX_SWEEPS = 60
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 
@@ -117,6 +123,58 @@ def block_solve(
     return frob2 * epsilon * epsilon <= 1.0
 
 
+@numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _dot(a: FloatArray, b: FloatArray) -> float:
+    """Dot product of two short vectors (no BLAS call)."""
+    acc = 0.0
+    for i in range(a.size):
+        acc += a[i] * b[i]
+    return acc
+
+
+@_jit
+def _orthogonalise_rows(x: FloatArray, y: FloatArray) -> None:
+    r"""One-sided Jacobi (Hestenes) SVD in place: ``x ← Qᵀx``, ``y ← Qᵀy``.
+
+    Plane rotations (a product Q) make the rows of ``x`` mutually orthogonal.
+    With ``y`` the identity on entry, :math:`x = \sum_k y_k^T x_k` over the
+    rows after the call, and the norms of the rows ``x_k`` are the singular
+    values. Accurate to rounding (Demmel & Veselić 1992); 6 to 8 sweeps for
+    a 6 × 6 Jacobian, cheaper than a LAPACK call at that size.
+    """
+    n, m = x.shape
+    norms2 = np.empty(n)
+    for _ in range(JACOBI_MAX_SWEEPS):
+        for k in range(n):  # recomputed each sweep: no drift from the updates
+            norms2[k] = _dot(x[k], x[k])
+        rotated = False
+        for p in range(n - 1):
+            for q in range(p + 1, n):
+                gamma = _dot(x[p], x[q])
+                alpha, beta = norms2[p], norms2[q]
+                if abs(gamma) <= JACOBI_TOL * math.sqrt(alpha * beta):
+                    continue  # orthogonal already (also when a row is zero)
+                rotated = True
+                zeta = (beta - alpha) / (2.0 * gamma)  # rotation zeroing gamma
+                if abs(zeta) < 1e150:
+                    t = math.copysign(1.0, zeta) / (
+                        abs(zeta) + math.sqrt(1.0 + zeta**2)
+                    )
+                else:
+                    t = 0.5 / zeta
+                c = 1.0 / math.sqrt(1.0 + t * t)
+                s = c * t
+                norms2[p], norms2[q] = alpha - t * gamma, beta + t * gamma
+                for i in range(m):
+                    a, b = x[p, i], x[q, i]
+                    x[p, i], x[q, i] = c * a - s * b, s * a + c * b
+                for i in range(n):
+                    a, b = y[p, i], y[q, i]
+                    y[p, i], y[q, i] = c * a - s * b, s * a + c * b
+        if not rotated:
+            return
+
+
 @_jit
 def damped_solve(
     jacobian: FloatArray,
@@ -128,8 +186,13 @@ def damped_solve(
 ) -> None:
     r"""DLS solution about a reference: :math:`\dot q_r + J^\#(\dot x - J\dot q_r)`.
 
-    :math:`J^\#` as :func:`workbench.ik.dls_inverse` (SVD, the damping law of
-    :func:`workbench.ik.damped.dls_gains`).
+    :math:`J^\#` as :func:`workbench.ik.dls_inverse`, with the damping law of
+    :func:`workbench.ik.damped.dls_damping`, from a one-sided Jacobi SVD of a
+    tall or square J, :math:`J = \sum_k w_k v_k^T` with orthogonal
+    :math:`w_k = \sigma_k u_k` (of :math:`J^T` for a wide J):
+
+    .. math:: J^\# r = \sum_k \frac{\sigma_k\, u_k^T r}{\sigma_k^2 + \lambda^2} v_k
+              = \sum_k \frac{w_k^T r}{\|w_k\|^2 + \lambda^2} v_k .
 
     Args:
         jacobian: (6, nv).
@@ -139,9 +202,24 @@ def damped_solve(
         qd_reference: (nv,) [rad/s], the velocity damped towards.
         qd: (nv,) output [rad/s].
     """
-    u, sigma, vt = np.linalg.svd(jacobian, full_matrices=False)
-    residual = u.T @ (twist - jacobian @ qd_reference)
-    qd[:] = qd_reference + vt.T @ (dls_gains(sigma, epsilon, lambda_max) * residual)
+    rows, cols = jacobian.shape
+    residual = twist - jacobian @ qd_reference
+    wide = cols > rows
+    # rows of x: w_k (the columns of J V), or of J^T V for a wide J
+    x = jacobian.copy() if wide else jacobian.T.copy()
+    y = np.eye(x.shape[0])
+    _orthogonalise_rows(x, y)
+    norms2 = np.array([_dot(x[k], x[k]) for k in range(x.shape[0])])
+    lambda2 = dls_damping(norms2.min(), epsilon, lambda_max)
+    qd[:] = qd_reference
+    for k in range(x.shape[0]):
+        denominator = norms2[k] + lambda2
+        if denominator <= 0.0:
+            continue
+        if wide:  # J = sum_k y_k x_k^T
+            qd += x[k] * (_dot(y[k], residual) / denominator)
+        else:  # J = sum_k x_k y_k^T
+            qd += y[k] * (_dot(x[k], residual) / denominator)
 
 
 def solve_velocity(

@@ -30,6 +30,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
+from workbench.errors import InputError
 from workbench.poses import as_rotation
 from workbench.trajectory.cartesian_paths import (
     ZERO_TOL,
@@ -52,23 +53,57 @@ from workbench.trajectory.trapezoidal_profile import (
     replan_trapezoid,
     stopping_profile,
 )
+from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]
 
 
-def _unit(x: FloatArray) -> tuple[FloatArray, float]:
-    norm = float(math.hypot(*x))
-    return (x / norm if norm > ZERO_TOL else x * 0.0), norm
+def _unit(x: list[float]) -> tuple[list[float], float]:
+    """Unit vector along ``x`` and its norm; zero below ``ZERO_TOL``.
+
+    Plain floats: replanning runs in one planning cycle, where numpy calls on
+    3-vectors cost microseconds each.
+    """
+    norm = math.hypot(*x)
+    if norm <= ZERO_TOL:
+        return [0.0, 0.0, 0.0], norm
+    return [c / norm for c in x], norm
 
 
-def _with_residual(
-    path: PositionPath, residual: FloatArray, vmax: float, amax: float
+def split_velocity(
+    velocity: list[float], direction: list[float]
+) -> tuple[float, list[float], float]:
+    """Split a velocity (3 floats) about a unit ``direction`` (3 floats).
+
+    Returns:
+        ``(along, rest_direction, rest_speed)``: the speed along
+        ``direction``, and the unit vector and norm of the remainder (zero
+        vector below ``ZERO_TOL``).
+    """
+    (vx, vy, vz), (ex, ey, ez) = velocity, direction
+    along = vx * ex + vy * ey + vz * ez
+    rest, speed = _unit([vx - along * ex, vy - along * ey, vz - along * ez])
+    return along, rest, speed
+
+
+def add_residual(
+    path: PositionPath,
+    direction: list[float],
+    speed: float,
+    max_velocity: float,
+    max_acceleration: float,
 ) -> PositionPath:
-    direction, speed = _unit(residual)
+    """``path`` plus a residual that starts at ``speed`` along ``direction``.
+
+    The residual decelerates at ``max_acceleration`` and comes back to zero
+    offset; none when ``speed`` is below ``ZERO_TOL``.
+    """
     if speed <= ZERO_TOL:
         return path
-    back = replan_trapezoid(0.0, vmax, amax, initial_velocity=speed)
-    return OffsetPath(path, direction, back)
+    back = replan_trapezoid(
+        0.0, max_velocity, max_acceleration, initial_velocity=speed, check=False
+    )
+    return OffsetPath(path, np.array(direction), back)
 
 
 def plan_line(
@@ -83,24 +118,27 @@ def plan_line(
 
     The tip arrives at ``final_velocity`` [m/s] along the line. The part of the
     current velocity across the line is brought back to zero by a residual.
+    Arguments are trusted (finite; the primitives check them when built).
     """
-    delta = np.asarray(goal, dtype=np.float64) - state.position
+    start, velocity = state.position.tolist(), state.velocity.tolist()
+    (gx, gy, gz), (px, py, pz) = goal.tolist(), start
+    delta = [gx - px, gy - py, gz - pz]
     direction, distance = _unit(delta)
     if distance <= ZERO_TOL:
-        direction, _ = _unit(state.velocity)
-        if not direction.any():
-            direction = np.array([1.0, 0.0, 0.0])
-    along = float(state.velocity @ direction)
+        direction, _ = _unit(velocity)
+        if not any(direction):
+            direction = [1.0, 0.0, 0.0]
+    along, rest, speed = split_velocity(velocity, direction)
     profile = replan_trapezoid(
         distance,
         max_velocity,
         max_acceleration,
         initial_velocity=along,
         final_velocity=final_velocity,
+        check=False,
     )
-    line = LinePath(state.position.copy(), direction, profile)
-    residual = state.velocity - along * direction
-    return _with_residual(line, residual, max_velocity, max_acceleration)
+    line = LinePath(state.position.copy(), np.array(direction), profile)
+    return add_residual(line, rest, speed, max_velocity, max_acceleration)
 
 
 def plan_rotation(
@@ -116,29 +154,41 @@ def plan_rotation(
     """
     goal = as_rotation(goal, "goal rotation")
     axis, angle = compute_relative_axis_angle(state.rotation, goal, check=False)
-    omega = state.angular_velocity
+    omega = state.angular_velocity.tolist()
     if angle <= ZERO_TOL and math.hypot(*omega) > ZERO_TOL:
-        axis, _ = _unit(state.rotation.T @ omega)
+        axis = np.array(_unit((state.rotation.T @ state.angular_velocity).tolist())[0])
     axis_base = state.rotation @ axis
-    along = float(omega @ axis_base)
+    along, turn_axis, speed = split_velocity(omega, axis_base.tolist())
     profile = replan_trapezoid(
-        angle, max_velocity, max_acceleration, initial_velocity=along
+        angle, max_velocity, max_acceleration, initial_velocity=along, check=False
     )
     path: OrientationPath = OrientationProfile(
-        state.rotation.copy(),
-        goal.copy(),
-        axis,
-        axis_base,
-        angle,
-        profile,
+        state.rotation.copy(), goal.copy(), axis, axis_base, angle, profile
     )
-    turn_axis, speed = _unit(omega - along * axis_base)
     if speed > ZERO_TOL:
         back = replan_trapezoid(
-            0.0, max_velocity, max_acceleration, initial_velocity=speed
+            0.0, max_velocity, max_acceleration, initial_velocity=speed, check=False
         )
-        path = TurnedOrientation(path, turn_axis, back)
+        path = TurnedOrientation(path, np.array(turn_axis), back)
     return path
+
+
+def hold_rotation(
+    state: CartesianState, max_velocity: float, max_acceleration: float
+) -> OrientationPath:
+    """Keep the state's orientation: :func:`plan_rotation` to ``state.rotation``.
+
+    At rest it is held fixed; a spinning tool stops at full deceleration and
+    turns back to it.
+    """
+    rotation = FixedOrientation(state.rotation.copy())
+    axis, spin = _unit(state.angular_velocity.tolist())
+    if spin <= ZERO_TOL:
+        return rotation
+    back = replan_trapezoid(
+        0.0, max_velocity, max_acceleration, initial_velocity=spin, check=False
+    )
+    return TurnedOrientation(rotation, np.array(axis), back)
 
 
 def plan_move(
@@ -161,18 +211,27 @@ def plan_move(
 
     Returns:
         The motion; position and orientation end at their own instants.
+
+    Raises:
+        InputError: If the goal is not a finite position and a rotation, or
+            ``final_velocity`` is out of range (``NonFiniteError`` on NaN).
     """
+    vmax = limits.max_velocity
+    if not 0.0 <= final_velocity <= vmax:  # also False for NaN
+        raise InputError(
+            f"final_velocity must be in [0, {vmax:g}], got {final_velocity!r}"
+        )
     return CartesianMotion(
         plan_line(
             state,
-            np.asarray(position, dtype=np.float64),
+            as_vector(position, 3, "position"),
             limits.max_velocity,
             limits.max_acceleration,
             final_velocity=final_velocity,
         ),
         plan_rotation(
             state,
-            np.asarray(rotation, dtype=np.float64),
+            rotation,
             limits.max_angular_velocity,
             limits.max_angular_acceleration,
         ),
@@ -185,17 +244,25 @@ def plan_stop(state: CartesianState, limits: CartesianLimits) -> CartesianMotion
     The tip keeps its direction of motion and its axis of rotation while it
     decelerates, so the stop is as short as the bounds allow.
     """
-    direction, speed = _unit(state.velocity)
+    direction, speed = _unit(state.velocity.tolist())
     position: PositionPath = FixedPosition(state.position.copy())
     if speed > ZERO_TOL:
-        profile = stopping_profile(speed, limits.max_acceleration)
-        position = LinePath(state.position.copy(), direction, profile)
-    axis, spin = _unit(state.angular_velocity)
+        profile = stopping_profile(speed, limits.max_acceleration, check=False)
+        position = LinePath(state.position.copy(), np.array(direction), profile)
+    axis, spin = _unit(state.angular_velocity.tolist())
     orientation: OrientationPath = FixedOrientation(state.rotation.copy())
     if spin > ZERO_TOL:
-        profile = stopping_profile(spin, limits.max_angular_acceleration)
-        orientation = TurnedOrientation(orientation, axis, profile)
+        profile = stopping_profile(spin, limits.max_angular_acceleration, check=False)
+        orientation = TurnedOrientation(orientation, np.array(axis), profile)
     return CartesianMotion(position, orientation)
 
 
-__all__ = ["plan_line", "plan_move", "plan_rotation", "plan_stop"]
+__all__ = [
+    "add_residual",
+    "hold_rotation",
+    "plan_line",
+    "plan_move",
+    "plan_rotation",
+    "plan_stop",
+    "split_velocity",
+]

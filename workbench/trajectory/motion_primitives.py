@@ -25,10 +25,12 @@ import numpy.typing as npt
 
 from workbench.errors import InputError
 from workbench.trajectory.cartesian_motion import (
+    add_residual,
+    hold_rotation,
     plan_line,
     plan_move,
-    plan_rotation,
     plan_stop,
+    split_velocity,
 )
 from workbench.trajectory.cartesian_paths import (
     ArcPath,
@@ -37,8 +39,6 @@ from workbench.trajectory.cartesian_paths import (
     CartesianState,
     FixedOrientation,
     FixedPosition,
-    OffsetPath,
-    PositionPath,
 )
 from workbench.trajectory.trapezoidal_profile import replan_trapezoid
 from workbench.validation import as_finite_array, as_vector
@@ -210,11 +210,8 @@ class StraightLine(MotionPrimitive):
                 limits.max_acceleration,
                 final_velocity=vmax if self.end_at_speed else 0.0,
             ),
-            plan_rotation(
-                state,
-                state.rotation,
-                limits.max_angular_velocity,
-                limits.max_angular_acceleration,
+            hold_rotation(
+                state, limits.max_angular_velocity, limits.max_angular_acceleration
             ),
         )
 
@@ -255,8 +252,11 @@ class SemiCircleUp(MotionPrimitive):
             InputError: If the goal is not at the start's height or coincides
                 with the start.
         """
-        chord = self.position - state.position
-        rise = float(chord @ self.up)
+        start, velocity = state.position.tolist(), state.velocity.tolist()
+        (gx, gy, gz), (px, py, pz) = self.position.tolist(), start
+        chord = [gx - px, gy - py, gz - pz]
+        up = self.up.tolist()
+        rise = chord[0] * up[0] + chord[1] * up[1] + chord[2] * up[2]
         if abs(rise) > LEVEL_TOL:
             raise InputError(
                 f"SemiCircleUp needs its ends at one height; the goal is {rise:.6g} m "
@@ -265,30 +265,24 @@ class SemiCircleUp(MotionPrimitive):
         radius = 0.5 * math.hypot(*chord)
         if radius <= LEVEL_TOL:
             raise InputError("SemiCircleUp needs a goal away from the start")
-        center = state.position + 0.5 * chord
-        radial = (state.position - center) / radius
-        along = float(state.velocity @ self.up)
-        vmax = limits.max_velocity
+        center = np.array(
+            [px + 0.5 * chord[0], py + 0.5 * chord[1], pz + 0.5 * chord[2]]
+        )
+        radial = np.array([-0.5 * c / radius for c in chord])
+        along, rest, speed = split_velocity(velocity, up)
+        vmax, amax = limits.max_velocity, limits.max_acceleration
         profile = replan_trapezoid(
             math.pi * radius,
             vmax,
-            limits.max_acceleration,
+            amax,
             initial_velocity=along,
             final_velocity=vmax if self.end_at_speed else 0.0,
+            check=False,
         )
-        path: PositionPath = ArcPath(center, radial, self.up.copy(), radius, profile)
-        residual = state.velocity - along * self.up
-        speed = math.hypot(*residual)
-        if speed > 1e-12:
-            back = replan_trapezoid(
-                0.0, vmax, limits.max_acceleration, initial_velocity=speed
-            )
-            path = OffsetPath(path, residual / speed, back)
-        orientation = plan_rotation(
-            state,
-            state.rotation,
-            limits.max_angular_velocity,
-            limits.max_angular_acceleration,
+        arc = ArcPath(center, radial, self.up.copy(), radius, profile)
+        path = add_residual(arc, rest, speed, vmax, amax)
+        orientation = hold_rotation(
+            state, limits.max_angular_velocity, limits.max_angular_acceleration
         )
         return CartesianMotion(path, orientation)
 

@@ -268,6 +268,7 @@ def replan_trapezoid(
     *,
     initial_velocity: float,
     final_velocity: float = 0.0,
+    check: bool = True,
 ) -> TrapezoidalProfile:
     """Time-optimal profile from a moving state to ``distance`` at ``final_velocity``.
 
@@ -284,30 +285,36 @@ def replan_trapezoid(
         max_acceleration: Acceleration bound, > 0.
         initial_velocity: Signed speed at t = 0, any finite value.
         final_velocity: Signed speed at the end, ``|vf| <= max_velocity``.
+        check: Validate the arguments; False skips that for floats known to
+            be valid (the online planner's replanning path).
 
     Raises:
         NonFiniteError: If an argument is NaN or infinite.
         InputError: If a limit is <= 0 or ``|final_velocity| > max_velocity``.
     """
-    d = _finite(distance, "distance")
-    vmax = _positive(max_velocity, "max_velocity")
-    amax = _positive(max_acceleration, "max_acceleration")
-    v0 = _finite(initial_velocity, "initial_velocity")
-    vf = _finite(final_velocity, "final_velocity")
-    if abs(vf) > vmax:
-        raise InputError(f"|final_velocity| must be <= {vmax:g}, got {vf:g}")
+    d, vmax, amax = distance, max_velocity, max_acceleration
+    v0, vf = initial_velocity, final_velocity
+    if check:
+        d = _finite(distance, "distance")
+        vmax = _positive(max_velocity, "max_velocity")
+        amax = _positive(max_acceleration, "max_acceleration")
+        v0 = _finite(initial_velocity, "initial_velocity")
+        vf = _finite(final_velocity, "final_velocity")
+        if abs(vf) > vmax:
+            raise InputError(f"|final_velocity| must be <= {vmax:g}, got {vf:g}")
     phases, _ = _phases(d, v0, vf, vmax, amax)
     return _build(phases, v0, vf, distance=d)
 
 
 def stopping_profile(
-    initial_velocity: float, max_acceleration: float
+    initial_velocity: float, max_acceleration: float, *, check: bool = True
 ) -> TrapezoidalProfile:
     """Stop from ``initial_velocity`` at full deceleration (one phase).
 
     Args:
         initial_velocity: Signed speed at t = 0 [m/s or rad/s].
         max_acceleration: Deceleration, > 0.
+        check: Validate the arguments (False: as in :func:`replan_trapezoid`).
 
     Returns:
         A profile of duration ``|v0| / a`` ending at rest after
@@ -317,8 +324,10 @@ def stopping_profile(
         NonFiniteError: If an argument is NaN or infinite.
         InputError: If ``max_acceleration`` <= 0.
     """
-    v0 = _finite(initial_velocity, "initial_velocity")
-    amax = _positive(max_acceleration, "max_acceleration")
+    v0, amax = initial_velocity, max_acceleration
+    if check:
+        v0 = _finite(initial_velocity, "initial_velocity")
+        amax = _positive(max_acceleration, "max_acceleration")
     return _build([(abs(v0) / amax, -math.copysign(amax, v0))], v0, 0.0)
 
 
