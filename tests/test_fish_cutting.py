@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import json
 import math
 
@@ -145,6 +146,20 @@ def test_runs_are_deterministic_per_seed():
     assert not np.allclose(
         a.sample_profiles(y)[1], c.sample_profiles(y)[1], equal_nan=True
     )
+
+
+def test_run_makes_no_reference_cycles_and_restores_the_collector(puma_kang):
+    """The cycle loop pauses the cyclic GC; that is safe only without cycles."""
+    gc.collect()
+    gc.disable()
+    try:
+        run_fish_cutting(puma_kang, SimulatedFish(seed=2), SETUP)
+        assert not gc.isenabled()  # left as it was
+        assert gc.collect() == 0  # nothing only the collector could free
+    finally:
+        gc.enable()
+    run_fish_cutting(puma_kang, SimulatedFish(seed=2), SETUP)
+    assert gc.isenabled()
 
 
 def test_fish_contacts():

@@ -237,6 +237,12 @@ def test_events_and_goals_are_validated(puma_kang):
         planner.set_goal([np.nan, 0.0, 0.0], np.eye(3))
     with pytest.raises(InputError, match="not a MotionPrimitive"):
         planner.append("PTP")
+    state, active = planner.state, planner.active
+    with pytest.raises(InputError, match="rotation"):  # checked before it runs
+        planner.set_goal(state.position, 2.0 * np.eye(3))
+    with pytest.raises(InputError, match="rotation"):
+        PointToPoint(state.position, np.diag([1.0, 1.0, -1.0]))
+    assert planner.state is state and planner.active is active  # nothing changed
     planner.set_goal([2.0, 0.0, 0.0], planner.state.rotation)  # out of reach
     with pytest.raises(InfeasibleError, match="reach"):
         for _ in range(2000):

@@ -146,13 +146,17 @@ def plan_rotation(
     goal: FloatArray,
     max_velocity: float,
     max_acceleration: float,
+    *,
+    check: bool = True,
 ) -> OrientationPath:
     """Shortest rotation from the state's orientation to ``goal`` (3, 3), at rest.
 
     ``state.rotation`` is taken as a rotation (the planner's own state); the
-    goal is checked (``InputError`` if it is not a rotation).
+    goal is checked (``InputError`` if it is not a rotation) unless ``check``
+    is False (a goal checked before).
     """
-    goal = as_rotation(goal, "goal rotation")
+    if check:
+        goal = as_rotation(goal, "goal rotation")
     axis, angle = compute_relative_axis_angle(state.rotation, goal, check=False)
     omega = state.angular_velocity.tolist()
     if angle <= ZERO_TOL and math.hypot(*omega) > ZERO_TOL:
@@ -198,6 +202,7 @@ def plan_move(
     limits: CartesianLimits,
     *,
     final_velocity: float = 0.0,
+    check: bool = True,
 ) -> CartesianMotion:
     """Move from a moving state to a pose: straight line and shortest rotation.
 
@@ -208,6 +213,8 @@ def plan_move(
         limits: Cartesian bounds.
         final_velocity: Speed [m/s] along the line at the goal, in
             ``[0, limits.max_velocity]``; the rotation always ends at rest.
+        check: Validate the goal and ``final_velocity``; False for a goal
+            checked before (float arrays, a rotation; the planner's primitives).
 
     Returns:
         The motion; position and orientation end at their own instants.
@@ -216,24 +223,27 @@ def plan_move(
         InputError: If the goal is not a finite position and a rotation, or
             ``final_velocity`` is out of range (``NonFiniteError`` on NaN).
     """
-    vmax = limits.max_velocity
-    if not 0.0 <= final_velocity <= vmax:  # also False for NaN
-        raise InputError(
-            f"final_velocity must be in [0, {vmax:g}], got {final_velocity!r}"
-        )
+    if check:
+        vmax = limits.max_velocity
+        if not 0.0 <= final_velocity <= vmax:  # also False for NaN
+            raise InputError(
+                f"final_velocity must be in [0, {vmax:g}], got {final_velocity!r}"
+            )
+        position = as_vector(position, 3, "position")
     return CartesianMotion(
         plan_line(
             state,
-            as_vector(position, 3, "position"),
+            position,  # type: ignore[arg-type]
             limits.max_velocity,
             limits.max_acceleration,
             final_velocity=final_velocity,
         ),
         plan_rotation(
             state,
-            rotation,
+            rotation,  # type: ignore[arg-type]
             limits.max_angular_velocity,
             limits.max_angular_acceleration,
+            check=check,
         ),
     )
 

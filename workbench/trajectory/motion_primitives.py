@@ -24,6 +24,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
+from workbench.poses import as_rotation
 from workbench.trajectory.cartesian_motion import (
     add_residual,
     hold_rotation,
@@ -41,7 +42,7 @@ from workbench.trajectory.cartesian_paths import (
     FixedPosition,
 )
 from workbench.trajectory.trapezoidal_profile import replan_trapezoid
-from workbench.validation import as_finite_array, as_vector
+from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -165,16 +166,19 @@ class PointToPoint(MotionPrimitive):
     Args:
         position: Goal position (3,) [m], in the planner's frame.
         rotation: Goal orientation (3, 3).
+
+    Raises:
+        InputError: If the goal is not a finite position and a rotation.
     """
 
     def __init__(self, position: npt.ArrayLike, rotation: npt.ArrayLike) -> None:
         super().__init__()
         self.position = _goal(position)
-        self.rotation = as_finite_array(rotation, (3, 3), "rotation").copy()
+        self.rotation = as_rotation(rotation, "rotation").copy()
 
     def plan(self, state: CartesianState, limits: CartesianLimits) -> CartesianMotion:
         """Plan from ``state``; see :func:`plan_move`."""
-        return plan_move(state, self.position, self.rotation, limits)
+        return plan_move(state, self.position, self.rotation, limits, check=False)
 
 
 class StraightLine(MotionPrimitive):

@@ -142,63 +142,62 @@ def _positive(value: float, name: str) -> float:
 
 
 def _build(
-    phases: list[tuple[float, float]],
-    v0: float,
-    vf: float,
-    *,
-    distance: float | None = None,
+    phases: list[tuple[float, float]], v0: float, vf: float, distance: float
 ) -> TrapezoidalProfile:
-    """Profile from (duration, acceleration) phases; zero-length phases dropped."""
+    """Profile from (duration, acceleration) phases; zero-length phases dropped.
+
+    The end state is set to exactly (``distance``, ``vf``), removing the
+    rounding of the sums.
+    """
     times, positions, velocities, accelerations = [0.0], [0.0], [v0], []
+    t = s = 0.0
+    v = v0
     for dt, a in phases:
-        if dt <= 0.0:
-            continue
-        v = velocities[-1]
-        times.append(times[-1] + dt)
-        positions.append(positions[-1] + (v + 0.5 * a * dt) * dt)
-        velocities.append(v + a * dt)
-        accelerations.append(a)
-    velocities[-1] = vf  # remove the rounding of the sums: end exactly there
-    if distance is not None and len(positions) > 1:
-        positions[-1] = distance
+        if dt > 0.0:
+            t += dt
+            s += (v + 0.5 * a * dt) * dt
+            v += a * dt
+            times.append(t)
+            positions.append(s)
+            velocities.append(v)
+            accelerations.append(a)
+    if accelerations:
+        positions[-1], velocities[-1] = distance, vf
     return TrapezoidalProfile(
         tuple(times), tuple(positions), tuple(velocities), tuple(accelerations)
     )
 
 
-def _phases(
+def _time_optimal(
     distance: float, v0: float, vf: float, vmax: float, amax: float
-) -> tuple[list[tuple[float, float]], float]:
-    """Time-optimal phases from (0, v0) to (distance, vf), |vf| <= vmax.
+) -> TrapezoidalProfile:
+    """Time-optimal profile from (0, v0) to (distance, vf), |vf| <= vmax.
 
-    Returns the phases and the signed extreme speed of the middle phase.
+    Arguments trusted: finite, ``vmax`` and ``amax`` > 0.
     """
+    v_start, d = v0, distance
     phases: list[tuple[float, float]] = []
     if abs(v0) > vmax:  # first get back within the speed bound
         v1 = math.copysign(vmax, v0)
         dt = (abs(v0) - vmax) / amax
         phases.append((dt, -math.copysign(amax, v0)))
-        distance -= 0.5 * (v0 + v1) * dt
+        d -= 0.5 * (v0 + v1) * dt
         v0 = v1
     direct = 0.5 * (v0 + vf) * abs(vf - v0) / amax  # one phase v0 -> vf
-    if distance >= direct:  # peak above both end speeds
-        peak = min(
-            math.sqrt(max(amax * distance + 0.5 * (v0 * v0 + vf * vf), 0.0)), vmax
-        )
+    if d >= direct:  # peak above both end speeds
+        peak = min(math.sqrt(max(amax * d + 0.5 * (v0 * v0 + vf * vf), 0.0)), vmax)
         peak = max(peak, v0, vf)
         sign = 1.0
     else:  # valley below both: move backwards (overshoot) first
-        peak = -min(
-            math.sqrt(max(0.5 * (v0 * v0 + vf * vf) - amax * distance, 0.0)), vmax
-        )
+        peak = -min(math.sqrt(max(0.5 * (v0 * v0 + vf * vf) - amax * d, 0.0)), vmax)
         peak = min(peak, v0, vf)
         sign = -1.0
     t1 = sign * (peak - v0) / amax
     t3 = sign * (peak - vf) / amax
     d13 = 0.5 * (v0 + peak) * t1 + 0.5 * (peak + vf) * t3
-    cruise = (distance - d13) / peak if peak != 0.0 else 0.0
+    cruise = (d - d13) / peak if peak != 0.0 else 0.0
     phases += [(t1, sign * amax), (max(cruise, 0.0), 0.0), (t3, -sign * amax)]
-    return phases, peak
+    return _build(phases, v_start, vf, distance)
 
 
 def trapezoid(
@@ -255,10 +254,8 @@ def trapezoid(
             f"max_acceleration {amax:g}: needs >= {needed:g}"
         )
     if d <= needed:  # exactly one ramp (or nothing)
-        phases = [(abs(vf - v0) / amax, math.copysign(amax, vf - v0))]
-    else:
-        phases, _ = _phases(d, v0, vf, vmax, amax)
-    return _build(phases, v0, vf, distance=d)
+        return _build([(abs(vf - v0) / amax, math.copysign(amax, vf - v0))], v0, vf, d)
+    return _time_optimal(d, v0, vf, vmax, amax)
 
 
 def replan_trapezoid(
@@ -302,8 +299,7 @@ def replan_trapezoid(
         vf = _finite(final_velocity, "final_velocity")
         if abs(vf) > vmax:
             raise InputError(f"|final_velocity| must be <= {vmax:g}, got {vf:g}")
-    phases, _ = _phases(d, v0, vf, vmax, amax)
-    return _build(phases, v0, vf, distance=d)
+    return _time_optimal(d, v0, vf, vmax, amax)
 
 
 def stopping_profile(
@@ -328,7 +324,8 @@ def stopping_profile(
     if check:
         v0 = _finite(initial_velocity, "initial_velocity")
         amax = _positive(max_acceleration, "max_acceleration")
-    return _build([(abs(v0) / amax, -math.copysign(amax, v0))], v0, 0.0)
+    ramp = (abs(v0) / amax, -math.copysign(amax, v0))
+    return _build([ramp], v0, 0.0, v0 * abs(v0) / (2.0 * amax))
 
 
 __all__ = [
