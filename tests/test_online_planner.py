@@ -312,12 +312,15 @@ def test_samples_say_which_cycles_planned_a_motion(puma_kang):
 def test_cycle_solves_a_pose_only_the_exact_rigidity_checks_accept(puma_kang):
     """Between the kernel's quick test and RIGIDITY_TOL: solved, not rejected."""
     planner = _planner(puma_kang)
-    pose = puma_kang.fk(planner.q).homogeneous
-    q_rigid, index, _ = planner._solve_ik(pose)
-    pose[:3, 0] *= 1.0 + 3e-7  # |x| - 1 past the quick test, within RIGIDITY_TOL
-    q, index_scaled, _ = planner._solve_ik(pose)
+    state, zero = planner.state, np.zeros(3)
+    rotation = state.rotation.copy()
+    _, q_rigid, index, _ = planner._command_joints(state.position, zero, rotation, zero)
+    rotation[:, 0] *= 1.0 + 3e-7  # |x| - 1 past the quick test, within RIGIDITY_TOL
+    _, q, index_scaled, _ = planner._command_joints(
+        state.position, zero, rotation, zero
+    )
     assert index_scaled == index
     np.testing.assert_allclose(q, q_rigid, atol=1e-5)
-    pose[:3, 0] *= 1.0 + 1e-5  # beyond RIGIDITY_TOL
+    rotation[:, 0] *= 1.0 + 1e-5  # beyond RIGIDITY_TOL
     with pytest.raises(InputError, match="orthonormal"):
-        planner._solve_ik(pose)
+        planner._command_joints(state.position, zero, rotation, zero)

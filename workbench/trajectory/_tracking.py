@@ -3,7 +3,8 @@
 Step 2 turns the tool-tip command into the wrist-centre command in the base
 frame; step 3 solves the closed-form IK and keeps the branch that continues
 the motion. Both run once per planning cycle, so they are compiled with Numba
-(the same arithmetic in Python costs several times more than the IK itself).
+(the same arithmetic in Python costs several times more than the IK itself)
+and called together (:func:`command_joints`, one call per cycle).
 """
 
 from __future__ import annotations
@@ -134,3 +135,54 @@ def track(
         return status, q_pred, -1, False
     index = kernel.continuing_branch(q_all, q_pred, pair, max_step2)
     return status, q_all[index].copy(), index, flags[index]
+
+
+@_jit
+def command_joints(
+    rotation: FloatArray,
+    position: FloatArray,
+    velocity: FloatArray,
+    angular_velocity: FloatArray,
+    frames: FloatArray,
+    geometry: np.ndarray,
+    q: FloatArray,
+    q_before: FloatArray,
+    pair: int,
+    max_step2: float,
+    pose: FloatArray,
+    twist: FloatArray,
+) -> tuple[int, FloatArray, int, bool]:
+    """:func:`wrist_command` then :func:`track`, in one call.
+
+    Args:
+        rotation: (3, 3) tool-tip orientation, world frame.
+        position: (3,) tool-tip position [m], world frame.
+        velocity: (3,) [m/s], world axes.
+        angular_velocity: (3,) [rad/s], world axes.
+        frames: (8, 3): ``tip_rotation_t`` (rows 0-2), ``tip_back`` (3),
+            ``base_rotation`` (4-6), ``base_position`` (7) of
+            :func:`wrist_command`.
+        geometry: ``_puma_kernel.packed_geometry(robot)``.
+        q: (6,) last joint command [rad].
+        q_before: (6,) the one before it [rad].
+        pair: (Arm, elbow) pair of the last command's branch.
+        max_step2: Largest squared joint step [rad²] that keeps the pair.
+        pose: (4, 4) output, wrist-centre pose in the base frame.
+        twist: (6,) output [m/s, rad/s], linear first, base axes.
+
+    Returns:
+        As :func:`track` (with its quick rigidity test).
+    """
+    wrist_command(
+        rotation,
+        position,
+        velocity,
+        angular_velocity,
+        frames[0:3],
+        frames[3],
+        frames[4:7],
+        frames[7],
+        pose,
+        twist,
+    )
+    return track(geometry, pose, q, q_before, pair, max_step2, True)

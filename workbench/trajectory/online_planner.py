@@ -43,7 +43,7 @@ from workbench.ik.closed_form import BRANCHES, analytic, nearest, solve_one
 from workbench.ik.damped import DLS_EPSILON, DLS_LAMBDA_MAX, dls_inverse
 from workbench.robot import Robot
 from workbench.trajectory._inverse_velocity import solve_velocity
-from workbench.trajectory._tracking import track, wrist_command
+from workbench.trajectory._tracking import command_joints, track
 from workbench.trajectory.cartesian_paths import (
     ZERO_TOL,
     CartesianLimits,
@@ -178,9 +178,8 @@ class OnlinePlanner:
         self._min_speed_limit = float(self._speed_limit.min())
         # squared joint step of two cycles at the speed limits (branch selection)
         self._max_step2 = float(np.sum((2.0 * self.period * robot.velocity_limit) ** 2))
-        # the frames of _tracking.wrist_command
-        self._tip_rotation_t, self._tip_back = tip[0].T.copy(), -tip[1]
-        self._base_rotation, self._base_position = base
+        # the frames of _tracking.command_joints
+        self._frames = np.vstack([tip[0].T, -tip[1], base[0], base[1]])
         self._geometry = kernel.packed_geometry(robot)
         oMf = robot.fk(q0)
         p = oMf.translation + oMf.rotation @ tip[1]
@@ -289,8 +288,7 @@ class OnlinePlanner:
                 primitive.begin(end, t_end, self.limits)
         self._active = primitive
         p, v, rotation, omega = primitive.sample(t)
-        pose, twist = self._to_wrist_in_base(p, v, rotation, omega)
-        q, index, within = self._solve_ik(pose)
+        twist, q, index, within = self._command_joints(p, v, rotation, omega)
         if not within:
             self._check_position(q, t)
         jacobian = pin.computeFrameJacobian(
@@ -313,16 +311,35 @@ class OnlinePlanner:
             t, p, v, rotation, omega, q, qd, BRANCHES[index], damped, replanned
         )
 
-    def _solve_ik(self, pose: FloatArray) -> tuple[FloatArray, int, bool]:
-        """The IK solution continuing the motion (``_tracking.track``).
+    def _command_joints(
+        self, p: FloatArray, v: FloatArray, rotation: FloatArray, omega: FloatArray
+    ) -> tuple[FloatArray, FloatArray, int, bool]:
+        """Tip command (world) -> wrist twist (base axes) and joint command.
+
+        Steps 2 and 3 of the cycle (``_tracking.command_joints``): the
+        wrist-centre command in the base frame, then the IK solution that
+        continues the motion.
 
         Returns:
-            ``(q, branch index, within limits)``, ``q`` read-only.
+            ``(twist, q, branch index, within limits)``: the wrist-centre twist
+            (6,) [m/s, rad/s], linear first, base axes; ``q`` read-only.
         """
         q_before = self._q if self._q_before is None else self._q_before
         pair = self._branch >> 1
-        status, q, index, within = track(
-            self._geometry, pose, self._q, q_before, pair, self._max_step2
+        pose, twist = np.empty((4, 4)), np.empty(6)
+        status, q, index, within = command_joints(
+            rotation,
+            p,
+            v,
+            omega,
+            self._frames,
+            self._geometry,
+            self._q,
+            q_before,
+            pair,
+            self._max_step2,
+            pose,
+            twist,
         )
         if status != kernel.OK:  # solve_one raises the error, or accepts a pose
             # that only the exact rigidity checks pass: solve it unchecked
@@ -331,7 +348,7 @@ class OnlinePlanner:
                 self._geometry, pose, self._q, q_before, pair, self._max_step2, False
             )
         q.setflags(write=False)
-        return q, index, within
+        return twist, q, index, within
 
     def _position_rate(self, q: FloatArray, twist: FloatArray) -> FloatArray:
         """Rate of the joint position commands ending at ``q``: the DLS reference.
@@ -352,30 +369,6 @@ class OnlinePlanner:
             lim = float(self.robot.velocity_limit[j])
             name = self.robot.joint_names[j]
             raise JointLimitError(name, float(qd[j]), -lim, lim, t=t, kind="velocity")
-
-    def _to_wrist_in_base(
-        self, p: FloatArray, v: FloatArray, rotation: FloatArray, omega: FloatArray
-    ) -> tuple[FloatArray, FloatArray]:
-        """Tip command (world) -> wrist-centre pose (base) and twist (base axes).
-
-        Returns:
-            The (4, 4) homogeneous matrix of the wrist centre in the base frame
-            and the twist (6,) [m/s, rad/s], linear first.
-        """
-        pose, twist = np.empty((4, 4)), np.empty(6)
-        wrist_command(
-            rotation,
-            p,
-            v,
-            omega,
-            self._tip_rotation_t,
-            self._tip_back,
-            self._base_rotation,
-            self._base_position,
-            pose,
-            twist,
-        )
-        return pose, twist
 
     def _check_position(self, q: FloatArray, t: float) -> None:
         lower, upper = self.robot.lower, self.robot.upper
