@@ -223,24 +223,25 @@ def plan_move(
         InputError: If the goal is not a finite position and a rotation, or
             ``final_velocity`` is out of range (``NonFiniteError`` on NaN).
     """
+    goal = np.asarray(position, dtype=np.float64)
     if check:
         vmax = limits.max_velocity
         if not 0.0 <= final_velocity <= vmax:  # also False for NaN
             raise InputError(
                 f"final_velocity must be in [0, {vmax:g}], got {final_velocity!r}"
             )
-        position = as_vector(position, 3, "position")
+        goal = as_vector(position, 3, "position")
     return CartesianMotion(
         plan_line(
             state,
-            position,  # type: ignore[arg-type]
+            goal,
             limits.max_velocity,
             limits.max_acceleration,
             final_velocity=final_velocity,
         ),
         plan_rotation(
             state,
-            rotation,  # type: ignore[arg-type]
+            np.asarray(rotation, dtype=np.float64),
             limits.max_angular_velocity,
             limits.max_angular_acceleration,
             check=check,
