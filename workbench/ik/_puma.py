@@ -270,10 +270,9 @@ def check_reach(geo: PumaGeometry, px: float, py: float, pz: float) -> None:
     """
     r2 = px * px + py * py
     distance = math.sqrt(r2 + pz * pz)
-    low, high = geo.reach
-    slack = 1e-12 * high
-    if not low - slack <= distance <= high + slack:
+    low, high, cylinder2 = geo.reach_test
+    if not low <= distance <= high:
         raise UnreachableError(distance, geo.reach, "reach")
-    radius = abs(geo.offset)
-    if r2 < radius * radius * (1.0 - 1e-12):
+    if r2 < cylinder2:
+        radius = abs(geo.offset)
         raise UnreachableError(math.sqrt(r2), (radius, radius), "cylinder")
