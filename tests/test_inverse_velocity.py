@@ -51,8 +51,9 @@ def test_jacobi_rows_give_the_singular_values_and_the_matrix(seed, shape):
     x = jacobian.copy() if shape[1] > shape[0] else jacobian.T.copy()
     original = x.copy()
     y = np.eye(x.shape[0])
-    _orthogonalise_rows(x, y)
+    norms2 = _orthogonalise_rows(x, y)
     gram = x @ x.T
+    np.testing.assert_allclose(norms2, np.einsum("ij,ij->i", x, x), rtol=1e-15, atol=0)
     sigma = np.sqrt(np.diag(gram))
     off_diagonal = gram - np.diag(np.diag(gram))
     assert np.abs(off_diagonal).max() <= 1e-14 * sigma.max() ** 2

@@ -133,7 +133,7 @@ def _dot(a: FloatArray, b: FloatArray) -> float:
 
 
 @_jit
-def _orthogonalise_rows(x: FloatArray, y: FloatArray) -> None:
+def _orthogonalise_rows(x: FloatArray, y: FloatArray) -> FloatArray:
     r"""One-sided Jacobi (Hestenes) SVD in place: ``x ← Qᵀx``, ``y ← Qᵀy``.
 
     Plane rotations (a product Q) make the rows of ``x`` mutually orthogonal.
@@ -141,6 +141,9 @@ def _orthogonalise_rows(x: FloatArray, y: FloatArray) -> None:
     rows after the call, and the norms of the rows ``x_k`` are the singular
     values. Accurate to rounding (Demmel & Veselić 1992); 6 to 8 sweeps for
     a 6 × 6 Jacobian, cheaper than a LAPACK call at that size.
+
+    Returns:
+        The squared norms of the rows of ``x``, the squared singular values.
     """
     n, m = x.shape
     norms2 = np.empty(n)
@@ -171,8 +174,11 @@ def _orthogonalise_rows(x: FloatArray, y: FloatArray) -> None:
                 for i in range(n):
                     a, b = y[p, i], y[q, i]
                     y[p, i], y[q, i] = c * a - s * b, s * a + c * b
-        if not rotated:
-            return
+        if not rotated:  # norms2 untouched since computed from x
+            return norms2
+    for k in range(n):
+        norms2[k] = _dot(x[k], x[k])
+    return norms2
 
 
 @_jit
@@ -208,8 +214,7 @@ def damped_solve(
     # rows of x: w_k (the columns of J V), or of J^T V for a wide J
     x = jacobian.copy() if wide else jacobian.T.copy()
     y = np.eye(x.shape[0])
-    _orthogonalise_rows(x, y)
-    norms2 = np.array([_dot(x[k], x[k]) for k in range(x.shape[0])])
+    norms2 = _orthogonalise_rows(x, y)
     lambda2 = dls_damping(norms2.min(), epsilon, lambda_max)
     qd[:] = qd_reference
     for k in range(x.shape[0]):
