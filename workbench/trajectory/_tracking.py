@@ -26,10 +26,7 @@ def wrist_command(
     position: FloatArray,
     velocity: FloatArray,
     angular_velocity: FloatArray,
-    tip_rotation_t: FloatArray,
-    tip_back: FloatArray,
-    base_rotation: FloatArray,
-    base_position: FloatArray,
+    frames: FloatArray,
     pose: FloatArray,
     twist: FloatArray,
 ) -> None:
@@ -44,13 +41,16 @@ def wrist_command(
         position: (3,) tool-tip position [m], world frame.
         velocity: (3,) [m/s], world axes.
         angular_velocity: (3,) [rad/s], world axes.
-        tip_rotation_t: (3, 3) transpose of the tip's rotation in the tool frame.
-        tip_back: (3,) from the tip to the wrist centre [m], tool axes.
-        base_rotation: (3, 3) base orientation in the world frame.
-        base_position: (3,) base origin in the world frame [m].
+        frames: (8, 3): rows 0-2 ``tip_rotation_t``, the transpose of the
+            tip's rotation in the tool frame; row 3 ``tip_back``, from the tip
+            to the wrist centre [m], tool axes; rows 4-6 ``base_rotation``, the
+            base orientation in the world frame; row 7 ``base_position``, the
+            base origin in the world frame [m].
         pose: (4, 4) output, wrist-centre pose in the base frame.
         twist: (6,) output [m/s, rad/s], linear first, base axes.
     """
+    tip_rotation_t, tip_back = frames[0:3], frames[3]
+    base_rotation, base_position = frames[4:7], frames[7]
     r6 = np.empty((3, 3))
     for i in range(3):
         for j in range(3):
@@ -159,9 +159,7 @@ def command_joints(
         position: (3,) tool-tip position [m], world frame.
         velocity: (3,) [m/s], world axes.
         angular_velocity: (3,) [rad/s], world axes.
-        frames: (8, 3): ``tip_rotation_t`` (rows 0-2), ``tip_back`` (3),
-            ``base_rotation`` (4-6), ``base_position`` (7) of
-            :func:`wrist_command`.
+        frames: (8, 3), the tip and base frames of :func:`wrist_command`.
         geometry: ``_puma_kernel.packed_geometry(robot)``.
         q: (6,) last joint command [rad].
         q_before: (6,) the one before it [rad].
@@ -173,16 +171,5 @@ def command_joints(
     Returns:
         As :func:`track` (with its quick rigidity test).
     """
-    wrist_command(
-        rotation,
-        position,
-        velocity,
-        angular_velocity,
-        frames[0:3],
-        frames[3],
-        frames[4:7],
-        frames[7],
-        pose,
-        twist,
-    )
+    wrist_command(rotation, position, velocity, angular_velocity, frames, pose, twist)
     return track(geometry, pose, q, q_before, pair, max_step2, True)
