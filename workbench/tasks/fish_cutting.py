@@ -227,9 +227,6 @@ def run_fish_cutting(
     )
 
 
-__all__ = ["FishCuttingResult", "FishEvent", "run_fish_cutting"]
-
-
 def summarize_fish_cutting(result: FishCuttingResult, robot_name: str) -> dict:
     """JSON-ready summary of a run (the keys of ``workbench fishcut --json``)."""
     latency = result.latency_us
@@ -255,3 +252,11 @@ def summarize_fish_cutting(result: FishCuttingResult, robot_name: str) -> dict:
         "seed": result.fish.seed,
         "servo_samples": len(result.servo.t),
     }
+
+
+__all__ = [
+    "FishCuttingResult",
+    "FishEvent",
+    "run_fish_cutting",
+    "summarize_fish_cutting",
+]
