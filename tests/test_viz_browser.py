@@ -3,6 +3,8 @@
 Chromium comes from the system; when it is missing and we are root, the
 session fixture installs it (``apt-get install -y chromium``), else the tests
 skip and say why. WebGL runs on SwiftShader (software), no GPU needed.
+``tests/_chromium.py`` drives Chromium over the DevTools protocol, with a
+deadline on every step and no retry (see its docstring for why).
 """
 
 from __future__ import annotations
@@ -17,26 +19,11 @@ import pinocchio as pin
 import pytest
 from PIL import Image
 
+from tests._chromium import take_screenshot
 from workbench import Robot
 from workbench.viz import Viewer
 
 WIDTH, HEIGHT = 800, 600
-CHROMIUM_FLAGS = (
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--enable-unsafe-swiftshader",  # software WebGL, opted in explicitly
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--no-first-run",
-    "--hide-scrollbars",
-    "--force-device-scale-factor=1",
-    f"--window-size={WIDTH},{HEIGHT}",
-    "--virtual-time-budget=3000",  # let the page load and render [ms]
-)
-CHROMIUM_TIMEOUT = 120  # [s] per attempt
-CHROMIUM_ATTEMPTS = 2
 PIXEL_CHANGED = 40  # max |RGB difference| above which a pixel counts as changed
 Q1_DEG = [0.0, -45.0, 180.0, 0.0, 45.0, 0.0]
 Q2_DEG = [60.0, -90.0, 160.0, 30.0, 30.0, 0.0]
@@ -72,42 +59,21 @@ def chromium() -> str:
     return found
 
 
-def screenshot(chromium: str, page: str, path: Path) -> np.ndarray:
+def screenshot(
+    chromium: str, page: str, path: Path, script: str | None = None
+) -> np.ndarray:
     """Save ``page`` next to ``path``, render it offline, return RGB (H, W, 3)."""
     html = path.with_suffix(".html")
     html.write_text(page, encoding="utf-8")
-    stderr = ""
-    for attempt in range(CHROMIUM_ATTEMPTS):  # a loaded machine can hang Chromium
-        command = [
-            chromium,
-            *CHROMIUM_FLAGS,
-            f"--user-data-dir={path.parent / f'{path.stem}-profile{attempt}'}",
-            f"--screenshot={path}",
-            html.as_uri(),
-        ]
-        try:
-            result = subprocess.run(
-                command, capture_output=True, text=True, timeout=CHROMIUM_TIMEOUT
-            )
-        except subprocess.TimeoutExpired as err:
-            stderr = f"timed out after {err.timeout} s"
-            continue
-        stderr = result.stderr
-        if path.exists():
-            break
-    assert path.exists(), f"no screenshot: {stderr[-2000:]}"
+    take_screenshot(chromium, html, path, width=WIDTH, height=HEIGHT, script=script)
     image = np.asarray(Image.open(path).convert("RGB"), dtype=np.int16)
     assert image.shape == (HEIGHT, WIDTH, 3)
     return image
 
 
-def seek(page: str, t: float) -> str:
-    """The page with its animation paused at time ``t`` [s] (the scrubber's seek)."""
-    script = (
-        "<script>setTimeout(function () { viewer.animator.pause(); "
-        f"viewer.animator.seek({t}); }}, 300);</script>"
-    )
-    return page.replace("</body>", script + "</body>")
+def seek(t: float) -> str:
+    """Script that pauses the page's animation at time ``t`` [s] (the scrubber)."""
+    return f"viewer.animator.pause(); viewer.animator.seek({t});"
 
 
 def changed(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -185,8 +151,8 @@ def test_animation_scrubs_pose_and_singularity_colour(chromium, puma, tmp_path) 
     viewer = Viewer(puma, color_by_singularity=True)
     viewer.play_trajectory(t, q)
     page = viewer.render_html()
-    start = screenshot(chromium, seek(page, 0.0), tmp_path / "t0.png")
-    middle = screenshot(chromium, seek(page, 1.0), tmp_path / "t1.png")
+    start = screenshot(chromium, page, tmp_path / "t0.png", seek(0.0))
+    middle = screenshot(chromium, page, tmp_path / "t1.png", seek(1.0))
 
     def red(image: np.ndarray) -> float:
         r, g, b = image[..., 0], image[..., 1], image[..., 2]
