@@ -1,5 +1,6 @@
 """workbench: a kinematics workbench for the PUMA 560 and any URDF arm, on Pinocchio."""
 
+import importlib.metadata
 import logging
 
 from workbench.dh import DHJoint, DHTable
@@ -21,6 +22,12 @@ from workbench.robot import Robot
 from workbench.urdf_generator import generate_urdf
 
 logging.getLogger(__name__).addHandler(logging.NullHandler())
+
+DISTRIBUTION = "kinematics-workbench"  # on PyPI; the import name is ``workbench``
+try:
+    __version__ = importlib.metadata.version(DISTRIBUTION)
+except importlib.metadata.PackageNotFoundError:  # run from a source tree
+    __version__ = "0+unknown"
 
 __all__ = [
     "DHJoint",

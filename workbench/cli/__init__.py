@@ -1,23 +1,31 @@
 """The ``workbench`` command line: one module per command, one parser here.
 
-Exit codes: 0 success, 2 bad input, 3 infeasible request. Errors print a single
-line on stderr and no traceback (set ``WORKBENCH_DEBUG=1`` to see one).
+Exit codes: 0 success, 2 bad input, 3 infeasible request, 141 when the reader
+of stdout went away (``workbench ... | head``: a quiet exit, as for SIGPIPE).
+Errors print a single line on stderr and no traceback (set ``WORKBENCH_DEBUG=1``
+to see one). The package's log messages go to stderr: warnings by default,
+``-v`` adds info, ``-vv`` debug, ``-q`` keeps only errors (and no progress line).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import logging
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 
+import workbench
 from workbench.cli import demo, fishcut, fk, ik, plan, report, singularities, urdf, view
+from workbench.cli._progress import Progress
 from workbench.errors import InfeasibleError, InputError, WorkbenchError
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1
 EXIT_BAD_INPUT = 2
 EXIT_INFEASIBLE = 3
+EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for `yes | head`
 
 _COMMANDS = (fk, ik, urdf, demo, singularities, report, plan, view, fishcut)
 
@@ -35,6 +43,26 @@ def build_parser() -> argparse.ArgumentParser:
         prog="workbench",
         description="Kinematics workbench for the PUMA 560 and any URDF arm.",
     )
+    parser.add_argument(
+        "--version",
+        action="version",
+        version=f"%(prog)s {workbench.__version__} "
+        f"(distribution {workbench.DISTRIBUTION})",
+    )
+    verbosity = parser.add_mutually_exclusive_group()
+    verbosity.add_argument(
+        "-v",
+        "--verbose",
+        action="count",
+        default=0,
+        help="more messages on stderr (-v info, -vv debug)",
+    )
+    verbosity.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="only errors on stderr (no warnings, no progress line)",
+    )
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for module in _COMMANDS:
         module.register(commands)
@@ -45,18 +73,81 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    message = getattr(args, "progress_message", f"{args.command}: working")
+    with (
+        _log_to_stderr(_log_level(args)),
+        Progress(message, enabled=not args.quiet) as progress,
+    ):
+        args.progress = progress
+        try:
+            code = int(args.run(args) or EXIT_OK)
+            sys.stdout.flush()  # a closed pipe shows here, not at exit
+            return code
+        except BrokenPipeError:
+            return _quiet_on_broken_pipe()
+        except InputError as err:
+            return _fail(err, EXIT_BAD_INPUT)
+        except InfeasibleError as err:
+            return _fail(err, EXIT_INFEASIBLE)
+        except WorkbenchError as err:
+            return _fail(err, EXIT_BAD_INPUT)
+        except KeyboardInterrupt:
+            return 130
+        except Exception as err:  # a bug: still one line, exit 1
+            return _fail(err, EXIT_INTERNAL, prefix="internal error")
+
+
+def _log_level(args: argparse.Namespace) -> int:
+    if args.quiet:
+        return logging.ERROR
+    return {0: logging.WARNING, 1: logging.INFO}.get(args.verbose, logging.DEBUG)
+
+
+@contextlib.contextmanager
+def _log_to_stderr(level: int) -> Iterator[None]:
+    """Show the package's log records of ``level`` and above on stderr.
+
+    Python warnings (``warnings.warn``) are routed through logging as well, so
+    ``-q`` hides them too. Everything is restored on exit (the tests call
+    :func:`main` many times in one process).
+    """
+    handler = _StderrHandler()
+    handler.setFormatter(logging.Formatter("workbench: %(levelname)s: %(message)s"))
+    loggers = [logging.getLogger("workbench"), logging.getLogger("py.warnings")]
+    saved = [(logger.level, logger.propagate) for logger in loggers]
+    for logger in loggers:
+        logger.addHandler(handler)
+        logger.setLevel(level)
+        logger.propagate = False
+    logging.captureWarnings(True)
     try:
-        return int(args.run(args) or EXIT_OK)
-    except InputError as err:
-        return _fail(err, EXIT_BAD_INPUT)
-    except InfeasibleError as err:
-        return _fail(err, EXIT_INFEASIBLE)
-    except WorkbenchError as err:
-        return _fail(err, EXIT_BAD_INPUT)
-    except KeyboardInterrupt:
-        return 130
-    except Exception as err:  # a bug: still one line, exit 1
-        return _fail(err, EXIT_INTERNAL, prefix="internal error")
+        yield
+    finally:
+        logging.captureWarnings(False)
+        for logger, (old_level, propagate) in zip(loggers, saved, strict=True):
+            logger.removeHandler(handler)
+            logger.setLevel(old_level)
+            logger.propagate = propagate
+
+
+class _StderrHandler(logging.Handler):
+    """Writes to the current ``sys.stderr`` (which tests may swap)."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            sys.stderr.write(self.format(record) + "\n")
+        except Exception:
+            self.handleError(record)
+
+
+def _quiet_on_broken_pipe() -> int:
+    """The reader of stdout is gone: stop without a word (no flush error at exit)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):  # stdout has no file descriptor (tests)
+        pass
+    return EXIT_BROKEN_PIPE
 
 
 def _fail(err: BaseException, code: int, prefix: str = "error") -> int:

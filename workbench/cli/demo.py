@@ -29,7 +29,10 @@ def register(commands: argparse._SubParsersAction) -> None:
         "--no-plots", action="store_true", help="skip the PNG figures (faster)"
     )
     add_json_flag(parser)
-    parser.set_defaults(run=run)
+    parser.set_defaults(
+        run=run,
+        progress_message="demo: running the papers' examples and writing the results…",
+    )
 
 
 def run(args: argparse.Namespace) -> int:

@@ -66,7 +66,9 @@ def register(commands: argparse._SubParsersAction) -> None:
         f"(default {_DEFAULTS.servo_rate:g})",
     )
     add_json_flag(parser)
-    parser.set_defaults(run=run)
+    parser.set_defaults(
+        run=run, progress_message="fishcut: running Kang's fish-cutting program online…"
+    )
 
 
 def _check_writable(path: Path | None, option: str) -> None:

@@ -29,7 +29,9 @@ def register(commands: argparse._SubParsersAction) -> None:
     parser.add_argument("--frame", help="frame name (default: the robot's tool frame)")
     add_angle_arguments(parser)
     add_json_flag(parser)
-    parser.set_defaults(run=run)
+    parser.set_defaults(
+        run=run, progress_message="fk: computing the forward kinematics…"
+    )
 
 
 def run(args: argparse.Namespace) -> int:

@@ -83,7 +83,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         "--all", action="store_true", help="print every closed-form branch"
     )
     add_json_flag(parser)
-    parser.set_defaults(run=run)
+    parser.set_defaults(run=run, progress_message="ik: solving the inverse kinematics…")
 
 
 def target_from_args(args: argparse.Namespace) -> pin.SE3:

@@ -81,7 +81,10 @@ def register(commands: argparse._SubParsersAction) -> None:
         "--plot", type=Path, metavar="FILE.png", help="plot q, qd, qdd with limits"
     )
     add_json_flag(pick)
-    pick.set_defaults(run=run_pick_place)
+    pick.set_defaults(
+        run=run_pick_place,
+        progress_message="plan: planning the trajectory and checking every limit…",
+    )
 
 
 def run_pick_place(args: argparse.Namespace) -> int:

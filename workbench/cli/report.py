@@ -56,7 +56,10 @@ def register(commands: argparse._SubParsersAction) -> None:
         "--no-progress", action="store_true", help="no progress bar on stderr"
     )
     add_json_flag(sing)
-    sing.set_defaults(run=run_singularities)
+    sing.set_defaults(
+        run=run_singularities,
+        progress_message="report: computing the singularity report…",
+    )
 
 
 def _positive_int(text: str) -> int:
@@ -93,6 +96,7 @@ def run_singularities(args: argparse.Namespace) -> int:
         write_singularity_report,
     )
 
+    args.progress.finish()  # the command draws its own progress bar (or none)
     robot = load_robot(args.robot)
     trajectory = None
     if args.trajectory is not None:

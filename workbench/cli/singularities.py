@@ -47,7 +47,9 @@ def register(commands: argparse._SubParsersAction) -> None:
     add_robot_argument(parser)
     add_angle_arguments(parser)
     add_json_flag(parser)
-    parser.set_defaults(run=run)
+    parser.set_defaults(
+        run=run, progress_message="singularities: analysing the configuration…"
+    )
 
 
 def analyse_configuration(robot: Robot, q: np.ndarray) -> dict[str, Any]:

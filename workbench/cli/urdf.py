@@ -26,7 +26,7 @@ def register(commands: argparse._SubParsersAction) -> None:
     from_dh.add_argument("table", type=Path, metavar="TABLE", help="DH table, JSON")
     from_dh.add_argument("--out", type=Path, required=True, help="URDF file to write")
     add_json_flag(from_dh)
-    from_dh.set_defaults(run=run_from_dh)
+    from_dh.set_defaults(run=run_from_dh, progress_message="urdf: generating the URDF…")
 
 
 def run_from_dh(args: argparse.Namespace) -> int:

@@ -77,7 +77,7 @@ def register(commands: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--port", type=_port, default=0, help="port for --serve (default: a free one)"
     )
-    parser.set_defaults(run=run)
+    parser.set_defaults(run=run, progress_message="view: building the 3D page…")
 
 
 def read_samples(path: Path, robot: Robot) -> JointTrajectorySamples:
@@ -136,6 +136,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote {path}")
         return 0
     url = viewer.start_server(port=args.port)
+    args.progress.finish()  # serving until Ctrl-C is not slowness
     print(f"workbench viewer at {url} (Ctrl-C to stop)", flush=True)
     try:
         viewer.serve_forever()

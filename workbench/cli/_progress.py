@@ -1,0 +1,115 @@
+"""One progress line on stderr for commands that take a while.
+
+A command that is still running after :data:`PROGRESS_DELAY` seconds prints
+one line saying what it is doing; the first Numba compilation of the process
+(a cold cache: the first run after an install or an upgrade) prints one line
+saying so as soon as it starts. ``-q`` silences both. Nothing is printed for a
+command that finishes quickly, so scripted output stays clean.
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+from types import TracebackType
+from typing import TextIO
+
+PROGRESS_DELAY = 1.0  # [s] before a running command prints its line
+COMPILING = "compiling the Numba kernels on first use (cached for later runs)…"
+
+
+class Progress:
+    """Context manager printing at most one line per phase on ``stream``.
+
+    Args:
+        message: What the command does, e.g. ``"demo: running the examples"``.
+        enabled: False prints nothing (``-q``).
+        delay: Seconds [s] after which the line is printed if still running;
+            None means :data:`PROGRESS_DELAY`.
+        stream: Where to print; None means ``sys.stderr`` at print time.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        enabled: bool = True,
+        delay: float | None = None,
+        stream: TextIO | None = None,
+    ):
+        self.message = message
+        self.enabled = enabled
+        self.delay = PROGRESS_DELAY if delay is None else delay
+        self._stream = stream
+        self._lock = threading.Lock()
+        self._timer: threading.Timer | None = None
+        self._finished = False
+        self._said_compiling = False
+        self._listener: object | None = None
+
+    def __enter__(self) -> Progress:
+        if not self.enabled:
+            return self
+        self._timer = threading.Timer(self.delay, self._say, args=(self.message,))
+        self._timer.daemon = True
+        self._timer.start()
+        self._listener = _listen_to_numba(self)
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        error: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.finish()
+        if self._listener is not None:
+            from numba.core import event
+
+            event.unregister("numba:compile", self._listener)  # type: ignore[arg-type]
+            self._listener = None
+
+    def finish(self) -> None:
+        """No more lines: the command is done or now waits on the user (a server)."""
+        with self._lock:
+            self._finished = True
+        if self._timer is not None:
+            self._timer.cancel()
+
+    def on_compile(self) -> None:
+        """Numba started compiling: say so once per process run."""
+        with self._lock:
+            if self._said_compiling or self._finished:
+                return
+            self._said_compiling = True
+        self._say(COMPILING, check=False)
+
+    def _say(self, text: str, check: bool = True) -> None:
+        with self._lock:
+            if check and self._finished:
+                return
+            stream = self._stream if self._stream is not None else sys.stderr
+            try:
+                stream.write(f"workbench: {text}\n")
+                stream.flush()
+            except (OSError, ValueError):  # stderr closed: progress is optional
+                pass
+
+
+def _listen_to_numba(progress: Progress) -> object | None:
+    """Register a Numba compile listener calling ``progress.on_compile``."""
+    try:
+        from numba.core import event
+    except ImportError:  # numba is a dependency; stay robust without it
+        return None
+
+    class _Listener(event.Listener):
+        def on_start(self, event: event.Event) -> None:
+            progress.on_compile()
+
+        def on_end(self, event: event.Event) -> None:
+            pass
+
+    listener = _Listener()
+    event.register("numba:compile", listener)
+    return listener
