@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -118,8 +119,14 @@ def test_demo_reproduces_table2(capsys, tmp_path: Path) -> None:
     assert code == 0
     assert "match Table II" in out and "DO NOT" not in out
     assert "Pick and place (Sec. V), T = 10 s" in out and "minimum duration" in out
-    summary = json.loads((tmp_path / "demo" / "summary.json").read_text())
+    text = (tmp_path / "demo" / "summary.json").read_text()
+    summary = json.loads(text)
     assert summary["table2_matches"] is True
+    # Floats are stored with at most 9 significant digits, paper values as printed.
+    for number in re.findall(r"-?\d+\.\d+(?:e[-+]?\d+)?", text):
+        mantissa = number.lstrip("-").split("e")[0].replace(".", "").lstrip("0")
+        assert len(mantissa) <= 9, number
+    assert summary["table2"]["pick"]["printed"][4:] == [-94.07, 125.4, -470.55]
     assert (tmp_path / "demo" / "table2.md").is_file()
     figures = summary["pick_and_place"]["figures"]
     assert len(figures) == 7

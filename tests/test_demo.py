@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from workbench.demo import compare_table2, format_table2
+from workbench.demo import compare_table2, format_table2, round_for_json
 from workbench.demo_pick_and_place import (
     format_pick_and_place,
     run_pick_and_place_demo,
@@ -47,3 +47,21 @@ def test_section5_end_to_end(puma, tmp_path) -> None:
     text = format_pick_and_place(result)
     assert "joint2 position 45.0005 deg at t = 0 s" in text
     assert "time-optimal on the same path 3.6652 s (ratio 2.000)" in text
+
+
+def test_paper_values_are_stored_as_printed(puma) -> None:
+    pick = compare_table2(puma)[0]
+    assert pick.printed[4:].tolist() == [-94.07, 125.4, -470.55]  # [mm], exact
+
+
+def test_round_for_json_keeps_nine_significant_digits() -> None:
+    value = {
+        "a": np.array([-94.07000000000001, 1.0 / 3.0]),
+        "b": (np.float64(2.0e-12 / 3.0), True, "text", None, 7),
+        "c": [float("inf")],
+    }
+    assert round_for_json(value) == {
+        "a": [-94.07, 0.333333333],
+        "b": [6.66666667e-13, True, "text", None, 7],
+        "c": [float("inf")],
+    }

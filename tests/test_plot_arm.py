@@ -1,13 +1,16 @@
-"""Stick figures: points through the DH frame origins, artists on 3D axes."""
+"""Stick figures: points through the DH frame origins, matplotlib's conventions."""
 
 from __future__ import annotations
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.figure import Figure
+from PIL import Image
 
 from workbench.plot_arm import compute_arm_points, plot_arm, set_equal_axes
 
 ATOL_EXACT = 1e-12
+Q = np.array([0.1, -0.8, 2.0, 0.3, 0.6, 0.0])
 
 
 def test_points_are_the_dh_frame_origins(any_puma, rng) -> None:
@@ -18,21 +21,36 @@ def test_points_are_the_dh_frame_origins(any_puma, rng) -> None:
     np.testing.assert_allclose(points[-1], any_puma.fk(q).translation, atol=ATOL_EXACT)
 
 
-def test_plot_arm_draws_links_joints_tool_and_wrist_axis(puma) -> None:
+def test_plot_arm_on_given_axes_draws_links_joints_tool_and_wrist_axis(puma) -> None:
     fig = plt.figure()
     ax = fig.add_subplot(projection="3d")
-    q = np.array([0.1, -0.8, 2.0, 0.3, 0.6, 0.0])
-    artists = plot_arm(ax, puma, q, color="k", label="arm")
-    assert len(artists) == 4
-    links, wrist = artists[0], artists[-1]
+    assert plot_arm(puma, Q, ax=ax, color="k", label="arm") is fig
+    assert len(ax.lines) == 4
+    links, wrist = ax.lines[0], ax.lines[-1]
+    assert links.get_label() == "arm"
     x, y, z = links.get_data_3d()
     np.testing.assert_allclose(
-        np.c_[x, y, z], compute_arm_points(puma, q), atol=ATOL_EXACT
+        np.c_[x, y, z], compute_arm_points(puma, Q), atol=ATOL_EXACT
     )
     start, end = np.array(wrist.get_data_3d()).T
     np.testing.assert_allclose(np.linalg.norm(end - start), 0.08, atol=ATOL_EXACT)
-    assert len(plot_arm(ax, puma, q, axis_length=0.0)) == 3
-    set_equal_axes(ax, compute_arm_points(puma, q))
+    plot_arm(puma, Q, ax=ax, axis_length=0.0)
+    assert len(ax.lines) == 4 + 3
+    set_equal_axes(ax, compute_arm_points(puma, Q))
     lo, hi = ax.get_xlim()
     assert np.isclose(hi - lo, ax.get_zlim()[1] - ax.get_zlim()[0])
     plt.close(fig)
+
+
+def test_plot_arm_without_axes_makes_a_figure_and_saves_on_request(
+    puma, tmp_path
+) -> None:
+    fig = plot_arm(puma, Q)
+    assert isinstance(fig, Figure) and len(fig.axes) == 1
+    assert not plt.get_fignums()  # not registered with pyplot
+    ax = fig.axes[0]
+    ranges = [np.ptp(lim) for lim in (ax.get_xlim(), ax.get_ylim(), ax.get_zlim())]
+    np.testing.assert_allclose(ranges, ranges[0], rtol=1e-12)  # equal axes
+    path = tmp_path / "sub" / "arm.png"
+    assert plot_arm(puma, Q, path) is not None
+    assert Image.open(path).size[0] > 100

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -39,6 +40,8 @@ TABLE2_ROWS = (
     "p_z [mm]",
 )
 _PRINTED_SCALE = np.array([1.0, 1.0, 1.0, 1.0, 1e3, 1e3, 1e3])
+PRINTED_DECIMALS = 2  # Angeles' Table II prints two decimals (mm for positions)
+SUMMARY_DIGITS = 9  # significant digits of the floats in summary.json
 
 
 @dataclass(frozen=True, slots=True)
@@ -60,7 +63,7 @@ class Table2Comparison:
     @property
     def rounded(self) -> npt.NDArray[np.float64]:
         """``computed`` rounded as the paper prints (two decimals)."""
-        return np.round(self.computed, 2)
+        return np.round(self.computed, PRINTED_DECIMALS)
 
     @property
     def matches(self) -> bool:
@@ -83,7 +86,9 @@ def compare_table2(robot: Robot) -> list[Table2Comparison]:
         ("place", paper_data.ANGELES_PLACE_Q_DEG, paper_data.ANGELES_PLACE_ANGELES7),
     ):
         computed = angeles7_from_se3(robot.fk(np.deg2rad(q_deg))) * _PRINTED_SCALE
-        rows.append(Table2Comparison(pose, q_deg, printed * _PRINTED_SCALE, computed))
+        # Back to the printed decimals: 0.09407 m * 1e3 is -94.07000000000001 mm.
+        printed_units = np.round(printed * _PRINTED_SCALE, PRINTED_DECIMALS)
+        rows.append(Table2Comparison(pose, q_deg, printed_units, computed))
     return rows
 
 
@@ -148,6 +153,33 @@ def format_fish_cutting(summary: dict[str, Any]) -> str:
     )
 
 
+def round_for_json(value: Any, digits: int = SUMMARY_DIGITS) -> Any:
+    """``value`` with NumPy data as lists and floats cut to ``digits`` significant.
+
+    Nine digits are far below the accuracy of anything the demo reports
+    (the papers print 2-4 digits) and far above what a reader compares, and
+    they keep ``-94.07`` from showing up as ``-94.07000000000001``.
+
+    Args:
+        value: Nested dicts, lists, tuples, NumPy arrays and scalars.
+        digits: Significant digits kept.
+
+    Returns:
+        The same structure with builtin types only.
+    """
+    if isinstance(value, dict):
+        return {key: round_for_json(item, digits) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [round_for_json(item, digits) for item in value]
+    if isinstance(value, np.ndarray):
+        return round_for_json(value.tolist(), digits)
+    if isinstance(value, np.generic):
+        return round_for_json(value.item(), digits)
+    if isinstance(value, float) and math.isfinite(value):
+        return float(f"{value:.{digits}g}")
+    return value
+
+
 def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, object]:
     """Run the papers' examples and write the results into ``out_dir``.
 
@@ -158,7 +190,9 @@ def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, ob
             and the singularity report (``singularities.html``): the slow part.
 
     Returns:
-        A JSON-ready summary (also written to ``out_dir/summary.json``).
+        A JSON-ready summary, also written to ``out_dir/summary.json`` with
+        every float rounded to :data:`SUMMARY_DIGITS` significant digits (see
+        :func:`round_for_json`); the CSV files keep full precision.
     """
     out_dir.mkdir(parents=True, exist_ok=True)
     rows = compare_table2(robot)
@@ -187,8 +221,7 @@ def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, ob
     if plots:
         summary["pages"] = _write_pages(robot, out_dir)
     (out_dir / "summary.json").write_text(
-        json.dumps(summary, indent=2, default=lambda a: np.asarray(a).tolist()) + "\n",
-        encoding="utf-8",
+        json.dumps(round_for_json(summary), indent=2) + "\n", encoding="utf-8"
     )
     _log.info("demo written to %s", out_dir)
     return summary

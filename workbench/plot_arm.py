@@ -1,19 +1,27 @@
-"""Stick figures of an arm for matplotlib 3D axes (no matplotlib import here).
+"""Stick figures of an arm on matplotlib 3D axes.
 
 The figure joins the origins of the DH frames ``frame0`` … ``frame{nq}`` of
 the generated PUMA URDFs (shoulder offset, upper arm, forearm, wrist), or, for
 an arm without them, the joint origins, then the tool frame. A short segment
 along the x axis of ``frame4`` shows the wrist: its flip twin turns it by π.
+
+:func:`plot_arm` follows matplotlib's convention (``ax=`` optional, returns the
+Figure, writes a file only when ``path`` is given); matplotlib is imported when
+it is called, so importing this module stays cheap.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
 
 from workbench.robot import Robot
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -45,43 +53,59 @@ def compute_arm_points(robot: Robot, q: npt.ArrayLike) -> FloatArray:
 
 
 def plot_arm(
-    ax: Any,
     robot: Robot,
     q: npt.ArrayLike,
+    path: str | Path | None = None,
     *,
+    ax: Any = None,
     color: str = "tab:blue",
     label: str | None = None,
     axis_frame: str = "frame4",
     axis_length: float = 0.08,
-) -> list[Any]:
-    """Draw the arm at ``q`` on a matplotlib 3D axes as a stick figure.
+) -> Figure:
+    """Draw the arm at ``q`` as a stick figure on matplotlib 3D axes.
 
     Args:
-        ax: Axes made with ``projection="3d"``.
         robot: Any robot.
         q: Configuration, shape (nq,) [rad].
+        path: PNG file to write; None writes nothing.
+        ax: 3D axes (``projection="3d"``) to draw on, keeping its limits; None
+            makes a new Figure with one 3D axes scaled equally around the arm.
         color: Matplotlib colour of links and joints.
         label: Legend label of the links.
         axis_frame: Frame whose x axis is drawn (skipped if not in the model).
         axis_length: Length of that segment [m]; 0 to skip it.
 
     Returns:
-        The artists drawn: links (line), joints (markers), tool (marker), and
-        the x axis of ``axis_frame`` (line) when drawn.
+        The Figure of ``ax``. It holds the links (line), the joints (markers),
+        the tool (red star) and the x axis of ``axis_frame`` (orange line).
     """
+    if ax is None:
+        from matplotlib.figure import Figure
+
+        ax = Figure(figsize=(5.0, 5.0)).add_subplot(projection="3d")
+        new_axes = True
+    else:
+        new_axes = False
     p = compute_arm_points(robot, q)
-    links = ax.plot(p[:, 0], p[:, 1], p[:, 2], "-", color=color, lw=3, label=label)
-    joints = ax.plot(p[:-1, 0], p[:-1, 1], p[:-1, 2], "o", color=color, ms=4)
-    tool = ax.plot(p[-1:, 0], p[-1:, 1], p[-1:, 2], "*", color="tab:red", ms=10)
-    artists = [*links, *joints, *tool]
+    ax.plot(p[:, 0], p[:, 1], p[:, 2], "-", color=color, lw=3, label=label)
+    ax.plot(p[:-1, 0], p[:-1, 1], p[:-1, 2], "o", color=color, ms=4)
+    ax.plot(p[-1:, 0], p[-1:, 1], p[-1:, 2], "*", color="tab:red", ms=10)
     if axis_length > 0.0 and axis_frame in robot.frame_names:
         frame = robot.fk(q, axis_frame)
         ends = np.array([frame.translation, frame * np.array([axis_length, 0, 0])])
-        artists += ax.plot(*ends.T, "-", color="tab:orange", lw=2)
+        ax.plot(*ends.T, "-", color="tab:orange", lw=2)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_zlabel("z [m]")
-    return artists
+    if new_axes:
+        set_equal_axes(ax, p)
+    fig = ax.get_figure()
+    if path is not None:
+        from workbench.trajectory_plots import save_figure
+
+        save_figure(fig, path)
+    return fig
 
 
 def set_equal_axes(ax: Any, points: npt.ArrayLike, *, margin: float = 0.05) -> None:

@@ -1,9 +1,12 @@
-"""PNG plots of the normal spline and of pick-and-place trajectories (matplotlib).
+"""Plots of the normal spline and of pick-and-place trajectories (matplotlib).
 
 Imported lazily by the command line and the demo; the core modules never
-import matplotlib. Figures are built with :class:`matplotlib.figure.Figure`
-and written by the Agg canvas, so no pyplot state and no display is involved.
-Angles are shown in degrees (display only); the data stay SI.
+import matplotlib. Each function follows matplotlib's convention: it draws into
+the ``fig`` it is given (these functions draw several axes) or into a new
+:class:`matplotlib.figure.Figure`, returns the Figure, and writes a PNG only
+when ``path`` is given. A new Figure is not registered with pyplot (no global
+state, nothing to close); in a notebook it shows inline when it is the value
+of a cell. Angles are shown in degrees (display only); the data stay SI.
 """
 
 from __future__ import annotations
@@ -27,42 +30,56 @@ _DPI = 110
 _SAMPLES = 1001
 
 
-def _save(fig: Figure, path: str | Path) -> Path:
+def _new_or_cleared(fig: Figure | None, figsize: tuple[float, float]) -> Figure:
+    """``fig`` emptied for a redraw, or a new constrained-layout Figure."""
+    if fig is None:
+        return Figure(figsize=figsize, layout="constrained")
+    fig.clear()
+    return fig
+
+
+def save_figure(fig: Figure, path: str | Path) -> Path:
+    """Write ``fig`` as a PNG at :data:`_DPI` (folders created); returns the path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    FigureCanvasAgg(fig)
+    if fig.canvas is None or type(fig.canvas).__name__ == "FigureCanvasBase":
+        FigureCanvasAgg(fig)
     fig.savefig(path, dpi=_DPI)
     return path
 
 
-def _colors(n: int) -> list[str]:
-    return [f"C{i % 10}" for i in range(n)]
+def _finish(fig: Figure, path: str | Path | None) -> Figure:
+    if path is not None:
+        save_figure(fig, path)
+    return fig
 
 
 def plot_normal_spline(
     spline: NormalSpline,
-    path: str | Path,
+    path: str | Path | None = None,
     *,
+    fig: Figure | None = None,
     literal: UniformCubicSpline | None = None,
     literal_amplitude: float | None = None,
-) -> Path:
+) -> Figure:
     """Fig. 1 of Angeles et al.: s, ṡ (a) and s̈, jerk (b) over t' = t/T.
 
     Args:
         spline: The normal spline.
-        path: PNG file to write.
+        path: PNG file to write; None writes nothing.
+        fig: Figure to draw into (cleared first); None makes a new one.
         literal: Optionally Section IV read literally (s odd and 2-periodic,
             on [0, 2]), drawn in a third panel (c) over its own period.
         literal_amplitude: The A used for ``literal``, for the panel title.
 
     Returns:
-        ``path``.
+        The Figure.
     """
     t = np.linspace(0.0, 1.0, _SAMPLES)
     s, sd, sdd = spline.evaluate(t)
     knots = spline.spline.knots
     rows = 2 if literal is None else 3
-    fig = Figure(figsize=(8, 3.4 * rows), layout="constrained")
+    fig = _new_or_cleared(fig, (8, 3.4 * rows))
     axes = fig.subplots(rows, 1)
     ax1, ax2 = axes[0], axes[1]
     ax1.plot(t, s, color="C0", label="s(t')")
@@ -106,74 +123,109 @@ def plot_normal_spline(
         ax3.set_ylabel("s [-], ds/dt [-]")
         ax3.legend(loc="upper right", fontsize="small")
         ax3.grid(alpha=0.3)
-    return _save(fig, path)
+    return _finish(fig, path)
 
 
-def _limit_lines(
-    ax: Axes, lower: FloatArray, upper: FloatArray, colors: Sequence[str]
-) -> bool:
-    drawn = False
-    for lo, hi, color in zip(lower, upper, colors, strict=True):
-        for value in (lo, hi):
-            if np.isfinite(value):
-                ax.axhline(value, color=color, ls="--", lw=0.9, alpha=0.7)
-                drawn = True
-    return drawn
+_QUANTITIES = ("position [deg]", "speed [deg/s]", "acceleration [deg/s²]")
 
 
 def plot_joint_trajectory(
     trajectory,
-    path: str | Path,
+    path: str | Path | None = None,
     *,
+    fig: Figure | None = None,
     joints: Sequence[int] | None = None,
     title: str | None = None,
-) -> Path:
-    """Positions, speeds and accelerations of some joints, with their limits.
+) -> Figure:
+    """Position, speed and acceleration of each joint against its own limits.
+
+    One row of three panels per joint (position, speed, acceleration), so
+    that every dashed limit line belongs to exactly one joint and one
+    quantity; the limit values are written at the line's right end.
 
     Args:
         trajectory: A joint trajectory (``robot``, ``duration``, ``sample``).
-        path: PNG file to write.
+        path: PNG file to write; None writes nothing.
+        fig: Figure to draw into (cleared first); None makes a new one.
         joints: 0-based joint indices to show (default all).
         title: Figure title.
 
     Returns:
-        ``path``. Limits are dashed lines in each joint's colour; infinite
-        limits are not drawn (noted in the panel title).
+        The Figure. Infinite limits are not drawn (the panel says so).
     """
     robot = trajectory.robot
     idx = list(range(robot.nq)) if joints is None else list(joints)
-    names = [robot.joint_names[i] for i in idx]
-    colors = _colors(len(idx))
     t = np.linspace(0.0, trajectory.duration, _SAMPLES)
     values = [np.rad2deg(x[:, idx]) for x in trajectory.sample(t)]
     lows = [robot.lower, -robot.velocity_limit, -robot.acceleration_limit]
     highs = [robot.upper, robot.velocity_limit, robot.acceleration_limit]
-    labels = ["position [deg]", "speed [deg/s]", "acceleration [deg/s²]"]
-    fig = Figure(figsize=(9, 8.5), layout="constrained")
-    axes = fig.subplots(3, 1, sharex=True)
-    for ax, data, lo, hi, label in zip(axes, values, lows, highs, labels, strict=True):
-        for k, (name, color) in enumerate(zip(names, colors, strict=True)):
-            ax.plot(t, data[:, k], color=color, label=name)
-        drawn = _limit_lines(
-            ax, np.rad2deg(np.asarray(lo)[idx]), np.rad2deg(np.asarray(hi)[idx]), colors
-        )
-        ax.set_ylabel(label)
-        ax.set_title(
-            f"joint {label.split(' ')[0]}: limits dashed"
-            if drawn
-            else f"joint {label.split(' ')[0]}: no limit known"
-        )
-        ax.grid(alpha=0.3)
-    handles, texts = axes[0].get_legend_handles_labels()
-    handles.append(Line2D([], [], color="0.3", ls="--", lw=0.9))
-    texts.append("limit (joint's colour)")
-    axes[0].legend(
-        handles, texts, loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize="small"
+    fig = _new_or_cleared(fig, (11.0, 1.9 * len(idx) + 1.0))
+    axes = np.atleast_2d(fig.subplots(len(idx), 3, sharex=True, squeeze=False))
+    for row, joint in enumerate(idx):
+        color = f"C{joint % 10}"
+        name = robot.joint_names[joint]
+        for col in range(3):
+            ax = axes[row, col]
+            ax.plot(t, values[col][:, row], color=color, lw=1.6)
+            lo = float(np.rad2deg(np.asarray(lows[col])[joint]))
+            hi = float(np.rad2deg(np.asarray(highs[col])[joint]))
+            _limit_lines(ax, lo, hi, color)
+            ax.grid(alpha=0.3)
+            ax.tick_params(labelsize=8)
+            if row == 0:
+                ax.set_title(_QUANTITIES[col], fontsize=10)
+            if col == 0:
+                label = (
+                    name
+                    if name == f"joint{joint + 1}"
+                    else f"{name} (joint {joint + 1})"
+                )
+                ax.set_ylabel(label, fontsize=9)
+    for ax in axes[-1]:
+        ax.set_xlabel("time t [s]")
+    handles = [
+        Line2D([], [], color="0.2", lw=1.6),
+        Line2D([], [], color="0.2", ls="--", lw=0.9),
+    ]
+    fig.legend(
+        handles,
+        ["joint value", "that joint's limit (value at the right end)"],
+        loc="outside lower center",
+        ncol=2,
+        fontsize="small",
     )
-    axes[-1].set_xlabel("time t [s]")
     if title:
         fig.suptitle(title)
-    return _save(fig, path)
+    return _finish(fig, path)
+
+
+def _limit_lines(ax: Axes, lower: float, upper: float, color: str) -> None:
+    """Dashed lines at the finite limits, labelled with their value."""
+    finite = [v for v in (lower, upper) if np.isfinite(v)]
+    for value in finite:
+        ax.axhline(value, color=color, ls="--", lw=0.9, alpha=0.8)
+        ax.annotate(
+            f"{value:.4g}",
+            xy=(1.0, value),
+            xycoords=("axes fraction", "data"),
+            xytext=(2, 0),
+            textcoords="offset points",
+            va="center",
+            fontsize=7,
+            color=color,
+            annotation_clip=False,
+        )
+    if not finite:
+        ax.text(
+            0.98,
+            0.95,
+            "no limit known",
+            transform=ax.transAxes,
+            ha="right",
+            va="top",
+            fontsize=7,
+            color="0.4",
+        )
 
 
 _PANELS = {
@@ -197,22 +249,24 @@ _PANELS = {
 
 def plot_cartesian(
     samples: CartesianSamples,
-    path: str | Path,
+    path: str | Path | None = None,
     *,
+    fig: Figure | None = None,
     which: str = "all",
     title: str | None = None,
-) -> Path:
+) -> Figure:
     """Tool-frame time histories as the paper's Figs. 4 (vect), 5 (cos), 6 (p).
 
     Args:
         samples: FK along the trajectory.
-        path: PNG file to write.
+        path: PNG file to write; None writes nothing.
+        fig: Figure to draw into (cleared first); None makes a new one.
         which: ``"vect"``, ``"cos"``, ``"position"``, ``"velocity"`` (speed
             and acceleration norms) or ``"all"`` (the four panels).
         title: Figure title.
 
     Returns:
-        ``path``.
+        The Figure.
 
     Raises:
         ValueError: If ``which`` is unknown.
@@ -221,7 +275,7 @@ def plot_cartesian(
     for kind in kinds:
         if kind not in (*_PANELS, "velocity"):
             raise ValueError(f"unknown panel {kind!r}")
-    fig = Figure(figsize=(8, 2.6 + 2.4 * len(kinds)), layout="constrained")
+    fig = _new_or_cleared(fig, (8, 2.6 + 2.4 * len(kinds)))
     axes = np.atleast_1d(fig.subplots(len(kinds), 1, sharex=True))
     t = samples.t
     for ax, kind in zip(axes, kinds, strict=True):
@@ -239,7 +293,7 @@ def plot_cartesian(
     axes[-1].set_xlabel("time t [s]")
     if title:
         fig.suptitle(title)
-    return _save(fig, path)
+    return _finish(fig, path)
 
 
 def _velocity_panel(ax: Axes, samples: CartesianSamples) -> None:

@@ -1,12 +1,17 @@
-"""Figures of the singularity report, as PNG bytes (matplotlib, Agg, no pyplot).
+"""Figures of the singularity report (matplotlib, no pyplot).
 
-Imported lazily by :mod:`workbench.reports.singularity_report` only.
+Imported lazily by :mod:`workbench.reports.singularity_report`. Each ``plot_*``
+function follows matplotlib's convention: ``ax=`` (or ``fig=`` when it draws
+several axes) is optional, the Figure is returned, and a PNG is written only
+when ``path`` is given; :func:`png_bytes` gives the bytes the report embeds.
 """
 
 from __future__ import annotations
 
 import io
 from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -28,11 +33,32 @@ _DPI = 110
 _HALO = [patheffects.withStroke(linewidth=4.5, foreground="white")]
 
 
-def _png(fig: Figure, *, tight: bool = True) -> bytes:
+def png_bytes(fig: Figure, *, tight: bool = True) -> bytes:
     """PNG bytes; ``tight=False`` saves the second draw that cropping costs."""
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=_DPI, bbox_inches="tight" if tight else None)
     return buffer.getvalue()
+
+
+def _axes(ax: Any, figsize: tuple[float, float]) -> tuple[Figure, Any]:
+    """``ax`` and its Figure, or a new Figure with one axes."""
+    if ax is None:
+        fig = Figure(figsize=figsize)
+        return fig, fig.add_subplot()
+    return ax.get_figure(), ax
+
+
+def _figure(fig: Figure | None, figsize: tuple[float, float]) -> Figure:
+    if fig is None:
+        return Figure(figsize=figsize)
+    fig.clear()
+    return fig
+
+
+def _finish(fig: Figure, path: str | Path | None, *, tight: bool = True) -> Figure:
+    if path is not None:
+        Path(path).write_bytes(png_bytes(fig, tight=tight))
+    return fig
 
 
 def _overlay(
@@ -102,17 +128,31 @@ def _overlay(
     ax.legend(loc="upper right", fontsize=8, framealpha=0.9)
 
 
-def figure_det_map(
+def plot_det_map(
     robot: Robot,
     grid: JointGrid,
+    path: str | Path | None = None,
     *,
+    ax: Any = None,
     shoulder: tuple[FloatArray, FloatArray, FloatArray] | None,
     elbow_theta3: FloatArray | None,
     examples: Mapping[str, FloatArray],
-) -> bytes:
-    """Det J over (θ2, θ3), diverging colours, loci overlaid."""
-    fig = Figure(figsize=(7.2, 5.8))
-    ax = fig.add_subplot()
+) -> Figure:
+    """Det J over (θ2, θ3), diverging colours, loci overlaid.
+
+    Args:
+        robot: The robot of the grid.
+        grid: Joint grid with ``values["det_j"]`` [m³].
+        path: PNG file to write; None writes nothing.
+        ax: Axes to draw on; None makes a new Figure.
+        shoulder: Optional (θ2 axis, θ3 axis, shoulder condition) to contour.
+        elbow_theta3: Elbow-singular θ3 values [rad] (horizontal lines).
+        examples: Named configurations (nq,) [rad] to mark.
+
+    Returns:
+        The Figure.
+    """
+    fig, ax = _axes(ax, (7.2, 5.8))
     det = grid.values["det_j"]
     vmax = float(np.max(np.abs(det))) or 1.0
     extent = np.degrees([grid.x[0], grid.x[-1], grid.y[0], grid.y[-1]])
@@ -132,20 +172,34 @@ def figure_det_map(
         f"{robot.name}: det J over (θ2, θ3), {grid.x.size} × {grid.y.size} grid",
         fontsize=10,
     )
-    return _png(fig)
+    return _finish(fig, path)
 
 
-def figure_sigma_map(
+def plot_sigma_map(
     robot: Robot,
     grid: JointGrid,
+    path: str | Path | None = None,
     *,
+    ax: Any = None,
     shoulder: tuple[FloatArray, FloatArray, FloatArray] | None,
     elbow_theta3: FloatArray | None,
     examples: Mapping[str, FloatArray],
-) -> bytes:
-    """log10 σmin over (θ2, θ3), loci overlaid."""
-    fig = Figure(figsize=(7.2, 5.8))
-    ax = fig.add_subplot()
+) -> Figure:
+    """log10 σmin over (θ2, θ3), loci overlaid.
+
+    Args:
+        robot: The robot of the grid.
+        grid: Joint grid with ``values["sigma_min"]`` (mixed units).
+        path: PNG file to write; None writes nothing.
+        ax: Axes to draw on; None makes a new Figure.
+        shoulder: As in :func:`plot_det_map`.
+        elbow_theta3: As in :func:`plot_det_map`.
+        examples: As in :func:`plot_det_map`.
+
+    Returns:
+        The Figure.
+    """
+    fig, ax = _axes(ax, (7.2, 5.8))
     sigma = np.log10(np.maximum(grid.values["sigma_min"], 1e-6))
     extent = np.degrees([grid.x[0], grid.x[-1], grid.y[0], grid.y[-1]])
     image = ax.imshow(
@@ -162,14 +216,17 @@ def figure_sigma_map(
         f"{robot.name}: smallest singular value of J, {grid.x.size} × {grid.y.size}",
         fontsize=10,
     )
-    return _png(fig)
+    return _finish(fig, path)
 
 
-def figure_arms(
+def plot_singular_arms(
     robot: Robot,
     examples: Mapping[str, FloatArray],
     directions: Mapping[str, DegenerateDirection],
-) -> bytes:
+    path: str | Path | None = None,
+    *,
+    fig: Figure | None = None,
+) -> Figure:
     """The arm in each shoulder and elbow singular configuration (Kang Figs. 2-3).
 
     Each panel shows the stick figure through the DH frame origins
@@ -177,17 +234,27 @@ def figure_arms(
     at the wrist centre (red), Kang's stated axis (dashed) and, for the
     shoulder, the singular plane x1 = 0; for the elbow, the shoulder-to-wrist
     line along which u points.
+
+    Args:
+        robot: A PUMA-type robot with DH frames ``frame0`` … ``frame6``.
+        examples: Named singular configurations (nq,) [rad]; ``wrist*`` skipped.
+        directions: Degenerate direction of each example, by name.
+        path: PNG file to write; None writes nothing.
+        fig: Figure to draw into (cleared first); None makes a new one.
+
+    Returns:
+        The Figure, one 3D panel per example.
     """
     from workbench.plot_arm import compute_arm_points, plot_arm, set_equal_axes
 
     names = [n for n in examples if not n.startswith("wrist")]
     rows = (len(names) + 1) // 2
-    fig = Figure(figsize=(9.0, 4.3 * rows))
+    fig = _figure(fig, (9.0, 4.3 * rows))
     legend: dict[str, object] = {}
     for k, name in enumerate(names):
         ax = fig.add_subplot(rows, 2, k + 1, projection="3d")
         q = examples[name]
-        plot_arm(ax, robot, q, label="arm (DH frame origins)", axis_length=0.0)
+        plot_arm(robot, q, ax=ax, label="arm (DH frame origins)", axis_length=0.0)
         d = directions[name]
         frame1 = robot.fk(q, "frame1")
         centre = robot.fk(q, "frame4").translation
@@ -212,7 +279,7 @@ def figure_arms(
         list(legend.values()), list(legend), loc="lower center", ncol=3, fontsize=8
     )
     fig.subplots_adjust(left=0.0, right=0.95, top=0.95, bottom=0.1, wspace=0.1)
-    return _png(fig, tight=False)
+    return _finish(fig, path, tight=False)
 
 
 def _plane(ax, origin: FloatArray, e1: FloatArray, e2: FloatArray) -> None:
@@ -234,13 +301,27 @@ def _arrow(
     return tip
 
 
-def figure_trajectory(
+def plot_distances_along_path(
     t: FloatArray,
     signals: Mapping[str, FloatArray],
     approaches: Mapping[str, ClosestApproach],
-) -> bytes:
-    """Signed distances along a trajectory, closest approaches marked."""
-    fig = Figure(figsize=(8.0, 1.9 * len(signals) + 0.6))
+    path: str | Path | None = None,
+    *,
+    fig: Figure | None = None,
+) -> Figure:
+    """Signed distances along a trajectory, closest approaches marked.
+
+    Args:
+        t: Sample times, shape (K,) [s].
+        signals: Signed distance of each kind, shape (K,) (unit per kind).
+        approaches: Closest approach of each kind (same keys as ``signals``).
+        path: PNG file to write; None writes nothing.
+        fig: Figure to draw into (cleared first); None makes a new one.
+
+    Returns:
+        The Figure, one panel per signal.
+    """
+    fig = _figure(fig, (8.0, 1.9 * len(signals) + 0.6))
     first = None
     for k, (kind, values) in enumerate(signals.items()):
         ax = fig.add_subplot(len(signals), 1, k + 1, sharex=first)
@@ -257,4 +338,4 @@ def figure_trajectory(
         else:
             ax.tick_params(labelbottom=False)
     fig.suptitle("Signed distances along the trajectory (● closest, ┆ crossing)")
-    return _png(fig)
+    return _finish(fig, path)

@@ -133,17 +133,21 @@ def build_singularity_report(
             "examples": data["examples"],
         }
     figures = {
-        "det_j_map": figs.figure_det_map(robot, det_grid, **overlay),
-        "sigma_min_map": figs.figure_sigma_map(robot, svd_grid, **overlay),
+        "det_j_map": figs.png_bytes(figs.plot_det_map(robot, det_grid, **overlay)),
+        "sigma_min_map": figs.png_bytes(
+            figs.plot_sigma_map(robot, svd_grid, **overlay)
+        ),
     }
     if fac is not None:
-        figures["arms"] = figs.figure_arms(robot, data["examples"], data["directions"])
+        arms = figs.plot_singular_arms(robot, data["examples"], data["directions"])
+        figures["arms"] = figs.png_bytes(arms, tight=False)
     if trajectory is not None:
         t, q = (np.asarray(v, dtype=np.float64) for v in trajectory)
         approaches = find_closest_approaches(robot, t, q)
         signals = compute_conditions(robot, q).as_dict() if fac is not None else {}
         signals["sigma_min"] = np.atleast_1d(compute_measures(robot, q).sigma_min)
-        figures["trajectory"] = figs.figure_trajectory(t, signals, approaches)
+        along = figs.plot_distances_along_path(t, signals, approaches)
+        figures["trajectory"] = figs.png_bytes(along)
         data["approaches"] = approaches
         summary["closest_approach"] = {
             kind: {"t": a.t, "distance": a.distance, "unit": a.unit}
