@@ -184,6 +184,7 @@ def take_screenshot(
     """
     profile = png.with_name(png.stem + "-profile")
     log = png.with_name(png.stem + "-chromium.log")
+    (profile / "DevToolsActivePort").unlink(missing_ok=True)  # from an earlier run
     with log.open("wb") as output:
         process = subprocess.Popen(
             [chromium, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", "about:blank"],

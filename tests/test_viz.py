@@ -585,3 +585,25 @@ def test_teach_panel_live_and_any_robot(three_r) -> None:
         assert not any(line.startswith(("shoulder", "IK branch")) for line in lines)
     finally:
         panel.close()
+
+
+def test_every_page_has_a_title_and_a_legend(puma) -> None:
+    viewer = Viewer(puma, color_by_singularity=True, title="Sec. V <pick>")
+    viewer.show_frames()
+    page = viewer.render_html()
+    assert "<title>Sec. V &lt;pick&gt;</title>" in page
+    assert '<div id="workbench-legend"><h1>Sec. V &lt;pick&gt;</h1>' in page
+    assert "distance to the nearest singularity" in page
+    assert "frame wrist_center: x red, y green, z blue" in page
+    assert "start of the path" not in page
+    viewer.play_trajectory([0.0, 1.0], np.zeros((2, 6)))
+    viewer.show_ghosts(np.zeros((2, 6)), labels=["one", "two"])
+    viewer.add_target("goal", np.eye(4))
+    page = viewer.render_html()
+    for text in ("tool path", "start of the path", "end of the path", "Ghost arms"):
+        assert text in page
+    assert "targets goal" in page and ">two<" in page
+    assert "workbench-legend" not in viewer.render_html(legend=False)
+    plain = Viewer(puma)  # no colouring: no colour scale
+    assert "nearest singularity" not in plain.render_html()
+    assert "<h1>workbench viewer: puma560</h1>" in plain.render_html()

@@ -117,9 +117,13 @@ def arm_region(robot: Robot, q: np.ndarray, viewer: Viewer) -> tuple[int, ...]:
 def test_arm_is_drawn_where_the_camera_frames_it(chromium, puma, tmp_path) -> None:
     q = np.deg2rad(Q1_DEG)
     viewer = Viewer(puma, q, color_by_singularity=True)
-    with_arm = screenshot(chromium, viewer.render_html(), tmp_path / "arm.png")
+    with_arm = screenshot(
+        chromium, viewer.render_html(legend=False), tmp_path / "arm.png"
+    )
     viewer.set_visible("robot", False)  # the same page without the robot
-    empty = screenshot(chromium, viewer.render_html(), tmp_path / "empty.png")
+    empty = screenshot(
+        chromium, viewer.render_html(legend=False), tmp_path / "empty.png"
+    )
 
     left, top, right, bottom = arm_region(puma, q, viewer)
     # Sensible camera: the arm is whole on screen and fills a good part of it.
@@ -138,9 +142,9 @@ def test_arm_is_drawn_where_the_camera_frames_it(chromium, puma, tmp_path) -> No
 def test_two_configurations_give_two_images(chromium, puma, tmp_path) -> None:
     viewer = Viewer(puma, np.deg2rad(Q1_DEG))
     viewer.set_camera([1.8, 1.5, 0.8], [0.1, 0.0, -0.1])  # one camera for both
-    first = screenshot(chromium, viewer.render_html(), tmp_path / "q1.png")
+    first = screenshot(chromium, viewer.render_html(legend=False), tmp_path / "q1.png")
     viewer.display(np.deg2rad(Q2_DEG))
-    second = screenshot(chromium, viewer.render_html(), tmp_path / "q2.png")
+    second = screenshot(chromium, viewer.render_html(legend=False), tmp_path / "q2.png")
     assert changed(first, second).mean() > 0.01
 
 
@@ -150,7 +154,7 @@ def test_animation_scrubs_pose_and_singularity_colour(chromium, puma, tmp_path) 
     q[:, 4] = np.deg2rad(45.0 - 45.0 * t)  # θ5 passes 0 (wrist singular) at 1 s
     viewer = Viewer(puma, color_by_singularity=True)
     viewer.play_trajectory(t, q)
-    page = viewer.render_html()
+    page = viewer.render_html(legend=False)
     start = screenshot(chromium, page, tmp_path / "t0.png", seek(0.0))
     middle = screenshot(chromium, page, tmp_path / "t1.png", seek(1.0))
 
@@ -161,3 +165,25 @@ def test_animation_scrubs_pose_and_singularity_colour(chromium, puma, tmp_path) 
     assert red(start) < 0.001  # far from singular: green links
     assert red(middle) > 0.01  # singular: red links
     assert changed(start, middle).mean() > 0.01
+
+
+def test_title_and_legend_are_drawn_top_left(chromium, puma, tmp_path) -> None:
+    t = np.linspace(0.0, 2.0, 61)  # [s]
+    q = np.tile(np.deg2rad(Q1_DEG), (t.size, 1))
+    q[:, 0] = np.linspace(0.0, 1.0, t.size)
+    viewer = Viewer(puma, color_by_singularity=True, title="A titled page")
+    viewer.show_frames()
+    viewer.play_trajectory(t, q)
+    pause = seek(0.0)
+    bare = screenshot(
+        chromium, viewer.render_html(legend=False), tmp_path / "a.png", pause
+    )
+    shown = screenshot(chromium, viewer.render_html(), tmp_path / "b.png", pause)
+    rows, cols = np.nonzero(changed(bare, shown))
+    assert rows.size > 0.02 * WIDTH * HEIGHT  # a box, not a few pixels
+    assert cols.min() < 0.05 * WIDTH and rows.min() < 0.05 * HEIGHT  # top left
+    assert cols.max() < 0.5 * WIDTH and rows.max() < 0.5 * HEIGHT
+    box = shown[rows.min() : rows.max(), cols.min() : cols.max()]
+    r, g, b = box[..., 0], box[..., 1], box[..., 2]
+    assert ((r > 180) & (g < 80) & (b < 80)).sum() > 50  # red end of the ramp
+    assert ((g > 150) & (r < 90) & (b < 110)).sum() > 50  # green end

@@ -113,7 +113,10 @@ def _write_pages(robot: Robot, out_dir: Path) -> dict[str, str]:
 
     samples = read_trajectory_csv(out_dir / "pick_and_place.csv", robot.nq)
     preview = write_trajectory_html(
-        robot, samples, out_dir / "preview.html", title="Angeles et al. Sec. V"
+        robot,
+        samples,
+        out_dir / "preview.html",
+        title=f"Angeles et al. (1988) Sec. V: pick and place, {robot.name}",
     )
     report = out_dir / "singularities.html"
     write_singularity_report(robot, report, trajectory=(samples.t, samples.q))
@@ -130,7 +133,10 @@ def _run_fish_cutting(out_dir: Path, *, pages: bool) -> dict[str, object]:
         from workbench.viz import write_trajectory_html
 
         write_trajectory_html(
-            kang, result.servo, out_dir / "fishcut.html", title="Kang Fig. 7 fish cut"
+            kang,
+            result.servo,
+            out_dir / "fishcut.html",
+            title=f"Kang (2007) Fig. 7: fish cutting, {kang.name}",
         )
     return summary
 

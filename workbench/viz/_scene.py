@@ -144,6 +144,7 @@ body {{ margin: 0; }}
 </head>
 <body>
 <div id="meshcat-pane"></div>
+{overlay}
 <script>
 {viewer_js}
 </script>
@@ -207,6 +208,7 @@ def render_page(
     camera: CameraView | None,
     title: str = "workbench viewer",
     live: bool = False,
+    overlay: str = "",
 ) -> str:
     """HTML page that embeds Meshcat's viewer and replays ``commands``.
 
@@ -216,6 +218,7 @@ def render_page(
         title: Page title (HTML-escaped here).
         live: Also connect to the live server's websocket (``/ws`` on the
             page's own host) for later commands.
+        overlay: HTML drawn over the scene (the title and legend box).
 
     Returns:
         The page; it needs no network access unless ``live``.
@@ -235,4 +238,5 @@ def render_page(
         commands=json.dumps(encoded),
         camera=json.dumps(view),
         live=_CONNECT if live else "",
+        overlay=overlay,
     )

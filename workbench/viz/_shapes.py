@@ -11,7 +11,7 @@ import numpy.typing as npt
 
 FloatArray = npt.NDArray[np.float64]
 
-_AXIS_COLORS = (0xE02020, 0x20A020, 0x2040E0)  # x red, y green, z blue
+AXIS_COLORS = (0xE02020, 0x20A020, 0x2040E0)  # x red, y green, z blue
 
 
 def _rgb_int(rgb: npt.ArrayLike) -> int:
@@ -32,7 +32,7 @@ def draw_triad(node: meshcat.Visualizer, scale: float, opacity: float = 1.0) -> 
         np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0]], dtype=float),
     )
     for axis, (name, color, turn) in enumerate(
-        zip("xyz", _AXIS_COLORS, turns, strict=True)
+        zip("xyz", AXIS_COLORS, turns, strict=True)
     ):
         placement = np.eye(4)
         placement[:3, :3] = turn

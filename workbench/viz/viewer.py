@@ -22,7 +22,7 @@ import pinocchio as pin
 from workbench.errors import DimensionError, InputError
 from workbench.poses import as_se3
 from workbench.robot import Robot
-from workbench.viz import _shapes
+from workbench.viz import _legend, _shapes
 from workbench.viz._arm import Arm, as_configurations, to_node_name
 from workbench.viz._camera import CameraView, frame_points
 from workbench.viz._scene import SceneRecorder, render_page
@@ -43,6 +43,8 @@ GHOST_COLORS = (
     (0.09, 0.75, 0.81),
 )
 TOOL_PATH_COLOR = (0.1, 0.2, 0.9)
+PATH_START_COLOR = (0.1, 0.8, 0.2)
+PATH_END_COLOR = (0.9, 0.1, 0.1)
 
 
 def _translation(p: npt.ArrayLike) -> FloatArray:
@@ -90,6 +92,9 @@ class Viewer:
         self._motion: FloatArray | None = None
         self._camera: CameraView | None = None
         self._server: LiveServer | None = None
+        self._legend: dict[str, str] = {}  # section -> HTML, drawn over the page
+        if self._gauge is not None:
+            self._legend["singularity"] = _legend.singularity_scale(self._gauge)
         self.q = np.clip(np.zeros(robot.nq), robot.lower, robot.upper)
         self.display(self.q if q is None else q)
         self._draw_floor()
@@ -145,6 +150,7 @@ class Viewer:
         for name in frames or [self.robot.tool_frame]:
             self._frames[name] = self.robot.get_frame_id(name)
             _shapes.draw_triad(self._scene[f"frames/{name}"], scale or 0.1 * self._size)
+        self._legend["frames"] = _legend.triads("frame " + ", ".join(self._frames))
         self.display(self.q)
 
     def add_target(
@@ -160,6 +166,8 @@ class Viewer:
         _shapes.draw_triad(node, scale or 0.12 * self._size, opacity=0.8)
         node.set_transform(pose.homogeneous)
         self._extra_points[f"target:{name}"] = pose.translation[None, :].copy()
+        names = [key[7:] for key in self._extra_points if key.startswith("target:")]
+        self._legend["targets"] = _legend.triads("targets " + ", ".join(names))
 
     def show_tool_path(
         self, q: npt.ArrayLike, *, name: str = "tool_path"
@@ -178,10 +186,13 @@ class Viewer:
         node = self._scene[to_node_name(name)]
         _shapes.draw_polyline(node["line"], points, TOOL_PATH_COLOR)
         radius = 0.012 * self._size
-        _shapes.draw_marker(node["start"], radius, (0.1, 0.8, 0.2))
+        _shapes.draw_marker(node["start"], radius, PATH_START_COLOR)
         node["start"].set_transform(_translation(points[0]))
-        _shapes.draw_marker(node["end"], radius, (0.9, 0.1, 0.1))
+        _shapes.draw_marker(node["end"], radius, PATH_END_COLOR)
         node["end"].set_transform(_translation(points[-1]))
+        self._legend["tool_path"] = _legend.tool_path(
+            TOOL_PATH_COLOR, PATH_START_COLOR, PATH_END_COLOR
+        )
         self._extra_points[f"path:{name}"] = points
         return points
 
@@ -221,6 +232,8 @@ class Viewer:
             ghost.draw(self._scene, qk)
             points.append(ghost.compute_points(qk))
         self._extra_points["ghosts"] = np.vstack(points)
+        colors = [GHOST_COLORS[i % len(GHOST_COLORS)] for i in range(len(qs))]
+        self._legend["ghosts"] = _legend.ghosts(labels, colors)
 
     def set_visible(self, name: str, visible: bool) -> None:
         """Show or hide a part of the scene (a node and everything under it).
@@ -309,10 +322,23 @@ class Viewer:
         self._arm.place(self.q)
         return frame_points(np.vstack(clouds))
 
-    def render_html(self) -> str:
-        """Self-contained HTML page of the scene (works offline, about 1 MB)."""
+    def render_html(self, *, legend: bool = True) -> str:
+        """Self-contained HTML page of the scene (works offline, about 1 MB).
+
+        Args:
+            legend: Draw the title and the legend (what the arm's colours, the
+                path markers, triads and ghosts mean) over the scene.
+        """
         commands = self._recorder.get_commands()
-        return render_page(commands, camera=self.get_camera(), title=self.title)
+        return render_page(
+            commands,
+            camera=self.get_camera(),
+            title=self.title,
+            overlay=self._render_overlay() if legend else "",
+        )
+
+    def _render_overlay(self) -> str:
+        return _legend.render_overlay(self.title, self._legend.values())
 
     def save_html(self, path: str | Path) -> Path:
         """Write :meth:`render_html` to ``path``; returns it.
@@ -356,7 +382,13 @@ class Viewer:
         return self._server.url
 
     def _render_live(self) -> str:
-        return render_page([], camera=self.get_camera(), title=self.title, live=True)
+        return render_page(
+            [],
+            camera=self.get_camera(),
+            title=self.title,
+            live=True,
+            overlay=self._render_overlay(),
+        )
 
     def wait_for_browser(self, timeout: float | None = None) -> bool:
         """Block until a page has loaded the scene; False on timeout.

@@ -1,0 +1,134 @@
+"""The title and legend drawn over a viewer page (an HTML box, top left).
+
+Meshcat draws the 3D scene only; what its colours and markers mean is said
+here, next to it: the singularity colour ramp, the tool path with its start and
+end markers, the frame triads, the ghost arms. Each entry is an HTML fragment;
+:func:`render_overlay` stacks them under the page title. Meshcat's own control
+panel stays at the top right, so the box sits at the top left, and it ignores
+the mouse so the scene can still be turned underneath it.
+"""
+
+from __future__ import annotations
+
+import html
+from collections.abc import Iterable, Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from workbench.viz._shapes import AXIS_COLORS
+from workbench.viz.singularity_gauge import SingularityGauge
+
+_AXIS_RGB = tuple(
+    ((c >> 16) / 255.0, ((c >> 8) & 0xFF) / 255.0, (c & 0xFF) / 255.0)
+    for c in AXIS_COLORS
+)
+
+_STYLE = """<style>
+#workbench-legend {
+  position: absolute; top: 8px; left: 8px; z-index: 10; max-width: 330px;
+  padding: 8px 10px; border-radius: 4px; pointer-events: none;
+  background: rgba(255, 255, 255, 0.88); color: #222;
+  font: 12px/1.35 system-ui, -apple-system, "Segoe UI", Roboto, sans-serif;
+  box-shadow: 0 1px 3px rgba(0, 0, 0, 0.3);
+}
+#workbench-legend h1 { font-size: 15px; margin: 0 0 6px 0; }
+#workbench-legend .row { display: flex; align-items: center; margin: 2px 0; }
+#workbench-legend .key { flex: none; width: 22px; margin-right: 6px; }
+#workbench-legend .dot { height: 10px; width: 10px; border-radius: 50%;
+  margin: 0 12px 0 6px; }
+#workbench-legend .line { height: 3px; }
+#workbench-legend .ramp { height: 10px; margin: 3px 0 1px 0; }
+#workbench-legend .ticks { position: relative; height: 14px;
+  font-size: 11px; color: #555; }
+#workbench-legend .ticks span { position: absolute; transform: translateX(-50%);
+  white-space: nowrap; }
+#workbench-legend .ends { display: flex; justify-content: space-between;
+  font-size: 11px; color: #555; }
+#workbench-legend .ticks span:first-child { transform: none; }
+#workbench-legend .ticks span:last-child { transform: translateX(-100%); }
+</style>"""
+
+
+def _css(rgb: npt.ArrayLike) -> str:
+    """CSS colour of an RGB triple in [0, 1]."""
+    r, g, b = (round(255 * float(c)) for c in np.clip(rgb, 0.0, 1.0))
+    return f"rgb({r}, {g}, {b})"
+
+
+def _row(key: str, label: str) -> str:
+    return f'<div class="row">{key}<span>{html.escape(label)}</span></div>'
+
+
+def dot(rgb: npt.ArrayLike, label: str) -> str:
+    """A legend row: a round marker of colour ``rgb`` (in [0, 1])."""
+    key = f'<span class="key dot" style="background: {_css(rgb)}"></span>'
+    return _row(key, label)
+
+
+def line(rgb: npt.ArrayLike, label: str) -> str:
+    """A legend row: a line of colour ``rgb`` (in [0, 1])."""
+    return _row(
+        f'<span class="key line" style="background: {_css(rgb)}"></span>', label
+    )
+
+
+def singularity_scale(gauge: SingularityGauge) -> str:
+    """The colour ramp of the arm's links and what its distance measures."""
+    stops = SingularityGauge.COLOR_STOPS
+    gradient = ", ".join(f"{_css(rgb)} {100 * x:g}%" for x, rgb in stops)
+    if stops[-1][0] < 1.0:
+        gradient += f", {_css(stops[-1][1])} 100%"
+    if gauge.method == "analytic":
+        measure = "min(|shoulder| / reach, |sin elbow|, |sin θ5|)"
+    else:
+        measure = "inverse condition number of J, scaled"
+    labels = ((0.0, "0"), (0.2, "0.2"), (0.5, "0.5"), (1.0, "1"))
+    ticks = "".join(
+        f'<span style="left: {100 * x:g}%">{text}</span>' for x, text in labels
+    )
+    return (
+        "<div><b>Arm colour</b>: distance to the nearest singularity, "
+        f"{html.escape(measure)}"
+        f'<div class="ramp" style="background: linear-gradient(to right, {gradient})">'
+        f'</div><div class="ticks">{ticks}</div>'
+        '<div class="ends"><span>singular</span><span>far</span></div></div>'
+    )
+
+
+def tool_path(
+    path_rgb: Sequence[float], start_rgb: Sequence[float], end_rgb: Sequence[float]
+) -> str:
+    """The tool path line and its start and end markers."""
+    return (
+        line(path_rgb, "tool path")
+        + dot(start_rgb, "start of the path")
+        + dot(end_rgb, "end of the path")
+    )
+
+
+def triads(what: str) -> str:
+    """Frame triads drawn for ``what`` (e.g. "tool frame", "targets")."""
+    key = (
+        '<span class="key" style="display: flex; gap: 2px">'
+        + "".join(
+            f'<span class="line" style="flex: 1; background: {_css(rgb)}"></span>'
+            for rgb in _AXIS_RGB
+        )
+        + "</span>"
+    )
+    return _row(key, f"{what}: x red, y green, z blue")
+
+
+def ghosts(labels: Sequence[str], colors: Sequence[Sequence[float]]) -> str:
+    """One row per translucent ghost arm (e.g. each IK branch)."""
+    rows = "".join(dot(rgb, label) for label, rgb in zip(labels, colors, strict=True))
+    return f"<div><b>Ghost arms</b>{rows}</div>"
+
+
+def render_overlay(title: str, entries: Iterable[str]) -> str:
+    """The box: ``title`` as a heading, then each legend entry (HTML)."""
+    body = "".join(entries)
+    return (
+        f'{_STYLE}<div id="workbench-legend"><h1>{html.escape(title)}</h1>{body}</div>'
+    )
