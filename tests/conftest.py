@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 from hypothesis import settings
@@ -13,6 +15,10 @@ settings.register_profile("workbench", derandomize=True, deadline=None)
 settings.load_profile("workbench")
 
 PUMA_NAMES = ("puma560", "puma560-kang")
+
+# No progress lines from the command line (tests compare stderr exactly; a loaded
+# machine or a cold Numba cache would add one). test_cli_habits turns them on.
+os.environ["WORKBENCH_PROGRESS"] = "0"
 
 
 @pytest.fixture(scope="session")

@@ -112,6 +112,7 @@ def _slow(args) -> int:
 
 
 def test_slow_command_prints_one_progress_line(capsys, monkeypatch) -> None:
+    monkeypatch.delenv("WORKBENCH_PROGRESS")  # conftest turns progress off
     monkeypatch.setattr(progress_module, "PROGRESS_DELAY", 0.05)
     monkeypatch.setattr(fk, "run", _slow)
     code, out, err = run(capsys, "fk", "--robot", "puma560", "--rad", "0")
@@ -119,9 +120,14 @@ def test_slow_command_prints_one_progress_line(capsys, monkeypatch) -> None:
     assert err == "workbench: fk: computing the forward kinematics…\n"
     code, _, err = run(capsys, "-q", "fk", "--robot", "puma560", "--rad", "0")
     assert code == 0 and err == ""
+    monkeypatch.setenv("WORKBENCH_PROGRESS", "0")
+    code, _, err = run(capsys, "fk", "--robot", "puma560", "--rad", "0")
+    assert code == 0 and err == ""
 
 
-def test_fast_command_prints_no_progress_line(capsys) -> None:
+def test_fast_command_prints_no_progress_line(capsys, monkeypatch) -> None:
+    monkeypatch.delenv("WORKBENCH_PROGRESS")
+    monkeypatch.setattr(progress_module, "PROGRESS_DELAY", 5.0)  # a loaded machine
     code, out, err = run(capsys, "fk", "--robot", "puma560", "--rad", *"000000")
     assert code == 0 and out and err == ""
 

@@ -4,7 +4,8 @@ Exit codes: 0 success, 2 bad input, 3 infeasible request, 141 when the reader
 of stdout went away (``workbench ... | head``: a quiet exit, as for SIGPIPE).
 Errors print a single line on stderr and no traceback (set ``WORKBENCH_DEBUG=1``
 to see one). The package's log messages go to stderr: warnings by default,
-``-v`` adds info, ``-vv`` debug, ``-q`` keeps only errors (and no progress line).
+``-v`` adds info, ``-vv`` debug, ``-q`` keeps only errors (and no progress line;
+``WORKBENCH_PROGRESS=0`` turns off only the progress line).
 """
 
 from __future__ import annotations
@@ -76,7 +77,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     message = getattr(args, "progress_message", f"{args.command}: working")
     with (
         _log_to_stderr(_log_level(args)),
-        Progress(message, enabled=not args.quiet) as progress,
+        Progress(message, enabled=_progress_wanted(args)) as progress,
     ):
         args.progress = progress
         try:
@@ -95,6 +96,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 130
         except Exception as err:  # a bug: still one line, exit 1
             return _fail(err, EXIT_INTERNAL, prefix="internal error")
+
+
+def _progress_wanted(args: argparse.Namespace) -> bool:
+    """Progress lines unless ``-q`` or ``WORKBENCH_PROGRESS=0`` (e.g. in CI logs)."""
+    return not args.quiet and os.environ.get("WORKBENCH_PROGRESS", "1") != "0"
 
 
 def _log_level(args: argparse.Namespace) -> int:
