@@ -123,7 +123,7 @@ def _write_pages(robot: Robot, out_dir: Path) -> dict[str, str]:
     return {"preview": str(preview), "singularity_report": str(report)}
 
 
-def _run_fish_cutting(out_dir: Path, *, pages: bool) -> dict[str, object]:
+def _run_fish_cutting(out_dir: Path, *, pages: bool) -> dict[str, Any]:
     """Kang's Fig. 7 program on the simulated fish: CSV, summary, 3D preview."""
     kang = load_robot("puma560-kang")
     result = run_fish_cutting(kang)
@@ -186,7 +186,7 @@ def round_for_json(value: Any, digits: int = SUMMARY_DIGITS) -> Any:
     return value
 
 
-def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, object]:
+def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, Any]:
     """Run the papers' examples and write the results into ``out_dir``.
 
     Args:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import cast
 
 import numpy as np
 import numpy.typing as npt
@@ -333,9 +334,8 @@ def axis_angle_from_rotation(
     Raises:
         InputError: As :func:`angeles4_from_rotation`.
     """
-    if check:
-        rotation = as_rotation(rotation, tol=tol)
-    e, s, c = _axis_sin_cos(rotation)
+    matrix = as_rotation(rotation, tol=tol) if check else cast(FloatArray, rotation)
+    e, s, c = _axis_sin_cos(matrix)
     return e, math.atan2(s, c)
 
 

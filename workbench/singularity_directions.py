@@ -124,7 +124,7 @@ def compute_degenerate_direction(
         column = 2 if axis_name == "z1" else 0
         paper = frame1.rotation[:, column].copy()
         cosine = abs(paper @ u[:3]) / np.linalg.norm(u[:3])
-        angle = float(np.degrees(np.arccos(min(cosine, 1.0))))
+        angle = float(np.degrees(np.arccos(min(float(cosine), 1.0))))
     return DegenerateDirection(
         kind=kind,
         q=q,

@@ -99,7 +99,11 @@ def compute_example_configurations(
     wrist[2], wrist[4] = math.radians(-30.0) * fac.sigma1 - off[2], -off[4]
     out["wrist"] = wrist
     table = robot if isinstance(robot, DHTable) else robot.dh_table
-    order = ("shoulder, elbow up", "shoulder, elbow down", "elbow, extended")
+    order: tuple[str, ...] = (
+        "shoulder, elbow up",
+        "shoulder, elbow down",
+        "elbow, extended",
+    )
     order += ("elbow, retracted", "wrist")
     return {key: _into_limits(table, out[key]) for key in order if key in out}
 

@@ -64,11 +64,11 @@ def compute_measures_from_jacobians(jacobians: npt.ArrayLike) -> JacobianMeasure
     jac = np.asarray(jacobians, dtype=np.float64)
     if jac.ndim < 2 or jac.shape[-2] != 6:
         raise InputError(f"Jacobians must have shape (..., 6, nv), got {jac.shape}")
-    sv = np.linalg.svd(jac, compute_uv=False)
+    sv = np.linalg.svd(jac, compute_uv=False).astype(np.float64, copy=False)
     sigma_min = sv[..., -1]
     with np.errstate(divide="ignore"):
         condition = np.where(sigma_min > 0.0, sv[..., 0] / sigma_min, np.inf)
-    det = np.linalg.det(jac) if jac.shape[-1] == 6 else None
+    det: FloatArray | None = np.linalg.det(jac) if jac.shape[-1] == 6 else None
     return JacobianMeasures(sv, sigma_min, np.prod(sv, axis=-1), condition, det)
 
 
@@ -89,20 +89,15 @@ def compute_measures(robot: Robot, q: npt.ArrayLike) -> JacobianMeasures:
     jacobians = np.stack([robot.jacobian(qi) for qi in batch])
     measures = compute_measures_from_jacobians(jacobians)
     if q.ndim == 1:
+        m = measures
         return JacobianMeasures(
-            *(None if x is None else x[0] for x in _fields(measures))
+            m.singular_values[0],
+            m.sigma_min[0],
+            m.manipulability[0],
+            m.condition_number[0],
+            None if m.det_j is None else m.det_j[0],
         )
     return measures
-
-
-def _fields(m: JacobianMeasures) -> tuple[FloatArray | None, ...]:
-    return (
-        m.singular_values,
-        m.sigma_min,
-        m.manipulability,
-        m.condition_number,
-        m.det_j,
-    )
 
 
 def compute_dh_jacobians(table: DHTable, q: npt.ArrayLike) -> FloatArray:
@@ -239,7 +234,7 @@ def compute_joint_grid(
         for key in chunks[0]
     }
     seconds = time.perf_counter() - start
-    return JointGrid(tuple(joints), x, y, q_fixed, values, method, seconds)
+    return JointGrid((joints[0], joints[1]), x, y, q_fixed, values, method, seconds)
 
 
 def _grid_method(

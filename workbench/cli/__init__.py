@@ -16,6 +16,7 @@ import logging
 import os
 import sys
 from collections.abc import Iterator, Sequence
+from typing import NoReturn
 
 import workbench
 from workbench.cli import demo, fishcut, fk, ik, plan, report, singularities, urdf, view
@@ -34,7 +35,7 @@ _COMMANDS = (fk, ik, urdf, demo, singularities, report, plan, view, fishcut)
 class _Parser(argparse.ArgumentParser):
     """ArgumentParser whose errors are one line on stderr and exit code 2."""
 
-    def error(self, message: str) -> None:
+    def error(self, message: str) -> NoReturn:
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
 
 

@@ -66,7 +66,7 @@ class Progress:
         if self._listener is not None:
             from numba.core import event
 
-            event.unregister("numba:compile", self._listener)  # type: ignore[arg-type]
+            event.unregister("numba:compile", self._listener)
             self._listener = None
 
     def finish(self) -> None:

@@ -6,6 +6,7 @@ Any other robot falls back to numerical IK (one solution, branch "numeric").
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -146,6 +147,7 @@ def run(args: argparse.Namespace) -> int:
     """Print the solution(s); returns the exit code."""
     robot = load_robot(args.robot)
     target = target_from_args(args)
+    rows: list[dict[str, Any]]
     try:
         solutions = analytic(robot, target)
     except UnsupportedRobotError:

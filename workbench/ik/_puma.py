@@ -189,8 +189,8 @@ def geometry_from_dh(
             f"robot {name!r} is not PUMA-type: needs a2 != 0 and (a3, d4) != 0"
         )
     offset = j2.d + j3.d
-    lower_t = tuple(float(x) for x in lower)
-    upper_t = tuple(float(x) for x in upper)
+    lower_t = tuple(float(x) for x in np.asarray(lower, dtype=np.float64))
+    upper_t = tuple(float(x) for x in np.asarray(upper, dtype=np.float64))
     offsets = tuple(j.theta_offset for j in table.joints)
     plain = tuple(
         o == 0.0 and lo >= -math.pi and hi <= math.pi

@@ -97,7 +97,7 @@ def packed_geometry(robot: Robot) -> np.ndarray:
 def pack_geometry(geo: PumaGeometry) -> np.ndarray:
     """The constants of ``geo`` as a read-only (1,) :data:`GEOMETRY_DTYPE` array."""
     packed = np.zeros(1, dtype=GEOMETRY_DTYPE)
-    for name in GEOMETRY_DTYPE.names:
+    for name in GEOMETRY_DTYPE.names or ():
         if name in PumaGeometry.__slots__:
             packed[name] = getattr(geo, name)
     packed["reach_low"], packed["reach_high"], packed["cylinder2"] = geo.reach_test

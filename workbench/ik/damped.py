@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import importlib.metadata
 import math
+from typing import Any
 
 import numba
 import numpy as np
@@ -65,7 +66,7 @@ DLS_LAMBDA_MAX = 0.05
 QP_DAMPING = 1e-6
 """Default damping weight rho of :func:`qp_step`."""
 
-_OSQP_SETTINGS: dict[str, float | bool] = {
+_OSQP_SETTINGS: dict[str, Any] = {
     "eps_abs": 1e-10,
     "eps_rel": 1e-10,
     "verbose": False,
@@ -231,8 +232,9 @@ def qp_step(
     gradient = -jac.T @ twist
     # With no limit active the unconstrained minimiser is the solution.
     with np.errstate(all="ignore"):
+        v: FloatArray | None
         try:
-            v = np.linalg.solve(hessian, -gradient)
+            v = np.linalg.solve(hessian, -gradient).astype(np.float64, copy=False)
         except np.linalg.LinAlgError:  # singular J and damping = 0
             v = None
     if v is not None and np.all(v >= lower) and np.all(v <= upper):

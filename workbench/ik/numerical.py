@@ -69,6 +69,7 @@ import time
 import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TypeGuard
 
 import eigenpy
 import numpy as np
@@ -253,7 +254,7 @@ def _check_options(
         )
 
 
-def _is_int(value: object) -> bool:
+def _is_int(value: object) -> TypeGuard[int]:
     return isinstance(value, numbers.Integral) and not isinstance(value, bool)
 
 
@@ -279,6 +280,8 @@ class _Setup:
         "upper",
         "vector_space",
     )
+    seed_q: FloatArray | None
+    seed_features: FloatArray | None
 
     def __init__(self, robot: Robot) -> None:
         model, data = robot.model, robot.data
@@ -322,12 +325,13 @@ class _Setup:
 
     def first_guess(self, target: pin.SE3) -> FloatArray:
         """The candidate whose tool pose is nearest ``target`` (a copy), (nq,)."""
-        if self.seed_features is None:
-            self._build_seeds()
-        scores = target.homogeneous.ravel().dot(self.seed_features)
-        return self.seed_q[int(scores.argmin())].copy()
+        seed_q, features = self.seed_q, self.seed_features
+        if seed_q is None or features is None:
+            seed_q, features = self._build_seeds()
+        scores = target.homogeneous.ravel().dot(features)
+        return seed_q[int(scores.argmin())].copy()
 
-    def _build_seeds(self) -> None:
+    def _build_seeds(self) -> tuple[FloatArray, FloatArray]:
         model, data, lower, upper = self.model, self.data, self.lower, self.upper
         half = np.minimum(0.5 * self.span, _UNBOUNDED_SPAN)
         draws = np.random.default_rng(_SEED_RNG).uniform(
@@ -349,6 +353,7 @@ class _Setup:
         self.seed_q = seed_q
         # (16, count), so that the product runs along contiguous rows.
         self.seed_features = np.ascontiguousarray(features.reshape(-1, 16).T)
+        return seed_q, self.seed_features
 
     def matches(self, robot: Robot) -> bool:
         return (
@@ -490,7 +495,9 @@ def _solve(
     sample = None
 
     q = q_ref.copy() if q_start is None else q_start
-    best_q, best_err2, best_pose, best_e = q, math.inf, None, None
+    best_q, best_err2 = q, math.inf
+    best_pose: pin.SE3 | None = None
+    best_e: FloatArray | None = None
     # Steps are counted over all runs; run_start and stall_at are step counts
     # (start of the run, last 10 % fall of its error below stall_level).
     steps = restarts = run_start = stall_at = 0
@@ -582,14 +589,19 @@ def _solve(
 
     # Every q above is a new array, never written to once evaluated.
     best_q.setflags(write=False)
-    # The angular part of log6 is log3 of the rotation.
+    # The angular part of log6 is log3 of the rotation; no pose was better
+    # than infinity only if every error was NaN.
+    position_error = rotation_error = math.nan
+    if best_pose is not None and best_e is not None:
+        position_error = math.hypot(*best_pose.translation.tolist())
+        rotation_error = math.hypot(*best_e[3:].tolist())
     return IKResult(
         q=best_q,
         success=best_err2 <= tol2,
         iterations=steps,
         error=math.sqrt(best_err2),
-        position_error=math.hypot(*best_pose.translation.tolist()),
-        rotation_error=math.hypot(*best_e[3:].tolist()),
+        position_error=position_error,
+        rotation_error=rotation_error,
         restarts=restarts,
     )
 

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 from matplotlib import patheffects
+from matplotlib.artist import Artist
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
@@ -250,7 +251,7 @@ def plot_singular_arms(
     names = [n for n in examples if not n.startswith("wrist")]
     rows = (len(names) + 1) // 2
     fig = _figure(fig, (9.0, 4.3 * rows))
-    legend: dict[str, object] = {}
+    legend: dict[str, Artist] = {}
     for k, name in enumerate(names):
         ax = fig.add_subplot(rows, 2, k + 1, projection="3d")
         q = examples[name]

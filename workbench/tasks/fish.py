@@ -151,7 +151,7 @@ class SimulatedFish:
             ``"bone"`` at or below the backbone top, ``"flesh"`` at or below
             the flesh surface, else None.
         """
-        x, y, z = (float(c) for c in position)  # type: ignore[union-attr]
+        x, y, z = (float(c) for c in np.asarray(position, dtype=np.float64))
         if z <= self.bone_top(x, y):
             return BONE
         if z <= self.flesh_top(x, y):

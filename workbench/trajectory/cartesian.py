@@ -34,7 +34,8 @@ _LIMIT_TOL = 1e-9  # [rad]: slack of ``within_limits`` for numerical solutions
 
 
 class _Sampled(Protocol):
-    robot: Robot
+    @property
+    def robot(self) -> Robot: ...
 
     def sample(self, t: npt.ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]: ...
 

@@ -75,7 +75,8 @@ class JointExtrema:
 
 
 class _HasExtrema(Protocol):
-    robot: Robot
+    @property
+    def robot(self) -> Robot: ...
 
     def get_extrema(self, order: int) -> JointExtrema: ...
 

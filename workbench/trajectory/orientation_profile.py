@@ -16,6 +16,7 @@ explains why the quaternion is taken with ``+u``, not Kang's ``−u``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 import numpy.typing as npt
@@ -71,10 +72,11 @@ def compute_relative_axis_angle(
     Raises:
         InputError: If a matrix is not a rotation (NaN, shape, not orthonormal).
     """
-    r1, r2 = rotation_start, rotation_goal
     if check:
         r1 = _rotation(rotation_start, "rotation_start")
         r2 = _rotation(rotation_goal, "rotation_goal")
+    else:  # float (3, 3) arrays known to be rotations
+        r1, r2 = cast(FloatArray, rotation_start), cast(FloatArray, rotation_goal)
     # the quaternion with w = cos(angle / 2) >= 0 is the shortest path: its
     # axis and angle in [0, pi] are those of the rotation matrix itself
     axis, angle = axis_angle_from_rotation(r1.T @ r2, check=False)
@@ -167,7 +169,7 @@ def orientation(
     r1 = np.asarray(rotation_start, dtype=np.float64)
     return OrientationProfile(
         rotation_start=_read_only(r1),
-        rotation_goal=_read_only(rotation_goal),
+        rotation_goal=_read_only(np.asarray(rotation_goal, dtype=np.float64)),
         axis=_read_only(axis),
         axis_base=_read_only(r1 @ axis),
         angle=angle,

@@ -71,7 +71,7 @@ class UniformCubicSpline:
     @property
     def knots(self) -> FloatArray:
         """Knot times, shape (N,)."""
-        return self.start + self.step * np.arange(self.n_points)
+        return self.start + self.step * np.arange(self.n_points, dtype=np.float64)
 
     def _locate(self, t: FloatArray) -> tuple[npt.NDArray[np.intp], FloatArray]:
         u = (t - self.start) * (1.0 / self.step)

@@ -15,7 +15,10 @@ AXIS_COLORS = (0xE02020, 0x20A020, 0x2040E0)  # x red, y green, z blue
 
 
 def _rgb_int(rgb: npt.ArrayLike) -> int:
-    r, g, b = (round(255 * float(np.clip(c, 0.0, 1.0))) for c in rgb)
+    r, g, b = (
+        round(255 * float(np.clip(c, 0.0, 1.0)))
+        for c in np.asarray(rgb, dtype=np.float64)
+    )
     return (r << 16) + (g << 8) + b
 
 

@@ -125,7 +125,11 @@ class SingularityGauge:
         q = self.robot.check_configuration(q)
         if self.method == "analytic":
             c = compute_conditions(self.robot, q)
-            raw = min(abs(float(c.shoulder)) / self.length, abs(c.elbow), abs(c.wrist))
+            raw = min(
+                abs(float(c.shoulder)) / self.length,
+                abs(float(c.elbow)),
+                abs(float(c.wrist)),
+            )
         else:
             raw = _inverse_condition(self.robot.jacobian(q), self.length)
         return min(1.0, float(raw) / self.reference)
