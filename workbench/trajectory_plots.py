@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -21,6 +22,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
+from workbench.robot import Robot
 from workbench.trajectory.cartesian import CartesianSamples
 from workbench.trajectory.normal_spline import NormalSpline, UniformCubicSpline
 
@@ -129,8 +131,20 @@ def plot_normal_spline(
 _QUANTITIES = ("position [deg]", "speed [deg/s]", "acceleration [deg/s²]")
 
 
+class _JointTrajectory(Protocol):
+    """What the joint plot reads: a robot, a duration and samples."""
+
+    @property
+    def robot(self) -> Robot: ...
+
+    @property
+    def duration(self) -> float: ...
+
+    def sample(self, t: npt.ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]: ...
+
+
 def plot_joint_trajectory(
-    trajectory,
+    trajectory: _JointTrajectory,
     path: str | Path | None = None,
     *,
     fig: Figure | None = None,
@@ -144,7 +158,9 @@ def plot_joint_trajectory(
     quantity; the limit values are written at the line's right end.
 
     Args:
-        trajectory: A joint trajectory (``robot``, ``duration``, ``sample``).
+        trajectory: A joint trajectory (``robot``, ``duration`` [s] and
+            ``sample(t) -> (q, qd, qdd)``), e.g. from
+            :func:`workbench.trajectory.pick_and_place`.
         path: PNG file to write; None writes nothing.
         fig: Figure to draw into (cleared first); None makes a new one.
         joints: 0-based joint indices to show (default all).

@@ -65,7 +65,7 @@ def compute_relative_axis_angle(
 
     Returns:
         ``(u, angle)``: unit axis, shape (3,), in the axes of the start frame,
-        and angle in [0, π] [rad], with ``R_2 = R_1 Rot(u, angle)``. At angle 0
+        and angle [rad] in [0, π], with ``R_2 = R_1 Rot(u, angle)``. At angle 0
         the axis is [1, 0, 0]; at π either sense is shortest and the one with
         its largest component positive is returned.
 
