@@ -77,7 +77,7 @@ import pinocchio as pin
 
 from workbench.errors import InputError
 from workbench.poses import as_se3
-from workbench.robot import Robot
+from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -12,8 +12,8 @@ from workbench.trajectory.cartesian import (
     pick_and_place_from_poses,
     select_ik_solution,
 )
-from workbench.trajectory.cartesian_motion import plan_move, plan_stop
-from workbench.trajectory.cartesian_paths import (
+from workbench.planning.cartesian_motion import plan_move, plan_stop
+from workbench.planning.cartesian_paths import (
     CartesianLimits,
     CartesianMotion,
     CartesianState,
@@ -25,7 +25,7 @@ from workbench.trajectory.limits import (
     minimum_duration,
     raise_for_violations,
 )
-from workbench.trajectory.motion_primitives import (
+from workbench.planning.motion_primitives import (
     Hold,
     MotionPrimitive,
     PointToPoint,
@@ -41,22 +41,22 @@ from workbench.trajectory.normal_spline import (
     compute_normal_spline,
     get_normal_spline,
 )
-from workbench.trajectory.online_planner import OnlinePlanner, PlannerSample
-from workbench.trajectory.orientation_profile import (
+from workbench.planning.online_planner import OnlinePlanner, PlannerSample
+from workbench.planning.orientation_profile import (
     OrientationProfile,
     compute_relative_axis_angle,
     orientation,
 )
 from workbench.trajectory.pick_and_place import JointTrajectory, pick_and_place
 from workbench.trajectory.segments import SegmentedTrajectory, pick_via_place
-from workbench.trajectory.servo_interpolation import interpolate_servo
+from workbench.planning.servo_interpolation import interpolate_servo
 from workbench.trajectory.time_optimal import (
     TimeOptimalComparison,
     compare_time_optimal,
     compute_time_optimal_duration,
     compute_toppra_duration,
 )
-from workbench.trajectory.trapezoidal_profile import (
+from workbench.planning.trapezoidal_profile import (
     TrapezoidalProfile,
     replan_trapezoid,
     stopping_profile,

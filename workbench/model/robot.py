@@ -9,7 +9,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from workbench.dh import DHTable
+from workbench.model.dh import DHTable
 from workbench.errors import (
     DimensionError,
     FrameNotFoundError,
