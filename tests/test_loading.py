@@ -19,7 +19,11 @@ from workbench import (
     get_robot_names,
     load_robot,
 )
-from workbench.model.catalog import CATALOG, get_catalog_urdf, get_example_robot_data_dir
+from workbench.model.catalog import (
+    CATALOG,
+    get_catalog_urdf,
+    get_example_robot_data_dir,
+)
 
 ARMS = {"ur5": (6, "tool0"), "panda": (7, "panda_hand_tcp"), "xarm7": (7, "link_eef")}
 

@@ -12,6 +12,7 @@ import pytest
 from conftest import random_configurations
 
 from workbench import InputError, NonFiniteError, Robot, generate_urdf, load_robot
+from workbench.singularities.along_path import find_closest_approaches
 from workbench.singularities.conditions import (
     SINGULARITY_KINDS,
     NotPumaTypeError,
@@ -32,7 +33,6 @@ from workbench.singularities.measures import (
     compute_measures,
     cross_check_det_j,
 )
-from workbench.singularities.along_path import find_closest_approaches
 from workbench.trajectory.csv_io import (
     JointTrajectorySamples,
     read_trajectory_csv,

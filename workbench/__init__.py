@@ -2,7 +2,6 @@
 
 import logging
 
-from workbench.model.dh import DHJoint, DHTable
 from workbench.errors import (
     DHTableError,
     DimensionError,
@@ -16,6 +15,7 @@ from workbench.errors import (
     URDFLoadError,
     WorkbenchError,
 )
+from workbench.model.dh import DHJoint, DHTable
 from workbench.model.loading import get_robot_names, load_robot
 from workbench.model.robot import Robot
 from workbench.model.urdf_generator import generate_urdf

@@ -17,8 +17,8 @@ from workbench.cli._common import (
 from workbench.errors import InputError
 from workbench.model.loading import load_robot
 from workbench.trajectory import minimum_duration, pick_and_place
-from workbench.trajectory.normal_spline import DEFAULT_N_POINTS
 from workbench.trajectory.csv_io import write_trajectory_csv
+from workbench.trajectory.normal_spline import DEFAULT_N_POINTS
 
 EXIT_INFEASIBLE = 3
 DEFAULT_RATE_HZ = 100.0

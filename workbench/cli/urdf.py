@@ -6,8 +6,8 @@ import argparse
 from pathlib import Path
 
 from workbench.cli._common import add_json_flag, print_json
-from workbench.model.dh import DHTable
 from workbench.errors import InputError
+from workbench.model.dh import DHTable
 from workbench.model.urdf_generator import generate_urdf
 
 

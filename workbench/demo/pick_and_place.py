@@ -17,8 +17,8 @@ import numpy as np
 
 from workbench import paper_data
 from workbench.errors import WorkbenchError
-from workbench.poses import ANGELES7_PRINTED_TOL, se3_from_angeles7
 from workbench.model.robot import Robot
+from workbench.poses import ANGELES7_PRINTED_TOL, se3_from_angeles7
 from workbench.trajectory import (
     compare_time_optimal,
     compute_cartesian_trajectory,

@@ -21,8 +21,8 @@ import numpy.typing as npt
 from workbench import paper_data
 from workbench.demo.pick_and_place import run_pick_and_place_demo
 from workbench.model.loading import load_robot
-from workbench.poses import angeles7_from_se3
 from workbench.model.robot import Robot
+from workbench.poses import angeles7_from_se3
 from workbench.tasks.fish_cutting import run_fish_cutting, summarize_fish_cutting
 from workbench.trajectory.csv_io import read_trajectory_csv, write_trajectory_csv
 

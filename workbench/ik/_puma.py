@@ -26,8 +26,8 @@ from functools import lru_cache
 import numpy as np
 import numpy.typing as npt
 
-from workbench.model.dh import DHTable
 from workbench.errors import InfeasibleError, InputError
+from workbench.model.dh import DHTable
 from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]

@@ -20,7 +20,7 @@ from pathlib import Path
 
 from workbench.errors import URDFLoadError
 
-_PACKAGE_ROOT = Path(__file__).resolve().parent
+_PACKAGE_ROOT = Path(__file__).resolve().parents[1]  # workbench/
 
 
 @dataclass(frozen=True, slots=True)

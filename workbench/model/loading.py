@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pinocchio as pin
 
+from workbench.errors import JointNotFoundError, RobotNotFoundError, URDFLoadError
 from workbench.model.catalog import CATALOG, get_catalog_urdf
 from workbench.model.dh import DHTable
-from workbench.errors import JointNotFoundError, RobotNotFoundError, URDFLoadError
 from workbench.model.robot import Robot
 
 

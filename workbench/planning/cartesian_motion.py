@@ -31,7 +31,6 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
-from workbench.poses import as_rotation
 from workbench.planning.cartesian_paths import (
     ZERO_TOL,
     CartesianLimits,
@@ -53,6 +52,7 @@ from workbench.planning.trapezoidal_profile import (
     replan_trapezoid,
     stopping_profile,
 )
+from workbench.poses import as_rotation
 from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]

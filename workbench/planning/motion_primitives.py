@@ -24,7 +24,6 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
-from workbench.poses import as_rotation
 from workbench.planning.cartesian_motion import (
     add_residual,
     hold_rotation,
@@ -42,6 +41,7 @@ from workbench.planning.cartesian_paths import (
     FixedPosition,
 )
 from workbench.planning.trapezoidal_profile import replan_trapezoid
+from workbench.poses import as_rotation
 from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]

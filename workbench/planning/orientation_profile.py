@@ -22,8 +22,8 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InputError
-from workbench.poses import as_rotation, axis_angle_from_rotation
 from workbench.planning.trapezoidal_profile import TrapezoidalProfile, trapezoid
+from workbench.poses import as_rotation, axis_angle_from_rotation
 from workbench.validation import as_finite_array
 
 FloatArray = npt.NDArray[np.float64]

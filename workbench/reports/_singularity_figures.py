@@ -15,9 +15,9 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
 from workbench.model.robot import Robot
+from workbench.singularities.along_path import ClosestApproach
 from workbench.singularities.directions import DegenerateDirection
 from workbench.singularities.measures import JointGrid
-from workbench.singularities.along_path import ClosestApproach
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -20,6 +20,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.model.robot import Robot
+from workbench.singularities.along_path import find_closest_approaches
 from workbench.singularities.conditions import (
     NotPumaTypeError,
     PumaFactorisation,
@@ -36,7 +37,6 @@ from workbench.singularities.measures import (
     compute_measures,
     cross_check_det_j,
 )
-from workbench.singularities.along_path import find_closest_approaches
 
 FloatArray = npt.NDArray[np.float64]
 #: ``progress(stage, done, total)``.

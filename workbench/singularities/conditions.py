@@ -38,8 +38,8 @@ from typing import ClassVar
 import numpy as np
 import numpy.typing as npt
 
-from workbench.model.dh import DHTable
 from workbench.errors import InputError
+from workbench.model.dh import DHTable
 from workbench.model.robot import Robot
 from workbench.validation import as_finite_array
 

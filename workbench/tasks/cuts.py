@@ -24,7 +24,6 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
-from workbench.tasks.fish import BONE, FLESH
 from workbench.planning.cartesian_motion import hold_rotation, plan_line, plan_stop
 from workbench.planning.cartesian_paths import (
     CartesianLimits,
@@ -34,6 +33,7 @@ from workbench.planning.cartesian_paths import (
 )
 from workbench.planning.motion_primitives import MotionPrimitive
 from workbench.planning.trapezoidal_profile import replan_trapezoid
+from workbench.tasks.fish import BONE, FLESH
 from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]

@@ -19,13 +19,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
 from workbench.model.robot import Robot
+from workbench.trajectory.csv_io import JointTrajectorySamples
 from workbench.trajectory.limits import (
     JointExtrema,
     LimitViolation,
@@ -38,13 +39,17 @@ from workbench.trajectory.normal_spline import (
     SplineExtremum,
     get_normal_spline,
 )
-from workbench.trajectory.csv_io import JointTrajectorySamples
 from workbench.validation import as_vector
 
-if TYPE_CHECKING:
-    from workbench.trajectory.segments import SegmentedTrajectory
-
 FloatArray = npt.NDArray[np.float64]
+
+
+class _Sampleable(Protocol):
+    """A trajectory sampled by time: JointTrajectory, SegmentedTrajectory."""
+
+    def sample(
+        self, t: npt.ArrayLike
+    ) -> tuple[FloatArray, FloatArray, FloatArray]: ...  # pragma: no cover
 
 
 def check_duration(duration: float, name: str = "duration") -> float:
@@ -188,7 +193,7 @@ def _scale(
 
 
 def _sample_uniform(
-    trajectory: JointTrajectory | SegmentedTrajectory,
+    trajectory: _Sampleable,
     duration: float,
     rate_hz: float,
 ) -> JointTrajectorySamples:
