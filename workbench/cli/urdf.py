@@ -21,7 +21,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         "from-dh",
         help="generate a URDF from a DH table (JSON)",
         description="Generate a URDF from a standard DH table in JSON (SI units); "
-        "see INTERFACE.md for the format.",
+        "see docs/interface.md for the format.",
     )
     from_dh.add_argument("table", type=Path, metavar="TABLE", help="DH table, JSON")
     from_dh.add_argument("--out", type=Path, required=True, help="URDF file to write")

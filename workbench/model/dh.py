@@ -87,7 +87,7 @@ class DHTable:
 
     @classmethod
     def from_dict(cls, raw: Any, source: str = "DH table") -> DHTable:
-        """Build a table from its JSON form (see shared INTERFACE.md).
+        """Build a table from its JSON form (see docs/interface.md).
 
         Args:
             raw: Parsed JSON object.
