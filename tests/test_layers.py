@@ -110,6 +110,8 @@ def test_no_import_cycle() -> None:
 
 
 def test_every_folder_has_a_layer() -> None:
-    folders = {p.name for p in PACKAGE.iterdir() if p.is_dir() and p.name != "__pycache__"}
+    folders = {
+        p.name for p in PACKAGE.iterdir() if p.is_dir() and p.name != "__pycache__"
+    }
     modules = {p.stem for p in PACKAGE.glob("*.py")} - {"__init__", "__main__"}
     assert (folders | modules) - {"_urdf"} <= set(LAYERS)
