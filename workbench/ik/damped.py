@@ -29,12 +29,12 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import DimensionError, InputError
+from workbench.ik._velocity_kernel import dls_damping, dls_gains
 from workbench.model.robot import Robot
 from workbench.poses import as_se3
 from workbench.validation import as_finite_array, as_vector
@@ -79,40 +79,6 @@ def dls_inverse(
     _check_positive(lambda_max, "lambda_max", strict=False)
     u, sigma, vt = np.linalg.svd(jac, full_matrices=False)
     return (vt.T * dls_gains(sigma, float(epsilon), float(lambda_max))) @ u.T
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def dls_damping(sigma_min2: float, epsilon: float, lambda_max: float) -> float:
-    r"""The damping :math:`\lambda^2` (module docstring) given :math:`\sigma_\min^2`.
-
-    The damping law in one place: :func:`dls_gains` (hence
-    :func:`dls_inverse`) and the online planner's compiled velocity step use it.
-    """
-    if sigma_min2 < epsilon * epsilon:
-        return (1.0 - sigma_min2 / (epsilon * epsilon)) * lambda_max * lambda_max
-    return 0.0
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def dls_gains(sigma: FloatArray, epsilon: float, lambda_max: float) -> FloatArray:
-    r"""The factors :math:`\sigma_i / (\sigma_i^2 + \lambda^2)` of :math:`J^\#`.
-
-    Args:
-        sigma: Singular values of J, descending, shape (k,).
-        epsilon: Size of the singular region, > 0.
-        lambda_max: Damping at a singularity, >= 0.
-
-    Returns:
-        Shape (k,); 0 where :math:`\sigma_i^2 + \lambda^2 = 0`.
-    """
-    sigma_min = sigma[-1] if sigma.size else 0.0
-    lambda2 = dls_damping(sigma_min * sigma_min, epsilon, lambda_max)
-    gains = np.zeros_like(sigma)
-    for k in range(sigma.size):
-        denominator = sigma[k] * sigma[k] + lambda2
-        if denominator > 0.0:
-            gains[k] = sigma[k] / denominator
-    return gains
 
 
 def dls_step(

@@ -39,10 +39,10 @@ import pinocchio as pin
 
 from workbench.errors import InputError, JointLimitError
 from workbench.ik import _puma_kernel as kernel
+from workbench.ik._velocity_kernel import solve_velocity
 from workbench.ik.closed_form import BRANCHES, analytic, nearest, solve_one
 from workbench.ik.damped import DLS_EPSILON, DLS_LAMBDA_MAX, dls_inverse
 from workbench.model.robot import Robot
-from workbench.planning._inverse_velocity import solve_velocity
 from workbench.planning._tracking import command_joints, track
 from workbench.planning.cartesian_paths import (
     ZERO_TOL,

@@ -34,8 +34,6 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-from workbench.ik.damped import dls_damping
-
 FloatArray = npt.NDArray[np.float64]
 
 #: |J[0:3, 3:6]| entries at or below this count as zero (rounding of FK).
@@ -47,6 +45,40 @@ JACOBI_TOL = 1e-15
 JACOBI_MAX_SWEEPS = 60
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+
+
+@_jit
+def dls_damping(sigma_min2: float, epsilon: float, lambda_max: float) -> float:
+    r"""The damping :math:`\lambda^2` (module docstring) given :math:`\sigma_\min^2`.
+
+    The damping law in one place: :func:`dls_gains` (hence
+    :func:`workbench.ik.dls_inverse`) and :func:`damped_solve` use it.
+    """
+    if sigma_min2 < epsilon * epsilon:
+        return (1.0 - sigma_min2 / (epsilon * epsilon)) * lambda_max * lambda_max
+    return 0.0
+
+
+@_jit
+def dls_gains(sigma: FloatArray, epsilon: float, lambda_max: float) -> FloatArray:
+    r"""The factors :math:`\sigma_i / (\sigma_i^2 + \lambda^2)` of :math:`J^\#`.
+
+    Args:
+        sigma: Singular values of J, descending, shape (k,).
+        epsilon: Size of the singular region, > 0.
+        lambda_max: Damping at a singularity, >= 0.
+
+    Returns:
+        Shape (k,); 0 where :math:`\sigma_i^2 + \lambda^2 = 0`.
+    """
+    sigma_min = sigma[-1] if sigma.size else 0.0
+    lambda2 = dls_damping(sigma_min * sigma_min, epsilon, lambda_max)
+    gains = np.zeros_like(sigma)
+    for k in range(sigma.size):
+        denominator = sigma[k] * sigma[k] + lambda2
+        if denominator > 0.0:
+            gains[k] = sigma[k] / denominator
+    return gains
 
 
 @_jit
@@ -123,7 +155,7 @@ def block_solve(
     return frob2 * epsilon * epsilon <= 1.0
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@numba.njit(cache=True, nogil=True, error_model="numpy", forceinline=True)
 def _dot(a: FloatArray, b: FloatArray) -> float:
     """Dot product of two short vectors (no BLAS call)."""
     acc = 0.0
@@ -268,4 +300,4 @@ def solve_velocity(
     return qd, True
 
 
-__all__ = ["BLOCK_TOL", "solve_velocity"]
+__all__ = ["BLOCK_TOL", "dls_damping", "dls_gains", "solve_velocity"]
