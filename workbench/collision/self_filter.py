@@ -77,8 +77,9 @@ class SelfCollisionFilter:
         """SRDF text with one ``<disable_collisions>`` line per excluded pair."""
         lines = [
             '<?xml version="1.0"?>',
-            "<!-- Self-collision filter computed by workbench.collision: links on "
-            "the same or consecutive joints, and links in contact at the zero pose. -->",
+            "<!-- Self-collision filter computed by workbench.collision: links on"
+            " the same or consecutive joints, and links in contact at the zero"
+            " pose. -->",
             f"<robot name={quoteattr(self.robot)}>",
         ]
         lines += [

@@ -16,6 +16,8 @@ above the world origin):
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
@@ -70,7 +72,7 @@ def build_fish_mesh(
         + [(i, 0) for i in range(n_u - 2, -1, -1)]
     )
     ids = [i * n_x + j for i, j in rim]
-    for a, b in zip(ids[:-1], ids[1:], strict=True):  # the walls around the rim
+    for a, b in itertools.pairwise(ids):  # the walls around the rim
         triangles += [[a, b, b + offset], [a, b + offset, a + offset]]
     return vertices, np.array(triangles, dtype=np.int64)
 
