@@ -131,25 +131,3 @@ class JointLimitError(InfeasibleError):
 
 class SceneFileError(InputError):
     """A scene file is missing, unreadable or invalid (the message says where)."""
-
-
-class CollisionError(InfeasibleError):
-    """A motion brings two bodies into contact (CLI exit code 3).
-
-    Attributes:
-        t: Time of the deepest contact of the first collision [s].
-        body_a: First body (robot link or obstacle name).
-        body_b: Second body.
-        distance: Signed distance there [m] (<= 0: penetration depth).
-    """
-
-    def __init__(self, t: float, body_a: str, body_b: str, distance: float, more: int):
-        self.t = t
-        self.body_a = body_a
-        self.body_b = body_b
-        self.distance = distance
-        extra = f" (and {more} more contact(s))" if more else ""
-        super().__init__(
-            f"collision of {body_a} with {body_b} at t = {t:.6g} s, "
-            f"distance {distance:.6g} m{extra}"
-        )
