@@ -3,9 +3,9 @@
 :class:`CollisionOverlay` draws every obstacle of a
 :class:`~workbench.collision.CollisionChecker`'s scene under the node
 ``scene/`` and, for a configuration, gives the colour of every link and
-obstacle: red for bodies in contact, orange for the closest pair, their own
-colour otherwise (links: neutral grey), and the placement of two small spheres on the closest
-points of the closest pair (node ``closest/``).
+obstacle: red for bodies in contact, orange for the closest pair, else their
+own colour (links: neutral grey), and the placement of two small spheres on
+the closest points of the closest pair (node ``closest/``).
 """
 
 from __future__ import annotations

@@ -19,6 +19,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from workbench.collision import CollisionChecker
 from workbench.errors import DimensionError, InputError
 from workbench.poses import as_se3
 from workbench.robot import Robot
@@ -229,8 +230,8 @@ class Viewer:
             points.append(ghost.compute_points(qk))
         self._extra_points["ghosts"] = np.vstack(points)
 
-    def show_collisions(self, checker) -> None:
-        """Draw the checker's scene; animations then colour contacts and the closest pair.
+    def show_collisions(self, checker: CollisionChecker) -> None:
+        """Draw the checker's scene; colour contacts and the closest pair from now on.
 
         Links and obstacles in contact turn red and the closest pair orange
         (instead of the singularity colours), with two markers on the closest
