@@ -62,7 +62,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         type=finite_float,
         default=DEFAULT_SERVO_RATE,
         metavar="HZ",
-        help=f"URScript servoj rate (default {DEFAULT_SERVO_RATE:g}: e-Series; CB3 125)",
+        help=f"URScript servoj rate (default {DEFAULT_SERVO_RATE:g}; CB3: 125)",
     )
     parser.add_argument("--topic", default=DEFAULT_TOPIC, help="bag topic")
     parser.add_argument("--frame-id", default="base", help="bag header.frame_id")
