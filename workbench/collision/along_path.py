@@ -86,8 +86,9 @@ class PathClearance:
         min_clearance: Smallest distance of any checked pair at any sample or
             refinement instant [m] (negative: penetration).
         t, body_a, body_b: Where it occurs.
-        lower_bound: Proven lower bound of the distance over the whole
-            continuous path [m].
+        lower_bound: Proven lower bound of the signed distance over the whole
+            continuous path [m]; > 0 proves the path free (inside contacts it
+            is a loose bound on the depth).
         contacts: Contact intervals, by start time.
         samples: Number of samples. evaluations: Pair distances computed.
         refinements: Instants added by bisection.
@@ -265,8 +266,8 @@ class _PathCheck:
             elif hi - lo == 1:
                 if d[lo, p] > 0.0 and d[hi, p] > 0.0:
                     self.bounds.append(self._bisect(p, lo, hi))
-                else:
-                    self.bounds.append(min(d[lo, p], d[hi, p]))
+                else:  # a contact at a sample: the bound only says how deep
+                    self.bounds.append(bound)
             else:
                 mid = (lo + hi) // 2
                 d[mid, p] = self.checker.compute_pair_distance(self.q[mid], p)
@@ -288,7 +289,7 @@ class _PathCheck:
                 motion = float((self.travel_at(t1) - self.travel_at(t0)) @ levers)
             bound = 0.5 * (d0 + d1 - motion) - DISTANCE_TOL
             if bound > 0.0 or motion < RESOLUTION or min(d0, d1) <= 0.0:
-                lowest = min(lowest, bound if min(d0, d1) > 0.0 else min(d0, d1))
+                lowest = min(lowest, bound)
                 continue
             tm = 0.5 * (t0 + t1)
             qm = 0.5 * (q0 + q1) if self.sample is None else self.sample(tm)
