@@ -263,7 +263,7 @@ def test_checker_errors(puma) -> None:
     with pytest.raises(InputError, match="name of a robot link"):
         CollisionChecker(puma, Scene("s", (box,)))
     ball = Obstacle("ball", "sphere", (0.1,), pin.SE3.Identity(), ("nope",))
-    with pytest.raises(InputError, match="unknown link.*nope"):
+    with pytest.raises(InputError, match=r"unknown link.*nope"):
         CollisionChecker(puma, Scene("s", (ball,)))
     with pytest.raises(InputError, match="no DH table"):
         get_angeles_scene(load_robot("ur5"))
