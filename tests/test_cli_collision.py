@@ -1,0 +1,137 @@
+"""``--scene`` / ``--no-collision`` of ``plan pick-place`` and ``fishcut``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import run_cli as run
+from workbench import paper_data
+from workbench.cli import EXIT_BAD_INPUT, EXIT_INFEASIBLE
+
+PICK = [str(x) for x in paper_data.ANGELES_PICK_Q_DEG]
+PLACE = [str(x) for x in paper_data.ANGELES_PLACE_Q_DEG]
+PLAN = (
+    "plan",
+    "pick-place",
+    "--robot",
+    "puma560",
+    "--pick-deg",
+    *PICK,
+    "--place-deg",
+    *PLACE,
+    "--duration",
+    "10",
+)
+
+
+def test_paper_scene_reports_the_pedestal_and_exits_3(capsys) -> None:
+    code, out, err = run(capsys, *PLAN, "--json")
+    assert code == EXIT_INFEASIBLE
+    result = json.loads(out)
+    assert result["scene"] == "angeles-pick-and-place"
+    first = result["collisions"][0]
+    assert (first["body_a"], first["body_b"], first["t_start"]) == (
+        "link2",
+        "pedestal",
+        0.0,
+    )
+    assert set(first) >= {"t", "body_a", "body_b", "distance"}
+    assert result["min_clearance"] < 0.0 and result["first_contact"] == first
+    assert err.count("\n") == 1 and "collision of link2 with pedestal" in err
+
+
+def test_human_output_lists_the_contacts(capsys) -> None:
+    code, out, _ = run(capsys, *PLAN)
+    assert code == EXIT_INFEASIBLE
+    assert "contact link2 - pedestal" in out and "proven lower bound" in out
+
+
+def test_free_scene_file(capsys, tmp_path: Path) -> None:
+    scene = tmp_path / "far.json"
+    far = {"name": "far", "shape": "sphere", "radius": 0.1, "position": [3, 0, 0]}
+    scene.write_text(json.dumps({"objects": [far]}), encoding="utf-8")
+    code, out, err = run(capsys, *PLAN, "--scene", str(scene), "--json")
+    assert (code, err) == (0, "")
+    result = json.loads(out)
+    assert result["collisions"] == [] and result["min_clearance"] > 0.05
+    assert 0.0 < result["clearance_lower_bound"] <= result["min_clearance"]
+
+
+def test_no_collision_keys(capsys) -> None:
+    code, out, _ = run(capsys, *PLAN, "--no-collision", "--json")
+    result = json.loads(out)
+    assert code == 0
+    assert (result["min_clearance"], result["collisions"]) == (None, [])
+
+
+@pytest.mark.parametrize(
+    ("text", "fragment"),
+    [
+        ('{"objects": [{"name": "a", "shape": "cone"}]}', "unknown shape"),
+        (
+            '{"objects": [{"name": "a", "shape": "box", "size": [1, -1, 1]}]}',
+            "must be > 0",
+        ),
+        (
+            '{"objects": [{"name": "a", "shape": "sphere", "radius": 1, '
+            '"position": [NaN, 0, 0]}]}',
+            "must be finite",
+        ),
+        (
+            '{"objects": [{"name": "a", "shape": "mesh", "file": "gone.stl"}]}',
+            "mesh file not found",
+        ),
+    ],
+)
+def test_bad_scene_exits_2_and_writes_nothing(
+    capsys, tmp_path: Path, text, fragment
+) -> None:
+    scene = tmp_path / "scene.json"
+    scene.write_text(text, encoding="utf-8")
+    csv = tmp_path / "out.csv"
+    for argv in (
+        (*PLAN, "--csv", str(csv)),
+        ("fishcut", "--csv", str(csv), "--html", str(tmp_path / "f.html")),
+    ):
+        code, out, err = run(capsys, *argv, "--scene", str(scene))
+        assert code == EXIT_BAD_INPUT
+        assert err.count("\n") == 1 and fragment in err and out == ""
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.json"]
+
+
+def test_missing_scene_file(capsys, tmp_path: Path) -> None:
+    code, _, err = run(capsys, *PLAN, "--scene", str(tmp_path / "none.json"))
+    assert code == EXIT_BAD_INPUT and "cannot read scene" in err
+
+
+def test_fishcut_default_scene_is_clear(capsys) -> None:
+    code, out, err = run(capsys, "fishcut", "--json")
+    assert (code, err) == (0, "")
+    result = json.loads(out)
+    assert result["scene"] == "kang-fish-cutting"
+    assert result["collisions"] == []
+    assert 0.0 < result["clearance_lower_bound"] <= result["min_clearance"] < 0.05
+
+
+def test_fishcut_obstacle_in_the_way_exits_3(capsys, tmp_path: Path) -> None:
+    scene = tmp_path / "post.json"  # a post through the fish's middle
+    post = {
+        "name": "post",
+        "shape": "cylinder",
+        "radius": 0.03,
+        "length": 0.6,
+        "position": [0.0, 0.41, -0.3],
+    }
+    scene.write_text(json.dumps({"objects": [post]}), encoding="utf-8")
+    csv = tmp_path / "fish.csv"
+    code, out, err = run(
+        capsys, "fishcut", "--scene", str(scene), "--csv", str(csv), "--json"
+    )
+    assert code == EXIT_INFEASIBLE
+    result = json.loads(out)
+    assert {c["body_b"] for c in result["collisions"]} == {"post"}
+    assert err.count("\n") == 1 and "with post" in err
+    assert csv.exists()  # the run completed: its outputs are written
