@@ -150,7 +150,7 @@ def test_urscript_refuses_other_arms(capsys, tmp_path: Path) -> None:
 def test_named_csv(capsys, tmp_path: Path, ur5_csv: Path) -> None:
     out = tmp_path / "named.csv"
     code, _, _ = run(capsys, "export", "--format", "csv", "--robot", "ur5",
-                     "--trajectory", str(ur5_csv), "--out", str(out), "--json")  # fmt: skip
+                     "--trajectory", str(ur5_csv), "--out", str(out))  # fmt: skip
     assert code == 0
     with out.open(newline="") as stream:
         rows = list(csv.reader(stream))
@@ -192,7 +192,7 @@ def test_existing_bag_is_not_replaced(capsys, tmp_path: Path) -> None:
 
 def test_failed_write_leaves_nothing(monkeypatch, tmp_path: Path) -> None:
     s = JointTrajectorySamples(
-        np.zeros(2) + [0, 1], np.zeros((2, 6)), np.zeros((2, 6)), np.zeros((2, 6))
+        np.array([0.0, 1.0]), np.zeros((2, 6)), np.zeros((2, 6)), np.zeros((2, 6))
     )
 
     def broken(*args, **kwargs):
