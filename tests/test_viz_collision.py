@@ -33,7 +33,9 @@ def test_overlay_colours_follow_the_contacts(puma) -> None:
     assert colors[pedestal] == list(CONTACT_RGB)
     upper_arm = overlay.link_nodes["link2"]
     assert all(colors[node] == list(CONTACT_RGB) for node in upper_arm)
-    assert all(colors[node] != list(CONTACT_RGB) for node in overlay.link_nodes["link4"])
+    assert all(
+        colors[node] != list(CONTACT_RGB) for node in overlay.link_nodes["link4"]
+    )
     colors, markers = overlay.compute_state(Q_PLACE)
     assert list(CONTACT_RGB) not in colors.values()
     assert list(CLOSEST_RGB) in colors.values()
