@@ -61,8 +61,10 @@ def raw_coal(robot, checker, q: np.ndarray) -> float:
     geometry = checker.geometry_model
     geometry_data = pin.GeometryData(geometry)
     objects = geometry.geometryObjects
-    pairs = [(objects[p.first].geometry, p.first, objects[p.second].geometry, p.second)
-             for p in geometry.collisionPairs]  # fmt: skip
+    pairs = [
+        (objects[p.first].geometry, p.first, objects[p.second].geometry, p.second)
+        for p in geometry.collisionPairs
+    ]
     request, result = coal.DistanceRequest(), coal.DistanceResult()
     best = np.inf
     for qk in q:
@@ -100,16 +102,24 @@ def main() -> None:
         )
 
     rows = [
-        ("workbench check_path, lines between samples", lambda: check_path(checker, t, q)),
+        (
+            "workbench check_path, lines between samples",
+            lambda: check_path(checker, t, q),
+        ),
         ("workbench check_path, spline + peak speeds", spline),
-        ("raw pin.computeDistances loop (samples only)", lambda: raw_pinocchio(robot, checker, q)),
-        ("raw coal.distance per pair (samples only)", lambda: raw_coal(robot, checker, q)),
-    ]  # fmt: skip
+        (
+            "raw pin.computeDistances loop (samples)",
+            lambda: raw_pinocchio(robot, checker, q),
+        ),
+        ("raw coal.distance per pair (samples)", lambda: raw_coal(robot, checker, q)),
+    ]
     reference_us = (
         1e6 * min(timeit.repeat("sum(range(1000))", number=1000, repeat=5)) / 1000
     )
-    print(f"Table III pick-and-place, {SAMPLES} samples, {len(checker.pairs)} pairs "
-          f"(self + pedestal + pick table), best of {args.repeat}")  # fmt: skip
+    print(
+        f"Table III pick-and-place, {SAMPLES} samples, {len(checker.pairs)} pairs "
+        f"(self + pedestal + pick table), best of {args.repeat}"
+    )
     print(f"reference loop sum(range(1000)): {reference_us:.1f} µs")
     timings = []
     for label, function in rows:
@@ -118,12 +128,18 @@ def main() -> None:
         timings.append(ms)
         extra = ""
         if not isinstance(result, float):
-            extra = (f", {result.evaluations} pair distances, "
-                     f"{len(result.contacts)} contacts, bound {result.lower_bound:.4f} m")  # fmt: skip
-        print(f"  {label:<46} {ms:8.2f} ms  x{ms / timings[0]:5.2f}  "
-              f"min {value:.6f} m{extra}")  # fmt: skip
-    print(f"target <= 50 ms: {'met' if timings[0] <= 50.0 else 'NOT met'} "
-          f"({timings[0]:.1f} ms)")  # fmt: skip
+            extra = (
+                f", {result.evaluations} pair distances, {len(result.contacts)} "
+                f"contacts, bound {result.lower_bound:.4f} m"
+            )
+        print(
+            f"  {label:<46} {ms:8.2f} ms  x{ms / timings[0]:5.2f}  "
+            f"min {value:.6f} m{extra}"
+        )
+    print(
+        f"target <= 50 ms: {'met' if timings[0] <= 50.0 else 'NOT met'} "
+        f"({timings[0]:.1f} ms)"
+    )
 
 
 if __name__ == "__main__":
