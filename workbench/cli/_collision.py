@@ -27,8 +27,10 @@ def add_collision_arguments(parser: argparse.ArgumentParser, default: str) -> No
     )
 
 
-def load_scene(args: argparse.Namespace, default: Callable[[], Scene]) -> Scene | None:
-    """The scene of ``--scene`` or the default one; None with ``--no-collision``.
+def load_scene(
+    args: argparse.Namespace, default: Callable[[], Scene | None]
+) -> Scene | None:
+    """The scene of ``--scene`` or ``default()``; None with ``--no-collision``.
 
     Raises:
         SceneFileError: If the file is missing or invalid.

@@ -120,9 +120,11 @@ def run(args: argparse.Namespace) -> int:
         servo_rate=args.servo_rate,
     )
     fish = SimulatedFish(args.seed)
-    scene = load_scene(args, lambda: get_fish_cutting_scene(robot, fish, setup))
+    scene = load_scene(args, lambda: None)  # a --scene file is checked first
+    result = run_fish_cutting(robot, fish, setup)  # (a non-PUMA robot fails here)
+    if scene is None and not args.no_collision:
+        scene = get_fish_cutting_scene(robot, fish, setup)
     checker = build_checker(robot, scene)
-    result = run_fish_cutting(robot, fish, setup)
     clearance = None
     if checker is not None:  # distances at the planning cycles, bound over the servo
         stride = max(1, round(setup.servo_rate / setup.planning_rate))
