@@ -11,20 +11,12 @@ Example::
     report.min_clearance, report.contacts     # [m], contact intervals
 """
 
-from workbench.collision.along_path import (
-    Contact,
-    PathClearance,
-    check_path,
-)
+from workbench.collision.along_path import check_path
 from workbench.collision.checker import CollisionChecker, PairInfo
+from workbench.collision.clearance_report import Contact, PathClearance
 from workbench.collision.paper_scenes import get_angeles_scene, get_pedestal
-from workbench.collision.scene import (
-    Obstacle,
-    Scene,
-    parse_scene,
-    read_scene,
-    write_scene,
-)
+from workbench.collision.scene import Obstacle, Scene
+from workbench.collision.scene_file import parse_scene, read_scene, write_scene
 from workbench.collision.self_filter import (
     DisabledPair,
     SelfCollisionFilter,

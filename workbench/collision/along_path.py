@@ -28,13 +28,12 @@ finds, and ``lower_bound`` holds for the whole continuous path.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from workbench.collision.checker import CollisionChecker
+from workbench.collision.clearance_report import Contact, PathClearance, group_contacts
 from workbench.errors import DimensionError, InputError
 from workbench.validation import as_finite_array
 
@@ -46,90 +45,6 @@ DISTANCE_TOL = 1e-9
 RESOLUTION = 1e-9
 #: Every pair is computed at every COARSE_STRIDE-th sample first.
 COARSE_STRIDE = 8
-
-
-@dataclass(frozen=True, slots=True)
-class Contact:
-    """Two bodies in contact over a time interval.
-
-    Attributes:
-        t: Time of the deepest contact [s].
-        body_a, body_b: Link or obstacle names.
-        distance: Signed distance at ``t`` [m], <= 0 (minus the penetration).
-        t_start, t_end: First and last instant found in contact [s].
-    """
-
-    t: float
-    body_a: str
-    body_b: str
-    distance: float
-    t_start: float
-    t_end: float
-
-    def as_dict(self) -> dict[str, Any]:
-        """JSON form: ``{t, body_a, body_b, distance, t_start, t_end}``."""
-        return {
-            "t": self.t,
-            "body_a": self.body_a,
-            "body_b": self.body_b,
-            "distance": self.distance,
-            "t_start": self.t_start,
-            "t_end": self.t_end,
-        }
-
-
-@dataclass(frozen=True, slots=True)
-class PathClearance:
-    """Result of :func:`check_path`.
-
-    Attributes:
-        min_clearance: Smallest distance of any checked pair at any sample or
-            refinement instant [m] (negative: penetration).
-        t, body_a, body_b: Where it occurs.
-        lower_bound: Proven lower bound of the signed distance over the whole
-            continuous path [m]; > 0 proves the path free (inside contacts it
-            is a loose bound on the depth).
-        contacts: Contact intervals, by start time.
-        samples: Number of samples. evaluations: Pair distances computed.
-        refinements: Instants added by bisection.
-    """
-
-    min_clearance: float
-    t: float
-    body_a: str
-    body_b: str
-    lower_bound: float
-    contacts: tuple[Contact, ...]
-    samples: int
-    evaluations: int
-    refinements: int
-
-    @property
-    def collision_free(self) -> bool:
-        """True when no contact was found (and ``lower_bound`` > 0 proves it)."""
-        return not self.contacts and self.lower_bound > 0.0
-
-    @property
-    def first_contact(self) -> Contact | None:
-        """The contact that starts first, or None."""
-        return self.contacts[0] if self.contacts else None
-
-    def as_dict(self) -> dict[str, Any]:
-        """JSON form (the ``collision`` keys of ``plan pick-place`` and ``fishcut``)."""
-        first = self.first_contact
-        return {
-            "min_clearance": self.min_clearance,
-            "min_clearance_at": {
-                "t": self.t,
-                "body_a": self.body_a,
-                "body_b": self.body_b,
-            },
-            "clearance_lower_bound": self.lower_bound,
-            "collisions": [c.as_dict() for c in self.contacts],
-            "first_contact": None if first is None else first.as_dict(),
-            "collision_samples": self.samples,
-            "collision_evaluations": self.evaluations,
-        }
 
 
 def check_path(
@@ -321,60 +236,20 @@ class _PathCheck:
         )
 
     def _contacts(self) -> tuple[Contact, ...]:
-        runs: dict[tuple[str, str], list[tuple[float, float, float, float]]] = {}
-        for p in np.flatnonzero(np.nanmin(self.distances, axis=0) <= 0.0).tolist() + [
-            pm for _, pm, dm in self.extra if dm <= 0.0
-        ]:
+        touching = set(np.flatnonzero(np.nanmin(self.distances, axis=0) <= 0.0))
+        touching |= {pm for _, pm, dm in self.extra if dm <= 0.0}
+        points: dict[tuple[str, str], list[tuple[FloatArray, FloatArray]]] = {}
+        for p in sorted(touching):
             known = ~np.isnan(self.distances[:, p])
-            times = list(self.t[known]) + [tm for tm, pm, _ in self.extra if pm == p]
-            values = list(self.distances[known, p]) + [
-                dm for _, pm, dm in self.extra if pm == p
-            ]
+            extra = [(tm, dm) for tm, pm, dm in self.extra if pm == p]
+            times = np.r_[self.t[known], [e[0] for e in extra]]
+            values = np.r_[self.distances[known, p], [e[1] for e in extra]]
             order = np.argsort(times, kind="stable")
-            ts, ds = np.array(times)[order], np.array(values)[order]
             pair = self.checker.pairs[p]
-            key = (pair.body_a, pair.body_b)
-            runs.setdefault(key, []).extend(_runs(ts, ds))
-        contacts = []
-        for (body_a, body_b), items in runs.items():
-            for t0, t1, tm, dm in _merge(items):
-                contacts.append(Contact(tm, body_a, body_b, dm, t0, t1))
-        return tuple(sorted(contacts, key=lambda c: (c.t_start, c.body_a, c.body_b)))
+            points.setdefault((pair.body_a, pair.body_b), []).append(
+                (times[order], values[order])
+            )
+        return group_contacts(points)
 
 
-def _runs(ts: FloatArray, ds: FloatArray) -> list[tuple[float, float, float, float]]:
-    """Runs of consecutive contacts: ``(t_start, t_end, t_deepest, deepest)``."""
-    out, start = [], None
-    inside = ds <= 0.0
-    for i in range(len(ts) + 1):
-        if i < len(ts) and inside[i]:
-            start = i if start is None else start
-        elif start is not None:
-            j = start + int(np.argmin(ds[start:i]))
-            out.append((float(ts[start]), float(ts[i - 1]), float(ts[j]), float(ds[j])))
-            start = None
-    return out
-
-
-def _merge(items: list[tuple[float, float, float, float]]) -> list[tuple[float, ...]]:
-    """Merge overlapping runs of one body pair (several geometry pairs)."""
-    merged: list[list[float]] = []
-    for t0, t1, tm, dm in sorted(set(items)):
-        if merged and t0 <= merged[-1][1]:
-            last = merged[-1]
-            last[1] = max(last[1], t1)
-            if dm < last[3]:
-                last[2], last[3] = tm, dm
-        else:
-            merged.append([t0, t1, tm, dm])
-    return [tuple(m) for m in merged]
-
-
-__all__ = [
-    "COARSE_STRIDE",
-    "DISTANCE_TOL",
-    "RESOLUTION",
-    "Contact",
-    "PathClearance",
-    "check_path",
-]
+__all__ = ["COARSE_STRIDE", "DISTANCE_TOL", "RESOLUTION", "check_path"]
