@@ -135,3 +135,21 @@ def test_fishcut_obstacle_in_the_way_exits_3(capsys, tmp_path: Path) -> None:
     assert {c["body_b"] for c in result["collisions"]} == {"post"}
     assert err.count("\n") == 1 and "with post" in err
     assert csv.exists()  # the run completed: its outputs are written
+
+
+def test_robot_without_geometry_skips_the_default_check(capsys, tmp_path) -> None:
+    from workbench import load_robot
+
+    text = load_robot("puma560").urdf_path.read_text()
+    while "<collision>" in text:
+        start = text.index("<collision>")
+        text = text[:start] + text[text.index("</collision>") + 12 :]
+    urdf = tmp_path / "bare.urdf"
+    urdf.write_text(text)
+    argv = ["plan", "pick-place", "--robot", str(urdf), *PLAN[4:]]
+    code, out, _ = run(capsys, *argv, "--json")
+    assert code == 0 and json.loads(out)["min_clearance"] is None
+    scene = tmp_path / "s.json"
+    scene.write_text('{"objects": []}')
+    code, _, err = run(capsys, *argv, "--scene", str(scene))
+    assert code == EXIT_BAD_INPUT and "no collision geometry" in err

@@ -256,6 +256,9 @@ def test_bad_inputs(puma, angeles_checker) -> None:
         check_path(angeles_checker, [0.0, 1.0], [Q_PICK])
     with pytest.raises(InputError, match="finite"):
         check_path(angeles_checker, [0.0, np.nan], [Q_PICK, Q_PLACE])
+    nothing = CollisionChecker(puma, self_collision=False)
+    with pytest.raises(InputError, match="no pairs"):
+        check_path(nothing, [0.0], [Q_PICK])
 
 
 def test_checker_errors(puma) -> None:
@@ -267,6 +270,18 @@ def test_checker_errors(puma) -> None:
         CollisionChecker(puma, Scene("s", (ball,)))
     with pytest.raises(InputError, match="no DH table"):
         get_angeles_scene(load_robot("ur5"))
+
+
+def test_robot_without_collision_geometry(tmp_path) -> None:
+    text = (load_robot("puma560").urdf_path).read_text()
+    while "<collision>" in text:  # the same arm with its visual geometry only
+        start = text.index("<collision>")
+        text = text[:start] + text[text.index("</collision>") + 12 :]
+    path = tmp_path / "bare.urdf"
+    path.write_text(text)
+    bare = load_robot(path)
+    with pytest.raises(InputError, match="no collision geometry"):
+        CollisionChecker(bare)
 
 
 def test_ur5_meshes_are_checked(rng) -> None:

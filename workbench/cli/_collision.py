@@ -40,9 +40,22 @@ def load_scene(
     return read_scene(args.scene) if args.scene is not None else default()
 
 
-def build_checker(robot: Robot, scene: Scene | None) -> CollisionChecker | None:
-    """A checker of ``robot`` in ``scene`` (None when the check is skipped)."""
-    return None if scene is None else CollisionChecker(robot, scene)
+def build_checker(
+    robot: Robot, scene: Scene | None, *, explicit: bool = False
+) -> CollisionChecker | None:
+    """A checker of ``robot`` in ``scene``; None when the check is skipped.
+
+    A robot without collision geometry skips the default check (nothing to
+    check); with a scene the user gave (``explicit``) it is an error.
+
+    Raises:
+        InputError: If ``explicit`` and the robot has no collision geometry.
+    """
+    if scene is None:
+        return None
+    if robot.collision_model.ngeoms == 0 and not explicit:
+        return None
+    return CollisionChecker(robot, scene)
 
 
 def get_collision_keys(

@@ -124,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
     result = run_fish_cutting(robot, fish, setup)  # (a non-PUMA robot fails here)
     if scene is None and not args.no_collision:
         scene = get_fish_cutting_scene(robot, fish, setup)
-    checker = build_checker(robot, scene)
+    checker = build_checker(robot, scene, explicit=args.scene is not None)
     clearance = None
     if checker is not None:  # distances at the planning cycles, bound over the servo
         stride = max(1, round(setup.servo_rate / setup.planning_rate))

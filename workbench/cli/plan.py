@@ -109,7 +109,7 @@ def run_pick_place(args: argparse.Namespace) -> int:
     t_min = minimum_duration(robot, q_pick, q_place, n_points=args.n_points)
     violations = traj.check_limits()
     scene = load_scene(args, lambda: _default_scene(robot))
-    checker = build_checker(robot, scene)
+    checker = build_checker(robot, scene, explicit=args.scene is not None)
     clearance = None
     if checker is not None:
         grid = traj.sample_uniform(args.rate)

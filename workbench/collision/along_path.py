@@ -75,10 +75,12 @@ def check_path(
 
     Raises:
         DimensionError, NonFiniteError: If the shapes or values are wrong.
-        InputError: If ``t`` does not increase, or ``sample`` is given
-            without a positive ``max_joint_speed``.
+        InputError: If ``t`` does not increase, ``sample`` is given without
+            ``max_joint_speed``, or the checker has no pairs.
     """
     robot = checker.robot
+    if not checker.pairs:
+        raise InputError("nothing to check: the checker has no pairs")
     t = np.asarray(t, dtype=np.float64)
     if t.ndim != 1 or t.size == 0:
         raise DimensionError("t", (max(t.size, 1),), t.shape)
