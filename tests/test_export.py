@@ -101,6 +101,9 @@ def test_bag_errors(tmp_path: Path) -> None:
         write_ros2_bag(tmp_path / "b", s, ["a", "a"])
     with pytest.raises(InputError, match="shape"):
         write_ros2_bag(tmp_path / "b", s, ["a"])
+    for topic in ("", "//x", "1abc", "a b"):
+        with pytest.raises(InputError, match="not a ROS 2 topic"):
+            write_ros2_bag(tmp_path / "b", s, ["a", "b"], topic=topic)
     assert list(tmp_path.iterdir()) == []
     with pytest.raises(InputError, match="cannot read bag"):
         read_ros2_bag(tmp_path / "none")

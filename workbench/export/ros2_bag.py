@@ -12,6 +12,7 @@ rounded to the nearest nanosecond (exact for the workbench's 100 Hz and
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -28,6 +29,9 @@ FloatArray = npt.NDArray[np.float64]
 DEFAULT_TOPIC = "/joint_trajectory"
 MSGTYPE = "trajectory_msgs/msg/JointTrajectory"
 _NS = 1_000_000_000
+#: ROS 2 topic names: slash-separated tokens of letters, digits and _, each
+#: starting with a letter.
+_TOPIC = re.compile(r"/?[A-Za-z][A-Za-z0-9_]*(/[A-Za-z][A-Za-z0-9_]*)*")
 
 
 def _rosbags() -> tuple[Any, Any, Any]:
@@ -62,7 +66,11 @@ class BagTrajectory:
     frame_id: str
 
 
-def _check(samples: JointTrajectorySamples, joint_names: list[str]) -> None:
+def _check(samples: JointTrajectorySamples, joint_names: list[str], topic: str) -> None:
+    if not _TOPIC.fullmatch(topic):
+        raise InputError(
+            f"topic {topic!r} is not a ROS 2 topic name (e.g. /joint_trajectory)"
+        )
     if len(joint_names) != samples.nq:
         raise DimensionError("joint_names", (samples.nq,), (len(joint_names),))
     if len(set(joint_names)) != len(joint_names):
@@ -94,9 +102,10 @@ def write_ros2_bag(
 
     Raises:
         InputError: If the folder exists, its parent is missing, the names do
-            not match the columns, or rosbags is missing.
+            not match the columns, the topic is not a ROS 2 name, or rosbags
+            is missing.
     """
-    _check(samples, list(joint_names))
+    _check(samples, list(joint_names), topic)
     (writer_class, plugin), _, store = _rosbags()
     types = store.types
     duration, header = (
