@@ -153,3 +153,16 @@ def test_robot_without_geometry_skips_the_default_check(capsys, tmp_path) -> Non
     scene.write_text('{"objects": []}')
     code, _, err = run(capsys, *argv, "--scene", str(scene))
     assert code == EXIT_BAD_INPUT and "no collision geometry" in err
+
+
+def test_view_draws_a_scene(capsys, tmp_path: Path) -> None:
+    scene = tmp_path / "s.json"
+    post = {"name": "post", "shape": "box", "size": [0.1, 0.1, 0.5]}
+    scene.write_text(json.dumps({"objects": [{**post, "position": [0.4, 0, -0.3]}]}))
+    page = tmp_path / "v.html"
+    code, _, _ = run(capsys, "view", "--robot", "puma560", "--deg", *PICK,
+                     "--scene", str(scene), "--html", str(page))  # fmt: skip
+    assert code == 0 and page.stat().st_size > 0
+    code, _, err = run(capsys, "view", "--robot", "puma560", "--scene",
+                       str(tmp_path / "none.json"), "--html", str(page))  # fmt: skip
+    assert code == EXIT_BAD_INPUT and "cannot read scene" in err
