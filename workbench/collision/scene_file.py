@@ -139,6 +139,10 @@ def _numbers(
     return arr
 
 
+def _floats(values: FloatArray) -> tuple[float, ...]:
+    return tuple(float(v) for v in values)
+
+
 def _parse_object(raw: Any, where: str, folder: Path) -> Obstacle:
     if not isinstance(raw, dict):
         raise SceneFileError(f"{where} must be a JSON object")
@@ -159,7 +163,7 @@ def _parse_object(raw: Any, where: str, folder: Path) -> Obstacle:
     allow = raw.get("allow", [])
     if not isinstance(allow, list) or not all(isinstance(a, str) for a in allow):
         raise SceneFileError(f"{where}: 'allow' must be a list of link names")
-    color = tuple(_numbers(raw.get("color", [0.55, 0.45, 0.35, 0.9]), 4, where))
+    color = _floats(_numbers(raw.get("color", [0.55, 0.45, 0.35, 0.9]), 4, where))
     if not all(0.0 <= c <= 1.0 for c in color):
         raise SceneFileError(f"{where}: 'color' entries must be in [0, 1]")
     return Obstacle(
@@ -177,15 +181,17 @@ def _parse_size(
     raw: dict, shape: str, where: str, folder: Path
 ) -> tuple[tuple[float, ...], dict[str, Any]]:
     if shape == "box":
-        return tuple(_numbers(raw["size"], 3, f"{where}: size", positive=True)), {}
+        return _floats(_numbers(raw["size"], 3, f"{where}: size", positive=True)), {}
     if shape == "sphere":
-        return tuple(
+        return _floats(
             _numbers([raw["radius"]], 1, f"{where}: radius", positive=True)
         ), {}
     if shape == "cylinder":
         values = [raw["radius"], raw["length"]]
-        return tuple(_numbers(values, 2, f"{where}: radius, length", positive=True)), {}
-    scale = tuple(
+        return _floats(
+            _numbers(values, 2, f"{where}: radius, length", positive=True)
+        ), {}
+    scale = _floats(
         _numbers(raw.get("scale", [1, 1, 1]), 3, f"{where}: scale", positive=True)
     )
     if ("file" in raw) == ("vertices" in raw or "triangles" in raw):

@@ -69,7 +69,9 @@ class CollisionOverlay:
             geometry, local = _geometry(obstacle)
             rgba = obstacle.color
             material = mg.MeshLambertMaterial(
-                color=_rgb_int(rgba[:3]), opacity=rgba[3], transparent=rgba[3] < 1.0
+                color=_rgb_int(rgba[:3]),
+                opacity=float(rgba[3]),
+                transparent=bool(rgba[3] < 1.0),
             )
             scene[node].set_object(geometry, material)
             transform = (obstacle.placement * local).homogeneous
