@@ -22,7 +22,7 @@ from workbench.cli._common import (
     finite_float,
     print_json,
 )
-from workbench.collision import Scene, check_path, get_angeles_scene
+from workbench.collision import Scene, check_path, get_angeles_scene, get_pedestal
 from workbench.errors import InputError
 from workbench.loading import load_robot
 from workbench.trajectory import minimum_duration, pick_and_place
@@ -92,7 +92,9 @@ def register(commands: argparse._SubParsersAction) -> None:
         "--plot", type=Path, metavar="FILE.png", help="plot q, qd, qdd with limits"
     )
     add_collision_arguments(
-        pick, "Angeles' pedestal and pick table for the PUMA models, else none"
+        pick,
+        "Angeles' pedestal and pick table for puma560, the pedestal for other DH "
+        "models, else none (self-collision only)",
     )
     add_json_flag(pick)
     pick.set_defaults(run=run_pick_place)
@@ -167,10 +169,12 @@ def run_pick_place(args: argparse.Namespace) -> int:
 
 
 def _default_scene(robot) -> Scene:
-    """Angeles' scene for the PUMA models; an empty one (self-collision) else."""
-    if robot.dh_table is None or robot.nq != 6:
+    """Angeles' cell for his PUMA, the pedestal for other DH arms, else none."""
+    if robot.dh_table is None:
         return Scene("empty")
-    return get_angeles_scene(robot)
+    if robot.dh_table.name == "puma560":
+        return get_angeles_scene(robot)
+    return Scene("pedestal", (get_pedestal(robot),), "the pedestal under the base")
 
 
 def _print_human(robot, traj, result: dict) -> None:
