@@ -7,8 +7,8 @@ checked for self-collision and against Angeles' scene (pedestal, pick table):
 the same checked pairs everywhere. Timed, best of ``--repeat`` runs:
 
 * ``check_path`` (straight lines between samples, and the spline with its exact
-  peak speeds): minimum clearance, where, every contact interval, and a proof
-  that nothing is missed between the samples;
+  peak speeds and accelerations): minimum clearance, where, every contact
+  interval, and a proof that nothing is missed between the samples;
 * raw Pinocchio from Python: ``pin.computeDistances`` at every sample (all
   pairs), then the minimum: distances at the samples only, no bound;
 * raw coal from Python: ``pin.updateGeometryPlacements``, then
@@ -93,12 +93,17 @@ def main() -> None:
     )
     t = np.linspace(0.0, traj.duration, SAMPLES)
     q = traj.sample(t)[0]
-    extrema = traj.get_extrema(1)
-    speed = np.maximum(np.abs(extrema.minimum), np.abs(extrema.maximum))
+    peaks = [traj.get_extrema(order) for order in (1, 2)]
+    speed, acceleration = (np.maximum(-e.minimum, e.maximum) for e in peaks)
 
     def spline():
         return check_path(
-            checker, t, q, sample=lambda s: traj.sample(s)[0], max_joint_speed=speed
+            checker,
+            t,
+            q,
+            sample=lambda s: traj.sample(s)[0],
+            max_joint_speed=speed,
+            max_joint_acceleration=acceleration,
         )
 
     rows = [
@@ -106,7 +111,7 @@ def main() -> None:
             "workbench check_path, lines between samples",
             lambda: check_path(checker, t, q),
         ),
-        ("workbench check_path, spline + peak speeds", spline),
+        ("workbench check_path, spline, peak speed + acc", spline),
         (
             "raw pin.computeDistances loop (samples)",
             lambda: raw_pinocchio(robot, checker, q),

@@ -186,6 +186,33 @@ def test_paper_path_contacts_with_pedestal_and_table(puma, angeles_checker) -> N
         )
 
 
+def test_spline_bound_with_accelerations_holds(puma) -> None:
+    checker = CollisionChecker(puma)  # free: the bound must be positive and hold
+    traj, t, q = _table3_path(puma, samples=101)
+    peaks = [traj.get_extrema(order) for order in (1, 2)]
+    speed, acceleration = (np.maximum(-e.minimum, e.maximum) for e in peaks)
+    report = check_path(
+        checker,
+        t,
+        q,
+        sample=lambda s: traj.sample(s)[0],
+        max_joint_speed=speed,
+        max_joint_acceleration=acceleration,
+    )
+    loose = check_path(
+        checker, t, q, sample=lambda s: traj.sample(s)[0], max_joint_speed=speed
+    )
+    dense = traj.sample(np.linspace(0.0, traj.duration, 4001))[0]
+    brute = min(checker.compute_distances(qk).min() for qk in dense)
+    assert report.collision_free and loose.collision_free
+    assert report.lower_bound <= brute + DISTANCE_TOL
+    assert loose.lower_bound <= brute + DISTANCE_TOL
+    assert report.refinements < loose.refinements  # the tighter travel bound
+    with pytest.raises(InputError, match=">= 0"):
+        check_path(checker, t, q, sample=lambda s: q[0], max_joint_speed=speed,
+                   max_joint_acceleration=-acceleration)  # fmt: skip
+
+
 def _thin_plate_setup(robot):
     """A 2 mm plate that the wrist sweeps through between two samples."""
     q0 = np.array([0.0, -0.6, 2.4, 0.0, 0.5, 0.0])

@@ -92,21 +92,23 @@ def _singularities(robot: Robot, t: np.ndarray, q: np.ndarray) -> dict[str, Any]
 def check_collisions(robot: Robot, traj) -> dict[str, Any]:
     """Clearance of a pick-and-place trajectory in Angeles' (assumed) scene.
 
-    The spline is checked with its exact peak joint speeds as the bound
-    between the samples (every ``1 / CSV_RATE_HZ`` s), so no contact is missed.
+    The spline is checked with its exact peak joint speeds and accelerations
+    as the bound between the samples (every ``1 / CSV_RATE_HZ`` s), so no
+    contact is missed.
 
     Returns:
         ``{"scene", "min_clearance", "collisions", ...}`` (JSON-ready).
     """
     checker = CollisionChecker(robot, get_angeles_scene(robot))
     grid = traj.sample_uniform(CSV_RATE_HZ)
-    speed = traj.get_extrema(1)
+    speed, acc = traj.get_extrema(1), traj.get_extrema(2)
     report = check_path(
         checker,
         grid.t,
         grid.q,
         sample=lambda s: traj.sample(s)[0],
-        max_joint_speed=np.maximum(np.abs(speed.minimum), np.abs(speed.maximum)),
+        max_joint_speed=np.maximum(-speed.minimum, speed.maximum),
+        max_joint_acceleration=np.maximum(-acc.minimum, acc.maximum),
     )
     return {"scene": checker.scene.name, **report.as_dict()}
 

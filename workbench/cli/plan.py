@@ -115,13 +115,14 @@ def run_pick_place(args: argparse.Namespace) -> int:
     clearance = None
     if checker is not None:
         grid = traj.sample_uniform(args.rate)
-        speed = traj.get_extrema(1)
+        speed, acc = traj.get_extrema(1), traj.get_extrema(2)
         clearance = check_path(
             checker,
             grid.t,
             grid.q,
             sample=lambda s: traj.sample(s)[0],
-            max_joint_speed=np.maximum(np.abs(speed.minimum), np.abs(speed.maximum)),
+            max_joint_speed=np.maximum(-speed.minimum, speed.maximum),
+            max_joint_acceleration=np.maximum(-acc.minimum, acc.maximum),
         )
     samples = traj.sample_uniform(args.rate) if args.csv else None
     if samples is not None:

@@ -2,10 +2,12 @@ r"""Clearance along a joint path, with no contact missed between the samples.
 
 The path is known at sample times :math:`t_k`; between two samples it is either
 the straight line in joint space (what a controller does with the samples) or
-any motion whose joint speeds stay below a bound :math:`V` (a planned spline).
-Joint :math:`i` then travels at most :math:`\tau_i = |q_{k+1,i} - q_{k,i}|`,
-resp. :math:`V_i (t_{k+1} - t_k)`, and the distance of a pair :math:`p` changes
-by at most :math:`\delta_p = \sum_i L_{p,i} \tau_i` (lever arms, see
+any motion whose joint speeds stay below a bound :math:`V` (a planned spline),
+optionally with accelerations below :math:`A`. Joint :math:`i` then travels at
+most :math:`\tau_i = |q_{k+1,i} - q_{k,i}|`, resp.
+:math:`\min(V_i \Delta t, |\Delta q_i| + A_i \Delta t^2 / 2)`, and the
+distance of a pair :math:`p` changes by at most
+:math:`\delta_p = \sum_i L_{p,i} \tau_i` (lever arms, see
 :mod:`workbench.collision.checker`). With :math:`d_k, d_{k+1}` the distances at
 the two samples, every instant of the interval is within :math:`\delta_p` of
 travel from one of them, so
@@ -54,6 +56,7 @@ def check_path(
     *,
     sample: Callable[[float], FloatArray] | None = None,
     max_joint_speed: npt.ArrayLike | None = None,
+    max_joint_acceleration: npt.ArrayLike | None = None,
     stride: int = 1,
 ) -> PathClearance:
     """Minimum clearance and contacts along a joint path.
@@ -66,6 +69,9 @@ def check_path(
             None: straight lines in joint space between the samples.
         max_joint_speed: With ``sample``: bound on |q̇| (nv,) [rad/s] over the
             path (e.g. the spline's exact peak speeds).
+        max_joint_acceleration: With ``sample``, optional: bound on |q̈| (nv,)
+            [rad/s²] of a C¹ path; tightens the travel bound to
+            ``|Δq| + A Δt² / 2`` (e.g. the spline's exact peak accelerations).
         stride: Compute distances at every ``stride``-th sample (and the
             last) only; the bound still covers the path through all samples
             (e.g. 10 for a 1 kHz servo path checked at the 100 Hz cycles).
@@ -88,26 +94,67 @@ def check_path(
     q = as_finite_array(q, (t.size, robot.nq), "q")
     if np.any(np.diff(t) <= 0.0):
         raise InputError("t must be strictly increasing")
-    if sample is None:
-        travel = np.abs(np.diff(q, axis=0))
-    else:
-        if max_joint_speed is None:
-            raise InputError("check_path with sample= needs max_joint_speed")
-        speed = as_finite_array(max_joint_speed, (robot.nv,), "max_joint_speed")
-        if np.any(speed < 0.0):
-            raise InputError("max_joint_speed must be >= 0")
-        travel = np.diff(t)[:, None] * speed[None, :]
+    between = (
+        _straight_travel
+        if sample is None
+        else _bounded_travel(robot.nv, max_joint_speed, max_joint_acceleration)
+    )
+    travel = between(t[:-1, None], q[:-1], t[1:, None], q[1:])  # (K - 1, nv)
     if isinstance(stride, bool) or not isinstance(stride, int) or stride < 1:
         raise InputError(f"stride must be an integer >= 1, got {stride!r}")
     cumulative = np.vstack([np.zeros((1, robot.nv)), np.cumsum(travel, axis=0)])
     keep = np.unique(np.r_[np.arange(0, t.size, stride), t.size - 1])
     if stride > 1 and sample is None:  # bisect along the samples, not across them
         sample = _polyline(t, q)
-    check = _PathCheck(checker, t[keep], q[keep], cumulative[keep], sample)
-    check.travel_at = lambda s: np.array(  # cumulative travel (nv,) at time s
-        [np.interp(s, t, column) for column in cumulative.T]
-    )
-    return check.run()
+        between = _polyline_travel(t, cumulative)
+    return _PathCheck(
+        checker, t[keep], q[keep], cumulative[keep], sample, between
+    ).run()
+
+
+def _straight_travel(
+    t0: float, q0: FloatArray, t1: float, q1: FloatArray
+) -> FloatArray:
+    """Joint travel (nv,) [rad] of the straight line from ``q0`` to ``q1``."""
+    return np.abs(q1 - q0)
+
+
+def _bounded_travel(
+    nv: int, speed: npt.ArrayLike | None, acceleration: npt.ArrayLike | None
+) -> Callable[[float, FloatArray, float, FloatArray], FloatArray]:
+    r"""Travel bound of a path with :math:`|\dot q| \le V`, :math:`|\ddot q| \le A`.
+
+    :math:`\int |\dot q| \le V \Delta t`, and, as :math:`\dot q - \Delta q /
+    \Delta t` vanishes somewhere in the interval and changes at most at rate
+    :math:`A`, :math:`\int |\dot q| \le |\Delta q| + A \Delta t^2 / 2`.
+    """
+    if speed is None:
+        raise InputError("check_path with sample= needs max_joint_speed")
+    v = as_finite_array(speed, (nv,), "max_joint_speed")
+    a = None
+    if acceleration is not None:
+        a = as_finite_array(acceleration, (nv,), "max_joint_acceleration")
+    if np.any(v < 0.0) or (a is not None and np.any(a < 0.0)):
+        raise InputError("max_joint_speed and max_joint_acceleration must be >= 0")
+
+    def travel(t0: float, q0: FloatArray, t1: float, q1: FloatArray) -> FloatArray:
+        dt = t1 - t0
+        if a is None:
+            return v * dt
+        return np.minimum(v * dt, np.abs(q1 - q0) + 0.5 * a * dt * dt)
+
+    return travel
+
+
+def _polyline_travel(
+    t: FloatArray, cumulative: FloatArray
+) -> Callable[[float, FloatArray, float, FloatArray], FloatArray]:
+    """Travel (nv,) along the polyline through all samples between two times."""
+
+    def at(s: float) -> FloatArray:
+        return np.array([np.interp(s, t, column) for column in cumulative.T])
+
+    return lambda t0, q0, t1, q1: at(t1) - at(t0)
 
 
 def _polyline(t: FloatArray, q: FloatArray) -> Callable[[float], FloatArray]:
@@ -122,11 +169,11 @@ def _polyline(t: FloatArray, q: FloatArray) -> Callable[[float], FloatArray]:
 class _PathCheck:
     """One run of the algorithm of the module docstring."""
 
-    def __init__(self, checker, t, q, cumulative, sample) -> None:
+    def __init__(self, checker, t, q, cumulative, sample, between) -> None:
         self.checker, self.t, self.q, self.sample = checker, t, q, sample
         self.levers = checker.levers
         self.cumulative = cumulative
-        self.travel_at: Callable[[float], FloatArray] = lambda s: cumulative[0]
+        self.between = between
         self.distances = np.full((t.size, len(checker.pairs)), np.nan)
         self.extra: list[tuple[float, int, float]] = []  # (t, pair, distance)
         self.bounds: list[float] = []
@@ -200,10 +247,7 @@ class _PathCheck:
         lowest = np.inf
         while stack:
             t0, q0, d0, t1, q1, d1 = stack.pop()
-            if self.sample is None:
-                motion = float(np.abs(q1 - q0) @ levers)
-            else:
-                motion = float((self.travel_at(t1) - self.travel_at(t0)) @ levers)
+            motion = float(self.between(t0, q0, t1, q1) @ levers)
             bound = 0.5 * (d0 + d1 - motion) - DISTANCE_TOL
             if bound > 0.0 or motion < RESOLUTION or min(d0, d1) <= 0.0:
                 lowest = min(lowest, bound)
