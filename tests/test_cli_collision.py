@@ -166,3 +166,15 @@ def test_view_draws_a_scene(capsys, tmp_path: Path) -> None:
     code, _, err = run(capsys, "view", "--robot", "puma560", "--scene",
                        str(tmp_path / "none.json"), "--html", str(page))  # fmt: skip
     assert code == EXIT_BAD_INPUT and "cannot read scene" in err
+
+
+def test_urdf_srdf(capsys, tmp_path: Path) -> None:
+    code, out, _ = run(capsys, "urdf", "srdf", "--robot", "puma560")
+    assert code == 0 and out.count("<disable_collisions") == 9
+    assert 'link1="link4" link2="link6" reason="Default"' in out
+    path = tmp_path / "ur5.srdf"
+    code, _, _ = run(capsys, "urdf", "srdf", "--robot", "ur5", "--out", str(path))
+    assert code == 0 and 'reason="Adjacent"' in path.read_text()
+    code, _, err = run(capsys, "urdf", "srdf", "--robot", "ur5", "--out",
+                       str(tmp_path / "no" / "x.srdf"))  # fmt: skip
+    assert code == EXIT_BAD_INPUT and err.count("\n") == 1
