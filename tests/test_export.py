@@ -26,7 +26,7 @@ from workbench.export import (
     write_ros2_bag,
 )
 from workbench.trajectory import pick_and_place
-from workbench.trajectory_csv import (
+from workbench.trajectory.csv_io import (
     JointTrajectorySamples,
     read_trajectory_csv,
     write_trajectory_csv,

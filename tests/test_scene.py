@@ -22,10 +22,10 @@ from workbench.collision import (
     write_scene,
 )
 from workbench.errors import SceneFileError
+from workbench.model.urdf_generator import get_pedestal_cylinder
 from workbench.tasks import SimulatedFish
 from workbench.tasks.fish_program import KANG_BASE_HEIGHT
 from workbench.tasks.fish_scene import build_fish_mesh, get_fish_cutting_scene
-from workbench.urdf_generator import get_pedestal_cylinder
 
 ATOL_EXACT = 1e-12
 CUBE_OBJ = """v -1 -1 -1

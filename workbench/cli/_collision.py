@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from workbench.collision import CollisionChecker, PathClearance, Scene, read_scene
-from workbench.robot import Robot
+from workbench.model.robot import Robot
 
 
 def add_collision_arguments(parser: argparse.ArgumentParser, default: str) -> None:

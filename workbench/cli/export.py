@@ -13,9 +13,9 @@ from workbench.export import write_named_csv, write_ros2_bag, write_urscript
 from workbench.export._atomic import check_output
 from workbench.export.ros2_bag import DEFAULT_TOPIC
 from workbench.export.urscript import DEFAULT_SERVO_RATE, check_ur_joints
-from workbench.loading import load_robot
-from workbench.robot import Robot
-from workbench.trajectory_csv import JointTrajectorySamples, read_trajectory_csv
+from workbench.model.loading import load_robot
+from workbench.model.robot import Robot
+from workbench.trajectory.csv_io import JointTrajectorySamples, read_trajectory_csv
 
 FORMATS = ("ros2-bag", "urscript", "csv")
 PICK_PLACE_RATE_HZ = 100.0

@@ -6,9 +6,9 @@ import argparse
 from pathlib import Path
 
 from workbench.cli._common import add_json_flag, add_robot_argument, print_json
-from workbench.dh import DHTable
 from workbench.errors import InputError
-from workbench.urdf_generator import generate_urdf
+from workbench.model.dh import DHTable
+from workbench.model.urdf_generator import generate_urdf
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -67,7 +67,7 @@ def run_from_dh(args: argparse.Namespace) -> int:
 def run_srdf(args: argparse.Namespace) -> int:
     """Print or write the self-collision filter; returns the exit code."""
     from workbench.collision import compute_self_collision_filter
-    from workbench.loading import load_robot
+    from workbench.model.loading import load_robot
 
     robot = load_robot(args.robot)
     if robot.collision_model.ngeoms == 0:

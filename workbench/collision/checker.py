@@ -33,7 +33,7 @@ from workbench.collision.self_filter import (
     get_link_name,
 )
 from workbench.errors import InputError
-from workbench.robot import Robot
+from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
 

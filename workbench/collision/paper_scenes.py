@@ -4,7 +4,7 @@ The paper gives no work cell (collisions were checked on a graphic display),
 so the scene is an assumption built from the model and Table III:
 
 * the **pedestal** drawn under the PUMA's base (the cylinder of
-  :func:`workbench.urdf_generator.get_pedestal_cylinder`); joint 1's housing
+  :func:`workbench.model.urdf_generator.get_pedestal_cylinder`); joint 1's housing
   sits on it, so ``link1`` is allowed to touch it;
 * a **pick table**: a 0.30 m × 0.30 m × 0.04 m plate whose top is
   :data:`PICK_TABLE_DROP` below the wrist centre at the pick of Table III
@@ -22,9 +22,9 @@ import pinocchio as pin
 
 from workbench.collision.scene import Obstacle, Scene
 from workbench.errors import InputError
+from workbench.model.robot import Robot
+from workbench.model.urdf_generator import get_pedestal_cylinder
 from workbench.paper_data import ANGELES_PICK_Q_DEG
-from workbench.robot import Robot
-from workbench.urdf_generator import get_pedestal_cylinder
 
 #: Height [m] of the wrist centre above the pick table's top.
 PICK_TABLE_DROP = 0.10

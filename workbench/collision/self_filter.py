@@ -23,7 +23,7 @@ from xml.sax.saxutils import quoteattr
 
 import pinocchio as pin
 
-from workbench.robot import Robot
+from workbench.model.robot import Robot
 
 #: Distance [m] at or below which two geometries count as in contact.
 CONTACT_TOL = 1e-9

@@ -14,7 +14,7 @@ import numpy as np
 
 from workbench.errors import DimensionError, InputError
 from workbench.export._atomic import atomic_file
-from workbench.trajectory_csv import JointTrajectorySamples
+from workbench.trajectory.csv_io import JointTrajectorySamples
 
 
 def get_named_header(joint_names: list[str]) -> list[str]:

@@ -22,7 +22,7 @@ import numpy.typing as npt
 
 from workbench.errors import DimensionError, InputError
 from workbench.export._atomic import atomic_folder
-from workbench.trajectory_csv import JointTrajectorySamples
+from workbench.trajectory.csv_io import JointTrajectorySamples
 
 FloatArray = npt.NDArray[np.float64]
 

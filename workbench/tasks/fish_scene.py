@@ -24,7 +24,7 @@ import pinocchio as pin
 
 from workbench.collision.paper_scenes import TABLE_COLOR, get_pedestal
 from workbench.collision.scene import Obstacle, Scene
-from workbench.robot import Robot
+from workbench.model.robot import Robot
 from workbench.tasks.fish import SimulatedFish
 from workbench.tasks.fish_program import FishCuttingSetup, get_world_transforms
 
