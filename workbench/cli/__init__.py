@@ -11,7 +11,18 @@ import os
 import sys
 from collections.abc import Sequence
 
-from workbench.cli import demo, fishcut, fk, ik, plan, report, singularities, urdf, view
+from workbench.cli import (
+    demo,
+    export,
+    fishcut,
+    fk,
+    ik,
+    plan,
+    report,
+    singularities,
+    urdf,
+    view,
+)
 from workbench.errors import InfeasibleError, InputError, WorkbenchError
 
 EXIT_OK = 0
@@ -19,7 +30,7 @@ EXIT_INTERNAL = 1
 EXIT_BAD_INPUT = 2
 EXIT_INFEASIBLE = 3
 
-_COMMANDS = (fk, ik, urdf, demo, singularities, report, plan, view, fishcut)
+_COMMANDS = (fk, ik, urdf, demo, singularities, report, plan, view, fishcut, export)
 
 
 class _Parser(argparse.ArgumentParser):

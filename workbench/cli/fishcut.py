@@ -9,11 +9,21 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
+from workbench.cli._collision import (
+    add_collision_arguments,
+    build_checker,
+    get_collision_keys,
+    load_scene,
+    print_collision_summary,
+    report_collision_error,
+)
 from workbench.cli._common import add_json_flag, add_robot_argument, print_json
+from workbench.collision import check_path
 from workbench.errors import InputError
 from workbench.model.loading import load_robot
 from workbench.tasks import FishCuttingSetup, SimulatedFish, run_fish_cutting
 from workbench.tasks.fish_cutting import summarize_fish_cutting
+from workbench.tasks.fish_scene import get_fish_cutting_scene
 from workbench.trajectory.csv_io import write_trajectory_csv
 
 DEFAULT_ROBOT = "puma560-kang"
@@ -30,7 +40,9 @@ def register(commands: argparse._SubParsersAction) -> None:
             "with the online planner: Cartesian command, closed-form IK with branch "
             "continuity and DLS joint rates each planning cycle, cubic Hermite "
             "interpolation at the servo rate. Touching the flesh slows the vertical "
-            "cut, touching the bone stops it (or lifts the horizontal cut)."
+            "cut, touching the bone stops it (or lifts the horizontal cut). The "
+            "servo path is checked for collisions with the scene and between the "
+            "links (exit code 3 on a contact, after writing the outputs)."
         ),
     )
     add_robot_argument(parser, default=DEFAULT_ROBOT)
@@ -65,6 +77,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         help=f"servo samples per second, a multiple of the planning rate "
         f"(default {_DEFAULTS.servo_rate:g})",
     )
+    add_collision_arguments(parser, "Kang's pedestal, cutting table and the fish")
     add_json_flag(parser)
     parser.set_defaults(run=run)
 
@@ -106,7 +119,16 @@ def run(args: argparse.Namespace) -> int:
         planning_rate=args.planning_rate,
         servo_rate=args.servo_rate,
     )
-    result = run_fish_cutting(robot, SimulatedFish(args.seed), setup)
+    fish = SimulatedFish(args.seed)
+    scene = load_scene(args, lambda: None)  # a --scene file is checked first
+    result = run_fish_cutting(robot, fish, setup)  # (a non-PUMA robot fails here)
+    if scene is None and not args.no_collision:
+        scene = get_fish_cutting_scene(robot, fish, setup)
+    checker = build_checker(robot, scene, explicit=args.scene is not None)
+    clearance = None
+    if checker is not None:  # distances at the planning cycles, bound over the servo
+        stride = max(1, round(setup.servo_rate / setup.planning_rate))
+        clearance = check_path(checker, result.servo.t, result.servo.q, stride=stride)
     if args.html is not None:  # viewer imported lazily (optional extra)
         from workbench.viz import write_trajectory_html
 
@@ -116,14 +138,18 @@ def run(args: argparse.Namespace) -> int:
                 result.servo,
                 tmp,
                 title=f"workbench fishcut: {robot.name}, fish seed {args.seed}",
+                checker=checker,
             )
     if args.csv is not None:
         with _atomic_path(args.csv) as tmp:
             write_trajectory_csv(tmp, result.servo)
-    summary = summarize_fish_cutting(result, robot.name)
+    summary = {
+        **summarize_fish_cutting(result, robot.name),
+        **get_collision_keys(scene, clearance),
+    }
     if args.json:
         print_json(summary)
-        return 0
+        return 3 if report_collision_error(clearance) else 0
     print(
         f"robot {robot.name}: {summary['cycles']} planning cycles at "
         f"{setup.planning_rate:g} Hz, {summary['duration']:.2f} s, servo "
@@ -141,4 +167,5 @@ def run(args: argparse.Namespace) -> int:
     for option, path in (("csv", args.csv), ("html", args.html)):
         if path is not None:
             print(f"{option} written to {path}")
-    return 0
+    print_collision_summary(clearance)
+    return 3 if report_collision_error(clearance) else 0

@@ -62,6 +62,13 @@ def register(commands: argparse._SubParsersAction) -> None:
         "(PUMA models; needs Q)",
     )
     parser.add_argument(
+        "--scene",
+        type=Path,
+        metavar="FILE",
+        help="draw this scene (JSON, base frame) and colour contacts red and the "
+        "closest pair orange instead of the singularity colours",
+    )
+    parser.add_argument(
         "--no-singularity-color",
         dest="singularity_color",
         action="store_false",
@@ -125,6 +132,10 @@ def run(args: argparse.Namespace) -> int:
     samples = read_samples(args.trajectory, robot) if args.trajectory else None
     q = robot.check_configuration(joint_values_rad(args, args.q)) if args.q else None
     viewer = Viewer(robot, q, color_by_singularity=args.singularity_color)
+    if args.scene is not None:
+        from workbench.collision import CollisionChecker, read_scene
+
+        viewer.show_collisions(CollisionChecker(robot, read_scene(args.scene)))
     viewer.show_frames()
     if samples is not None:
         viewer.play_trajectory(samples.t, samples.q)

@@ -19,11 +19,13 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench import paper_data
+from workbench.collision import CollisionChecker, check_path, get_angeles_scene
 from workbench.demo.pick_and_place import run_pick_and_place_demo
 from workbench.model.loading import load_robot
 from workbench.model.robot import Robot
 from workbench.poses import angeles7_from_se3
 from workbench.tasks.fish_cutting import run_fish_cutting, summarize_fish_cutting
+from workbench.tasks.fish_scene import get_fish_cutting_scene
 from workbench.trajectory.csv_io import read_trajectory_csv, write_trajectory_csv
 
 _log = logging.getLogger(__name__)
@@ -108,7 +110,11 @@ def _write_pages(robot: Robot, out_dir: Path) -> dict[str, str]:
 
     samples = read_trajectory_csv(out_dir / "pick_and_place.csv", robot.nq)
     preview = write_trajectory_html(
-        robot, samples, out_dir / "preview.html", title="Angeles et al. Sec. V"
+        robot,
+        samples,
+        out_dir / "preview.html",
+        title="Angeles et al. Sec. V",
+        checker=CollisionChecker(robot, get_angeles_scene(robot)),
     )
     report = out_dir / "singularities.html"
     write_singularity_report(robot, report, trajectory=(samples.t, samples.q))
@@ -121,11 +127,21 @@ def _run_fish_cutting(out_dir: Path, *, pages: bool) -> dict[str, object]:
     result = run_fish_cutting(kang)
     write_trajectory_csv(out_dir / "fishcut.csv", result.servo)
     summary = summarize_fish_cutting(result, kang.name)
+    checker = CollisionChecker(
+        kang, get_fish_cutting_scene(kang, result.fish, result.setup)
+    )
+    stride = max(1, round(result.setup.servo_rate / result.setup.planning_rate))
+    clearance = check_path(checker, result.servo.t, result.servo.q, stride=stride)
+    summary["collision"] = {"scene": checker.scene.name, **clearance.as_dict()}
     if pages:
         from workbench.viz import write_trajectory_html
 
         write_trajectory_html(
-            kang, result.servo, out_dir / "fishcut.html", title="Kang Fig. 7 fish cut"
+            kang,
+            result.servo,
+            out_dir / "fishcut.html",
+            title="Kang Fig. 7 fish cut",
+            checker=checker,
         )
     return summary
 
@@ -144,7 +160,20 @@ def format_fish_cutting(summary: dict[str, Any]) -> str:
         f"{summary['wrist_flips']}; wrist singularity crossings "
         f"{summary['wrist_singularity_crossings']}\n"
         f"  planning cycle: median {latency['median']:.1f} µs, "
-        f"p99 {latency['p99']:.1f} µs"
+        f"p99 {latency['p99']:.1f} µs\n"
+        + _format_fish_clearance(summary.get("collision"))
+    )
+
+
+def _format_fish_clearance(report: dict[str, Any] | None) -> str:
+    if report is None:
+        return "  collision check skipped"
+    at = report["min_clearance_at"]
+    contacts = len(report["collisions"])
+    return (
+        f"  clearance (scene {report['scene']}; the knife links may touch the fish): "
+        f"min {report['min_clearance']:.4f} m ({at['body_a']} - {at['body_b']} at "
+        f"t = {at['t']:.2f} s), {contacts} contact(s)"
     )
 
 
@@ -156,6 +185,8 @@ def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, ob
         out_dir: Output folder (created).
         plots: Also write the PNG figures, the 3D preview (``preview.html``)
             and the singularity report (``singularities.html``): the slow part.
+            The self-collision filter of the model is always written
+            (``<robot>.srdf``).
 
     Returns:
         A JSON-ready summary (also written to ``out_dir/summary.json``).
@@ -184,6 +215,8 @@ def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, ob
         "pick_and_place": run_pick_and_place_demo(robot, out_dir, plots=plots),
     }
     summary["fish_cutting"] = _run_fish_cutting(out_dir, pages=plots)
+    checker = CollisionChecker(robot, get_angeles_scene(robot))
+    (out_dir / f"{robot.name}.srdf").write_text(checker.filter.to_srdf(), "utf-8")
     if plots:
         summary["pages"] = _write_pages(robot, out_dir)
     (out_dir / "summary.json").write_text(

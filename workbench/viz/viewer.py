@@ -19,6 +19,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from workbench.collision import CollisionChecker
 from workbench.errors import DimensionError, InputError
 from workbench.model.robot import Robot
 from workbench.poses import as_se3
@@ -90,6 +91,7 @@ class Viewer:
         self._motion: FloatArray | None = None
         self._camera: CameraView | None = None
         self._server: LiveServer | None = None
+        self._overlay = None
         self.q = np.clip(np.zeros(robot.nq), robot.lower, robot.upper)
         self.display(self.q if q is None else q)
         self._draw_floor()
@@ -129,6 +131,12 @@ class Viewer:
             rgb = [float(c) for c in self._gauge.compute_color(q)]
             for node in self._arm.moving_nodes:
                 self._scene[node].set_property("color", [*rgb, 1.0])
+        if self._overlay is not None:
+            colors, markers = self._overlay.compute_state(q)
+            for node, rgb in colors.items():
+                self._scene[node].set_property("color", [*rgb, 1.0])
+            for node, pose in markers.items():
+                self._scene[node].set_transform(pose)
 
     def show_frames(
         self, frames: list[str] | None = None, *, scale: float | None = None
@@ -222,6 +230,26 @@ class Viewer:
             points.append(ghost.compute_points(qk))
         self._extra_points["ghosts"] = np.vstack(points)
 
+    def show_collisions(self, checker: CollisionChecker) -> None:
+        """Draw the checker's scene; colour contacts and the closest pair from now on.
+
+        Links and obstacles in contact turn red and the closest pair orange
+        (instead of the singularity colours), with two markers on the closest
+        points (see :class:`~workbench.viz.collision_overlay.CollisionOverlay`).
+
+        Args:
+            checker: A :class:`~workbench.collision.CollisionChecker` of this
+                viewer's robot.
+        """
+        from workbench.viz.collision_overlay import CollisionOverlay
+
+        self._overlay = CollisionOverlay(self._scene, self._arm, checker)
+        self._gauge = None
+        self.display(self.q)
+        corners = [o.placement.translation for o in checker.scene.obstacles]
+        if corners:
+            self._extra_points["scene"] = np.array(corners)
+
     def set_visible(self, name: str, visible: bool) -> None:
         """Show or hide a part of the scene (a node and everything under it).
 
@@ -281,6 +309,14 @@ class Viewer:
                     frame[f"{node}/<object>"].set_property(
                         "material.color", "color", rgb
                     )
+            if self._overlay is not None:
+                colors, markers = self._overlay.compute_state(q[k])
+                for node, rgb in colors.items():
+                    frame[f"{node}/<object>"].set_property(
+                        "material.color", "color", rgb
+                    )
+                for node, pose in markers.items():
+                    frame[node].set_transform(pose)
         self.display(q[0])
         self._scene.set_animation(animation, play=True, repetitions=repetitions)
         self._motion = q[keep[:: max(1, len(keep) // 40)]]
