@@ -10,7 +10,7 @@ import numpy as np
 from workbench.cli._common import add_json_flag, finite_float, print_json
 from workbench.errors import InputError
 from workbench.export import write_named_csv, write_ros2_bag, write_urscript
-from workbench.export._atomic import check_output
+from workbench.export.atomic_files import check_output
 from workbench.export.ros2_bag import DEFAULT_TOPIC
 from workbench.export.urscript import DEFAULT_SERVO_RATE, check_ur_joints
 from workbench.model.loading import load_robot

@@ -3,10 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
-import os
-import tempfile
-from collections.abc import Iterator
 from pathlib import Path
 
 from workbench.cli._collision import (
@@ -19,7 +15,7 @@ from workbench.cli._collision import (
 )
 from workbench.cli._common import add_json_flag, add_robot_argument, print_json
 from workbench.collision import check_path
-from workbench.errors import InputError
+from workbench.export.atomic_files import atomic_file, check_output
 from workbench.model.loading import load_robot
 from workbench.tasks import FishCuttingSetup, SimulatedFish, run_fish_cutting
 from workbench.tasks.fish_cutting import summarize_fish_cutting
@@ -82,37 +78,11 @@ def register(commands: argparse._SubParsersAction) -> None:
     parser.set_defaults(run=run)
 
 
-def _check_writable(path: Path | None, option: str) -> None:
-    if path is None:
-        return
-    if path.is_dir():
-        raise InputError(f"{option} {path}: is a directory")
-    if not path.parent.resolve().is_dir():
-        raise InputError(f"{option} {path}: folder {path.parent} does not exist")
-
-
-@contextlib.contextmanager
-def _atomic_path(path: Path) -> Iterator[Path]:
-    """A temporary path next to ``path``, renamed onto it only on success."""
-    handle, name = tempfile.mkstemp(
-        dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix
-    )
-    os.close(handle)
-    tmp = Path(name)
-    try:
-        yield tmp
-        mask = os.umask(0)  # mkstemp makes 0600 files: give the usual mode
-        os.umask(mask)
-        tmp.chmod(0o666 & ~mask)
-        tmp.replace(path)
-    finally:
-        tmp.unlink(missing_ok=True)
-
-
 def run(args: argparse.Namespace) -> int:
     """Run the program; write the CSV and the page only if it completes."""
-    _check_writable(args.csv, "--csv")
-    _check_writable(args.html, "--html")
+    for path in (args.csv, args.html):
+        if path is not None:
+            check_output(path)
     robot = load_robot(args.robot)
     setup = FishCuttingSetup(
         max_velocity=args.max_velocity,
@@ -132,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
     if args.html is not None:  # viewer imported lazily (optional extra)
         from workbench.viz import write_trajectory_html
 
-        with _atomic_path(args.html) as tmp:
+        with atomic_file(args.html) as tmp:
             write_trajectory_html(
                 robot,
                 result.servo,
@@ -141,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
                 checker=checker,
             )
     if args.csv is not None:
-        with _atomic_path(args.csv) as tmp:
+        with atomic_file(args.csv) as tmp:
             write_trajectory_csv(tmp, result.servo)
     summary = {
         **summarize_fish_cutting(result, robot.name),

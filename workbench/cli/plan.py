@@ -22,7 +22,7 @@ from workbench.cli._common import (
     finite_float,
     print_json,
 )
-from workbench.collision import Scene, check_path, get_angeles_scene, get_pedestal
+from workbench.collision import Scene, get_angeles_scene, get_pedestal
 from workbench.errors import InputError
 from workbench.model.loading import load_robot
 from workbench.trajectory import minimum_duration, pick_and_place
@@ -114,16 +114,7 @@ def run_pick_place(args: argparse.Namespace) -> int:
     checker = build_checker(robot, scene, explicit=args.scene is not None)
     clearance = None
     if checker is not None:
-        grid = traj.sample_uniform(args.rate)
-        speed, acc = traj.get_extrema(1), traj.get_extrema(2)
-        clearance = check_path(
-            checker,
-            grid.t,
-            grid.q,
-            sample=lambda s: traj.sample(s)[0],
-            max_joint_speed=np.maximum(-speed.minimum, speed.maximum),
-            max_joint_acceleration=np.maximum(-acc.minimum, acc.maximum),
-        )
+        clearance = traj.check_collisions(checker, args.rate)
     samples = traj.sample_uniform(args.rate) if args.csv else None
     if samples is not None:
         write_trajectory_csv(args.csv, samples)

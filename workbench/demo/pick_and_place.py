@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from workbench import paper_data
-from workbench.collision import CollisionChecker, check_path, get_angeles_scene
+from workbench.collision import CollisionChecker, get_angeles_scene
 from workbench.errors import WorkbenchError
 from workbench.model.robot import Robot
 from workbench.poses import ANGELES7_PRINTED_TOL, se3_from_angeles7
@@ -100,16 +100,7 @@ def check_collisions(robot: Robot, traj) -> dict[str, Any]:
         ``{"scene", "min_clearance", "collisions", ...}`` (JSON-ready).
     """
     checker = CollisionChecker(robot, get_angeles_scene(robot))
-    grid = traj.sample_uniform(CSV_RATE_HZ)
-    speed, acc = traj.get_extrema(1), traj.get_extrema(2)
-    report = check_path(
-        checker,
-        grid.t,
-        grid.q,
-        sample=lambda s: traj.sample(s)[0],
-        max_joint_speed=np.maximum(-speed.minimum, speed.maximum),
-        max_joint_acceleration=np.maximum(-acc.minimum, acc.maximum),
-    )
+    report = traj.check_collisions(checker, CSV_RATE_HZ)
     return {"scene": checker.scene.name, **report.as_dict()}
 
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from workbench.errors import DimensionError, InputError
-from workbench.export._atomic import atomic_file
+from workbench.export.atomic_files import atomic_file
 from workbench.trajectory.csv_io import JointTrajectorySamples
 
 

@@ -21,7 +21,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import DimensionError, InputError
-from workbench.export._atomic import atomic_folder
+from workbench.export.atomic_files import atomic_folder
 from workbench.trajectory.csv_io import JointTrajectorySamples
 
 FloatArray = npt.NDArray[np.float64]

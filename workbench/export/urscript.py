@@ -19,7 +19,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
-from workbench.export._atomic import atomic_file
+from workbench.export.atomic_files import atomic_file
 from workbench.trajectory.csv_io import JointTrajectorySamples
 
 FloatArray = npt.NDArray[np.float64]

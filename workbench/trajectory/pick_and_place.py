@@ -24,6 +24,7 @@ from typing import Protocol
 import numpy as np
 import numpy.typing as npt
 
+from workbench.collision import CollisionChecker, PathClearance, check_path
 from workbench.errors import InputError
 from workbench.model.robot import Robot
 from workbench.trajectory.csv_io import JointTrajectorySamples
@@ -166,6 +167,30 @@ class JointTrajectory:
     def check_limits(self) -> list[LimitViolation]:
         """Every position, speed and acceleration limit left (exact extremes)."""
         return check_limits(self)
+
+    def check_collisions(
+        self, checker: CollisionChecker, rate_hz: float
+    ) -> PathClearance:
+        """Clearance along the whole motion, not only at the samples.
+
+        Distances are computed at ``rate_hz`` samples; between them the
+        spline's exact peak speeds and accelerations bound how far any point
+        can move (:func:`workbench.collision.check_path`).
+
+        Args:
+            checker: Robot (this trajectory's), scene and body pairs.
+            rate_hz: Sampling rate of the distance computations [Hz], > 0.
+        """
+        grid = self.sample_uniform(rate_hz)
+        speed, accel = self.get_extrema(1), self.get_extrema(2)
+        return check_path(
+            checker,
+            grid.t,
+            grid.q,
+            sample=lambda t: self.sample(t)[0],
+            max_joint_speed=np.maximum(-speed.minimum, speed.maximum),
+            max_joint_acceleration=np.maximum(-accel.minimum, accel.maximum),
+        )
 
 
 def _scale(
