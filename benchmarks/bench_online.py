@@ -26,9 +26,9 @@ import numpy as np
 import pinocchio as pin
 
 from workbench import ik, load_robot
+from workbench.planning import OnlinePlanner
 from workbench.tasks import FishCuttingSetup, SimulatedFish, run_fish_cutting
 from workbench.tasks.fish_program import KANG_BASE_HEIGHT, build_program
-from workbench.trajectory import OnlinePlanner
 
 clock = time.perf_counter
 

@@ -25,7 +25,7 @@ from workbench.tasks.fish_program import (
     compute_home_configuration,
     compute_waypoints,
 )
-from workbench.trajectory_csv import read_trajectory_csv
+from workbench.trajectory.csv_io import read_trajectory_csv
 
 SETUP = FishCuttingSetup()
 
@@ -73,6 +73,23 @@ def test_program_runs_through_and_returns_home(run):
         run.q[0, 3] + run.q[0, 5], abs=1e-9
     )
     assert _speed(run)[-1] == 0.0
+
+
+def test_second_horizontal_cut_hands_over_at_cutting_speed(run):
+    """Fig. 7's HorizontalCut(Dh, Ch, 1, 1): vi = vf = 1, so the cut ends moving."""
+    primitive = np.array(run.primitive)
+    cuts = np.flatnonzero(primitive == "HorizontalCut")
+    assert np.all(np.diff(cuts) == 1)  # the two cuts run back to back, never stopping
+    speed = _speed(run)
+    assert speed[cuts[1:]].min() > 0.0
+    end = cuts[-1]
+    assert speed[end] == pytest.approx(SETUP.cutting_speed, rel=1e-9)
+    point_c = compute_waypoints(SimulatedFish(seed=0), SETUP)["C"]
+    step = SETUP.cutting_speed / SETUP.planning_rate
+    assert np.linalg.norm(run.position[end, :2] - point_c[:2]) <= step * (1 + 1e-9)
+    # the lift that follows brings the horizontal velocity back to zero
+    lift = np.flatnonzero(primitive[end + 1 :] != "StraightLine")[0] + end + 1
+    np.testing.assert_allclose(run.velocity[lift - 1, :2], 0.0, atol=1e-12)
 
 
 def test_flesh_then_bone_at_every_vertical_cut(run):

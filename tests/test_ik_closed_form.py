@@ -16,7 +16,6 @@ from hypothesis import strategies as st
 from tests.conftest import run_cli as run
 from workbench import Robot, load_robot, paper_data
 from workbench.cli import EXIT_BAD_INPUT, EXIT_INFEASIBLE
-from workbench.dh import DHJoint, DHTable
 from workbench.errors import (
     DimensionError,
     InfeasibleError,
@@ -34,8 +33,10 @@ from workbench.ik.closed_form import (
     analytic_batch,
     nearest,
 )
+from workbench.model.dh import DHJoint, DHTable
+from workbench.model.urdf_generator import generate_urdf
 from workbench.poses import ANGELES7_PRINTED_TOL, se3_from_angeles7
-from workbench.urdf_generator import generate_urdf
+from workbench.singularities import compute_conditions
 
 ATOL_FK = 1e-9  # every branch reproduces the target (observed ~1e-15)
 ATOL_SAME_Q = 1e-6  # [rad] the generating q is among the branches
@@ -345,14 +346,16 @@ def test_kang_corrected_formulas(puma_kang) -> None:
         assert _same(s["theta6_fixed"], q[5])
 
 
-def test_kang_singular_family_is_theta4_plus_theta6(puma_kang) -> None:
+def test_kang_singular_family_is_theta4_plus_theta6(any_puma) -> None:
+    """At θ5 = 0, FK depends on θ4 + θ6 only: "θ6 = −θ4" is the family's direction."""
     q = np.array([0.4, 1.9, 0.3, 0.8, 0.0, 0.5])  # theta5 = 0
-    target = puma_kang.fk(q).homogeneous
+    assert abs(compute_conditions(any_puma, q).wrist) <= ATOL_FK
+    target = any_puma.fk(q).homogeneous
     for theta4 in np.linspace(-3.0, 3.0, 7):
         member = q + np.array([0, 0, 0, theta4 - q[3], 0, q[3] - theta4])  # sum kept
-        assert fk_error(puma_kang, member, target) <= ATOL_FK
-    printed = q + np.array([0, 0, 0, 0, 0, -q[3] - q[5]])  # "theta6 = -theta4"
-    assert fk_error(puma_kang, printed, target) > 0.1
+        assert fk_error(any_puma, member, target) <= ATOL_FK
+    literal = q + np.array([0, 0, 0, 0, 0, -q[3] - q[5]])  # theta6 = -theta4 exactly
+    assert fk_error(any_puma, literal, target) > 0.1
 
 
 # -- singularities and continuity ------------------------------------------------

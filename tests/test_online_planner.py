@@ -16,14 +16,14 @@ from workbench import (
     load_robot,
 )
 from workbench.ik.closed_form import analytic, nearest
-from workbench.poses import rotation_from_axis_angle
-from workbench.trajectory import (
+from workbench.planning import (
     CartesianLimits,
     OnlinePlanner,
     PointToPoint,
     StraightLine,
     interpolate_servo,
 )
+from workbench.poses import rotation_from_axis_angle
 
 ATOL_EXACT = 1e-12
 Q_START = np.array([0.3, 0.4, 0.2, 0.3, 0.8, 0.2])  # away from every singularity
@@ -281,8 +281,8 @@ def test_start_outside_limits_and_robot_without_closed_form(puma_kang):
 
 
 def test_samples_and_states_are_immutable(puma_kang):
-    from workbench.trajectory import PlannerSample
-    from workbench.trajectory.cartesian_paths import CartesianState
+    from workbench.planning import PlannerSample
+    from workbench.planning.cartesian_paths import CartesianState
 
     planner = _planner(puma_kang)
     planner.append(PointToPoint(*_random_goal(planner, np.random.default_rng(5))))

@@ -8,9 +8,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from workbench import InfeasibleError, InputError, NonFiniteError, trajectory
-from workbench.poses import quat_wxyz_from_rotation, rotation_from_axis_angle
-from workbench.trajectory import compute_relative_axis_angle, orientation
+from workbench import InfeasibleError, InputError, NonFiniteError, planning
+from workbench.planning import compute_relative_axis_angle, orientation
+from workbench.poses import rotation_from_axis_angle
 
 ATOL_EXACT = 1e-12
 ATOL_FD = 1e-6
@@ -55,7 +55,7 @@ def test_ends_are_exact(seed):
         r1 = _random_rotation(rng)
         axis = rng.normal(size=3)
         r2 = r1 @ rotation_from_axis_angle(axis / np.linalg.norm(axis), angle)
-        rot = trajectory.orientation(r1, r2, 0.8, 2.0)
+        rot = planning.orientation(r1, r2, 0.8, 2.0)
         r_start, w_start = rot.sample(0.0)
         r_end, w_end = rot.sample(rot.duration)
         np.testing.assert_allclose(r_start, r1, rtol=0, atol=ATOL_EXACT)
@@ -134,8 +134,32 @@ def test_shortest_path_and_robust_near_pi():
     np.testing.assert_allclose(rot.sample(0.5)[0], r1, atol=0)
 
 
-def test_kang_eq4_sign_is_a_frame_rotation_erratum(rng):
-    """Eq. (5) is the active rotation of q = [cos(θ/2), +u sin(θ/2)] (Pinocchio's)."""
+def _kang_eq5_inverse(r: np.ndarray) -> np.ndarray:
+    """[q0, q1, q2, q3] with eq. (5) giving ``r``, q0 >= 0 (Shoemake, Kang's Ref. 8).
+
+    Written here from eq. (5) itself (largest-pivot form), independent of
+    ``workbench.poses``.
+    """
+    trace = r[0, 0] + r[1, 1] + r[2, 2]
+    pivots = [trace, r[0, 0], r[1, 1], r[2, 2]]
+    k = int(np.argmax(pivots))
+    if k == 0:
+        q0 = 0.5 * math.sqrt(1.0 + trace)
+        q = [q0, (r[2, 1] - r[1, 2]) / (4 * q0), (r[0, 2] - r[2, 0]) / (4 * q0)]
+        q.append((r[1, 0] - r[0, 1]) / (4 * q0))
+    else:
+        i, j, m = k - 1, k % 3, (k + 1) % 3
+        qi = 0.5 * math.sqrt(1.0 + r[i, i] - r[j, j] - r[m, m])
+        q = [0.0] * 4
+        q[0] = (r[m, j] - r[j, m]) / (4 * qi)
+        q[1 + i], q[1 + j] = qi, (r[j, i] + r[i, j]) / (4 * qi)
+        q[1 + m] = (r[m, i] + r[i, m]) / (4 * qi)
+    q = np.array(q)
+    return q if q[0] >= 0 else -q
+
+
+def test_kang_eq5_is_the_active_matrix_and_eq4_its_passive_axis(rng):
+    """Eq. (5) of q = [cos(θ/2), +u sin(θ/2)] is Rot(u, θ), Pinocchio's quaternion."""
     axis = rng.normal(size=3)
     axis /= np.linalg.norm(axis)
     theta = 1.1
@@ -145,18 +169,37 @@ def test_kang_eq4_sign_is_a_frame_rotation_erratum(rng):
     np.testing.assert_allclose(
         plus, pin.Quaternion(w, *v).toRotationMatrix(), atol=1e-15
     )
-    # Eq. (4) as printed, q = [cos(θ/2), -u sin(θ/2)], fed to eq. (5), gives R^T
-    minus = _kang_eq5(w, *(-v))
-    np.testing.assert_allclose(minus, plus.T, atol=1e-15)
-    # so reading u from eq. (5) with eq. (4)'s sign turns the tool the wrong way:
-    r1, r2 = _random_rotation(rng), _random_rotation(rng)
-    q_wxyz = quat_wxyz_from_rotation(r1.T @ r2)
-    u_kang = -q_wxyz[1:] / np.linalg.norm(q_wxyz[1:])
-    angle = 2 * math.atan2(np.linalg.norm(q_wxyz[1:]), q_wxyz[0])
-    wrong_end = r1 @ rotation_from_axis_angle(u_kang, angle)
-    assert np.abs(wrong_end - r2).max() > 1e-3
-    right_end = orientation(r1, r2, 1.0, 1.0).sample(1e3)[0]
-    np.testing.assert_allclose(right_end, r2, atol=ATOL_EXACT)
+    # Eq. (4)'s u (minus sign) is the axis of the frame rotation: Rot(u, θ)^T.
+    np.testing.assert_allclose(_kang_eq5(w, *(-v)), plus.T, atol=1e-15)
+
+
+def test_kang_eq4_eq5_path_reaches_r2_and_equals_the_workbench(rng):
+    """Through eq. (5) and eq. (4) alike, R -> q -> R(t) reaches R2 in every case.
+
+    §4: q from R = R1^T R2 by eq. (5); u and θ12 from q by eq. (4); θ(t) by the
+    trapezoid; R(t) = R1 · eq5(eq4(u, θ(t))). The same passive pair both ways is
+    consistent; it traces the workbench's R1 Rot(u_active, θ(t)) exactly.
+    """
+    pairs = [(_random_rotation(rng), _random_rotation(rng)) for _ in range(200)]
+    near_pi = rotation_from_axis_angle([0.0, 0.6, 0.8], math.pi - 1e-9)
+    pairs += [(np.eye(3), near_pi), (near_pi, np.eye(3))]
+    for r1, r2 in pairs:
+        q = _kang_eq5_inverse(r1.T @ r2)
+        np.testing.assert_allclose(_kang_eq5(*q), r1.T @ r2, atol=ATOL_EXACT)
+        half = math.atan2(np.linalg.norm(q[1:]), q[0])
+        u_kang = -q[1:] / math.sin(half)  # eq. (4): q_vec = -u sin(θ/2)
+        profile = orientation(r1, r2, 0.8, 2.0)
+        for t in np.linspace(0.0, profile.duration, 7):
+            theta = profile.profile.sample(t)[0]
+            kang_t = r1 @ _kang_eq5(
+                math.cos(theta / 2), *(-u_kang * math.sin(theta / 2))
+            )
+            np.testing.assert_allclose(kang_t, profile.sample(t)[0], atol=ATOL_EXACT)
+        np.testing.assert_allclose(kang_t, r2, atol=ATOL_EXACT)
+        # Only a mix fails: eq. (4)'s u in the active Rodrigues formula.
+        if 1e-3 < 2 * half < math.pi - 1e-3:
+            mixed = r1 @ rotation_from_axis_angle(u_kang, 2 * half)
+            assert np.abs(mixed - r2).max() > 1e-3
 
 
 def test_vi_vf_flags_pass_through():

@@ -7,7 +7,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from PIL import Image
 
-from workbench.plot_arm import compute_arm_points, plot_arm, set_equal_axes
+from workbench.plots.arm import compute_arm_points, plot_arm, set_equal_axes
 
 ATOL_EXACT = 1e-12
 Q = np.array([0.1, -0.8, 2.0, 0.3, 0.6, 0.0])

@@ -9,15 +9,15 @@ import pytest
 from matplotlib.figure import Figure
 from PIL import Image
 
-from workbench.reports import _singularity_figures as figs
-from workbench.singularity_measures import compute_joint_grid
-from workbench.trajectory import pick_and_place
-from workbench.trajectory.cartesian import compute_cartesian_trajectory
-from workbench.trajectory_plots import (
+from workbench.plots.trajectory import (
     plot_cartesian,
     plot_joint_trajectory,
     plot_normal_spline,
 )
+from workbench.reports import _singularity_figures as figs
+from workbench.singularities.measures import compute_joint_grid
+from workbench.trajectory import pick_and_place
+from workbench.trajectory.cartesian import compute_cartesian_trajectory
 
 Q_PICK = np.deg2rad([0.0, 45.0, 200.0, -100.0, 30.0, 10.0])
 Q_PLACE = np.deg2rad([150.0, -100.0, -10.0, 100.0, -70.0, 170.0])

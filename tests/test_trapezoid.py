@@ -9,8 +9,8 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from workbench import InfeasibleError, InputError, NonFiniteError, trajectory
-from workbench.trajectory import replan_trapezoid, stopping_profile, trapezoid
+from workbench import InfeasibleError, InputError, NonFiniteError, planning
+from workbench.planning import replan_trapezoid, stopping_profile, trapezoid
 
 ATOL_EXACT = 1e-12
 RTOL_LIMIT = 1e-9
@@ -82,7 +82,7 @@ def test_kang_velocity_flags(vi, vf, duration):
 
 
 def test_contract_entry_point_and_array_sampling():
-    prof = trajectory.trapezoid(0.3, 0.2, 0.4)
+    prof = planning.trapezoid(0.3, 0.2, 0.4)
     s, sd, sdd = prof.sample(np.zeros((2, 3)))
     assert s.shape == sd.shape == sdd.shape == (2, 3)
 

@@ -127,3 +127,7 @@ class JointLimitError(InfeasibleError):
         super().__init__(
             f"joint {joint} {kind} {value:.6g}{when} outside [{lower:.6g}, {upper:.6g}]"
         )
+
+
+class SceneFileError(InputError):
+    """A scene file is missing, unreadable or invalid (the message says where)."""

@@ -9,6 +9,7 @@ from typing import Any, overload
 
 import numpy as np
 import numpy.typing as npt
+from pinocchio import rpy as rpy
 
 _Array = npt.NDArray[np.float64]
 _ArrayLike = npt.ArrayLike
@@ -60,6 +61,14 @@ class SE3:
     @staticmethod
     def Identity() -> SE3: ...
 
+class Quaternion:
+    @overload
+    def __init__(self, rotation: _ArrayLike) -> None: ...
+    @overload
+    def __init__(self, w: float, x: float, y: float, z: float) -> None: ...
+    def coeffs(self) -> _Array: ...  # [x, y, z, w]
+    def toRotationMatrix(self) -> _Array: ...
+
 class Motion:
     linear: _Array
     angular: _Array
@@ -97,6 +106,8 @@ class Model:
     names: Sequence[str]
     frames: Sequence[Frame]
     joints: Sequence[JointModel]
+    parents: Sequence[int]
+    jointPlacements: Sequence[SE3]
     lowerPositionLimit: _Array
     upperPositionLimit: _Array
     velocityLimit: _Array
@@ -113,6 +124,14 @@ class Data:
     J: _Array
 
 class GeometryObject:
+    def __init__(
+        self,
+        name: str,
+        parent_joint: int,
+        parent_frame: int,
+        placement: SE3,
+        geometry: Any,  # a coal collision geometry
+    ) -> None: ...
     name: str
     parentJoint: int
     parentFrame: int
@@ -124,15 +143,37 @@ class GeometryObject:
     meshMaterial: Any
     geometry: Any  # an hpp-fcl collision geometry
 
+class CollisionPair:
+    first: int
+    second: int
+    def __init__(self, first: int, second: int) -> None: ...
+
 class GeometryModel:
+    @overload
+    def __init__(self) -> None: ...
+    @overload
+    def __init__(self, other: GeometryModel) -> None: ...
     ngeoms: int
     geometryObjects: Sequence[GeometryObject]
+    collisionPairs: Sequence[CollisionPair]
+    def addGeometryObject(self, geometry_object: GeometryObject) -> int: ...
+    def addCollisionPair(self, pair: CollisionPair) -> None: ...
     def createData(self) -> GeometryData: ...
     def getGeometryId(self, name: str) -> int: ...
     def existGeometryName(self, name: str) -> bool: ...
 
+class DistanceResult:  # coal's, as Pinocchio returns it
+    min_distance: float
+    def getNearestPoint1(self) -> _Array: ...
+    def getNearestPoint2(self) -> _Array: ...
+
 class GeometryData:
+    def __init__(self, geometry_model: GeometryModel) -> None: ...
     oMg: Sequence[SE3]
+    distanceResults: Sequence[DistanceResult]
+    distanceRequests: Sequence[Any]  # coal DistanceRequest
+    def activateCollisionPair(self, pair_index: int) -> None: ...
+    def deactivateCollisionPair(self, pair_index: int) -> None: ...
 
 def neutral(model: Model) -> _Array: ...
 def normalize(model: Model, q: _ArrayLike) -> _Array: ...
@@ -168,6 +209,16 @@ def getFrameJacobian(
 def getFrameJacobianTimeVariation(
     model: Model, data: Data, frame_id: int, reference_frame: ReferenceFrame
 ) -> _Array: ...
+def computeDistances(
+    model: Model,
+    data: Data,
+    geometry_model: GeometryModel,
+    geometry_data: GeometryData,
+    q: _ArrayLike,
+) -> int: ...
+def computeDistance(
+    geometry_model: GeometryModel, geometry_data: GeometryData, pair_index: int
+) -> DistanceResult: ...
 def log6(transform: SE3 | _ArrayLike) -> Motion: ...
 def log3(rotation: _ArrayLike) -> _Array: ...
 def exp3(omega: _ArrayLike) -> _Array: ...

@@ -19,7 +19,18 @@ from collections.abc import Iterator, Sequence
 from typing import NoReturn
 
 import workbench
-from workbench.cli import demo, fishcut, fk, ik, plan, report, singularities, urdf, view
+from workbench.cli import (
+    demo,
+    export,
+    fishcut,
+    fk,
+    ik,
+    plan,
+    report,
+    singularities,
+    urdf,
+    view,
+)
 from workbench.cli._progress import Progress
 from workbench.errors import InfeasibleError, InputError, WorkbenchError
 
@@ -29,7 +40,7 @@ EXIT_BAD_INPUT = 2
 EXIT_INFEASIBLE = 3
 EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for `yes | head`
 
-_COMMANDS = (fk, ik, urdf, demo, singularities, report, plan, view, fishcut)
+_COMMANDS = (fk, ik, urdf, demo, singularities, report, plan, view, fishcut, export)
 
 
 class _Parser(argparse.ArgumentParser):

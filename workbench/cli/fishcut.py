@@ -3,18 +3,24 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
-import os
-import tempfile
-from collections.abc import Iterator
 from pathlib import Path
 
+from workbench.cli._collision import (
+    add_collision_arguments,
+    build_checker,
+    get_collision_keys,
+    load_scene,
+    print_collision_summary,
+    report_collision_error,
+)
 from workbench.cli._common import add_json_flag, add_robot_argument, print_json
-from workbench.errors import InputError
-from workbench.loading import load_robot
+from workbench.collision import check_path
+from workbench.export.atomic_files import atomic_file, check_output
+from workbench.model.loading import load_robot
 from workbench.tasks import FishCuttingSetup, SimulatedFish, run_fish_cutting
 from workbench.tasks.fish_cutting import summarize_fish_cutting
-from workbench.trajectory_csv import write_trajectory_csv
+from workbench.tasks.fish_scene import get_fish_cutting_scene
+from workbench.trajectory.csv_io import write_trajectory_csv
 
 DEFAULT_ROBOT = "puma560-kang"
 _DEFAULTS = FishCuttingSetup()
@@ -30,7 +36,9 @@ def register(commands: argparse._SubParsersAction) -> None:
             "with the online planner: Cartesian command, closed-form IK with branch "
             "continuity and DLS joint rates each planning cycle, cubic Hermite "
             "interpolation at the servo rate. Touching the flesh slows the vertical "
-            "cut, touching the bone stops it (or lifts the horizontal cut)."
+            "cut, touching the bone stops it (or lifts the horizontal cut). The "
+            "servo path is checked for collisions with the scene and between the "
+            "links (exit code 3 on a contact, after writing the outputs)."
         ),
     )
     add_robot_argument(parser, default=DEFAULT_ROBOT)
@@ -65,67 +73,55 @@ def register(commands: argparse._SubParsersAction) -> None:
         help=f"servo samples per second, a multiple of the planning rate "
         f"(default {_DEFAULTS.servo_rate:g})",
     )
+    add_collision_arguments(parser, "Kang's pedestal, cutting table and the fish")
     add_json_flag(parser)
     parser.set_defaults(
         run=run, progress_message="fishcut: running Kang's fish-cutting program online…"
     )
 
 
-def _check_writable(path: Path | None, option: str) -> None:
-    if path is None:
-        return
-    if path.is_dir():
-        raise InputError(f"{option} {path}: is a directory")
-    if not path.parent.resolve().is_dir():
-        raise InputError(f"{option} {path}: folder {path.parent} does not exist")
-
-
-@contextlib.contextmanager
-def _atomic_path(path: Path) -> Iterator[Path]:
-    """A temporary path next to ``path``, renamed onto it only on success."""
-    handle, name = tempfile.mkstemp(
-        dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix
-    )
-    os.close(handle)
-    tmp = Path(name)
-    try:
-        yield tmp
-        mask = os.umask(0)  # mkstemp makes 0600 files: give the usual mode
-        os.umask(mask)
-        tmp.chmod(0o666 & ~mask)
-        tmp.replace(path)
-    finally:
-        tmp.unlink(missing_ok=True)
-
-
 def run(args: argparse.Namespace) -> int:
     """Run the program; write the CSV and the page only if it completes."""
-    _check_writable(args.csv, "--csv")
-    _check_writable(args.html, "--html")
+    for path in (args.csv, args.html):
+        if path is not None:
+            check_output(path)
     robot = load_robot(args.robot)
     setup = FishCuttingSetup(
         max_velocity=args.max_velocity,
         planning_rate=args.planning_rate,
         servo_rate=args.servo_rate,
     )
-    result = run_fish_cutting(robot, SimulatedFish(args.seed), setup)
+    fish = SimulatedFish(args.seed)
+    scene = load_scene(args, lambda: None)  # a --scene file is checked first
+    result = run_fish_cutting(robot, fish, setup)  # (a non-PUMA robot fails here)
+    if scene is None and not args.no_collision:
+        scene = get_fish_cutting_scene(robot, fish, setup)
+    checker = build_checker(robot, scene, explicit=args.scene is not None)
+    clearance = None
+    if checker is not None:  # distances at the planning cycles, bound over the servo
+        stride = max(1, round(setup.servo_rate / setup.planning_rate))
+        clearance = check_path(checker, result.servo.t, result.servo.q, stride=stride)
     if args.html is not None:  # viewer imported lazily (optional extra)
         from workbench.viz import write_trajectory_html
 
-        with _atomic_path(args.html) as tmp:
+        with atomic_file(args.html) as tmp:
             write_trajectory_html(
                 robot,
                 result.servo,
                 tmp,
                 title=f"workbench fishcut: {robot.name}, fish seed {args.seed}",
+                checker=checker,
             )
     if args.csv is not None:
-        with _atomic_path(args.csv) as tmp:
+        with atomic_file(args.csv) as tmp:
             write_trajectory_csv(tmp, result.servo)
-    summary = summarize_fish_cutting(result, robot.name)
+    summary = {
+        **summarize_fish_cutting(result, robot.name),
+        **get_collision_keys(scene, clearance),
+    }
     if args.json:
         print_json(summary)
-        return 0
+        return 3 if report_collision_error(clearance) else 0
     print(
         f"robot {robot.name}: {summary['cycles']} planning cycles at "
         f"{setup.planning_rate:g} Hz, {summary['duration']:.2f} s, servo "
@@ -143,4 +139,5 @@ def run(args: argparse.Namespace) -> int:
     for option, path in (("csv", args.csv), ("html", args.html)):
         if path is not None:
             print(f"{option} written to {path}")
-    return 0
+    print_collision_summary(clearance)
+    return 3 if report_collision_error(clearance) else 0

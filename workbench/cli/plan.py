@@ -8,17 +8,26 @@ from pathlib import Path
 
 import numpy as np
 
+from workbench.cli._collision import (
+    add_collision_arguments,
+    build_checker,
+    get_collision_keys,
+    load_scene,
+    print_collision_summary,
+    report_collision_error,
+)
 from workbench.cli._common import (
     add_json_flag,
     add_robot_argument,
     finite_float,
     print_json,
 )
+from workbench.collision import Scene, get_angeles_scene, get_pedestal
 from workbench.errors import InputError
-from workbench.loading import load_robot
+from workbench.model.loading import load_robot
 from workbench.trajectory import minimum_duration, pick_and_place
+from workbench.trajectory.csv_io import write_trajectory_csv
 from workbench.trajectory.normal_spline import DEFAULT_N_POINTS
-from workbench.trajectory_csv import write_trajectory_csv
 
 EXIT_INFEASIBLE = 3
 DEFAULT_RATE_HZ = 100.0
@@ -37,8 +46,10 @@ def register(commands: argparse._SubParsersAction) -> None:
         help="Angeles et al. (1988) normal-spline pick-and-place trajectory",
         description="Rest-to-rest joint trajectory from the pick to the place "
         "configuration along Angeles' normal spline; checks position, speed and "
-        "acceleration limits exactly and reports the minimum duration. Exit code "
-        "3 (after printing the result) when a limit is violated.",
+        "acceleration limits exactly, reports the minimum duration and the "
+        "clearance to the scene and between the links (proven between samples). "
+        "Exit code 3 (after printing the result) when a limit is violated or two "
+        "bodies touch.",
     )
     add_robot_argument(pick)
     pick.add_argument(
@@ -80,6 +91,11 @@ def register(commands: argparse._SubParsersAction) -> None:
     pick.add_argument(
         "--plot", type=Path, metavar="FILE.png", help="plot q, qd, qdd with limits"
     )
+    add_collision_arguments(
+        pick,
+        "Angeles' pedestal and pick table for puma560, the pedestal for other DH "
+        "models, else none (self-collision only)",
+    )
     add_json_flag(pick)
     pick.set_defaults(
         run=run_pick_place,
@@ -97,11 +113,16 @@ def run_pick_place(args: argparse.Namespace) -> int:
     traj = pick_and_place(robot, q_pick, q_place, args.duration, n_points=args.n_points)
     t_min = minimum_duration(robot, q_pick, q_place, n_points=args.n_points)
     violations = traj.check_limits()
+    scene = load_scene(args, lambda: _default_scene(robot))
+    checker = build_checker(robot, scene, explicit=args.scene is not None)
+    clearance = None
+    if checker is not None:
+        clearance = traj.check_collisions(checker, args.rate)
     samples = traj.sample_uniform(args.rate) if args.csv else None
     if samples is not None:
         write_trajectory_csv(args.csv, samples)
     if args.plot:
-        from workbench.trajectory_plots import plot_joint_trajectory
+        from workbench.plots.trajectory import plot_joint_trajectory
 
         plot_joint_trajectory(
             traj,
@@ -126,16 +147,29 @@ def run_pick_place(args: argparse.Namespace) -> int:
         "csv": None if args.csv is None else str(args.csv),
         "samples": 0 if samples is None else int(samples.t.size),
         "plot": None if args.plot is None else str(args.plot),
+        **get_collision_keys(scene, clearance),
     }
     if args.json:
         print_json(result)
     else:
         _print_human(robot, traj, result)
+        print_collision_summary(clearance)
     if violations:
         more = f" (and {len(violations) - 1} more)" if len(violations) > 1 else ""
         print(f"workbench: error: {violations[0].message}{more}", file=sys.stderr)
         return EXIT_INFEASIBLE
+    if report_collision_error(clearance):
+        return EXIT_INFEASIBLE
     return 0
+
+
+def _default_scene(robot) -> Scene:
+    """Angeles' cell for his PUMA, the pedestal for other DH arms, else none."""
+    if robot.dh_table is None:
+        return Scene("empty")
+    if robot.dh_table.name == "puma560":
+        return get_angeles_scene(robot)
+    return Scene("pedestal", (get_pedestal(robot),), "the pedestal under the base")
 
 
 def _print_human(robot, traj, result: dict) -> None:

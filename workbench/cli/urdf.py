@@ -5,10 +5,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from workbench.cli._common import add_json_flag, print_json
-from workbench.dh import DHTable
+from workbench.cli._common import add_json_flag, add_robot_argument, print_json
 from workbench.errors import InputError
-from workbench.urdf_generator import generate_urdf
+from workbench.model.dh import DHTable
+from workbench.model.urdf_generator import generate_urdf
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -21,12 +21,24 @@ def register(commands: argparse._SubParsersAction) -> None:
         "from-dh",
         help="generate a URDF from a DH table (JSON)",
         description="Generate a URDF from a standard DH table in JSON (SI units); "
-        "see INTERFACE.md for the format.",
+        "see docs/interface.md for the format.",
     )
     from_dh.add_argument("table", type=Path, metavar="TABLE", help="DH table, JSON")
     from_dh.add_argument("--out", type=Path, required=True, help="URDF file to write")
     add_json_flag(from_dh)
     from_dh.set_defaults(run=run_from_dh, progress_message="urdf: generating the URDF…")
+    srdf = actions.add_parser(
+        "srdf",
+        help="write the self-collision filter of a robot (SRDF disable_collisions)",
+        description="The link pairs excluded from self-collision checks: links on "
+        "the same or consecutive joints, links in contact at the zero pose "
+        "(docs/collision.md), as SRDF <disable_collisions> lines.",
+    )
+    add_robot_argument(srdf)
+    srdf.add_argument("--out", type=Path, help="SRDF file to write (default: stdout)")
+    srdf.set_defaults(
+        run=run_srdf, progress_message="urdf: writing the collision filter…"
+    )
 
 
 def run_from_dh(args: argparse.Namespace) -> int:
@@ -51,4 +63,24 @@ def run_from_dh(args: argparse.Namespace) -> int:
             f"wrote {args.out} ({table.name}: {table.nq} joints, "
             f"tool frame {table.tool_frame})"
         )
+    return 0
+
+
+def run_srdf(args: argparse.Namespace) -> int:
+    """Print or write the self-collision filter; returns the exit code."""
+    from workbench.collision import compute_self_collision_filter
+    from workbench.model.loading import load_robot
+
+    robot = load_robot(args.robot)
+    if robot.collision_model.ngeoms == 0:
+        raise InputError(f"robot {robot.name!r} has no collision geometry")
+    text = compute_self_collision_filter(robot).to_srdf()
+    if args.out is None:
+        print(text, end="")
+        return 0
+    try:
+        args.out.write_text(text, encoding="utf-8")
+    except OSError as err:
+        raise InputError(f"cannot write {args.out}: {err.strerror}") from err
+    print(f"wrote {args.out}")
     return 0

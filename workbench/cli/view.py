@@ -10,9 +10,9 @@ import numpy.typing as npt
 
 from workbench.cli._common import add_robot_argument, finite_float, joint_values_rad
 from workbench.errors import InputError
-from workbench.loading import load_robot
-from workbench.robot import Robot
-from workbench.trajectory_csv import (
+from workbench.model.loading import load_robot
+from workbench.model.robot import Robot
+from workbench.trajectory.csv_io import (
     JointTrajectorySamples,
     TrajectoryFileError,
     read_trajectory_csv,
@@ -60,6 +60,13 @@ def register(commands: argparse._SubParsersAction) -> None:
         action="store_true",
         help="also draw every closed-form IK branch of the pose as ghost arms "
         "(PUMA models; needs Q)",
+    )
+    parser.add_argument(
+        "--scene",
+        type=Path,
+        metavar="FILE",
+        help="draw this scene (JSON, base frame) and colour contacts red and the "
+        "closest pair orange instead of the singularity colours",
     )
     parser.add_argument(
         "--no-singularity-color",
@@ -125,6 +132,10 @@ def run(args: argparse.Namespace) -> int:
     samples = read_samples(args.trajectory, robot) if args.trajectory else None
     q = robot.check_configuration(joint_values_rad(args, args.q)) if args.q else None
     viewer = Viewer(robot, q, color_by_singularity=args.singularity_color)
+    if args.scene is not None:
+        from workbench.collision import CollisionChecker, read_scene
+
+        viewer.show_collisions(CollisionChecker(robot, read_scene(args.scene)))
     viewer.show_frames()
     if samples is not None:
         viewer.play_trajectory(samples.t, samples.q)

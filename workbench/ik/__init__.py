@@ -1,6 +1,6 @@
 """Inverse kinematics: closed form for PUMA-type arms, numerical for any arm.
 
-Public entry points (see INTERFACE.md): ``analytic``, ``analytic_batch``,
+Public entry points (see docs/interface.md): ``analytic``, ``analytic_batch``,
 ``numeric``, plus the damped-least-squares tools.
 """
 
@@ -14,16 +14,9 @@ from workbench.ik.closed_form import (
     analytic_batch,
     nearest,
 )
-from workbench.ik.damped import (
-    DLS_EPSILON,
-    DLS_LAMBDA_MAX,
-    QP_DAMPING,
-    DifferentialIKError,
-    dls_inverse,
-    dls_step,
-    qp_step,
-)
+from workbench.ik.damped import DLS_EPSILON, DLS_LAMBDA_MAX, dls_inverse, dls_step
 from workbench.ik.numerical import IKResult, numeric
+from workbench.ik.qp import QP_DAMPING, DifferentialIKError, qp_step
 
 __all__ = [
     "BRANCHES",

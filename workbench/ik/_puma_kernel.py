@@ -36,8 +36,8 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.ik._puma import WRIST_SINGULAR_TOL, PumaGeometry, get_geometry
+from workbench.model.robot import Robot
 from workbench.poses import RIGIDITY_TOL
-from workbench.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -108,8 +108,11 @@ def pack_geometry(geo: PumaGeometry) -> np.ndarray:
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 #: For the helpers called per angle or per pose inside the batch loops: inlined
-#: into their callers (measured: the batch's joint-value stage 3x faster).
-_jit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+#: into their callers by LLVM (measured: the batch's joint-value stage 3x faster
+#: than calls). ``forceinline`` (LLVM's alwaysinline) rather than Numba's
+#: ``inline="always"`` (inlining in Numba's IR, before type inference): same
+#: machine code speed, a third of the compile time on the first run.
+_jit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", forceinline=True)
 
 
 @_jit_inline

@@ -4,6 +4,7 @@ from workbench.tasks.cuts import HorizontalCut, VerticalDownCut
 from workbench.tasks.fish import SimulatedFish
 from workbench.tasks.fish_cutting import FishCuttingResult, FishEvent, run_fish_cutting
 from workbench.tasks.fish_program import FishCuttingSetup, build_program
+from workbench.tasks.fish_scene import get_fish_cutting_scene
 
 __all__ = [
     "FishCuttingResult",
@@ -13,5 +14,6 @@ __all__ = [
     "SimulatedFish",
     "VerticalDownCut",
     "build_program",
+    "get_fish_cutting_scene",
     "run_fish_cutting",
 ]

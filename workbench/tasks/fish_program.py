@@ -16,16 +16,16 @@ import pinocchio as pin
 
 from workbench.errors import InfeasibleError
 from workbench.ik.closed_form import analytic, nearest
-from workbench.robot import Robot
-from workbench.tasks.cuts import HorizontalCut, VerticalDownCut
-from workbench.tasks.fish import SimulatedFish
-from workbench.trajectory.cartesian_paths import CartesianLimits
-from workbench.trajectory.motion_primitives import (
+from workbench.model.robot import Robot
+from workbench.planning.cartesian_paths import CartesianLimits
+from workbench.planning.motion_primitives import (
     MotionPrimitive,
     PointToPoint,
     SemiCircleUp,
     StraightLine,
 )
+from workbench.tasks.cuts import HorizontalCut, VerticalDownCut
+from workbench.tasks.fish import SimulatedFish
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -150,8 +150,12 @@ def build_program(
     program += [
         StraightLine(p["Q_above"]),
         StraightLine(p["Q"]),
+        # Fig. 7: HorizontalCut(Q, Dh, 0, 1); HorizontalCut(Dh, Ch, 1, 1): both end
+        # at the cutting speed (the flags; the second line's comment is a slip,
+        # docs/errata-kang-orientation.md item 5). The lift then slows the
+        # horizontal velocity to zero.
         HorizontalCut(p["D"], cutting_speed=cut, step_height=step, end_at_speed=True),
-        HorizontalCut(p["C"], cutting_speed=cut, step_height=step),
+        HorizontalCut(p["C"], cutting_speed=cut, step_height=step, end_at_speed=True),
         StraightLine(p["C_above"]),
         PointToPoint(home.translation, home.rotation),
     ]

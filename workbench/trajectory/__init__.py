@@ -1,6 +1,11 @@
-"""Trajectories: Angeles' normal spline and the pick-and-place motions built on it.
+"""Joint-space trajectories after Angeles et al. (1988).
 
-Public entry points (see INTERFACE.md): ``pick_and_place``, ``minimum_duration``.
+The normal cubic spline with zero end velocity and acceleration, scaled per joint
+between two inverse-kinematics solutions (``pick_and_place``; with via points,
+``pick_via_place``); the Cartesian trajectory by forward kinematics; joint position
+and speed limit checks; the minimum physically possible duration and its comparison
+with a time-optimal parametrisation; joint trajectory CSV files. Kang's online
+Cartesian planning is in :mod:`workbench.planning`.
 """
 
 from workbench.trajectory.cartesian import (
@@ -12,26 +17,12 @@ from workbench.trajectory.cartesian import (
     pick_and_place_from_poses,
     select_ik_solution,
 )
-from workbench.trajectory.cartesian_motion import plan_move, plan_stop
-from workbench.trajectory.cartesian_paths import (
-    CartesianLimits,
-    CartesianMotion,
-    CartesianState,
-)
 from workbench.trajectory.limits import (
     JointExtrema,
     LimitViolation,
     check_limits,
     minimum_duration,
     raise_for_violations,
-)
-from workbench.trajectory.motion_primitives import (
-    Hold,
-    MotionPrimitive,
-    PointToPoint,
-    SemiCircleUp,
-    Stop,
-    StraightLine,
 )
 from workbench.trajectory.normal_spline import (
     NormalSpline,
@@ -41,52 +32,26 @@ from workbench.trajectory.normal_spline import (
     compute_normal_spline,
     get_normal_spline,
 )
-from workbench.trajectory.online_planner import OnlinePlanner, PlannerSample
-from workbench.trajectory.orientation_profile import (
-    OrientationProfile,
-    compute_relative_axis_angle,
-    orientation,
-)
 from workbench.trajectory.pick_and_place import JointTrajectory, pick_and_place
 from workbench.trajectory.segments import SegmentedTrajectory, pick_via_place
-from workbench.trajectory.servo_interpolation import interpolate_servo
 from workbench.trajectory.time_optimal import (
     TimeOptimalComparison,
     compare_time_optimal,
     compute_time_optimal_duration,
     compute_toppra_duration,
 )
-from workbench.trajectory.trapezoidal_profile import (
-    TrapezoidalProfile,
-    replan_trapezoid,
-    stopping_profile,
-    trapezoid,
-)
 
 __all__ = [
-    "CartesianLimits",
-    "CartesianMotion",
     "CartesianSamples",
-    "CartesianState",
-    "Hold",
     "IKChoice",
     "JointExtrema",
     "JointTrajectory",
     "LimitViolation",
-    "MotionPrimitive",
     "NormalSpline",
-    "OnlinePlanner",
-    "OrientationProfile",
-    "PlannerSample",
-    "PointToPoint",
     "PosePickAndPlace",
     "SegmentedTrajectory",
-    "SemiCircleUp",
     "SplineExtremum",
-    "Stop",
-    "StraightLine",
     "TimeOptimalComparison",
-    "TrapezoidalProfile",
     "UniformCubicSpline",
     "as_target_pose",
     "check_limits",
@@ -94,21 +59,13 @@ __all__ = [
     "compute_cartesian_trajectory",
     "compute_literal_spline",
     "compute_normal_spline",
-    "compute_relative_axis_angle",
     "compute_time_optimal_duration",
     "compute_toppra_duration",
     "get_normal_spline",
-    "interpolate_servo",
     "minimum_duration",
-    "orientation",
     "pick_and_place",
     "pick_and_place_from_poses",
     "pick_via_place",
-    "plan_move",
-    "plan_stop",
     "raise_for_violations",
-    "replan_trapezoid",
     "select_ik_solution",
-    "stopping_profile",
-    "trapezoid",
 ]

@@ -19,13 +19,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
 
+from workbench.collision import CollisionChecker, PathClearance, check_path
 from workbench.errors import InputError
-from workbench.robot import Robot
+from workbench.model.robot import Robot
+from workbench.trajectory.csv_io import JointTrajectorySamples
 from workbench.trajectory.limits import (
     JointExtrema,
     LimitViolation,
@@ -38,13 +40,17 @@ from workbench.trajectory.normal_spline import (
     SplineExtremum,
     get_normal_spline,
 )
-from workbench.trajectory_csv import JointTrajectorySamples
 from workbench.validation import as_vector
 
-if TYPE_CHECKING:
-    from workbench.trajectory.segments import SegmentedTrajectory
-
 FloatArray = npt.NDArray[np.float64]
+
+
+class _Sampleable(Protocol):
+    """A trajectory sampled by time: JointTrajectory, SegmentedTrajectory."""
+
+    def sample(
+        self, t: npt.ArrayLike
+    ) -> tuple[FloatArray, FloatArray, FloatArray]: ...  # pragma: no cover
 
 
 def check_duration(duration: float, name: str = "duration") -> float:
@@ -162,6 +168,30 @@ class JointTrajectory:
         """Every position, speed and acceleration limit left (exact extremes)."""
         return check_limits(self)
 
+    def check_collisions(
+        self, checker: CollisionChecker, rate_hz: float
+    ) -> PathClearance:
+        """Clearance along the whole motion, not only at the samples.
+
+        Distances are computed at ``rate_hz`` samples; between them the
+        spline's exact peak speeds and accelerations bound how far any point
+        can move (:func:`workbench.collision.check_path`).
+
+        Args:
+            checker: Robot (this trajectory's), scene and body pairs.
+            rate_hz: Sampling rate of the distance computations [Hz], > 0.
+        """
+        grid = self.sample_uniform(rate_hz)
+        speed, accel = self.get_extrema(1), self.get_extrema(2)
+        return check_path(
+            checker,
+            grid.t,
+            grid.q,
+            sample=lambda t: self.sample(t)[0],
+            max_joint_speed=np.maximum(-speed.minimum, speed.maximum),
+            max_joint_acceleration=np.maximum(-accel.minimum, accel.maximum),
+        )
+
 
 def _scale(
     s: FloatArray,
@@ -188,7 +218,7 @@ def _scale(
 
 
 def _sample_uniform(
-    trajectory: JointTrajectory | SegmentedTrajectory,
+    trajectory: _Sampleable,
     duration: float,
     rate_hz: float,
 ) -> JointTrajectorySamples:

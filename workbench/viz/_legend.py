@@ -126,6 +126,20 @@ def ghosts(labels: Sequence[str], colors: Sequence[Sequence[float]]) -> str:
     return f"<div><b>Ghost arms</b>{rows}</div>"
 
 
+def collisions(obstacles: Sequence[str]) -> str:
+    """The colours of a collision-checked page (links, contacts, closest pair)."""
+    from workbench.viz.collision_overlay import CLOSEST_RGB, CONTACT_RGB, LINK_RGB
+
+    named = f" ({', '.join(obstacles)})" if obstacles else ""
+    return (
+        f"<div><b>Collisions</b> with the scene{html.escape(named)}"
+        + dot(LINK_RGB, "link, no contact")
+        + dot(CONTACT_RGB, "in contact")
+        + dot(CLOSEST_RGB, "closest pair (markers on the closest points)")
+        + "</div>"
+    )
+
+
 def render_overlay(title: str, entries: Iterable[str]) -> str:
     """The box: ``title`` as a heading, then each legend entry (HTML)."""
     body = "".join(entries)

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from workbench.robot import Robot
-from workbench.trajectory_csv import JointTrajectorySamples
+from workbench.collision import CollisionChecker
+from workbench.model.robot import Robot
+from workbench.trajectory.csv_io import JointTrajectorySamples
 from workbench.viz.viewer import Viewer
 
 
@@ -16,6 +17,7 @@ def write_trajectory_html(
     *,
     title: str | None = None,
     color_by_singularity: bool = True,
+    checker: CollisionChecker | None = None,
 ) -> Path:
     """Write a self-contained HTML page that plays a joint trajectory.
 
@@ -27,10 +29,12 @@ def write_trajectory_html(
     Args:
         robot: The robot the trajectory is for.
         samples: ``samples.t`` shape (K,) [s], ``samples.q`` shape (K, nq) [rad]
-            (e.g. from :func:`workbench.trajectory_csv.read_trajectory_csv`).
+            (e.g. from :func:`workbench.trajectory.csv_io.read_trajectory_csv`).
         path: Output file (``.html``).
         title: Page title; default names the robot.
         color_by_singularity: Colour the arm red (singular) to green (far).
+        checker: Draw its scene and colour contacts (red) and the closest pair
+            (orange) along the animation instead of the singularity colours.
 
     Returns:
         ``path`` as a Path.
@@ -46,6 +50,8 @@ def write_trajectory_html(
         color_by_singularity=color_by_singularity,
         title=title or f"workbench trajectory preview: {robot.name}",
     )
+    if checker is not None:
+        viewer.show_collisions(checker)
     viewer.show_frames()
     viewer.play_trajectory(samples.t, samples.q)
     return viewer.save_html(path)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import html
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import meshcat
 import meshcat.animation
@@ -19,15 +20,19 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from workbench.collision import CollisionChecker
 from workbench.errors import DimensionError, InputError
+from workbench.model.robot import Robot
 from workbench.poses import as_se3
-from workbench.robot import Robot
 from workbench.viz import _legend, _shapes
 from workbench.viz._arm import Arm, as_configurations, to_node_name
 from workbench.viz._camera import CameraView, frame_points
 from workbench.viz._scene import SceneRecorder, render_page
 from workbench.viz._server import LiveServer
 from workbench.viz.singularity_gauge import SingularityGauge, _characteristic_length
+
+if TYPE_CHECKING:
+    from workbench.viz.collision_overlay import CollisionOverlay
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -95,6 +100,7 @@ class Viewer:
         self._legend: dict[str, str] = {}  # section -> HTML, drawn over the page
         if self._gauge is not None:
             self._legend["singularity"] = _legend.singularity_scale(self._gauge)
+        self._overlay: CollisionOverlay | None = None
         self.q = np.clip(np.zeros(robot.nq), robot.lower, robot.upper)
         self.display(self.q if q is None else q)
         self._draw_floor()
@@ -134,6 +140,12 @@ class Viewer:
             rgb = [float(c) for c in self._gauge.compute_color(q)]
             for node in self._arm.moving_nodes:
                 self._scene[node].set_property("color", [*rgb, 1.0])
+        if self._overlay is not None:
+            colors, markers = self._overlay.compute_state(q)
+            for node, rgb in colors.items():
+                self._scene[node].set_property("color", [*rgb, 1.0])
+            for node, pose in markers.items():
+                self._scene[node].set_transform(pose)
 
     def show_frames(
         self, frames: list[str] | None = None, *, scale: float | None = None
@@ -235,6 +247,30 @@ class Viewer:
         colors = [GHOST_COLORS[i % len(GHOST_COLORS)] for i in range(len(qs))]
         self._legend["ghosts"] = _legend.ghosts(labels, colors)
 
+    def show_collisions(self, checker: CollisionChecker) -> None:
+        """Draw the checker's scene; colour contacts and the closest pair from now on.
+
+        Links and obstacles in contact turn red and the closest pair orange
+        (instead of the singularity colours), with two markers on the closest
+        points (see :class:`~workbench.viz.collision_overlay.CollisionOverlay`).
+
+        Args:
+            checker: A :class:`~workbench.collision.CollisionChecker` of this
+                viewer's robot.
+        """
+        from workbench.viz.collision_overlay import CollisionOverlay
+
+        self._overlay = CollisionOverlay(self._scene, self._arm, checker)
+        self._gauge = None
+        self._legend.pop("singularity", None)  # the links now show contacts
+        self._legend["collisions"] = _legend.collisions(
+            [o.name for o in checker.scene.obstacles]
+        )
+        self.display(self.q)
+        corners = [o.placement.translation for o in checker.scene.obstacles]
+        if corners:
+            self._extra_points["scene"] = np.array(corners)
+
     def set_visible(self, name: str, visible: bool) -> None:
         """Show or hide a part of the scene (a node and everything under it).
 
@@ -294,6 +330,14 @@ class Viewer:
                     frame[f"{node}/<object>"].set_property(
                         "material.color", "color", rgb
                     )
+            if self._overlay is not None:
+                colors, markers = self._overlay.compute_state(q[k])
+                for node, rgb in colors.items():
+                    frame[f"{node}/<object>"].set_property(
+                        "material.color", "color", rgb
+                    )
+                for node, pose in markers.items():
+                    frame[node].set_transform(pose)
         self.display(q[0])
         self._scene.set_animation(animation, play=True, repetitions=repetitions)
         self._motion = q[keep[:: max(1, len(keep) // 40)]]
@@ -334,10 +378,10 @@ class Viewer:
             commands,
             camera=self.get_camera(),
             title=self.title,
-            overlay=self._render_overlay() if legend else "",
+            overlay=self._render_legend() if legend else "",
         )
 
-    def _render_overlay(self) -> str:
+    def _render_legend(self) -> str:
         return _legend.render_overlay(self.title, self._legend.values())
 
     def save_html(self, path: str | Path) -> Path:
@@ -387,7 +431,7 @@ class Viewer:
             camera=self.get_camera(),
             title=self.title,
             live=True,
-            overlay=self._render_overlay(),
+            overlay=self._render_legend(),
         )
 
     def wait_for_browser(self, timeout: float | None = None) -> bool:

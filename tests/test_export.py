@@ -1,0 +1,216 @@
+"""``workbench export`` and ``workbench.export``: bags, URScript, named CSV."""
+
+from __future__ import annotations
+
+import csv
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from tests.conftest import run_cli as run
+from workbench import InputError, load_robot
+from workbench.cli import EXIT_BAD_INPUT
+from workbench.export import (
+    UR_JOINTS,
+    generate_urscript,
+    get_named_header,
+    read_ros2_bag,
+    resample_hermite,
+    write_named_csv,
+    write_ros2_bag,
+)
+from workbench.trajectory import pick_and_place
+from workbench.trajectory.csv_io import (
+    JointTrajectorySamples,
+    read_trajectory_csv,
+    write_trajectory_csv,
+)
+
+ATOL_EXACT = 1e-12
+NAMES = [f"joint{i}" for i in range(1, 7)]
+
+
+@pytest.fixture(scope="module")
+def ur5_csv(tmp_path_factory) -> Path:
+    ur5 = load_robot("ur5")
+    q0 = np.deg2rad([0.0, -90.0, 90.0, -90.0, -90.0, 0.0])
+    q1 = np.deg2rad([90.0, -60.0, 60.0, -90.0, -90.0, 30.0])
+    path = tmp_path_factory.mktemp("ur5") / "ur5.csv"
+    write_trajectory_csv(path, pick_and_place(ur5, q0, q1, 2.0).sample_uniform(100.0))
+    return path
+
+
+def _same(a: JointTrajectorySamples, b: JointTrajectorySamples) -> None:
+    for x, y in ((a.t, b.t), (a.q, b.q), (a.qd, b.qd), (a.qdd, b.qdd)):
+        np.testing.assert_allclose(x, y, rtol=0, atol=ATOL_EXACT)
+
+
+def test_bag_round_trip_from_the_cli(capsys, tmp_path: Path) -> None:
+    bag, table = tmp_path / "bag", tmp_path / "pp.csv"
+    code, out, err = run(
+        capsys, "export", "--format", "ros2-bag", "--pick-place", "--out", str(bag)
+    )
+    assert (code, err) == (0, "") and "1001 samples" in out
+    assert sorted(p.suffix for p in bag.iterdir()) == [".mcap", ".yaml"]
+    run(capsys, "plan", "pick-place", "--robot", "puma560", "--pick-deg", "0", "45",
+        "200", "-100", "30", "10", "--place-deg", "150", "-100", "-10", "100", "-70",
+        "170", "--duration", "10", "--csv", str(table), "--no-collision")  # fmt: skip
+    back = read_ros2_bag(bag)
+    assert back.joint_names == tuple(NAMES) and back.frame_id == "base"
+    _same(back.samples, read_trajectory_csv(table, 6))
+
+
+finite = st.floats(-10.0, 10.0, allow_nan=False)
+
+
+@given(
+    steps=arrays(np.int64, 5, elements=st.integers(1, 10**9), unique=True),
+    values=arrays(np.float64, (5, 3, 2), elements=finite),
+)
+def test_bag_round_trip_property(tmp_path_factory, steps, values) -> None:
+    t = np.cumsum(steps) / 1e9  # times on the nanosecond grid of ROS durations
+    samples = JointTrajectorySamples(
+        t, values[:, :, 0], values[:, :, 1], -values[:, :, 0]
+    )
+    bag = tmp_path_factory.mktemp("bag") / "b"
+    write_ros2_bag(bag, samples, ["a", "b", "c"], topic="/arm/trajectory")
+    back = read_ros2_bag(bag, topic="/arm/trajectory")
+    assert back.joint_names == ("a", "b", "c")
+    _same(back.samples, samples)
+
+
+def test_bag_times_round_to_nanoseconds(tmp_path: Path) -> None:
+    t = np.array([0.0, 1.0 / 3.0])
+    q = np.zeros((2, 1))
+    write_ros2_bag(tmp_path / "b", JointTrajectorySamples(t, q, q, q), ["j"])
+    back = read_ros2_bag(tmp_path / "b").samples.t
+    assert back[1] == 333_333_333 / 1e9 and abs(back[1] - t[1]) <= 0.5e-9
+
+
+def test_bag_errors(tmp_path: Path) -> None:
+    s = JointTrajectorySamples(
+        np.zeros(1), np.zeros((1, 2)), np.zeros((1, 2)), np.zeros((1, 2))
+    )
+    with pytest.raises(InputError, match="unique"):
+        write_ros2_bag(tmp_path / "b", s, ["a", "a"])
+    with pytest.raises(InputError, match="shape"):
+        write_ros2_bag(tmp_path / "b", s, ["a"])
+    for topic in ("", "//x", "1abc", "a b"):
+        with pytest.raises(InputError, match="not a ROS 2 topic"):
+            write_ros2_bag(tmp_path / "b", s, ["a", "b"], topic=topic)
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(InputError, match="cannot read bag"):
+        read_ros2_bag(tmp_path / "none")
+
+
+def test_urscript_for_a_ur5(capsys, tmp_path: Path, ur5_csv: Path) -> None:
+    script = tmp_path / "ur5.script"
+    code, _, err = run(capsys, "export", "--format", "urscript", "--robot", "ur5",
+                       "--trajectory", str(ur5_csv), "--out", str(script),
+                       "--servo-rate", "125")  # fmt: skip
+    assert (code, err) == (0, "")
+    text = script.read_text()
+    commands = re.findall(r"servoj\(\[([^\]]*)\], t=([0-9.]+)", text)
+    assert len(commands) == 2 * 125 + 1 and {c[1] for c in commands} == {"0.008"}
+    first = np.array([float(x) for x in commands[0][0].split(",")])
+    last = np.array([float(x) for x in commands[-1][0].split(",")])
+    samples = read_trajectory_csv(ur5_csv, 6)
+    np.testing.assert_allclose(first, samples.q[0], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(last, samples.q[-1], rtol=0, atol=1e-9)
+    assert text.startswith("def workbench_trajectory():") and "movej(" in text
+    assert text.rstrip().endswith("workbench_trajectory()")
+
+
+def test_hermite_resampling_passes_through_the_samples(ur5_csv: Path) -> None:
+    samples = read_trajectory_csv(ur5_csv, 6)
+    fine = resample_hermite(samples, 500.0)  # 5 servo steps per 100 Hz sample
+    np.testing.assert_allclose(fine[::5], samples.q, rtol=0, atol=ATOL_EXACT)
+    ur5 = load_robot("ur5")
+    q0 = np.deg2rad([0.0, -90.0, 90.0, -90.0, -90.0, 0.0])
+    q1 = np.deg2rad([90.0, -60.0, 60.0, -90.0, -90.0, 30.0])
+    exact = pick_and_place(ur5, q0, q1, 2.0).sample(np.arange(len(fine)) / 500.0)[0]
+    assert np.max(np.abs(fine - exact)) < 1e-6  # cubic pieces: Hermite is exact
+
+
+def test_urscript_refuses_other_arms(capsys, tmp_path: Path) -> None:
+    out = tmp_path / "puma.script"
+    code, stdout, err = run(
+        capsys, "export", "--format", "urscript", "--pick-place", "--out", str(out)
+    )
+    assert code == EXIT_BAD_INPUT and stdout == "" and err.count("\n") == 1
+    assert "Universal Robots arms only" in err and "joint1" in err
+    assert not out.exists()
+    with pytest.raises(InputError, match="shoulder_pan_joint"):
+        generate_urscript(read_trajectory_csv, NAMES)  # type: ignore[arg-type]
+
+
+def test_named_csv(capsys, tmp_path: Path, ur5_csv: Path) -> None:
+    out = tmp_path / "named.csv"
+    code, _, _ = run(capsys, "export", "--format", "csv", "--robot", "ur5",
+                     "--trajectory", str(ur5_csv), "--out", str(out))  # fmt: skip
+    assert code == 0
+    with out.open(newline="") as stream:
+        rows = list(csv.reader(stream))
+    assert rows[0] == get_named_header(list(UR_JOINTS))
+    assert rows[0][:2] == ["t [s]", "shoulder_pan_joint [rad]"]
+    assert rows[0][-1] == "wrist_3_joint acceleration [rad/s^2]"
+    table = np.array(rows[1:], dtype=float)
+    samples = read_trajectory_csv(ur5_csv, 6)
+    np.testing.assert_array_equal(
+        table, np.column_stack([samples.t, samples.q, samples.qd, samples.qdd])
+    )
+
+
+@pytest.mark.parametrize("fmt", ["ros2-bag", "urscript", "csv"])
+def test_bad_inputs_exit_2_and_write_nothing(capsys, tmp_path: Path, fmt) -> None:
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,q1,qd1,qdd1\n0,1,2\n", encoding="utf-8")
+    out = tmp_path / "out"
+    for argv in (
+        ("--trajectory", str(bad), "--out", str(out)),
+        ("--trajectory", str(tmp_path / "missing.csv"), "--out", str(out)),
+        ("--pick-place", "--out", str(tmp_path / "no" / "dir" / "out")),
+    ):
+        robot = ("--robot", "ur5") if fmt == "urscript" else ()
+        code, stdout, err = run(capsys, "export", "--format", fmt, *robot, *argv)
+        assert code == EXIT_BAD_INPUT and stdout == "" and err.count("\n") == 1
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv"]
+
+
+def test_existing_bag_is_not_replaced(capsys, tmp_path: Path) -> None:
+    bag = tmp_path / "bag"
+    bag.mkdir()
+    code, _, err = run(
+        capsys, "export", "--format", "ros2-bag", "--pick-place", "--out", str(bag)
+    )
+    assert code == EXIT_BAD_INPUT and "already exists" in err
+    assert list(bag.iterdir()) == []
+
+
+def test_failed_write_leaves_nothing(monkeypatch, tmp_path: Path) -> None:
+    s = JointTrajectorySamples(
+        np.array([0.0, 1.0]), np.zeros((2, 6)), np.zeros((2, 6)), np.zeros((2, 6))
+    )
+
+    def broken(*args, **kwargs):
+        raise OSError("disk full")
+
+    monkeypatch.setattr("csv.writer", broken)
+    with pytest.raises(OSError, match="disk full"):
+        write_named_csv(tmp_path / "x.csv", s, NAMES)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_json_output(capsys, tmp_path: Path) -> None:
+    out = tmp_path / "pp.csv"
+    code, stdout, _ = run(capsys, "export", "--format", "csv", "--pick-place",
+                          "--out", str(out), "--json")  # fmt: skip
+    result = json.loads(stdout)
+    assert code == 0 and result["samples"] == 1001 and result["duration"] == 10.0
+    assert result["joint_names"] == NAMES and result["format"] == "csv"

@@ -1,0 +1,132 @@
+"""``workbench export``: a joint trajectory to a ROS 2 bag, URScript or named CSV."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from workbench.cli._common import add_json_flag, finite_float, print_json
+from workbench.errors import InputError
+from workbench.export import write_named_csv, write_ros2_bag, write_urscript
+from workbench.export.atomic_files import check_output
+from workbench.export.ros2_bag import DEFAULT_TOPIC
+from workbench.export.urscript import DEFAULT_SERVO_RATE, check_ur_joints
+from workbench.model.loading import load_robot
+from workbench.model.robot import Robot
+from workbench.trajectory.csv_io import JointTrajectorySamples, read_trajectory_csv
+
+FORMATS = ("ros2-bag", "urscript", "csv")
+PICK_PLACE_RATE_HZ = 100.0
+
+
+def register(commands: argparse._SubParsersAction) -> None:
+    """Add the ``export`` command."""
+    parser = commands.add_parser(
+        "export",
+        help="export a joint trajectory (ROS 2 bag, URScript, CSV)",
+        description=(
+            "Export a joint trajectory: a ROS 2 bag (MCAP) with one "
+            "trajectory_msgs/msg/JointTrajectory message, a URScript program "
+            "(servoj at the servo rate; UR arms only) or a CSV file whose header "
+            "names the joints and units. Nothing is written unless the export "
+            "succeeds."
+        ),
+    )
+    parser.add_argument("--format", required=True, choices=FORMATS)
+    parser.add_argument(
+        "--out", type=Path, required=True, help="output file (a new folder for a bag)"
+    )
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument(
+        "--trajectory",
+        type=Path,
+        metavar="FILE",
+        help="trajectory CSV (t,q..,qd..,qdd..)",
+    )
+    source.add_argument(
+        "--pick-place",
+        action="store_true",
+        help="Angeles' Table III pick-and-place (T = 10 s, 100 Hz)",
+    )
+    source.add_argument(
+        "--fishcut", action="store_true", help="Kang's fish-cutting run (servo rate)"
+    )
+    parser.add_argument(
+        "--robot",
+        help="robot name or URDF (default: puma560, puma560-kang for --fishcut)",
+    )
+    parser.add_argument(
+        "--servo-rate",
+        type=finite_float,
+        default=DEFAULT_SERVO_RATE,
+        metavar="HZ",
+        help=f"URScript servoj rate (default {DEFAULT_SERVO_RATE:g}; CB3: 125)",
+    )
+    parser.add_argument("--topic", default=DEFAULT_TOPIC, help="bag topic")
+    parser.add_argument("--frame-id", default="base", help="bag header.frame_id")
+    add_json_flag(parser)
+    parser.set_defaults(run=run)
+
+
+def _samples(args: argparse.Namespace, robot: Robot) -> JointTrajectorySamples:
+    if args.trajectory is not None:
+        return read_trajectory_csv(args.trajectory, robot.nq)
+    if args.pick_place:
+        from workbench.paper_data import (
+            ANGELES_DURATION,
+            ANGELES_PICK_Q_DEG,
+            ANGELES_PLACE_Q_DEG,
+        )
+        from workbench.trajectory import pick_and_place
+
+        traj = pick_and_place(
+            robot,
+            np.deg2rad(ANGELES_PICK_Q_DEG),
+            np.deg2rad(ANGELES_PLACE_Q_DEG),
+            ANGELES_DURATION,
+        )
+        return traj.sample_uniform(PICK_PLACE_RATE_HZ)
+    from workbench.tasks import run_fish_cutting
+
+    return run_fish_cutting(robot).servo
+
+
+def run(args: argparse.Namespace) -> int:
+    """Export; returns the exit code."""
+    check_output(args.out, folder=args.format == "ros2-bag")
+    if args.format == "urscript" and not (args.servo_rate > 0.0):
+        raise InputError(f"--servo-rate must be > 0 [Hz], got {args.servo_rate:g}")
+    name = args.robot or ("puma560-kang" if args.fishcut else "puma560")
+    robot = load_robot(name)
+    names = robot.joint_names
+    if args.format == "urscript":  # refuse before any work
+        check_ur_joints(names, robot.name)
+    samples = _samples(args, robot)
+    if args.format == "ros2-bag":
+        write_ros2_bag(
+            args.out, samples, names, topic=args.topic, frame_id=args.frame_id
+        )
+    elif args.format == "urscript":
+        write_urscript(
+            args.out, samples, names, servo_rate=args.servo_rate, robot_name=robot.name
+        )
+    else:
+        write_named_csv(args.out, samples, names)
+    result = {
+        "format": args.format,
+        "out": str(args.out),
+        "robot": robot.name,
+        "joint_names": names,
+        "samples": int(samples.t.size),
+        "duration": float(samples.t[-1] - samples.t[0]),
+    }
+    if args.json:
+        print_json(result)
+    else:
+        print(
+            f"{args.format}: {result['samples']} samples of {robot.name} "
+            f"({result['duration']:.6g} s) written to {args.out}"
+        )
+    return 0

@@ -1,0 +1,86 @@
+"""The scene of Angeles' pick-and-place (1988, Sec. V), in the robot base frame.
+
+The paper gives no work cell (collisions were checked on a graphic display),
+so the scene is an assumption built from the model and Table III:
+
+* the **pedestal** drawn under the PUMA's base (the cylinder of
+  :func:`workbench.model.urdf_generator.get_pedestal_cylinder`); joint 1's housing
+  sits on it, so ``link1`` is allowed to touch it;
+* a **pick table**: a 0.30 m × 0.30 m × 0.04 m plate whose top is
+  :data:`PICK_TABLE_DROP` below the wrist centre at the pick of Table III
+  (room for a gripper), centred :data:`PICK_TABLE_REACH` further out from the
+  base axis than the wrist centre, square to that direction.
+
+Kang's fish-cutting scene (pedestal, table, fish) is built by
+:func:`workbench.tasks.fish_scene.get_fish_cutting_scene`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from workbench.collision.scene import Obstacle, Scene
+from workbench.errors import InputError
+from workbench.model.robot import Robot
+from workbench.model.urdf_generator import get_pedestal_cylinder
+from workbench.paper_data import ANGELES_PICK_Q_DEG
+
+#: Height [m] of the wrist centre above the pick table's top.
+PICK_TABLE_DROP = 0.10
+#: Horizontal distance [m] from the pick's wrist centre to the table centre.
+PICK_TABLE_REACH = 0.10
+PICK_TABLE_SIZE = (0.30, 0.30, 0.04)
+PEDESTAL_COLOR = (0.25, 0.27, 0.3, 1.0)
+TABLE_COLOR = (0.6, 0.45, 0.3, 0.9)
+
+
+def get_pedestal(robot: Robot, *, allow: tuple[str, ...] = ("link1",)) -> Obstacle:
+    """The PUMA's pedestal as an obstacle (base frame).
+
+    Raises:
+        InputError: If the robot was not generated from a DH table.
+    """
+    if robot.dh_table is None:
+        raise InputError(
+            f"robot {robot.name!r} has no DH table: the pedestal scenes are for "
+            "the PUMA models (give --scene FILE for other robots)"
+        )
+    radius, length, z = get_pedestal_cylinder(robot.dh_table)
+    return Obstacle(
+        "pedestal",
+        "cylinder",
+        (radius, length),
+        pin.SE3(np.eye(3), np.array([0.0, 0.0, z])),
+        allow,
+        color=PEDESTAL_COLOR,
+    )
+
+
+def get_angeles_scene(robot: Robot) -> Scene:
+    """Pedestal and pick table of Angeles' pick-and-place (see module docstring).
+
+    Args:
+        robot: A PUMA model (``puma560``; ``puma560-kang`` also works).
+
+    Raises:
+        InputError: If the robot is not a PUMA model from a DH table.
+    """
+    pedestal = get_pedestal(robot)
+    q_pick = np.deg2rad(ANGELES_PICK_Q_DEG)
+    if robot.nq != q_pick.size:
+        raise InputError(f"robot {robot.name!r} is not a six-joint PUMA")
+    wrist = robot.fk(q_pick).translation
+    out = np.array([wrist[0], wrist[1], 0.0])
+    out = out / np.linalg.norm(out) if np.linalg.norm(out) > 0 else np.array([1, 0, 0])
+    size = PICK_TABLE_SIZE
+    center = wrist + PICK_TABLE_REACH * out
+    center[2] = wrist[2] - PICK_TABLE_DROP - size[2] / 2
+    rotation = pin.rpy.rpyToMatrix(0.0, 0.0, float(np.arctan2(out[1], out[0])))
+    table = Obstacle(
+        "pick_table", "box", size, pin.SE3(rotation, center), color=TABLE_COLOR
+    )
+    return Scene("angeles-pick-and-place", (pedestal, table), "Angeles 1988, Sec. V")
+
+
+__all__ = ["PICK_TABLE_DROP", "PICK_TABLE_REACH", "get_angeles_scene", "get_pedestal"]

@@ -1,0 +1,79 @@
+"""Singularities: analytic conditions, measures, loci, directions, along a path.
+
+Modules, in the order they build on each other:
+
+- ``conditions``: det J of a PUMA-type arm factorised into its shoulder, elbow and wrist
+  conditions (Kang 2007, Section 3), derived from the robot's DH table;
+- ``measures``: SVD measures of any Jacobian, joint-space grids, the cross-check of the
+  analytic det J against Pinocchio;
+- ``loci``: the elbow-singular θ3 and the shoulder-singular θ2 in closed form;
+- ``directions``: the Cartesian direction a singular configuration cannot move in;
+- ``along_path``: the closest approaches of a joint trajectory to each singularity.
+"""
+
+from workbench.singularities.along_path import ClosestApproach, find_closest_approaches
+from workbench.singularities.conditions import (
+    CONDITION_UNITS,
+    ELBOW_TOL,
+    SHOULDER_TOL,
+    SINGULARITY_KINDS,
+    WRIST_TOL,
+    NotPumaTypeError,
+    PumaFactorisation,
+    SingularityConditions,
+    classify_configuration,
+    compute_conditions,
+    compute_det_j_analytic,
+    get_puma_factorisation,
+)
+from workbench.singularities.directions import (
+    DegenerateDirection,
+    compute_degenerate_direction,
+    compute_wrist_center_jacobian,
+)
+from workbench.singularities.loci import (
+    compute_example_configurations,
+    get_elbow_singular_theta3,
+    solve_shoulder_theta2,
+)
+from workbench.singularities.measures import (
+    DetCrossCheck,
+    JacobianMeasures,
+    JointGrid,
+    compute_dh_jacobians,
+    compute_joint_grid,
+    compute_measures,
+    compute_measures_from_jacobians,
+    cross_check_det_j,
+)
+
+__all__ = [
+    "CONDITION_UNITS",
+    "ELBOW_TOL",
+    "SHOULDER_TOL",
+    "SINGULARITY_KINDS",
+    "WRIST_TOL",
+    "ClosestApproach",
+    "DegenerateDirection",
+    "DetCrossCheck",
+    "JacobianMeasures",
+    "JointGrid",
+    "NotPumaTypeError",
+    "PumaFactorisation",
+    "SingularityConditions",
+    "classify_configuration",
+    "compute_conditions",
+    "compute_degenerate_direction",
+    "compute_det_j_analytic",
+    "compute_dh_jacobians",
+    "compute_example_configurations",
+    "compute_joint_grid",
+    "compute_measures",
+    "compute_measures_from_jacobians",
+    "compute_wrist_center_jacobian",
+    "cross_check_det_j",
+    "find_closest_approaches",
+    "get_elbow_singular_theta3",
+    "get_puma_factorisation",
+    "solve_shoulder_theta2",
+]

@@ -1,0 +1,247 @@
+r"""Analytic singularities of PUMA-type arms: conditions, det J factors, classes.
+
+For a 6R arm whose standard DH table (:math:`\theta_i = q_i + \theta_{0,i}`) has
+:math:`a_1 = 0`, :math:`\alpha_1 = \pm 90°`, :math:`\alpha_2 = 0`,
+:math:`\alpha_3, \alpha_4, \alpha_5 = \pm 90°` and :math:`a_4 = a_5 = d_5 = 0`
+(a spherical wrist centred at the origin of frame 4), the Jacobian of any tool
+point, rows [linear; angular] in base axes, is block triangular and
+
+.. math::
+    \det J = K\, s\, e\, w, \qquad
+    K = -\sigma_1\, a_2\, L_3\, \sin\alpha_4 \sin\alpha_5,
+
+with :math:`\sigma_i = \sin\alpha_i`, :math:`L_3 = \sqrt{a_3^2 + d_4^2}` [m] and
+the three signed distances (the *conditions*)
+
+* shoulder :math:`s = a_2 c_2 + a_3 c_{23} + \sigma_3 d_4 s_{23}` [m]: the x1
+  coordinate of the wrist centre, i.e. its distance from the plane through the
+  base axis z0 parallel to the shoulder axis z1 (Kang's Eq. 1);
+* elbow :math:`e = (a_3 s_3 - \sigma_3 d_4 c_3) / L_3` [1]: the sine of the
+  angle between the upper arm (x2) and the line from the elbow to the wrist
+  centre seen along z2 (Kang's Eq. 2, divided by :math:`L_3`);
+* wrist :math:`w = s_5` [1]: zero when the axes z3 and z5 are collinear (Eq. 3).
+
+The signs come from each robot's own table: they differ between ``puma560``
+(Angeles, :math:`K = -a_2 L_3`) and ``puma560-kang`` (Kang, :math:`K = +a_2 L_3`).
+The derivation is in ``docs/errata-kang-singularities.md``; the loci in joint
+space are in :mod:`workbench.singularities.loci`, the degenerate directions in
+:mod:`workbench.singularities.directions`, the numeric measures of any robot in
+:mod:`workbench.singularities.measures`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+import numpy.typing as npt
+
+from workbench.errors import InputError
+from workbench.model.dh import DHTable
+from workbench.model.robot import Robot
+from workbench.validation import as_finite_array
+
+FloatArray = npt.NDArray[np.float64]
+
+#: The singularity types, in the order of the det J factors.
+SINGULARITY_KINDS = ("shoulder", "elbow", "wrist")
+#: Units of the signed distances of :data:`SINGULARITY_KINDS`.
+CONDITION_UNITS = {"shoulder": "m", "elbow": "1 (sine)", "wrist": "1 (sine)"}
+
+#: |shoulder distance| [m] at or below which a configuration counts as
+#: shoulder-singular: 1 cm of the wrist centre from the singular plane.
+SHOULDER_TOL = 0.01
+#: |elbow sine| at or below which a configuration counts as elbow-singular (1°).
+ELBOW_TOL = math.sin(math.radians(1.0))
+#: |sin θ5| at or below which a configuration counts as wrist-singular (1°).
+WRIST_TOL = math.sin(math.radians(1.0))
+
+_DH_TOL = 1e-12  # DH angles and lengths that must be exactly 0 or ±90°
+
+
+class NotPumaTypeError(InputError):
+    """The robot has no DH table of PUMA type, so there is no analytic form."""
+
+
+@dataclass(frozen=True, slots=True)
+class PumaFactorisation:
+    r"""Constants of :math:`\det J = K\, s\, e\, w` read off a PUMA-type DH table.
+
+    Attributes:
+        robot: Robot (table) name.
+        sigma1: :math:`\sin\alpha_1` (±1).
+        sigma3: :math:`\sin\alpha_3` (±1).
+        wrist_sign: :math:`\sin\alpha_4 \sin\alpha_5` (±1).
+        a2: Upper arm length [m].
+        a3: Elbow offset [m].
+        d4: Forearm length [m].
+        forearm: :math:`L_3 = \sqrt{a_3^2 + d_4^2}` [m].
+        constant: :math:`K` [m²], so that det J [m³] = K · s [m] · e · w.
+        theta_offset: Offsets of the six joint angles, shape (6,) [rad].
+    """
+
+    robot: str
+    sigma1: float
+    sigma3: float
+    wrist_sign: float
+    a2: float
+    a3: float
+    d4: float
+    forearm: float
+    constant: float
+    theta_offset: tuple[float, ...]
+    kinds: ClassVar[tuple[str, ...]] = SINGULARITY_KINDS
+
+    def describe(self) -> dict[str, str]:
+        """The factors as plain-text formulas with this table's signs."""
+        sign = "+" if self.sigma3 > 0 else "−"
+        offsets = any(abs(o) > 0.0 for o in self.theta_offset)
+        note = " (θi includes its DH theta offset)" if offsets else ""
+        return {
+            "det_j": "det J = K · shoulder · elbow · wrist  [m³]",
+            "constant": (
+                f"K = {-self.sigma1 * self.wrist_sign:+.0f} · a2 · √(a3² + d4²)"
+                f" = {self.constant:+.6f} m²"
+            ),
+            "shoulder": f"a2 c2 + a3 c23 {sign} d4 s23  [m]{note}",
+            "elbow": f"(a3 s3 {'−' if self.sigma3 > 0 else '+'} d4 c3) / √(a3² + d4²)",
+            "wrist": "s5",
+        }
+
+
+def get_puma_factorisation(robot: Robot | DHTable) -> PumaFactorisation:
+    """Derive the factorisation of det J from the robot's DH table.
+
+    Raises:
+        NotPumaTypeError: If the robot has no DH table, or its table is not of
+            PUMA type (the message says which parameter breaks it).
+    """
+    table = robot if isinstance(robot, DHTable) else robot.dh_table
+    name = getattr(robot, "name", "robot")
+    if table is None:
+        raise NotPumaTypeError(
+            f"{name}: no DH table, so no analytic singularity conditions "
+            "(the numeric measures still apply)"
+        )
+    if table.nq != 6:
+        raise NotPumaTypeError(
+            f"{table.name}: PUMA type needs 6 joints, got {table.nq}"
+        )
+    j = table.joints
+    must_be_zero = {"a1": j[0].a, "α2": j[1].alpha, "a4": j[3].a}
+    must_be_zero |= {"a5": j[4].a, "d5": j[4].d}
+    for label, value in must_be_zero.items():
+        if abs(value) > _DH_TOL:
+            raise NotPumaTypeError(f"{table.name}: PUMA type needs {label} = 0")
+    for index in (0, 2, 3, 4):
+        if abs(abs(math.sin(j[index].alpha)) - 1.0) > _DH_TOL:
+            raise NotPumaTypeError(f"{table.name}: PUMA type needs α{index + 1} = ±90°")
+    sigma1, sigma3 = round(math.sin(j[0].alpha)), round(math.sin(j[2].alpha))
+    wrist_sign = round(math.sin(j[3].alpha)) * round(math.sin(j[4].alpha))
+    a2, a3, d4 = j[1].a, j[2].a, j[3].d
+    forearm = math.hypot(a3, d4)
+    if a2 == 0.0 or forearm == 0.0:
+        raise NotPumaTypeError(f"{table.name}: PUMA type needs a2 ≠ 0 and (a3, d4) ≠ 0")
+    return PumaFactorisation(
+        robot=table.name,
+        sigma1=float(sigma1),
+        sigma3=float(sigma3),
+        wrist_sign=float(wrist_sign),
+        a2=a2,
+        a3=a3,
+        d4=d4,
+        forearm=forearm,
+        constant=-sigma1 * a2 * forearm * wrist_sign,
+        theta_offset=tuple(joint.theta_offset for joint in j),
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class SingularityConditions:
+    """Signed distances to the three singular loci (arrays broadcast over q[..., :]).
+
+    Attributes:
+        shoulder: x1 coordinate of the wrist centre [m].
+        elbow: Elbow sine [1].
+        wrist: sin θ5 [1].
+    """
+
+    shoulder: FloatArray
+    elbow: FloatArray
+    wrist: FloatArray
+
+    def as_dict(self) -> dict[str, FloatArray]:
+        """``{"shoulder": ..., "elbow": ..., "wrist": ...}``."""
+        return {"shoulder": self.shoulder, "elbow": self.elbow, "wrist": self.wrist}
+
+
+def _angles(fac: PumaFactorisation, q: npt.ArrayLike) -> FloatArray:
+    q = np.asarray(q, dtype=np.float64)
+    if q.ndim == 0 or q.shape[-1] != 6:
+        raise InputError(f"q must have shape (..., 6), got shape {q.shape}")
+    q = as_finite_array(q, q.shape, "q")
+    return q + np.asarray(fac.theta_offset)
+
+
+def compute_conditions(
+    robot: Robot | DHTable, q: npt.ArrayLike
+) -> SingularityConditions:
+    """Signed distances of ``q`` to the shoulder, elbow and wrist loci.
+
+    Args:
+        robot: A PUMA-type robot (or its DH table).
+        q: Configurations, shape (..., 6) [rad].
+
+    Returns:
+        Arrays of shape ``q.shape[:-1]``; see :class:`SingularityConditions`.
+
+    Raises:
+        NotPumaTypeError: If the robot is not of PUMA type.
+        InputError: If ``q`` is not (..., 6) or not finite.
+    """
+    fac = get_puma_factorisation(robot)
+    theta = _angles(fac, q)
+    t2, t3, t5 = theta[..., 1], theta[..., 2], theta[..., 4]
+    t23 = t2 + t3
+    shoulder = fac.a2 * np.cos(t2) + fac.a3 * np.cos(t23)
+    shoulder = shoulder + fac.sigma3 * fac.d4 * np.sin(t23)
+    elbow = (fac.a3 * np.sin(t3) - fac.sigma3 * fac.d4 * np.cos(t3)) / fac.forearm
+    return SingularityConditions(shoulder, elbow, np.sin(t5))
+
+
+def compute_det_j_analytic(robot: Robot | DHTable, q: npt.ArrayLike) -> FloatArray:
+    """Determinant of the Jacobian [m³] from the factorisation, shape ``q.shape[:-1]``.
+
+    Equals ``np.linalg.det(robot.jacobian(q))`` for any tool point on the last
+    link (moving the reference point does not change the determinant).
+    """
+    fac = get_puma_factorisation(robot)
+    c = compute_conditions(robot, q)
+    return fac.constant * c.shoulder * c.elbow * c.wrist
+
+
+def classify_configuration(
+    robot: Robot | DHTable,
+    q: npt.ArrayLike,
+    *,
+    shoulder_tol: float = SHOULDER_TOL,
+    elbow_tol: float = ELBOW_TOL,
+    wrist_tol: float = WRIST_TOL,
+) -> tuple[str, ...]:
+    """The singularity types ``q`` is within tolerance of; ``()`` means none.
+
+    Args:
+        robot: A PUMA-type robot.
+        q: One configuration, shape (6,) [rad].
+        shoulder_tol: Tolerance on |shoulder distance| [m].
+        elbow_tol: Tolerance on |elbow sine|.
+        wrist_tol: Tolerance on |sin θ5|.
+
+    Returns:
+        A sub-tuple of :data:`SINGULARITY_KINDS`, e.g. ``("shoulder", "wrist")``.
+    """
+    conditions = compute_conditions(robot, as_finite_array(q, (6,), "q")).as_dict()
+    tolerances = {"shoulder": shoulder_tol, "elbow": elbow_tol, "wrist": wrist_tol}
+    return tuple(k for k in SINGULARITY_KINDS if abs(conditions[k]) <= tolerances[k])
