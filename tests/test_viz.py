@@ -607,3 +607,16 @@ def test_every_page_has_a_title_and_a_legend(puma) -> None:
     plain = Viewer(puma)  # no colouring: no colour scale
     assert "nearest singularity" not in plain.render_html()
     assert "<h1>workbench viewer: puma560</h1>" in plain.render_html()
+
+
+def test_collision_pages_explain_their_colours(puma) -> None:
+    from workbench.collision import CollisionChecker, get_angeles_scene
+
+    viewer = Viewer(puma, color_by_singularity=True)
+    assert "nearest singularity" in viewer.render_html()
+    viewer.show_collisions(CollisionChecker(puma, get_angeles_scene(puma)))
+    page = viewer.render_html()
+    assert "nearest singularity" not in page  # the links now show contacts
+    assert "with the scene (pedestal, pick_table)" in page
+    for text in ("link, no contact", "in contact", "closest pair"):
+        assert text in page
