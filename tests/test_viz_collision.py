@@ -13,6 +13,8 @@ from workbench.trajectory import pick_and_place
 from workbench.viz import Viewer, write_trajectory_html
 from workbench.viz.collision_overlay import CLOSEST_RGB, CONTACT_RGB
 
+# Pixel counts look at the scene only: the legend box has red and orange keys too.
+NO_LEGEND = "document.getElementById('workbench-legend').remove();"
 Q_PICK = np.deg2rad(paper_data.ANGELES_PICK_Q_DEG)
 Q_PLACE = np.deg2rad(paper_data.ANGELES_PLACE_Q_DEG)
 
@@ -48,9 +50,13 @@ def test_pick_pose_shows_the_contact_in_red(chromium, puma, tmp_path) -> None:  
     viewer = Viewer(puma, Q_PICK)
     viewer.show_collisions(checker)
     viewer.set_camera([1.4, 1.2, 0.3], [0.0, 0.0, -0.3])
-    contact = screenshot(chromium, viewer.render_html(), tmp_path / "pick.png")
+    contact = screenshot(
+        chromium, viewer.render_html(legend=False), tmp_path / "pick.png"
+    )
     viewer.display(Q_PLACE)
-    free = screenshot(chromium, viewer.render_html(), tmp_path / "place.png")
+    free = screenshot(
+        chromium, viewer.render_html(legend=False), tmp_path / "place.png"
+    )
     assert red(contact) > 0.01  # the upper arm and the pedestal
     assert red(free) < 0.001
 
@@ -61,8 +67,8 @@ def test_animation_highlights_contacts_over_time(chromium, puma, tmp_path) -> No
     checker = CollisionChecker(puma, get_angeles_scene(puma))
     path = write_trajectory_html(puma, samples, tmp_path / "p.html", checker=checker)
     page = path.read_text(encoding="utf-8")
-    start = screenshot(chromium, seek(page, 0.0), tmp_path / "t0.png")
-    late = screenshot(chromium, seek(page, 8.0), tmp_path / "t8.png")
+    start = screenshot(chromium, page, tmp_path / "t0.png", NO_LEGEND + seek(0.0))
+    late = screenshot(chromium, page, tmp_path / "t8.png", NO_LEGEND + seek(8.0))
     assert red(start) > 0.002  # link2 in the pedestal at the pick
     assert red(late) < 0.0005  # clear near the place
 
@@ -76,7 +82,9 @@ def test_fishcut_page_shows_fish_and_table(chromium, puma_kang, tmp_path) -> Non
         puma_kang, servo, tmp_path / "fish.html", checker=checker
     ).read_text(encoding="utf-8")
     assert "scene" in with_scene
-    image = screenshot(chromium, seek(with_scene, 0.0), tmp_path / "fish.png")
+    image = screenshot(
+        chromium, with_scene, tmp_path / "fish.png", NO_LEGEND + seek(0.0)
+    )
     r, g, b = image[..., 0], image[..., 1], image[..., 2]
     fish = (r > 170) & (g > 90) & (g < 170) & (b > 70) & (b < 150) & (r - b > 60)
     wood = (r > 90) & (r < 190) & (g > 60) & (g < 140) & (b < 90) & (r - b > 50)

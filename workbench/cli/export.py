@@ -67,7 +67,9 @@ def register(commands: argparse._SubParsersAction) -> None:
     parser.add_argument("--topic", default=DEFAULT_TOPIC, help="bag topic")
     parser.add_argument("--frame-id", default="base", help="bag header.frame_id")
     add_json_flag(parser)
-    parser.set_defaults(run=run)
+    parser.set_defaults(
+        run=run, progress_message="export: planning and writing the trajectory…"
+    )
 
 
 def _samples(args: argparse.Namespace, robot: Robot) -> JointTrajectorySamples:
