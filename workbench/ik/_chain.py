@@ -1,0 +1,225 @@
+"""The serial chain of a robot, read from its Pinocchio model, for the compiled IK.
+
+:class:`Chain` packs what the compiled kernels (``_chain_kernel``) need: the
+joint placements, axes and kinds of the joints from the base to the tool
+frame, the tool frame placement and the joint limits (layout in the
+``_chain_kernel`` docstring), plus the first-guess candidates. It also maps
+Pinocchio configurations ``q`` (nq,) to chain coordinates (one value per
+joint of the chain: an angle for a continuous joint, whose ``q`` is
+(cos, sin)) and back. Built once per robot object and cached (see
+:func:`get_chain`); rebuilt when the robot's model, limits or tool frame are
+replaced.
+
+Supported joints: revolute (any axis, bounded or continuous) and prismatic
+(any axis), i.e. every joint a URDF arm has; fixed joints are already merged
+into the placements by Pinocchio. Joints off the path to the tool frame (a
+tree) keep the values of the reference configuration.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+
+from workbench.errors import InputError
+from workbench.ik import _chain_kernel as kernel
+from workbench.robot import Robot
+
+FloatArray = npt.NDArray[np.float64]
+
+SEED_COUNT = 1024
+"""Candidate first guesses (mid-range included) when no ``q0`` is given."""
+
+SEED_SPREAD = 0.65
+"""Candidates lie within this fraction of the half-range (<= pi) of mid-range."""
+
+SEED_ROTATION_WEIGHT = 0.05
+"""Weight of the rotation gap against the position gap [m^2] in choosing one."""
+
+SEED_RNG = 20240
+"""Fixed seed of the candidates: the first guess is the same in every process."""
+
+
+class Chain:
+    """A robot's chain for the compiled kernels, with its coordinate maps.
+
+    Attributes:
+        packed: (n + 1, CHAIN_WIDTH) read-only chain array (``_chain_kernel``).
+        n: Number of joints on the path to the tool frame.
+        identity: True when chain coordinates are ``q`` itself (every joint
+            is on the path and has one coordinate), so no mapping is needed.
+        lower, upper: (nq,) limits of the robot when the chain was built.
+        mid: (nq,) read-only middle of the limits (neutral for continuous
+            joints, 0 where unbounded): the default pull reference.
+        low, span: (n,) box restarts draw from, chain coordinates.
+    """
+
+    def __init__(self, robot: Robot) -> None:
+        model = robot.model
+        self.model, self.frame_id = model, robot.tool_frame_id
+        self.lower, self.upper = robot.lower, robot.upper
+        frame = model.frames[self.frame_id]
+        path = [j for j in model.supports[frame.parentJoint] if j > 0]
+        self.n = n = len(path)
+        self.idx_q = np.array([model.joints[j].idx_q for j in path], dtype=np.intp)
+        self.unbounded = np.array([model.joints[j].nq == 2 for j in path])
+        self.identity = n == model.nq and np.array_equal(self.idx_q, np.arange(n))
+        packed = np.zeros((n + 1, kernel.CHAIN_WIDTH))
+        for row, j in zip(packed[:n], path, strict=True):
+            _pack_joint(row, model, j, robot.lower, robot.upper)
+        _pack_placement(packed[n], frame.placement)
+        packed.setflags(write=False)
+        self.packed = packed
+        mid = _mid_configuration(model, robot.lower, robot.upper)
+        mid.setflags(write=False)
+        self.mid = mid
+        self.mid_values = self.to_chain(mid)
+        self.mid_values.setflags(write=False)
+        lo, hi = packed[:n, 16], packed[:n, 17]
+        self.low = np.where(np.isfinite(lo), lo, -kernel.UNBOUNDED_SPAN)
+        self.span = np.where(np.isfinite(hi), hi, kernel.UNBOUNDED_SPAN) - self.low
+        self._seeds: FloatArray | None = None
+        self.no_start = np.empty((0, n))  # "no q0" for the batch kernel
+        self.no_seeds = np.empty((0, 16 + n))  # when a q0 is given
+
+    def matches(self, robot: Robot) -> bool:
+        """Whether ``robot`` still has this chain's model, limits and tool frame."""
+        return (
+            self.model is robot.model
+            and self.lower is robot.lower
+            and self.upper is robot.upper
+            and self.frame_id == robot.tool_frame_id
+        )
+
+    def to_chain(self, q: FloatArray) -> FloatArray:
+        """Chain coordinates (n,) of a configuration ``q`` (nq,) (a new array)."""
+        if self.identity:
+            return q.copy()
+        values = q[self.idx_q]
+        if self.unbounded.any():
+            sin = q[self.idx_q[self.unbounded] + 1]
+            values[self.unbounded] = np.arctan2(sin, values[self.unbounded])
+        return values
+
+    def to_configuration(self, values: FloatArray, q_ref: FloatArray) -> FloatArray:
+        """Configurations (..., nq) of chain coordinates ``values`` (..., n).
+
+        Coordinates off the chain are copied from ``q_ref`` (nq,) or (..., nq).
+        Returns ``values`` itself when the chain is the identity.
+        """
+        if self.identity:
+            return values
+        q = np.array(np.broadcast_to(q_ref, (*values.shape[:-1], q_ref.shape[-1])))
+        plain = ~self.unbounded
+        q[..., self.idx_q[plain]] = values[..., plain]
+        angles = values[..., self.unbounded]
+        q[..., self.idx_q[self.unbounded]] = np.cos(angles)
+        q[..., self.idx_q[self.unbounded] + 1] = np.sin(angles)
+        return q
+
+    @property
+    def seeds(self) -> FloatArray:
+        """(SEED_COUNT, 16 + n) first-guess candidates (built on first use).
+
+        Each row: 16 features of the candidate's tool pose, such that their dot
+        product with the row-major target matrix is the squared position gap
+        plus SEED_ROTATION_WEIGHT times the squared Frobenius rotation gap, up
+        to terms that do not depend on the candidate; then its coordinates.
+        """
+        if self._seeds is None:
+            self._seeds = self._build_seeds()
+        return self._seeds
+
+    def _build_seeds(self) -> FloatArray:
+        half = np.minimum(0.5 * self.span, kernel.UNBOUNDED_SPAN)
+        draws = np.random.default_rng(SEED_RNG).uniform(
+            -1.0, 1.0, (SEED_COUNT - 1, self.n)
+        )
+        mid = self.to_chain(self.mid)
+        values = np.vstack((mid, mid + SEED_SPREAD * half * draws))
+        np.clip(values, self.packed[: self.n, 16], self.packed[: self.n, 17], values)
+        seeds = np.zeros((SEED_COUNT, 16 + self.n))
+        jac = np.empty((6, self.n))
+        for row, value in zip(seeds, values, strict=True):
+            pose = kernel.chain_kinematics(self.packed, value, jac)
+            position = pose[:3, 3]
+            features = row[:16].reshape(4, 4)
+            features[:3, :3] = (-2.0 * SEED_ROTATION_WEIGHT) * pose[:3, :3]
+            features[:3, 3] = -2.0 * position
+            features[3, 3] = position.dot(position)
+            row[16:] = value
+        seeds.setflags(write=False)
+        return seeds
+
+
+def _pack_placement(row: FloatArray, placement: pin.SE3) -> None:
+    row[0:9] = placement.rotation.ravel()
+    row[9:12] = placement.translation
+
+
+def _pack_joint(
+    row: FloatArray, model: pin.Model, j: int, lower: FloatArray, upper: FloatArray
+) -> None:
+    """Fill the chain row of joint ``j``; raise if it is no revolute/prismatic joint."""
+    joint = model.joints[j]
+    kind = joint.shortname()
+    motion = None
+    if joint.nv == 1 and "Mimic" not in kind and "Helical" not in kind:
+        data = joint.createData()
+        joint.calc(data, pin.neutral(model)[joint.idx_q : joint.idx_q + joint.nq])
+        motion = np.array(data.S).ravel()
+    linear = angular = 0.0
+    if motion is not None:
+        linear, angular = np.linalg.norm(motion[:3]), np.linalg.norm(motion[3:])
+    if motion is None or (linear > 0.0) == (angular > 0.0):
+        raise InputError(
+            f"numerical IK supports revolute, continuous and prismatic joints; "
+            f"joint {model.names[j]!r} is a {kind}"
+        )
+    _pack_placement(row, model.jointPlacements[j])
+    revolute = angular > 0.0
+    row[12:15] = motion[3:] / angular if revolute else motion[:3] / linear
+    row[15] = kernel.REVOLUTE if revolute else kernel.PRISMATIC
+    if joint.nq == 2:  # continuous: (cos, sin)
+        row[16], row[17], row[18] = -math.inf, math.inf, kernel.WRAP_UNBOUNDED
+        return
+    lo, hi = lower[joint.idx_q], upper[joint.idx_q]
+    row[16], row[17] = lo, hi
+    full_turn = revolute and hi - lo >= 2.0 * math.pi
+    row[18] = kernel.WRAP_FULL_TURN if full_turn else kernel.WRAP_NONE
+
+
+def _mid_configuration(
+    model: pin.Model, lower: FloatArray, upper: FloatArray
+) -> FloatArray:
+    """Middle of the limits; neutral for multi-coordinate joints, 0 if unlimited."""
+    mid = 0.5 * (lower + upper)
+    if model.nq != model.nv:
+        neutral = pin.neutral(model)
+        for joint in model.joints[1:]:
+            if joint.nq != 1:
+                span = slice(joint.idx_q, joint.idx_q + joint.nq)
+                mid[span] = neutral[span]
+    if not math.isfinite(mid.sum()):
+        mid[~np.isfinite(mid)] = 0.0
+    return mid
+
+
+_CHAINS: weakref.WeakKeyDictionary[Robot, Chain] = weakref.WeakKeyDictionary()
+
+
+def get_chain(robot: Robot) -> Chain:
+    """The cached :class:`Chain` of ``robot``, (re)built when stale.
+
+    Raises:
+        InputError: If a joint on the path to the tool frame is neither
+            revolute nor prismatic.
+    """
+    chain = _CHAINS.get(robot)
+    if chain is None or not chain.matches(robot):
+        chain = _CHAINS[robot] = Chain(robot)
+    return chain

@@ -1,0 +1,607 @@
+r"""Compiled serial-chain kinematics and the Levenberg–Marquardt loop of ``numeric``.
+
+Everything here is compiled with Numba (``cache=True``: compiled once per
+machine on first use, then loaded from the cache). The module is kept whole,
+although longer than the usual ~300 lines: Numba's cache of a function is not
+invalidated when a function it calls changes in *another* file, so the
+kernels that call each other live in one file. Only :func:`run`,
+:func:`solve_batch` and :func:`chain_kinematics` are entry points; the rest
+is inlined into them.
+
+The chain (built by ``workbench.ik._chain`` from the Pinocchio model) is one
+float64 array of shape (n + 1, CHAIN_WIDTH). Row ``k < n`` describes the k-th
+joint on the path from the base to the tool frame:
+
+* ``[0:9]`` rotation, ``[9:12]`` translation of the joint placement in its
+  parent joint's frame (Pinocchio's ``jointPlacements``), row-major;
+* ``[12:15]`` unit axis in the joint frame; ``[15]`` ``REVOLUTE`` or
+  ``PRISMATIC``;
+* ``[16]``, ``[17]`` lower and upper limits [rad or m] (inf when unbounded);
+* ``[18]`` ``WRAP_NONE``, ``WRAP_FULL_TURN`` (a bounded revolute joint whose
+  range spans a full turn: it comes back in at the other end) or
+  ``WRAP_UNBOUNDED`` (a continuous joint: never clipped).
+
+Row ``n`` holds the tool frame placement in the last joint's frame in
+``[0:12]``. Chain coordinates are one value per joint (an angle for a
+continuous joint, whose Pinocchio ``q`` is (cos, sin)).
+
+Poses are Pinocchio's: :math:`{}^oM_k = {}^oM_{k-1}\,M_k^{place}\,
+\exp(\hat a_k q_k)` and :math:`{}^oM_f = {}^oM_n\,M_f^{place}`. The Jacobian
+is Pinocchio's LOCAL frame Jacobian of the tool, rows [linear; angular].
+The error of a configuration is :math:`e = \log_6(T^{-1}\,{}^oM_f)`, (6,).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+
+CHAIN_WIDTH = 19
+REVOLUTE, PRISMATIC = 0.0, 1.0
+WRAP_NONE, WRAP_FULL_TURN, WRAP_UNBOUNDED = 0.0, 1.0, 2.0
+
+#: Status codes of :func:`run`.
+CONVERGED, STALLED, EXHAUSTED, NOT_RIGID = 0, 1, 2, 3
+
+#: Columns of the per-target statistics of :func:`run` / :func:`solve_batch`:
+#: squared error, position error [m], rotation error [rad], steps, restarts.
+ERR2, POSITION, ROTATION, STEPS, RESTARTS = 0, 1, 2, 3, 4
+N_STATS = 5
+
+DAMPING_GAIN = 3e-2
+"""mu in lambda = mu |e|^2 + lambda_0 [1/m^2 ~ 1/rad^2 scale]."""
+
+DAMPING_FLOOR = 1e-9
+"""lambda_0: keeps J J^T + lambda I positive definite at singularities."""
+
+STALL_STEPS = 4
+"""A run ends when its error has not dropped by 10 % for this many steps."""
+
+STALL_RATIO = 0.81
+"""Squared-error ratio of one 10 % decrease."""
+
+RUN_STEPS = 40
+"""A run ends after this many steps, converging or not."""
+
+NULL_GAIN = 0.1
+"""Gain of the null-space pull to ``q_ref`` (redundant arms only) [1/step]."""
+
+NULL_OFF_ERROR = 0.3
+"""The null-space pull stops once |e| falls below this [m ~ rad]."""
+
+MAX_STEP = 1.5
+"""Newton steps (n = 6) are shortened to this norm [rad]."""
+
+SINGULAR_STEP = 10.0
+"""A Newton step longer than this [rad] means a (near-)singular Jacobian."""
+
+ACTIVE_SET_ERROR = 0.3
+"""Redundant arms re-solve a step that crosses a limit while |e| < this."""
+
+UNBOUNDED_SPAN = math.pi
+"""Restarts draw unbounded coordinates within +-this [rad]."""
+
+#: Fast acceptance of a target: columns x, y of R orthonormal, z = x × y and
+#: the bottom row, each within RIGIDITY_TOL / 5 (``workbench.poses``), as one
+#: sum of squares. A target that fails it takes the exact checks in Python.
+FAST_TOL2 = (1e-6 / 5.0) ** 2
+
+_MAX_STEP2, _SINGULAR_STEP2 = MAX_STEP**2, SINGULAR_STEP**2
+_NULL_OFF_ERROR2, _ACTIVE_SET_ERROR2 = NULL_OFF_ERROR**2, ACTIVE_SET_ERROR**2
+_PI, _TAU = math.pi, 2.0 * math.pi
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+
+_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+_inline = numba.njit(cache=True, nogil=True, error_model="numpy")
+
+
+@_inline
+def _forward(chain: FloatArray, q: FloatArray, rot: FloatArray, pos: FloatArray):
+    """Poses of the joints (rows 0..n-1) and the tool (row n) in the base frame.
+
+    ``rot`` (n + 1, 3, 3) and ``pos`` (n + 1, 3) are filled.
+    """
+    n = chain.shape[0] - 1
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = (
+        1.0,
+        0.0,
+        0.0,
+        0.0,
+        1.0,
+        0.0,
+        0.0,
+        0.0,
+        1.0,
+    )
+    px, py, pz = 0.0, 0.0, 0.0
+    for k in range(n + 1):
+        c = chain[k]
+        # Parent pose times the placement.
+        a00 = r00 * c[0] + r01 * c[3] + r02 * c[6]
+        a01 = r00 * c[1] + r01 * c[4] + r02 * c[7]
+        a02 = r00 * c[2] + r01 * c[5] + r02 * c[8]
+        a10 = r10 * c[0] + r11 * c[3] + r12 * c[6]
+        a11 = r10 * c[1] + r11 * c[4] + r12 * c[7]
+        a12 = r10 * c[2] + r11 * c[5] + r12 * c[8]
+        a20 = r20 * c[0] + r21 * c[3] + r22 * c[6]
+        a21 = r20 * c[1] + r21 * c[4] + r22 * c[7]
+        a22 = r20 * c[2] + r21 * c[5] + r22 * c[8]
+        bx = px + r00 * c[9] + r01 * c[10] + r02 * c[11]
+        by = py + r10 * c[9] + r11 * c[10] + r12 * c[11]
+        bz = pz + r20 * c[9] + r21 * c[10] + r22 * c[11]
+        if k < n:
+            x, y, z = c[12], c[13], c[14]
+            if c[15] == REVOLUTE:
+                # Rodrigues: exp(a^ q) = I + s a^ + (1 - cos) (a a^T - I).
+                s, co = math.sin(q[k]), math.cos(q[k])
+                v = 1.0 - co
+                e00, e11, e22 = co + v * x * x, co + v * y * y, co + v * z * z
+                e01, e10 = v * x * y - s * z, v * x * y + s * z
+                e02, e20 = v * x * z + s * y, v * x * z - s * y
+                e12, e21 = v * y * z - s * x, v * y * z + s * x
+                r00 = a00 * e00 + a01 * e10 + a02 * e20
+                r01 = a00 * e01 + a01 * e11 + a02 * e21
+                r02 = a00 * e02 + a01 * e12 + a02 * e22
+                r10 = a10 * e00 + a11 * e10 + a12 * e20
+                r11 = a10 * e01 + a11 * e11 + a12 * e21
+                r12 = a10 * e02 + a11 * e12 + a12 * e22
+                r20 = a20 * e00 + a21 * e10 + a22 * e20
+                r21 = a20 * e01 + a21 * e11 + a22 * e21
+                r22 = a20 * e02 + a21 * e12 + a22 * e22
+                px, py, pz = bx, by, bz
+            else:  # prismatic: translation q a along the joint axis
+                d = q[k]
+                r00, r01, r02, r10, r11, r12, r20, r21, r22 = (
+                    a00, a01, a02, a10, a11, a12, a20, a21, a22
+                )  # fmt: skip
+                px = bx + d * (a00 * x + a01 * y + a02 * z)
+                py = by + d * (a10 * x + a11 * y + a12 * z)
+                pz = bz + d * (a20 * x + a21 * y + a22 * z)
+        else:
+            r00, r01, r02, r10, r11, r12, r20, r21, r22 = (
+                a00, a01, a02, a10, a11, a12, a20, a21, a22
+            )  # fmt: skip
+            px, py, pz = bx, by, bz
+        m = rot[k]
+        m[0, 0], m[0, 1], m[0, 2] = r00, r01, r02
+        m[1, 0], m[1, 1], m[1, 2] = r10, r11, r12
+        m[2, 0], m[2, 1], m[2, 2] = r20, r21, r22
+        pos[k, 0], pos[k, 1], pos[k, 2] = px, py, pz
+
+
+@_inline
+def _jacobian(chain: FloatArray, rot: FloatArray, pos: FloatArray, jac: FloatArray):
+    """LOCAL Jacobian of the tool, (6, n), from the poses of :func:`_forward`."""
+    n = chain.shape[0] - 1
+    f = rot[n]
+    fx, fy, fz = pos[n, 0], pos[n, 1], pos[n, 2]
+    for k in range(n):
+        m, c = rot[k], chain[k]
+        # Joint axis in base axes.
+        wx = m[0, 0] * c[12] + m[0, 1] * c[13] + m[0, 2] * c[14]
+        wy = m[1, 0] * c[12] + m[1, 1] * c[13] + m[1, 2] * c[14]
+        wz = m[2, 0] * c[12] + m[2, 1] * c[13] + m[2, 2] * c[14]
+        if c[15] == REVOLUTE:
+            dx, dy, dz = fx - pos[k, 0], fy - pos[k, 1], fz - pos[k, 2]
+            lx, ly, lz = wy * dz - wz * dy, wz * dx - wx * dz, wx * dy - wy * dx
+            ax, ay, az = wx, wy, wz
+        else:
+            lx, ly, lz = wx, wy, wz
+            ax, ay, az = 0.0, 0.0, 0.0
+        # Into the tool's axes: R_f^T.
+        jac[0, k] = f[0, 0] * lx + f[1, 0] * ly + f[2, 0] * lz
+        jac[1, k] = f[0, 1] * lx + f[1, 1] * ly + f[2, 1] * lz
+        jac[2, k] = f[0, 2] * lx + f[1, 2] * ly + f[2, 2] * lz
+        jac[3, k] = f[0, 0] * ax + f[1, 0] * ay + f[2, 0] * az
+        jac[4, k] = f[0, 1] * ax + f[1, 1] * ay + f[2, 1] * az
+        jac[5, k] = f[0, 2] * ax + f[1, 2] * ay + f[2, 2] * az
+
+
+@_inline
+def _error(target: FloatArray, rot: FloatArray, pos: FloatArray, e: FloatArray):
+    r"""``e = log6(T^-1 oMf)`` (6,) of the tool pose (last row); returns |p_err|."""
+    n = rot.shape[0] - 1
+    f = rot[n]
+    # R = R_t^T R_f, p = R_t^T (p_f - p_t).
+    dx, dy, dz = (
+        pos[n, 0] - target[0, 3],
+        pos[n, 1] - target[1, 3],
+        pos[n, 2] - target[2, 3],
+    )
+    t, g = target, f
+    r00 = t[0, 0] * g[0, 0] + t[1, 0] * g[1, 0] + t[2, 0] * g[2, 0]
+    r01 = t[0, 0] * g[0, 1] + t[1, 0] * g[1, 1] + t[2, 0] * g[2, 1]
+    r02 = t[0, 0] * g[0, 2] + t[1, 0] * g[1, 2] + t[2, 0] * g[2, 2]
+    r10 = t[0, 1] * g[0, 0] + t[1, 1] * g[1, 0] + t[2, 1] * g[2, 0]
+    r11 = t[0, 1] * g[0, 1] + t[1, 1] * g[1, 1] + t[2, 1] * g[2, 1]
+    r12 = t[0, 1] * g[0, 2] + t[1, 1] * g[1, 2] + t[2, 1] * g[2, 2]
+    r20 = t[0, 2] * g[0, 0] + t[1, 2] * g[1, 0] + t[2, 2] * g[2, 0]
+    r21 = t[0, 2] * g[0, 1] + t[1, 2] * g[1, 1] + t[2, 2] * g[2, 1]
+    r22 = t[0, 2] * g[0, 2] + t[1, 2] * g[1, 2] + t[2, 2] * g[2, 2]
+    px = t[0, 0] * dx + t[1, 0] * dy + t[2, 0] * dz
+    py = t[0, 1] * dx + t[1, 1] * dy + t[2, 1] * dz
+    pz = t[0, 2] * dx + t[1, 2] * dy + t[2, 2] * dz
+    # log3, robust at 0 and at pi: theta = atan2(|vee| / 2, (tr - 1) / 2).
+    vx, vy, vz = r21 - r12, r02 - r20, r10 - r01
+    co = 0.5 * (r00 + r11 + r22 - 1.0)
+    si = 0.5 * math.sqrt(vx * vx + vy * vy + vz * vz)
+    theta = math.atan2(si, co)
+    if co > -0.9:
+        if theta < 1e-4:  # theta / (2 sin theta), Taylor
+            factor = 0.5 + theta * theta / 12.0
+        else:
+            factor = 0.5 * theta / si
+        wx, wy, wz = factor * vx, factor * vy, factor * vz
+    else:  # near pi: the axis from the symmetric part (1 - cos) a a^T + cos I
+        v = 1.0 - co
+        if r00 >= r11 and r00 >= r22:
+            ax = math.sqrt(max(r00 - co, 0.0) / v)
+            ay, az = 0.5 * (r01 + r10) / (v * ax), 0.5 * (r02 + r20) / (v * ax)
+        elif r11 >= r22:
+            ay = math.sqrt(max(r11 - co, 0.0) / v)
+            ax, az = 0.5 * (r01 + r10) / (v * ay), 0.5 * (r12 + r21) / (v * ay)
+        else:
+            az = math.sqrt(max(r22 - co, 0.0) / v)
+            ax, ay = 0.5 * (r02 + r20) / (v * az), 0.5 * (r12 + r21) / (v * az)
+        if ax * vx + ay * vy + az * vz < 0.0:  # vee = 2 sin(theta) a
+            ax, ay, az = -ax, -ay, -az
+        wx, wy, wz = theta * ax, theta * ay, theta * az
+    # v = alpha p - w x p / 2 + beta (w . p) w  (the inverse of SE(3)'s V).
+    if theta < 1e-2:
+        t2 = theta * theta
+        alpha = 1.0 - t2 / 12.0 - t2 * t2 / 720.0
+        beta = 1.0 / 12.0 + t2 / 720.0
+    else:
+        alpha = 0.5 * theta / math.tan(0.5 * theta)
+        beta = (1.0 - alpha) / (theta * theta)
+    wp = beta * (wx * px + wy * py + wz * pz)
+    e[0] = alpha * px - 0.5 * (wy * pz - wz * py) + wp * wx
+    e[1] = alpha * py - 0.5 * (wz * px - wx * pz) + wp * wy
+    e[2] = alpha * pz - 0.5 * (wx * py - wy * px) + wp * wz
+    e[3], e[4], e[5] = wx, wy, wz
+    return math.sqrt(px * px + py * py + pz * pz)
+
+
+@_inline
+def _lu_solve(a: FloatArray, b: FloatArray) -> bool:
+    """Solve a x = b in place (x in b), LU with partial pivoting; False if singular."""
+    m = b.shape[0]
+    for k in range(m):
+        p = k
+        for i in range(k + 1, m):
+            if abs(a[i, k]) > abs(a[p, k]):
+                p = i
+        if a[p, k] == 0.0:
+            return False
+        if p != k:
+            for j in range(m):
+                a[k, j], a[p, j] = a[p, j], a[k, j]
+            b[k], b[p] = b[p], b[k]
+        inv = 1.0 / a[k, k]
+        for i in range(k + 1, m):
+            f = a[i, k] * inv
+            if f != 0.0:
+                for j in range(k + 1, m):
+                    a[i, j] -= f * a[k, j]
+                b[i] -= f * b[k]
+    for k in range(m - 1, -1, -1):
+        s = b[k]
+        for j in range(k + 1, m):
+            s -= a[k, j] * b[j]
+        b[k] = s / a[k, k]
+    return True
+
+
+@_inline
+def _cholesky_solve(a: FloatArray, b: FloatArray):
+    """Solve a x = b in place (x in b), a symmetric positive definite (lower used)."""
+    m = b.shape[0]
+    for j in range(m):
+        d = a[j, j]
+        for k in range(j):
+            d -= a[j, k] * a[j, k]
+        d = math.sqrt(d)
+        a[j, j] = d
+        for i in range(j + 1, m):
+            s = a[i, j]
+            for k in range(j):
+                s -= a[i, k] * a[j, k]
+            a[i, j] = s / d
+    for i in range(m):
+        s = b[i]
+        for k in range(i):
+            s -= a[i, k] * b[k]
+        b[i] = s / a[i, i]
+    for i in range(m - 1, -1, -1):
+        s = b[i]
+        for k in range(i + 1, m):
+            s -= a[k, i] * b[k]
+        b[i] = s / a[i, i]
+
+
+@_inline
+def _damped_step(jac, e, pull, use_pull, damping, dq):
+    r"""Damped least-squares step (to subtract from q) into ``dq`` (n,).
+
+    n >= 6: :math:`J^T (J J^T + \lambda I)^{-1} (e + J z) - z` (z = ``pull``
+    when ``use_pull``); n < 6: :math:`(J^T J + \lambda I)^{-1} J^T e`.
+    """
+    n = jac.shape[1]
+    if n < 6:
+        normal = np.empty((n, n))
+        for i in range(n):
+            for j in range(i + 1):
+                s = 0.0
+                for r in range(6):
+                    s += jac[r, i] * jac[r, j]
+                normal[i, j] = s
+            normal[i, i] += damping
+            s = 0.0
+            for r in range(6):
+                s += jac[r, i] * e[r]
+            dq[i] = s
+        _cholesky_solve(normal, dq)
+        return
+    normal = np.empty((6, 6))
+    y = np.empty(6)
+    for i in range(6):
+        for j in range(i + 1):
+            s = 0.0
+            for k in range(n):
+                s += jac[i, k] * jac[j, k]
+            normal[i, j] = s
+        normal[i, i] += damping
+        s = e[i]
+        if use_pull:
+            for k in range(n):
+                s += jac[i, k] * pull[k]
+        y[i] = s
+    _cholesky_solve(normal, y)
+    for k in range(n):
+        s = 0.0
+        for i in range(6):
+            s += jac[i, k] * y[i]
+        dq[k] = s - pull[k] if use_pull else s
+
+
+@_inline
+def _roughly_rigid(pose: FloatArray) -> bool:
+    """The fast acceptance test of a target (finite, rigid to RIGIDITY_TOL / 5)."""
+    r00, r01, r02 = pose[0, 0], pose[0, 1], pose[0, 2]
+    r10, r11, r12 = pose[1, 0], pose[1, 1], pose[1, 2]
+    r20, r21, r22 = pose[2, 0], pose[2, 1], pose[2, 2]
+    e0 = r00 * r00 + r10 * r10 + r20 * r20 - 1.0
+    e1 = r01 * r01 + r11 * r11 + r21 * r21 - 1.0
+    e2 = r00 * r01 + r10 * r11 + r20 * r21
+    ex = r10 * r21 - r20 * r11 - r02  # x × y - z
+    ey = r20 * r01 - r00 * r21 - r12
+    ez = r00 * r11 - r10 * r01 - r22
+    b0, b1, b2, b3 = pose[3, 0], pose[3, 1], pose[3, 2], pose[3, 3] - 1.0
+    err2 = e0 * e0 + e1 * e1 + e2 * e2 + ex * ex + ey * ey + ez * ez
+    err2 += b0 * b0 + b1 * b1 + b2 * b2 + b3 * b3
+    # a NaN fails the comparison; an infinite translation makes the sum NaN
+    return err2 <= FAST_TOL2 and (pose[0, 3] + pose[1, 3] + pose[2, 3]) * 0.0 == 0.0
+
+
+@_inline
+def _first_guess(seeds: FloatArray, target: FloatArray, q: FloatArray):
+    """Copy into ``q`` the candidate whose tool pose is nearest ``target``.
+
+    ``seeds`` (count, 16 + n): 16 features of the candidate's tool pose (its
+    score is their dot product with the row-major target matrix), then its q.
+    """
+    best, best_score = 0, math.inf
+    t = target.ravel()
+    for i in range(seeds.shape[0]):
+        s = seeds[i]
+        score = (
+            s[0] * t[0] + s[1] * t[1] + s[2] * t[2] + s[3] * t[3]
+            + s[4] * t[4] + s[5] * t[5] + s[6] * t[6] + s[7] * t[7]
+            + s[8] * t[8] + s[9] * t[9] + s[10] * t[10] + s[11] * t[11]
+            + s[15]
+        )  # fmt: skip
+        if score < best_score:
+            best, best_score = i, score
+    for k in range(q.shape[0]):
+        q[k] = seeds[best, 16 + k]
+
+
+@_jit
+def run(chain, target, q, q_ref, best_q, stats, tol2, max_steps, guess, seeds, check):
+    """One run of damped Newton steps from ``q``, until it converges or stalls.
+
+    Args:
+        chain: (n + 1, CHAIN_WIDTH) chain (module docstring).
+        target: (4, 4) homogeneous target of the tool in the base frame [m].
+        q: (n,) start, chain coordinates; overwritten (the last iterate).
+        q_ref: (n,) configuration redundant arms are pulled towards.
+        best_q: (n,) best configuration so far, updated in place.
+        stats: (N_STATS,) running statistics (ERR2 inf and STEPS 0 at first),
+            updated in place.
+        tol2: Squared convergence threshold on |e|.
+        max_steps: Step budget over all runs.
+        guess: Start from the candidate of ``seeds`` nearest the target
+            instead of ``q``.
+        seeds: (count, 16 + n) candidates (:func:`_first_guess`).
+        check: Apply the fast rigidity test to ``target`` first.
+
+    Returns:
+        CONVERGED, STALLED (a restart is due), EXHAUSTED (no steps left) or
+        NOT_RIGID (``target`` failed the fast rigidity test; nothing done).
+    """
+    if check and not _roughly_rigid(target):
+        return NOT_RIGID
+    n = q.shape[0]
+    if guess:
+        _first_guess(seeds, target, q)
+    rot, pos = np.empty((n + 1, 3, 3)), np.empty((n + 1, 3))
+    jac, jac_free = np.empty((6, n)), np.empty((6, n))
+    e, dq, pull, q_next = np.empty(6), np.empty(n), np.zeros(n), np.empty(n)
+    lu = np.empty((6, 6))
+    square, redundant = n == 6, n > 6
+    steps = int(stats[STEPS])
+    run_start = stall_at = steps
+    stall_level = math.inf
+    while True:
+        _forward(chain, q, rot, pos)
+        position = _error(target, rot, pos, e)
+        err2 = (
+            e[0] * e[0]
+            + e[1] * e[1]
+            + e[2] * e[2]
+            + e[3] * e[3]
+            + e[4] * e[4]
+            + e[5] * e[5]
+        )
+        if err2 < stats[ERR2]:
+            stats[ERR2], stats[POSITION] = err2, position
+            stats[ROTATION] = math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5])
+            best_q[:] = q
+            if err2 <= tol2:
+                stats[STEPS] = steps
+                return CONVERGED
+        if err2 < stall_level:
+            stall_level, stall_at = STALL_RATIO * err2, steps
+        if steps >= max_steps:
+            stats[STEPS] = steps
+            return EXHAUSTED
+        if steps - stall_at >= STALL_STEPS or steps - run_start >= RUN_STEPS:
+            stats[STEPS] = steps
+            return STALLED
+        steps += 1
+
+        _jacobian(chain, rot, pos, jac)
+        newton = False
+        if square:
+            lu[:, :] = jac
+            dq[:] = e
+            if _lu_solve(lu, dq):
+                step2 = 0.0
+                for k in range(n):
+                    step2 += dq[k] * dq[k]
+                if step2 <= _MAX_STEP2:
+                    newton = True
+                elif step2 < _SINGULAR_STEP2:  # long: shortened
+                    dq *= MAX_STEP / math.sqrt(step2)
+                    newton = True
+                # else near-singular J (or NaN): damped step below
+        damping = DAMPING_GAIN * err2 + DAMPING_FLOOR
+        use_pull = False
+        if not newton:
+            use_pull = redundant and err2 > _NULL_OFF_ERROR2
+            if use_pull:
+                for k in range(n):
+                    d = q_ref[k] - q[k]
+                    if chain[k, 18] == WRAP_UNBOUNDED:  # shortest way round
+                        d -= _TAU * math.floor(d / _TAU + 0.5)
+                    pull[k] = NULL_GAIN * d
+            _damped_step(jac, e, pull, use_pull, damping, dq)
+        clipped = False
+        for k in range(n):
+            x = q[k] - dq[k]
+            lo, hi = chain[k, 16], chain[k, 17]
+            if chain[k, 18] == WRAP_FULL_TURN:  # comes back in at the other end
+                if x > hi:
+                    x -= _TAU
+                elif x < lo:
+                    x += _TAU
+            q_next[k] = x
+            clipped |= x < lo or x > hi
+        if clipped and redundant and err2 < _ACTIVE_SET_ERROR2:
+            # Freeze the joints pushed out: the others take over their motion.
+            for k in range(n):
+                free = chain[k, 16] <= q_next[k] <= chain[k, 17]
+                for r in range(6):
+                    jac_free[r, k] = jac[r, k] if free else 0.0
+            _damped_step(jac_free, e, pull, False, damping, dq)
+            for k in range(n):
+                q_next[k] = q[k] - dq[k]
+        for k in range(n):
+            q[k] = min(max(q_next[k], chain[k, 16]), chain[k, 17])
+
+
+@_inline
+def _splitmix(state: np.ndarray) -> float:
+    """Next uniform draw in [0, 1) of the SplitMix64 generator ``state`` (1,) uint64."""
+    state[0] += _GOLDEN
+    z = state[0]
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    z ^= z >> np.uint64(31)
+    return float(z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
+
+
+@_jit
+def solve_batch(
+    chain, targets, q_ref, q_start, seeds, tol2, max_steps, seed, out_q, out_stats
+):
+    """Solve every target of ``targets`` (N, 4, 4), restarts drawn in compiled code.
+
+    Args:
+        chain: (n + 1, CHAIN_WIDTH) chain.
+        targets: (N, 4, 4) targets, already checked finite and rigid.
+        q_ref: (1 or N, n) pull references (one for all, or one per target).
+        q_start: (0, 1 or N, n) starts; none: the nearest candidate of ``seeds``.
+        seeds: (count, 16 + n) candidates.
+        tol2: Squared convergence threshold on |e|.
+        max_steps: Step budget per target.
+        seed: Seed of the restart draws; target i draws from SplitMix64 seeded
+            with ``seed + i * golden``, so a result does not depend on the batch.
+        out_q: (N, n) best configuration per target.
+        out_stats: (N, N_STATS) statistics per target.
+    """
+    n = chain.shape[0] - 1
+    low, span = np.empty(n), np.empty(n)
+    for k in range(n):
+        lo, hi = chain[k, 16], chain[k, 17]
+        low[k] = lo if math.isfinite(lo) else -UNBOUNDED_SPAN
+        span[k] = (hi if math.isfinite(hi) else UNBOUNDED_SPAN) - low[k]
+    q = np.empty(n)
+    state = np.empty(1, dtype=np.uint64)
+    for i in range(targets.shape[0]):
+        stats = out_stats[i]
+        stats[:] = 0.0
+        stats[ERR2] = math.inf
+        ref = q_ref[i if q_ref.shape[0] > 1 else 0]
+        guess = q_start.shape[0] == 0
+        if not guess:
+            q[:] = q_start[i if q_start.shape[0] > 1 else 0]
+        state[0] = np.uint64(seed) + np.uint64(i) * _GOLDEN
+        while True:
+            status = run(
+                chain,
+                targets[i],
+                q,
+                ref,
+                out_q[i],
+                stats,
+                tol2,
+                max_steps,
+                guess,
+                seeds,
+                False,
+            )
+            if status != STALLED:
+                break
+            guess = False
+            for k in range(n):
+                q[k] = low[k] + span[k] * _splitmix(state)
+            stats[RESTARTS] += 1.0
+
+
+@_jit
+def chain_kinematics(chain, q, jac):
+    """Tool pose (4, 4) in the base frame at ``q`` (n,); LOCAL Jacobian into ``jac``."""
+    n = chain.shape[0] - 1
+    rot, pos = np.empty((n + 1, 3, 3)), np.empty((n + 1, 3))
+    _forward(chain, q, rot, pos)
+    _jacobian(chain, rot, pos, jac)
+    pose = np.eye(4)
+    pose[:3, :3] = rot[n]
+    pose[:3, 3] = pos[n]
+    return pose
