@@ -143,12 +143,15 @@ class Chain:
         values = np.vstack((mid, mid + SEED_SPREAD * half * draws))
         np.clip(values, self.packed[: self.n, 16], self.packed[: self.n, 17], values)
         seeds = np.zeros((SEED_COUNT, 16 + self.n))
-        jac = np.empty((6, self.n))
-        for row, value in zip(seeds, values, strict=True):
-            pose = kernel.chain_kinematics(self.packed, value, jac)
-            position = pose[:3, 3]
+        # Pinocchio's FK (not the compiled chain's): no compilation for this.
+        model, data = self.model, self.model.createData()
+        configurations = self.to_configuration(values, self.mid)
+        for row, value, q in zip(seeds, values, configurations, strict=True):
+            pin.forwardKinematics(model, data, q)
+            pose = pin.updateFramePlacement(model, data, self.frame_id)
+            position = pose.translation
             features = row[:16].reshape(4, 4)
-            features[:3, :3] = (-2.0 * SEED_ROTATION_WEIGHT) * pose[:3, :3]
+            features[:3, :3] = (-2.0 * SEED_ROTATION_WEIGHT) * pose.rotation
             features[:3, 3] = -2.0 * position
             features[3, 3] = position.dot(position)
             row[16:] = value

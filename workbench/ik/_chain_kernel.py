@@ -107,99 +107,76 @@ def _forward(chain: FloatArray, q: FloatArray, rot: FloatArray, pos: FloatArray)
     ``rot`` (n + 1, 3, 3) and ``pos`` (n + 1, 3) are filled.
     """
     n = chain.shape[0] - 1
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = (
-        1.0,
-        0.0,
-        0.0,
-        0.0,
-        1.0,
-        0.0,
-        0.0,
-        0.0,
-        1.0,
-    )
-    px, py, pz = 0.0, 0.0, 0.0
+    a = np.empty((3, 3))
+    e = np.empty((3, 3))
     for k in range(n + 1):
         c = chain[k]
-        # Parent pose times the placement.
-        a00 = r00 * c[0] + r01 * c[3] + r02 * c[6]
-        a01 = r00 * c[1] + r01 * c[4] + r02 * c[7]
-        a02 = r00 * c[2] + r01 * c[5] + r02 * c[8]
-        a10 = r10 * c[0] + r11 * c[3] + r12 * c[6]
-        a11 = r10 * c[1] + r11 * c[4] + r12 * c[7]
-        a12 = r10 * c[2] + r11 * c[5] + r12 * c[8]
-        a20 = r20 * c[0] + r21 * c[3] + r22 * c[6]
-        a21 = r20 * c[1] + r21 * c[4] + r22 * c[7]
-        a22 = r20 * c[2] + r21 * c[5] + r22 * c[8]
-        bx = px + r00 * c[9] + r01 * c[10] + r02 * c[11]
-        by = py + r10 * c[9] + r11 * c[10] + r12 * c[11]
-        bz = pz + r20 * c[9] + r21 * c[10] + r22 * c[11]
-        if k < n:
-            x, y, z = c[12], c[13], c[14]
-            if c[15] == REVOLUTE:
-                # Rodrigues: exp(a^ q) = I + s a^ + (1 - cos) (a a^T - I).
-                s, co = math.sin(q[k]), math.cos(q[k])
-                v = 1.0 - co
-                e00, e11, e22 = co + v * x * x, co + v * y * y, co + v * z * z
-                e01, e10 = v * x * y - s * z, v * x * y + s * z
-                e02, e20 = v * x * z + s * y, v * x * z - s * y
-                e12, e21 = v * y * z - s * x, v * y * z + s * x
-                r00 = a00 * e00 + a01 * e10 + a02 * e20
-                r01 = a00 * e01 + a01 * e11 + a02 * e21
-                r02 = a00 * e02 + a01 * e12 + a02 * e22
-                r10 = a10 * e00 + a11 * e10 + a12 * e20
-                r11 = a10 * e01 + a11 * e11 + a12 * e21
-                r12 = a10 * e02 + a11 * e12 + a12 * e22
-                r20 = a20 * e00 + a21 * e10 + a22 * e20
-                r21 = a20 * e01 + a21 * e11 + a22 * e21
-                r22 = a20 * e02 + a21 * e12 + a22 * e22
-                px, py, pz = bx, by, bz
-            else:  # prismatic: translation q a along the joint axis
-                d = q[k]
-                r00, r01, r02, r10, r11, r12, r20, r21, r22 = (
-                    a00, a01, a02, a10, a11, a12, a20, a21, a22
-                )  # fmt: skip
-                px = bx + d * (a00 * x + a01 * y + a02 * z)
-                py = by + d * (a10 * x + a11 * y + a12 * z)
-                pz = bz + d * (a20 * x + a21 * y + a22 * z)
+        r, p = rot[k], pos[k]
+        if k == 0:
+            for i in range(3):  # the placement itself
+                for j in range(3):
+                    a[i, j] = c[3 * i + j]
+                p[i] = c[9 + i]
         else:
-            r00, r01, r02, r10, r11, r12, r20, r21, r22 = (
-                a00, a01, a02, a10, a11, a12, a20, a21, a22
-            )  # fmt: skip
-            px, py, pz = bx, by, bz
-        m = rot[k]
-        m[0, 0], m[0, 1], m[0, 2] = r00, r01, r02
-        m[1, 0], m[1, 1], m[1, 2] = r10, r11, r12
-        m[2, 0], m[2, 1], m[2, 2] = r20, r21, r22
-        pos[k, 0], pos[k, 1], pos[k, 2] = px, py, pz
+            parent, parent_p = rot[k - 1], pos[k - 1]
+            for i in range(3):  # parent pose times the placement
+                for j in range(3):
+                    a[i, j] = (
+                        parent[i, 0] * c[j] + parent[i, 1] * c[3 + j]
+                        + parent[i, 2] * c[6 + j]
+                    )  # fmt: skip
+                p[i] = parent_p[i] + (
+                    parent[i, 0] * c[9] + parent[i, 1] * c[10] + parent[i, 2] * c[11]
+                )
+        if k < n and c[15] == REVOLUTE:
+            # Rodrigues: exp(a^ q) = cos I + sin a^ + (1 - cos) a a^T.
+            s, co = math.sin(q[k]), math.cos(q[k])
+            for i in range(3):
+                for j in range(3):
+                    e[i, j] = (1.0 - co) * c[12 + i] * c[12 + j]
+                e[i, i] += co
+            x, y, z = s * c[12], s * c[13], s * c[14]
+            e[0, 1] -= z
+            e[1, 0] += z
+            e[0, 2] += y
+            e[2, 0] -= y
+            e[1, 2] -= x
+            e[2, 1] += x
+            for i in range(3):
+                for j in range(3):
+                    r[i, j] = a[i, 0] * e[0, j] + a[i, 1] * e[1, j] + a[i, 2] * e[2, j]
+        else:
+            for i in range(3):
+                for j in range(3):
+                    r[i, j] = a[i, j]
+            if k < n:  # prismatic: translation q a along the joint axis
+                for i in range(3):
+                    p[i] += q[k] * (a[i, 0] * c[12] + a[i, 1] * c[13] + a[i, 2] * c[14])
 
 
 @_inline
 def _jacobian(chain: FloatArray, rot: FloatArray, pos: FloatArray, jac: FloatArray):
     """LOCAL Jacobian of the tool, (6, n), from the poses of :func:`_forward`."""
     n = chain.shape[0] - 1
-    f = rot[n]
-    fx, fy, fz = pos[n, 0], pos[n, 1], pos[n, 2]
+    f, fp = rot[n], pos[n]
+    w, d = np.empty(3), np.empty(3)
     for k in range(n):
-        m, c = rot[k], chain[k]
-        # Joint axis in base axes.
-        wx = m[0, 0] * c[12] + m[0, 1] * c[13] + m[0, 2] * c[14]
-        wy = m[1, 0] * c[12] + m[1, 1] * c[13] + m[1, 2] * c[14]
-        wz = m[2, 0] * c[12] + m[2, 1] * c[13] + m[2, 2] * c[14]
-        if c[15] == REVOLUTE:
-            dx, dy, dz = fx - pos[k, 0], fy - pos[k, 1], fz - pos[k, 2]
-            lx, ly, lz = wy * dz - wz * dy, wz * dx - wx * dz, wx * dy - wy * dx
-            ax, ay, az = wx, wy, wz
-        else:
-            lx, ly, lz = wx, wy, wz
-            ax, ay, az = 0.0, 0.0, 0.0
-        # Into the tool's axes: R_f^T.
-        jac[0, k] = f[0, 0] * lx + f[1, 0] * ly + f[2, 0] * lz
-        jac[1, k] = f[0, 1] * lx + f[1, 1] * ly + f[2, 1] * lz
-        jac[2, k] = f[0, 2] * lx + f[1, 2] * ly + f[2, 2] * lz
-        jac[3, k] = f[0, 0] * ax + f[1, 0] * ay + f[2, 0] * az
-        jac[4, k] = f[0, 1] * ax + f[1, 1] * ay + f[2, 1] * az
-        jac[5, k] = f[0, 2] * ax + f[1, 2] * ay + f[2, 2] * az
+        r, c = rot[k], chain[k]
+        for i in range(3):  # joint axis in base axes
+            w[i] = r[i, 0] * c[12] + r[i, 1] * c[13] + r[i, 2] * c[14]
+        if c[15] == REVOLUTE:  # linear: w x (p_f - p_k); angular: w
+            for i in range(3):
+                d[i] = fp[i] - pos[k, i]
+            lx = w[1] * d[2] - w[2] * d[1]
+            ly = w[2] * d[0] - w[0] * d[2]
+            lz = w[0] * d[1] - w[1] * d[0]
+            angular = 1.0
+        else:  # linear: w; angular: 0
+            lx, ly, lz = w[0], w[1], w[2]
+            angular = 0.0
+        for i in range(3):  # into the tool's axes: R_f^T
+            jac[i, k] = f[0, i] * lx + f[1, i] * ly + f[2, i] * lz
+            jac[3 + i, k] = angular * (f[0, i] * w[0] + f[1, i] * w[1] + f[2, i] * w[2])
 
 
 @_inline
@@ -207,68 +184,56 @@ def _error(target: FloatArray, rot: FloatArray, pos: FloatArray, e: FloatArray):
     r"""``e = log6(T^-1 oMf)`` (6,) of the tool pose (last row); returns |p_err|."""
     n = rot.shape[0] - 1
     f = rot[n]
-    # R = R_t^T R_f, p = R_t^T (p_f - p_t).
-    dx, dy, dz = (
-        pos[n, 0] - target[0, 3],
-        pos[n, 1] - target[1, 3],
-        pos[n, 2] - target[2, 3],
-    )
-    t, g = target, f
-    r00 = t[0, 0] * g[0, 0] + t[1, 0] * g[1, 0] + t[2, 0] * g[2, 0]
-    r01 = t[0, 0] * g[0, 1] + t[1, 0] * g[1, 1] + t[2, 0] * g[2, 1]
-    r02 = t[0, 0] * g[0, 2] + t[1, 0] * g[1, 2] + t[2, 0] * g[2, 2]
-    r10 = t[0, 1] * g[0, 0] + t[1, 1] * g[1, 0] + t[2, 1] * g[2, 0]
-    r11 = t[0, 1] * g[0, 1] + t[1, 1] * g[1, 1] + t[2, 1] * g[2, 1]
-    r12 = t[0, 1] * g[0, 2] + t[1, 1] * g[1, 2] + t[2, 1] * g[2, 2]
-    r20 = t[0, 2] * g[0, 0] + t[1, 2] * g[1, 0] + t[2, 2] * g[2, 0]
-    r21 = t[0, 2] * g[0, 1] + t[1, 2] * g[1, 1] + t[2, 2] * g[2, 1]
-    r22 = t[0, 2] * g[0, 2] + t[1, 2] * g[1, 2] + t[2, 2] * g[2, 2]
-    px = t[0, 0] * dx + t[1, 0] * dy + t[2, 0] * dz
-    py = t[0, 1] * dx + t[1, 1] * dy + t[2, 1] * dz
-    pz = t[0, 2] * dx + t[1, 2] * dy + t[2, 2] * dz
+    r, p, d = np.empty((3, 3)), np.empty(3), np.empty(3)
+    for i in range(3):
+        d[i] = pos[n, i] - target[i, 3]
+    for i in range(3):  # R = R_t^T R_f, p = R_t^T (p_f - p_t)
+        for j in range(3):
+            r[i, j] = (
+                target[0, i] * f[0, j] + target[1, i] * f[1, j] + target[2, i] * f[2, j]
+            )
+        p[i] = target[0, i] * d[0] + target[1, i] * d[1] + target[2, i] * d[2]
     # log3, robust at 0 and at pi: theta = atan2(|vee| / 2, (tr - 1) / 2).
-    vx, vy, vz = r21 - r12, r02 - r20, r10 - r01
-    co = 0.5 * (r00 + r11 + r22 - 1.0)
-    si = 0.5 * math.sqrt(vx * vx + vy * vy + vz * vz)
+    w = e[3:]
+    w[0], w[1], w[2] = r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]
+    co = 0.5 * (r[0, 0] + r[1, 1] + r[2, 2] - 1.0)
+    si = 0.5 * math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
     theta = math.atan2(si, co)
-    if co > -0.9:
-        if theta < 1e-4:  # theta / (2 sin theta), Taylor
-            factor = 0.5 + theta * theta / 12.0
-        else:
-            factor = 0.5 * theta / si
-        wx, wy, wz = factor * vx, factor * vy, factor * vz
-    else:  # near pi: the axis from the symmetric part (1 - cos) a a^T + cos I
+    if co > -0.9:  # w = theta / (2 sin theta) vee (Taylor near 0)
+        factor = 0.5 + theta * theta / 12.0 if theta < 1e-4 else 0.5 * theta / si
+        for i in range(3):
+            w[i] *= factor
+    else:  # near pi: the axis from the symmetric part cos I + (1 - cos) a a^T
         v = 1.0 - co
-        if r00 >= r11 and r00 >= r22:
-            ax = math.sqrt(max(r00 - co, 0.0) / v)
-            ay, az = 0.5 * (r01 + r10) / (v * ax), 0.5 * (r02 + r20) / (v * ax)
-        elif r11 >= r22:
-            ay = math.sqrt(max(r11 - co, 0.0) / v)
-            ax, az = 0.5 * (r01 + r10) / (v * ay), 0.5 * (r12 + r21) / (v * ay)
-        else:
-            az = math.sqrt(max(r22 - co, 0.0) / v)
-            ax, ay = 0.5 * (r02 + r20) / (v * az), 0.5 * (r12 + r21) / (v * az)
-        if ax * vx + ay * vy + az * vz < 0.0:  # vee = 2 sin(theta) a
-            ax, ay, az = -ax, -ay, -az
-        wx, wy, wz = theta * ax, theta * ay, theta * az
+        m = 0
+        for i in range(1, 3):
+            if r[i, i] > r[m, m]:
+                m = i
+        d[m] = math.sqrt(max(r[m, m] - co, 0.0) / v)
+        for i in range(3):
+            if i != m:
+                d[i] = 0.5 * (r[m, i] + r[i, m]) / (v * d[m])
+        if d[0] * w[0] + d[1] * w[1] + d[2] * w[2] < 0.0:  # vee = 2 sin a
+            theta = -theta
+        for i in range(3):
+            w[i] = theta * d[i]
+        theta = abs(theta)
     # v = alpha p - w x p / 2 + beta (w . p) w  (the inverse of SE(3)'s V).
+    t2 = theta * theta
     if theta < 1e-2:
-        t2 = theta * theta
-        alpha = 1.0 - t2 / 12.0 - t2 * t2 / 720.0
-        beta = 1.0 / 12.0 + t2 / 720.0
+        alpha, beta = 1.0 - t2 / 12.0 - t2 * t2 / 720.0, 1.0 / 12.0 + t2 / 720.0
     else:
         alpha = 0.5 * theta / math.tan(0.5 * theta)
-        beta = (1.0 - alpha) / (theta * theta)
-    wp = beta * (wx * px + wy * py + wz * pz)
-    e[0] = alpha * px - 0.5 * (wy * pz - wz * py) + wp * wx
-    e[1] = alpha * py - 0.5 * (wz * px - wx * pz) + wp * wy
-    e[2] = alpha * pz - 0.5 * (wx * py - wy * px) + wp * wz
-    e[3], e[4], e[5] = wx, wy, wz
-    return math.sqrt(px * px + py * py + pz * pz)
+        beta = (1.0 - alpha) / t2
+    wp = beta * (w[0] * p[0] + w[1] * p[1] + w[2] * p[2])
+    e[0] = alpha * p[0] - 0.5 * (w[1] * p[2] - w[2] * p[1]) + wp * w[0]
+    e[1] = alpha * p[1] - 0.5 * (w[2] * p[0] - w[0] * p[2]) + wp * w[1]
+    e[2] = alpha * p[2] - 0.5 * (w[0] * p[1] - w[1] * p[0]) + wp * w[2]
+    return math.sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2])
 
 
 @_inline
-def _lu_solve(a: FloatArray, b: FloatArray) -> bool:
+def _solve(a: FloatArray, b: FloatArray) -> bool:
     """Solve a x = b in place (x in b), LU with partial pivoting; False if singular."""
     m = b.shape[0]
     for k in range(m):
@@ -282,46 +247,17 @@ def _lu_solve(a: FloatArray, b: FloatArray) -> bool:
             for j in range(m):
                 a[k, j], a[p, j] = a[p, j], a[k, j]
             b[k], b[p] = b[p], b[k]
-        inv = 1.0 / a[k, k]
         for i in range(k + 1, m):
-            f = a[i, k] * inv
-            if f != 0.0:
-                for j in range(k + 1, m):
-                    a[i, j] -= f * a[k, j]
-                b[i] -= f * b[k]
+            f = a[i, k] / a[k, k]
+            for j in range(k + 1, m):
+                a[i, j] -= f * a[k, j]
+            b[i] -= f * b[k]
     for k in range(m - 1, -1, -1):
         s = b[k]
         for j in range(k + 1, m):
             s -= a[k, j] * b[j]
         b[k] = s / a[k, k]
     return True
-
-
-@_inline
-def _cholesky_solve(a: FloatArray, b: FloatArray):
-    """Solve a x = b in place (x in b), a symmetric positive definite (lower used)."""
-    m = b.shape[0]
-    for j in range(m):
-        d = a[j, j]
-        for k in range(j):
-            d -= a[j, k] * a[j, k]
-        d = math.sqrt(d)
-        a[j, j] = d
-        for i in range(j + 1, m):
-            s = a[i, j]
-            for k in range(j):
-                s -= a[i, k] * a[j, k]
-            a[i, j] = s / d
-    for i in range(m):
-        s = b[i]
-        for k in range(i):
-            s -= a[i, k] * b[k]
-        b[i] = s / a[i, i]
-    for i in range(m - 1, -1, -1):
-        s = b[i]
-        for k in range(i + 1, m):
-            s -= a[k, i] * b[k]
-        b[i] = s / a[i, i]
 
 
 @_inline
@@ -332,37 +268,35 @@ def _damped_step(jac, e, pull, use_pull, damping, dq):
     when ``use_pull``); n < 6: :math:`(J^T J + \lambda I)^{-1} J^T e`.
     """
     n = jac.shape[1]
-    if n < 6:
-        normal = np.empty((n, n))
-        for i in range(n):
-            for j in range(i + 1):
-                s = 0.0
+    m = min(n, 6)
+    normal, y = np.empty((m, m)), np.empty(m)
+    for i in range(m):
+        for j in range(m):
+            s = 0.0
+            if n < 6:  # J^T J
                 for r in range(6):
                     s += jac[r, i] * jac[r, j]
-                normal[i, j] = s
-            normal[i, i] += damping
-            s = 0.0
-            for r in range(6):
-                s += jac[r, i] * e[r]
-            dq[i] = s
-        _cholesky_solve(normal, dq)
-        return
-    normal = np.empty((6, 6))
-    y = np.empty(6)
-    for i in range(6):
-        for j in range(i + 1):
-            s = 0.0
-            for k in range(n):
-                s += jac[i, k] * jac[j, k]
+            else:  # J J^T
+                for k in range(n):
+                    s += jac[i, k] * jac[j, k]
             normal[i, j] = s
         normal[i, i] += damping
-        s = e[i]
-        if use_pull:
-            for k in range(n):
-                s += jac[i, k] * pull[k]
+        s = 0.0
+        if n < 6:  # J^T e
+            for r in range(6):
+                s += jac[r, i] * e[r]
+        else:  # e + J z
+            s = e[i]
+            if use_pull:
+                for k in range(n):
+                    s += jac[i, k] * pull[k]
         y[i] = s
-    _cholesky_solve(normal, y)
-    for k in range(n):
+    _solve(normal, y)  # positive definite: never singular
+    if n < 6:
+        for k in range(n):
+            dq[k] = y[k]
+        return
+    for k in range(n):  # J^T y (- z)
         s = 0.0
         for i in range(6):
             s += jac[i, k] * y[i]
@@ -396,17 +330,14 @@ def _first_guess(seeds: FloatArray, target: FloatArray, q: FloatArray):
     score is their dot product with the row-major target matrix), then its q.
     """
     best, best_score = 0, math.inf
-    t = target.ravel()
-    for i in range(seeds.shape[0]):
-        s = seeds[i]
-        score = (
-            s[0] * t[0] + s[1] * t[1] + s[2] * t[2] + s[3] * t[3]
-            + s[4] * t[4] + s[5] * t[5] + s[6] * t[6] + s[7] * t[7]
-            + s[8] * t[8] + s[9] * t[9] + s[10] * t[10] + s[11] * t[11]
-            + s[15]
-        )  # fmt: skip
+    for c in range(seeds.shape[0]):
+        s = seeds[c]
+        score = s[15]
+        for i in range(3):
+            for j in range(4):
+                score += s[4 * i + j] * target[i, j]
         if score < best_score:
-            best, best_score = i, score
+            best, best_score = c, score
     for k in range(q.shape[0]):
         q[k] = seeds[best, 16 + k]
 
@@ -441,7 +372,7 @@ def run(chain, target, q, q_ref, best_q, stats, tol2, max_steps, guess, seeds, c
         _first_guess(seeds, target, q)
     rot, pos = np.empty((n + 1, 3, 3)), np.empty((n + 1, 3))
     jac, jac_free = np.empty((6, n)), np.empty((6, n))
-    e, dq, pull, q_next = np.empty(6), np.empty(n), np.zeros(n), np.empty(n)
+    e, dq, pull, q_next = np.empty(6), np.empty(n), np.empty(n), np.empty(n)
     lu = np.empty((6, 6))
     square, redundant = n == 6, n > 6
     steps = int(stats[STEPS])
@@ -461,7 +392,8 @@ def run(chain, target, q, q_ref, best_q, stats, tol2, max_steps, guess, seeds, c
         if err2 < stats[ERR2]:
             stats[ERR2], stats[POSITION] = err2, position
             stats[ROTATION] = math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5])
-            best_q[:] = q
+            for k in range(n):
+                best_q[k] = q[k]
             if err2 <= tol2:
                 stats[STEPS] = steps
                 return CONVERGED
@@ -478,16 +410,20 @@ def run(chain, target, q, q_ref, best_q, stats, tol2, max_steps, guess, seeds, c
         _jacobian(chain, rot, pos, jac)
         newton = False
         if square:
-            lu[:, :] = jac
-            dq[:] = e
-            if _lu_solve(lu, dq):
+            for i in range(6):
+                for j in range(6):
+                    lu[i, j] = jac[i, j]
+                dq[i] = e[i]
+            if _solve(lu, dq):
                 step2 = 0.0
                 for k in range(n):
                     step2 += dq[k] * dq[k]
                 if step2 <= _MAX_STEP2:
                     newton = True
                 elif step2 < _SINGULAR_STEP2:  # long: shortened
-                    dq *= MAX_STEP / math.sqrt(step2)
+                    shorten = MAX_STEP / math.sqrt(step2)
+                    for k in range(n):
+                        dq[k] *= shorten
                     newton = True
                 # else near-singular J (or NaN): damped step below
         damping = DAMPING_GAIN * err2 + DAMPING_FLOOR
@@ -518,7 +454,8 @@ def run(chain, target, q, q_ref, best_q, stats, tol2, max_steps, guess, seeds, c
                 free = chain[k, 16] <= q_next[k] <= chain[k, 17]
                 for r in range(6):
                     jac_free[r, k] = jac[r, k] if free else 0.0
-            _damped_step(jac_free, e, pull, False, damping, dq)
+            # (use_pull is False here: the pull stops above ACTIVE_SET_ERROR)
+            _damped_step(jac_free, e, pull, use_pull, damping, dq)
             for k in range(n):
                 q_next[k] = q[k] - dq[k]
         for k in range(n):
@@ -565,12 +502,15 @@ def solve_batch(
     state = np.empty(1, dtype=np.uint64)
     for i in range(targets.shape[0]):
         stats = out_stats[i]
-        stats[:] = 0.0
+        for j in range(N_STATS):
+            stats[j] = 0.0
         stats[ERR2] = math.inf
         ref = q_ref[i if q_ref.shape[0] > 1 else 0]
         guess = q_start.shape[0] == 0
         if not guess:
-            q[:] = q_start[i if q_start.shape[0] > 1 else 0]
+            start = q_start[i if q_start.shape[0] > 1 else 0]
+            for k in range(n):
+                q[k] = start[k]
         state[0] = np.uint64(seed) + np.uint64(i) * _GOLDEN
         while True:
             status = run(
@@ -601,7 +541,9 @@ def chain_kinematics(chain, q, jac):
     rot, pos = np.empty((n + 1, 3, 3)), np.empty((n + 1, 3))
     _forward(chain, q, rot, pos)
     _jacobian(chain, rot, pos, jac)
-    pose = np.eye(4)
-    pose[:3, :3] = rot[n]
-    pose[:3, 3] = pos[n]
+    pose = np.empty((4, 4))
+    for i in range(4):
+        for j in range(3):
+            pose[i, j] = rot[n, i, j] if i < 3 else 0.0
+        pose[i, 3] = pos[n, i] if i < 3 else 1.0
     return pose
