@@ -1,7 +1,7 @@
 """Inverse kinematics: closed form for PUMA-type arms, numerical for any arm.
 
 Public entry points (see INTERFACE.md): ``analytic``, ``analytic_batch``,
-``numeric``, plus the damped-least-squares tools.
+``numeric``, ``numeric_batch``, plus the damped-least-squares tools.
 """
 
 from workbench.ik.closed_form import (
@@ -24,6 +24,7 @@ from workbench.ik.damped import (
     qp_step,
 )
 from workbench.ik.numerical import IKResult, numeric
+from workbench.ik.numerical_batch import IKBatchResult, numeric_batch
 
 __all__ = [
     "BRANCHES",
@@ -32,6 +33,7 @@ __all__ = [
     "QP_DAMPING",
     "WRIST_SINGULAR_TOL",
     "DifferentialIKError",
+    "IKBatchResult",
     "IKResult",
     "IKSolution",
     "UnreachableError",
@@ -42,5 +44,6 @@ __all__ = [
     "dls_step",
     "nearest",
     "numeric",
+    "numeric_batch",
     "qp_step",
 ]

@@ -84,7 +84,7 @@ class Chain:
         self.span = np.where(np.isfinite(hi), hi, kernel.UNBOUNDED_SPAN) - self.low
         self._seeds: FloatArray | None = None
         self.no_start = np.empty((0, n))  # "no q0" for the batch kernel
-        self.no_seeds = np.empty((0, 16 + n))  # when a q0 is given
+        self.no_seeds = np.empty((16 + n, 0))  # when a q0 is given
 
     def matches(self, robot: Robot) -> bool:
         """Whether ``robot`` still has this chain's model, limits and tool frame."""
@@ -96,13 +96,13 @@ class Chain:
         )
 
     def to_chain(self, q: FloatArray) -> FloatArray:
-        """Chain coordinates (n,) of a configuration ``q`` (nq,) (a new array)."""
+        """Chain coordinates (..., n) of configurations ``q`` (..., nq); new array."""
         if self.identity:
-            return q.copy()
-        values = q[self.idx_q]
+            return np.array(q)
+        values = q[..., self.idx_q]
         if self.unbounded.any():
-            sin = q[self.idx_q[self.unbounded] + 1]
-            values[self.unbounded] = np.arctan2(sin, values[self.unbounded])
+            sin = q[..., self.idx_q[self.unbounded] + 1]
+            values[..., self.unbounded] = np.arctan2(sin, values[..., self.unbounded])
         return values
 
     def to_configuration(self, values: FloatArray, q_ref: FloatArray) -> FloatArray:
@@ -123,12 +123,12 @@ class Chain:
 
     @property
     def seeds(self) -> FloatArray:
-        """(SEED_COUNT, 16 + n) first-guess candidates (built on first use).
+        """(16 + n, SEED_COUNT) first-guess candidates, one per column (built once).
 
-        Each row: 16 features of the candidate's tool pose, such that their dot
-        product with the row-major target matrix is the squared position gap
-        plus SEED_ROTATION_WEIGHT times the squared Frobenius rotation gap, up
-        to terms that do not depend on the candidate; then its coordinates.
+        Each column: 16 features of the candidate's tool pose, such that their
+        dot product with the row-major target matrix is the squared position
+        gap plus SEED_ROTATION_WEIGHT times the squared Frobenius rotation gap,
+        up to terms that do not depend on the candidate; then its coordinates.
         """
         if self._seeds is None:
             self._seeds = self._build_seeds()
@@ -155,6 +155,7 @@ class Chain:
             features[:3, 3] = -2.0 * position
             features[3, 3] = position.dot(position)
             row[16:] = value
+        seeds = np.ascontiguousarray(seeds.T)
         seeds.setflags(write=False)
         return seeds
 

@@ -97,127 +97,111 @@ _PI, _TAU = math.pi, 2.0 * math.pi
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
-_inline = numba.njit(cache=True, nogil=True, error_model="numpy")
 
 
-@_inline
-def _forward(chain: FloatArray, q: FloatArray, rot: FloatArray, pos: FloatArray):
+@_jit
+def _forward(chain: FloatArray, q: FloatArray, frames: FloatArray):
     """Poses of the joints (rows 0..n-1) and the tool (row n) in the base frame.
 
-    ``rot`` (n + 1, 3, 3) and ``pos`` (n + 1, 3) are filled.
+    ``frames`` (n + 1, 12) is filled: rotation (row-major) then position.
     """
     n = chain.shape[0] - 1
-    a = np.empty((3, 3))
-    e = np.empty((3, 3))
     for k in range(n + 1):
-        c = chain[k]
-        r, p = rot[k], pos[k]
-        if k == 0:
-            for i in range(3):  # the placement itself
-                for j in range(3):
-                    a[i, j] = c[3 * i + j]
-                p[i] = c[9 + i]
-        else:
-            parent, parent_p = rot[k - 1], pos[k - 1]
-            for i in range(3):  # parent pose times the placement
-                for j in range(3):
-                    a[i, j] = (
-                        parent[i, 0] * c[j] + parent[i, 1] * c[3 + j]
-                        + parent[i, 2] * c[6 + j]
-                    )  # fmt: skip
-                p[i] = parent_p[i] + (
-                    parent[i, 0] * c[9] + parent[i, 1] * c[10] + parent[i, 2] * c[11]
-                )
-        if k < n and c[15] == REVOLUTE:
-            # Rodrigues: exp(a^ q) = cos I + sin a^ + (1 - cos) a a^T.
-            s, co = math.sin(q[k]), math.cos(q[k])
+        c, f = chain[k], frames[k]
+        if k == 0:  # the placement itself
+            for i in range(12):
+                f[i] = c[i]
+        else:  # parent pose times the placement
+            g = frames[k - 1]
             for i in range(3):
+                g0, g1, g2 = g[3 * i], g[3 * i + 1], g[3 * i + 2]
                 for j in range(3):
-                    e[i, j] = (1.0 - co) * c[12 + i] * c[12 + j]
-                e[i, i] += co
-            x, y, z = s * c[12], s * c[13], s * c[14]
-            e[0, 1] -= z
-            e[1, 0] += z
-            e[0, 2] += y
-            e[2, 0] -= y
-            e[1, 2] -= x
-            e[2, 1] += x
+                    f[3 * i + j] = g0 * c[j] + g1 * c[3 + j] + g2 * c[6 + j]
+                f[9 + i] = g[9 + i] + g0 * c[9] + g1 * c[10] + g2 * c[11]
+        if k == n:
+            break
+        x, y, z = c[12], c[13], c[14]
+        if c[15] == PRISMATIC:  # translation q a along the joint axis
             for i in range(3):
-                for j in range(3):
-                    r[i, j] = a[i, 0] * e[0, j] + a[i, 1] * e[1, j] + a[i, 2] * e[2, j]
-        else:
-            for i in range(3):
-                for j in range(3):
-                    r[i, j] = a[i, j]
-            if k < n:  # prismatic: translation q a along the joint axis
-                for i in range(3):
-                    p[i] += q[k] * (a[i, 0] * c[12] + a[i, 1] * c[13] + a[i, 2] * c[14])
-
-
-@_inline
-def _jacobian(chain: FloatArray, rot: FloatArray, pos: FloatArray, jac: FloatArray):
-    """LOCAL Jacobian of the tool, (6, n), from the poses of :func:`_forward`."""
-    n = chain.shape[0] - 1
-    f, fp = rot[n], pos[n]
-    w, d = np.empty(3), np.empty(3)
-    for k in range(n):
-        r, c = rot[k], chain[k]
-        for i in range(3):  # joint axis in base axes
-            w[i] = r[i, 0] * c[12] + r[i, 1] * c[13] + r[i, 2] * c[14]
-        if c[15] == REVOLUTE:  # linear: w x (p_f - p_k); angular: w
-            for i in range(3):
-                d[i] = fp[i] - pos[k, i]
-            lx = w[1] * d[2] - w[2] * d[1]
-            ly = w[2] * d[0] - w[0] * d[2]
-            lz = w[0] * d[1] - w[1] * d[0]
-            angular = 1.0
-        else:  # linear: w; angular: 0
-            lx, ly, lz = w[0], w[1], w[2]
-            angular = 0.0
-        for i in range(3):  # into the tool's axes: R_f^T
-            jac[i, k] = f[0, i] * lx + f[1, i] * ly + f[2, i] * lz
-            jac[3 + i, k] = angular * (f[0, i] * w[0] + f[1, i] * w[1] + f[2, i] * w[2])
-
-
-@_inline
-def _error(target: FloatArray, rot: FloatArray, pos: FloatArray, e: FloatArray):
-    r"""``e = log6(T^-1 oMf)`` (6,) of the tool pose (last row); returns |p_err|."""
-    n = rot.shape[0] - 1
-    f = rot[n]
-    r, p, d = np.empty((3, 3)), np.empty(3), np.empty(3)
-    for i in range(3):
-        d[i] = pos[n, i] - target[i, 3]
-    for i in range(3):  # R = R_t^T R_f, p = R_t^T (p_f - p_t)
-        for j in range(3):
-            r[i, j] = (
-                target[0, i] * f[0, j] + target[1, i] * f[1, j] + target[2, i] * f[2, j]
-            )
-        p[i] = target[0, i] * d[0] + target[1, i] * d[1] + target[2, i] * d[2]
-    # log3, robust at 0 and at pi: theta = atan2(|vee| / 2, (tr - 1) / 2).
-    w = e[3:]
-    w[0], w[1], w[2] = r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]
-    co = 0.5 * (r[0, 0] + r[1, 1] + r[2, 2] - 1.0)
-    si = 0.5 * math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
-    theta = math.atan2(si, co)
-    if co > -0.9:  # w = theta / (2 sin theta) vee (Taylor near 0)
-        factor = 0.5 + theta * theta / 12.0 if theta < 1e-4 else 0.5 * theta / si
+                f[9 + i] += q[k] * (f[3 * i] * x + f[3 * i + 1] * y + f[3 * i + 2] * z)
+            continue
+        # Rodrigues: exp(a^ q) = cos I + sin a^ + (1 - cos) a a^T.
+        s, co = math.sin(q[k]), math.cos(q[k])
+        v = 1.0 - co
+        e00, e11, e22 = co + v * x * x, co + v * y * y, co + v * z * z
+        e01, e10 = v * x * y - s * z, v * x * y + s * z
+        e02, e20 = v * x * z + s * y, v * x * z - s * y
+        e12, e21 = v * y * z - s * x, v * y * z + s * x
         for i in range(3):
-            w[i] *= factor
+            a0, a1, a2 = f[3 * i], f[3 * i + 1], f[3 * i + 2]
+            f[3 * i] = a0 * e00 + a1 * e10 + a2 * e20
+            f[3 * i + 1] = a0 * e01 + a1 * e11 + a2 * e21
+            f[3 * i + 2] = a0 * e02 + a1 * e12 + a2 * e22
+
+
+@_jit
+def _jacobian(chain: FloatArray, frames: FloatArray, jac: FloatArray):
+    """LOCAL Jacobian of the tool into ``jac[:, :n]``, from :func:`_forward`."""
+    n = chain.shape[0] - 1
+    f = frames[n]
+    for k in range(n):
+        c, g = chain[k], frames[k]
+        x, y, z = c[12], c[13], c[14]
+        wx = g[0] * x + g[1] * y + g[2] * z  # joint axis in base axes
+        wy = g[3] * x + g[4] * y + g[5] * z
+        wz = g[6] * x + g[7] * y + g[8] * z
+        if c[15] == REVOLUTE:  # linear w x (p_f - p_k), angular w
+            dx, dy, dz = f[9] - g[9], f[10] - g[10], f[11] - g[11]
+            lx, ly, lz = wy * dz - wz * dy, wz * dx - wx * dz, wx * dy - wy * dx
+            turn = 1.0
+        else:  # linear w, angular 0
+            lx, ly, lz = wx, wy, wz
+            turn = 0.0
+        for i in range(3):  # into the tool's axes: R_f^T
+            jac[i, k] = f[i] * lx + f[3 + i] * ly + f[6 + i] * lz
+            jac[3 + i, k] = turn * (f[i] * wx + f[3 + i] * wy + f[6 + i] * wz)
+
+
+@_jit
+def _error(target: FloatArray, frames: FloatArray, e: FloatArray) -> float:
+    r"""``e = log6(T^-1 oMf)`` (6,) of the tool (last row of ``frames``); |p_err|."""
+    f, t = frames[frames.shape[0] - 1], target
+    dx, dy, dz = f[9] - t[0, 3], f[10] - t[1, 3], f[11] - t[2, 3]
+    # R = R_t^T R_f (row-major in e's scratch-free scalars), p = R_t^T (p_f - p_t).
+    r00 = t[0, 0] * f[0] + t[1, 0] * f[3] + t[2, 0] * f[6]
+    r01 = t[0, 0] * f[1] + t[1, 0] * f[4] + t[2, 0] * f[7]
+    r02 = t[0, 0] * f[2] + t[1, 0] * f[5] + t[2, 0] * f[8]
+    r10 = t[0, 1] * f[0] + t[1, 1] * f[3] + t[2, 1] * f[6]
+    r11 = t[0, 1] * f[1] + t[1, 1] * f[4] + t[2, 1] * f[7]
+    r12 = t[0, 1] * f[2] + t[1, 1] * f[5] + t[2, 1] * f[8]
+    r20 = t[0, 2] * f[0] + t[1, 2] * f[3] + t[2, 2] * f[6]
+    r21 = t[0, 2] * f[1] + t[1, 2] * f[4] + t[2, 2] * f[7]
+    r22 = t[0, 2] * f[2] + t[1, 2] * f[5] + t[2, 2] * f[8]
+    px = t[0, 0] * dx + t[1, 0] * dy + t[2, 0] * dz
+    py = t[0, 1] * dx + t[1, 1] * dy + t[2, 1] * dz
+    pz = t[0, 2] * dx + t[1, 2] * dy + t[2, 2] * dz
+    # log3, robust at 0 and at pi: theta = atan2(|vee| / 2, (tr - 1) / 2).
+    vx, vy, vz = r21 - r12, r02 - r20, r10 - r01
+    co = 0.5 * (r00 + r11 + r22 - 1.0)
+    si = 0.5 * math.sqrt(vx * vx + vy * vy + vz * vz)
+    theta = math.atan2(si, co)
+    if co > -0.9:  # w = theta / (2 sin theta) vee, Taylor near 0
+        h = 0.5 + theta * theta / 12.0 if theta < 1e-4 else 0.5 * theta / si
+        wx, wy, wz = h * vx, h * vy, h * vz
     else:  # near pi: the axis from the symmetric part cos I + (1 - cos) a a^T
         v = 1.0 - co
-        m = 0
-        for i in range(1, 3):
-            if r[i, i] > r[m, m]:
-                m = i
-        d[m] = math.sqrt(max(r[m, m] - co, 0.0) / v)
-        for i in range(3):
-            if i != m:
-                d[i] = 0.5 * (r[m, i] + r[i, m]) / (v * d[m])
-        if d[0] * w[0] + d[1] * w[1] + d[2] * w[2] < 0.0:  # vee = 2 sin a
-            theta = -theta
-        for i in range(3):
-            w[i] = theta * d[i]
-        theta = abs(theta)
+        if r00 >= r11 and r00 >= r22:
+            ax = math.sqrt(max(r00 - co, 0.0) / v)
+            ay, az = 0.5 * (r01 + r10) / (v * ax), 0.5 * (r02 + r20) / (v * ax)
+        elif r11 >= r22:
+            ay = math.sqrt(max(r11 - co, 0.0) / v)
+            ax, az = 0.5 * (r01 + r10) / (v * ay), 0.5 * (r12 + r21) / (v * ay)
+        else:
+            az = math.sqrt(max(r22 - co, 0.0) / v)
+            ax, ay = 0.5 * (r02 + r20) / (v * az), 0.5 * (r12 + r21) / (v * az)
+        if ax * vx + ay * vy + az * vz < 0.0:  # vee = 2 sin(theta) a
+            ax, ay, az = -ax, -ay, -az
+        wx, wy, wz = theta * ax, theta * ay, theta * az
     # v = alpha p - w x p / 2 + beta (w . p) w  (the inverse of SE(3)'s V).
     t2 = theta * theta
     if theta < 1e-2:
@@ -225,17 +209,20 @@ def _error(target: FloatArray, rot: FloatArray, pos: FloatArray, e: FloatArray):
     else:
         alpha = 0.5 * theta / math.tan(0.5 * theta)
         beta = (1.0 - alpha) / t2
-    wp = beta * (w[0] * p[0] + w[1] * p[1] + w[2] * p[2])
-    e[0] = alpha * p[0] - 0.5 * (w[1] * p[2] - w[2] * p[1]) + wp * w[0]
-    e[1] = alpha * p[1] - 0.5 * (w[2] * p[0] - w[0] * p[2]) + wp * w[1]
-    e[2] = alpha * p[2] - 0.5 * (w[0] * p[1] - w[1] * p[0]) + wp * w[2]
-    return math.sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2])
+    wp = beta * (wx * px + wy * py + wz * pz)
+    e[0] = alpha * px - 0.5 * (wy * pz - wz * py) + wp * wx
+    e[1] = alpha * py - 0.5 * (wz * px - wx * pz) + wp * wy
+    e[2] = alpha * pz - 0.5 * (wx * py - wy * px) + wp * wz
+    e[3], e[4], e[5] = wx, wy, wz
+    return math.sqrt(px * px + py * py + pz * pz)
 
 
-@_inline
-def _solve(a: FloatArray, b: FloatArray) -> bool:
-    """Solve a x = b in place (x in b), LU with partial pivoting; False if singular."""
-    m = b.shape[0]
+@_jit
+def _solve(a: FloatArray, b: FloatArray, m: int) -> bool:
+    """Solve a x = b (first m rows/columns) in place, x in b; False if singular.
+
+    LU with partial pivoting.
+    """
     for k in range(m):
         p = k
         for i in range(k + 1, m):
@@ -260,16 +247,15 @@ def _solve(a: FloatArray, b: FloatArray) -> bool:
     return True
 
 
-@_inline
-def _damped_step(jac, e, pull, use_pull, damping, dq):
-    r"""Damped least-squares step (to subtract from q) into ``dq`` (n,).
+@_jit
+def _damped_step(jac, n, e, pull, use_pull, damping, normal, y, dq):
+    r"""Damped least-squares step (to subtract from q) into ``dq[:n]``.
 
     n >= 6: :math:`J^T (J J^T + \lambda I)^{-1} (e + J z) - z` (z = ``pull``
     when ``use_pull``); n < 6: :math:`(J^T J + \lambda I)^{-1} J^T e`.
+    ``normal`` (>= 6, >= 6) and ``y`` (>= 6,) are scratch space.
     """
-    n = jac.shape[1]
     m = min(n, 6)
-    normal, y = np.empty((m, m)), np.empty(m)
     for i in range(m):
         for j in range(m):
             s = 0.0
@@ -281,8 +267,8 @@ def _damped_step(jac, e, pull, use_pull, damping, dq):
                     s += jac[i, k] * jac[j, k]
             normal[i, j] = s
         normal[i, i] += damping
-        s = 0.0
         if n < 6:  # J^T e
+            s = 0.0
             for r in range(6):
                 s += jac[r, i] * e[r]
         else:  # e + J z
@@ -291,19 +277,18 @@ def _damped_step(jac, e, pull, use_pull, damping, dq):
                 for k in range(n):
                     s += jac[i, k] * pull[k]
         y[i] = s
-    _solve(normal, y)  # positive definite: never singular
-    if n < 6:
-        for k in range(n):
+    _solve(normal, y, m)  # positive definite: never singular
+    for k in range(n):
+        if n < 6:
             dq[k] = y[k]
-        return
-    for k in range(n):  # J^T y (- z)
+            continue
         s = 0.0
-        for i in range(6):
+        for i in range(6):  # J^T y (- z)
             s += jac[i, k] * y[i]
         dq[k] = s - pull[k] if use_pull else s
 
 
-@_inline
+@_jit
 def _roughly_rigid(pose: FloatArray) -> bool:
     """The fast acceptance test of a target (finite, rigid to RIGIDITY_TOL / 5)."""
     r00, r01, r02 = pose[0, 0], pose[0, 1], pose[0, 2]
@@ -322,73 +307,50 @@ def _roughly_rigid(pose: FloatArray) -> bool:
     return err2 <= FAST_TOL2 and (pose[0, 3] + pose[1, 3] + pose[2, 3]) * 0.0 == 0.0
 
 
-@_inline
+@_jit
 def _first_guess(seeds: FloatArray, target: FloatArray, q: FloatArray):
     """Copy into ``q`` the candidate whose tool pose is nearest ``target``.
 
-    ``seeds`` (count, 16 + n): 16 features of the candidate's tool pose (its
-    score is their dot product with the row-major target matrix), then its q.
+    ``seeds`` (16 + n, count), one column per candidate: 16 features of its
+    tool pose (the score is their dot product with the row-major target
+    matrix), then its coordinates. Candidates run along rows (SIMD-friendly).
     """
-    best, best_score = 0, math.inf
-    for c in range(seeds.shape[0]):
-        s = seeds[c]
-        score = s[15]
-        for i in range(3):
-            for j in range(4):
-                score += s[4 * i + j] * target[i, j]
-        if score < best_score:
-            best, best_score = c, score
+    count = seeds.shape[1]
+    if count == 0:
+        return
+    score = np.empty(count)
+    for c in range(count):
+        score[c] = seeds[15, c]
+    for i in range(3):
+        for j in range(4):
+            t, row = target[i, j], seeds[4 * i + j]
+            for c in range(count):
+                score[c] += t * row[c]
+    best = 0
+    for c in range(1, count):
+        if score[c] < score[best]:
+            best = c
     for k in range(q.shape[0]):
-        q[k] = seeds[best, 16 + k]
+        q[k] = seeds[16 + k, best]
 
 
 @_jit
-def run(chain, target, q, q_ref, best_q, stats, tol2, max_steps, guess, seeds, check):
-    """One run of damped Newton steps from ``q``, until it converges or stalls.
-
-    Args:
-        chain: (n + 1, CHAIN_WIDTH) chain (module docstring).
-        target: (4, 4) homogeneous target of the tool in the base frame [m].
-        q: (n,) start, chain coordinates; overwritten (the last iterate).
-        q_ref: (n,) configuration redundant arms are pulled towards.
-        best_q: (n,) best configuration so far, updated in place.
-        stats: (N_STATS,) running statistics (ERR2 inf and STEPS 0 at first),
-            updated in place.
-        tol2: Squared convergence threshold on |e|.
-        max_steps: Step budget over all runs.
-        guess: Start from the candidate of ``seeds`` nearest the target
-            instead of ``q``.
-        seeds: (count, 16 + n) candidates (:func:`_first_guess`).
-        check: Apply the fast rigidity test to ``target`` first.
-
-    Returns:
-        CONVERGED, STALLED (a restart is due), EXHAUSTED (no steps left) or
-        NOT_RIGID (``target`` failed the fast rigidity test; nothing done).
-    """
-    if check and not _roughly_rigid(target):
-        return NOT_RIGID
+def _iterate(chain, target, q, q_ref, best_q, stats, tol2, max_steps, frames, work):
+    """The steps of one run (see :func:`run`); ``frames``, ``work`` scratch."""
     n = q.shape[0]
-    if guess:
-        _first_guess(seeds, target, q)
-    rot, pos = np.empty((n + 1, 3, 3)), np.empty((n + 1, 3))
-    jac, jac_free = np.empty((6, n)), np.empty((6, n))
-    e, dq, pull, q_next = np.empty(6), np.empty(n), np.empty(n), np.empty(n)
-    lu = np.empty((6, 6))
+    m = max(n, 6)
+    jac, jac_free, normal = work[0:6], work[6:12], work[12:18]
+    e, dq, pull, q_next, y = work[18], work[19], work[20], work[21], work[22]
     square, redundant = n == 6, n > 6
     steps = int(stats[STEPS])
     run_start = stall_at = steps
     stall_level = math.inf
     while True:
-        _forward(chain, q, rot, pos)
-        position = _error(target, rot, pos, e)
-        err2 = (
-            e[0] * e[0]
-            + e[1] * e[1]
-            + e[2] * e[2]
-            + e[3] * e[3]
-            + e[4] * e[4]
-            + e[5] * e[5]
-        )
+        _forward(chain, q, frames)
+        position = _error(target, frames, e)
+        err2 = 0.0
+        for i in range(6):
+            err2 += e[i] * e[i]
         if err2 < stats[ERR2]:
             stats[ERR2], stats[POSITION] = err2, position
             stats[ROTATION] = math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5])
@@ -407,36 +369,35 @@ def run(chain, target, q, q_ref, best_q, stats, tol2, max_steps, guess, seeds, c
             return STALLED
         steps += 1
 
-        _jacobian(chain, rot, pos, jac)
+        _jacobian(chain, frames, jac)
         newton = False
-        if square:
+        if square:  # Newton step J^-1 e
             for i in range(6):
                 for j in range(6):
-                    lu[i, j] = jac[i, j]
+                    normal[i, j] = jac[i, j]
                 dq[i] = e[i]
-            if _solve(lu, dq):
+            if _solve(normal, dq, 6):
                 step2 = 0.0
-                for k in range(n):
+                for k in range(6):
                     step2 += dq[k] * dq[k]
                 if step2 <= _MAX_STEP2:
                     newton = True
                 elif step2 < _SINGULAR_STEP2:  # long: shortened
                     shorten = MAX_STEP / math.sqrt(step2)
-                    for k in range(n):
+                    for k in range(6):
                         dq[k] *= shorten
                     newton = True
-                # else near-singular J (or NaN): damped step below
+                # else near-singular J (or NaN): the damped step
         damping = DAMPING_GAIN * err2 + DAMPING_FLOOR
-        use_pull = False
+        use_pull = redundant and err2 > _NULL_OFF_ERROR2
         if not newton:
-            use_pull = redundant and err2 > _NULL_OFF_ERROR2
             if use_pull:
                 for k in range(n):
                     d = q_ref[k] - q[k]
                     if chain[k, 18] == WRAP_UNBOUNDED:  # shortest way round
                         d -= _TAU * math.floor(d / _TAU + 0.5)
                     pull[k] = NULL_GAIN * d
-            _damped_step(jac, e, pull, use_pull, damping, dq)
+            _damped_step(jac, n, e, pull, use_pull, damping, normal, y, dq)
         clipped = False
         for k in range(n):
             x = q[k] - dq[k]
@@ -450,19 +411,54 @@ def run(chain, target, q, q_ref, best_q, stats, tol2, max_steps, guess, seeds, c
             clipped |= x < lo or x > hi
         if clipped and redundant and err2 < _ACTIVE_SET_ERROR2:
             # Freeze the joints pushed out: the others take over their motion.
+            # (No pull here: it stops above ACTIVE_SET_ERROR.)
             for k in range(n):
                 free = chain[k, 16] <= q_next[k] <= chain[k, 17]
                 for r in range(6):
                     jac_free[r, k] = jac[r, k] if free else 0.0
-            # (use_pull is False here: the pull stops above ACTIVE_SET_ERROR)
-            _damped_step(jac_free, e, pull, use_pull, damping, dq)
+            _damped_step(jac_free, n, e, pull, False, damping, normal, y, dq)
             for k in range(n):
                 q_next[k] = q[k] - dq[k]
         for k in range(n):
             q[k] = min(max(q_next[k], chain[k, 16]), chain[k, 17])
+    return m  # unreachable
 
 
-@_inline
+@_jit
+def run(chain, target, q, q_ref, best_q, stats, tol2, max_steps, guess, seeds, check):
+    """One run of damped Newton steps from ``q``, until it converges or stalls.
+
+    Args:
+        chain: (n + 1, CHAIN_WIDTH) chain (module docstring).
+        target: (4, 4) homogeneous target of the tool in the base frame [m].
+        q: (n,) start, chain coordinates; overwritten (the last iterate).
+        q_ref: (n,) configuration redundant arms are pulled towards.
+        best_q: (n,) best configuration so far, updated in place.
+        stats: (N_STATS,) running statistics (ERR2 inf and STEPS 0 at first),
+            updated in place.
+        tol2: Squared convergence threshold on |e|.
+        max_steps: Step budget over all runs.
+        guess: Start from the candidate of ``seeds`` nearest the target
+            instead of ``q``.
+        seeds: (16 + n, count) candidates (:func:`_first_guess`).
+        check: Apply the fast rigidity test to ``target`` first.
+
+    Returns:
+        CONVERGED, STALLED (a restart is due), EXHAUSTED (no steps left) or
+        NOT_RIGID (``target`` failed the fast rigidity test; nothing done).
+    """
+    if check and not _roughly_rigid(target):
+        return NOT_RIGID
+    n = q.shape[0]
+    if guess:
+        _first_guess(seeds, target, q)
+    frames, work = np.empty((n + 1, 12)), np.empty((23, max(n, 6)))
+    return _iterate(
+        chain, target, q, q_ref, best_q, stats, tol2, max_steps, frames, work
+    )
+
+
+@_jit
 def _splitmix(state: np.ndarray) -> float:
     """Next uniform draw in [0, 1) of the SplitMix64 generator ``state`` (1,) uint64."""
     state[0] += _GOLDEN
@@ -484,7 +480,7 @@ def solve_batch(
         targets: (N, 4, 4) targets, already checked finite and rigid.
         q_ref: (1 or N, n) pull references (one for all, or one per target).
         q_start: (0, 1 or N, n) starts; none: the nearest candidate of ``seeds``.
-        seeds: (count, 16 + n) candidates.
+        seeds: (16 + n, count) candidates.
         tol2: Squared convergence threshold on |e|.
         max_steps: Step budget per target.
         seed: Seed of the restart draws; target i draws from SplitMix64 seeded
@@ -493,42 +489,32 @@ def solve_batch(
         out_stats: (N, N_STATS) statistics per target.
     """
     n = chain.shape[0] - 1
-    low, span = np.empty(n), np.empty(n)
+    low, span, q = np.empty(n), np.empty(n), np.empty(n)
     for k in range(n):
         lo, hi = chain[k, 16], chain[k, 17]
         low[k] = lo if math.isfinite(lo) else -UNBOUNDED_SPAN
         span[k] = (hi if math.isfinite(hi) else UNBOUNDED_SPAN) - low[k]
-    q = np.empty(n)
+    frames, work = np.empty((n + 1, 12)), np.empty((23, max(n, 6)))
     state = np.empty(1, dtype=np.uint64)
     for i in range(targets.shape[0]):
-        stats = out_stats[i]
+        stats, target = out_stats[i], targets[i]
         for j in range(N_STATS):
             stats[j] = 0.0
         stats[ERR2] = math.inf
         ref = q_ref[i if q_ref.shape[0] > 1 else 0]
-        guess = q_start.shape[0] == 0
-        if not guess:
+        if q_start.shape[0] == 0:
+            _first_guess(seeds, target, q)
+        else:
             start = q_start[i if q_start.shape[0] > 1 else 0]
             for k in range(n):
                 q[k] = start[k]
         state[0] = np.uint64(seed) + np.uint64(i) * _GOLDEN
-        while True:
-            status = run(
-                chain,
-                targets[i],
-                q,
-                ref,
-                out_q[i],
-                stats,
-                tol2,
-                max_steps,
-                guess,
-                seeds,
-                False,
+        while (
+            _iterate(
+                chain, target, q, ref, out_q[i], stats, tol2, max_steps, frames, work
             )
-            if status != STALLED:
-                break
-            guess = False
+            == STALLED
+        ):
             for k in range(n):
                 q[k] = low[k] + span[k] * _splitmix(state)
             stats[RESTARTS] += 1.0
@@ -538,12 +524,13 @@ def solve_batch(
 def chain_kinematics(chain, q, jac):
     """Tool pose (4, 4) in the base frame at ``q`` (n,); LOCAL Jacobian into ``jac``."""
     n = chain.shape[0] - 1
-    rot, pos = np.empty((n + 1, 3, 3)), np.empty((n + 1, 3))
-    _forward(chain, q, rot, pos)
-    _jacobian(chain, rot, pos, jac)
+    frames = np.empty((n + 1, 12))
+    _forward(chain, q, frames)
+    _jacobian(chain, frames, jac)
     pose = np.empty((4, 4))
+    f = frames[n]
     for i in range(4):
         for j in range(3):
-            pose[i, j] = rot[n, i, j] if i < 3 else 0.0
-        pose[i, 3] = pos[n, i] if i < 3 else 1.0
+            pose[i, j] = f[3 * i + j] if i < 3 else 0.0
+        pose[i, 3] = f[9 + i] if i < 3 else 1.0
     return pose
