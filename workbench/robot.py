@@ -87,7 +87,7 @@ class Robot:
         self.dh_table = dh_table
         self.model = model
         self.data = model.createData()
-        self._finite_test = np.full(model.nq, 1e-300)  # see _fast_configuration
+        self._finite_test = np.full(model.nq, 1e-300)  # see check_configuration
         self.urdf_path = urdf_path
         self._package_dirs = package_dirs
         self.tool_frame = tool_frame
@@ -180,10 +180,25 @@ class Robot:
     def check_configuration(self, q: npt.ArrayLike) -> FloatArray:
         """Validate ``q``: shape (nq,), finite. Returns it as float64.
 
+        A float64 array is returned as is (not copied), as ``np.asarray``
+        would. Its test is cheap and exact: ``q . w`` with every
+        ``w_i = 1e-300`` is finite iff every entry is (NaN and inf propagate;
+        finite terms are below 2e8, so the sum cannot overflow, and no
+        floating-point warning is raised either way).
+
         Raises:
             DimensionError: If the joint count is wrong.
             NonFiniteError: If an entry is NaN or infinite.
         """
+        weights = self._finite_test
+        if (
+            q.__class__ is np.ndarray
+            and q.dtype is _FLOAT64
+            and q.shape == weights.shape
+            and math.isfinite(q.dot(weights))
+            and weights.shape[0] == self.model.nq
+        ):
+            return q
         return as_vector(q, self.nq, "q")
 
     def get_frame_id(self, frame: str | None) -> int:
@@ -201,25 +216,6 @@ class Robot:
         bodies = [i for i in matches if self.model.frames[i].type == pin.FrameType.BODY]
         return (bodies or matches)[-1]
 
-    def _fast_configuration(self, q: npt.ArrayLike) -> FloatArray:
-        """``q`` itself if it is a finite float64 array of shape (nq,), else checked.
-
-        The same exact test as :meth:`check_configuration`, cheaper for the
-        usual input: ``q . w`` with every ``w_i = 1e-300`` is finite iff every
-        entry is (NaN and inf propagate; finite terms are below 2e8 and cannot
-        overflow; no floating-point warning either way).
-        """
-        weights = self._finite_test
-        if (
-            q.__class__ is np.ndarray
-            and q.dtype is _FLOAT64
-            and q.shape == weights.shape
-            and math.isfinite(q.dot(weights))
-            and weights.shape[0] == self.model.nq
-        ):
-            return q
-        return self.check_configuration(q)
-
     def fk(self, q: npt.ArrayLike, frame: str | None = None) -> pin.SE3:
         """Forward kinematics: pose of a frame in the base frame.
 
@@ -235,7 +231,7 @@ class Robot:
             NonFiniteError: If an entry of ``q`` is NaN or infinite.
             FrameNotFoundError: If the model has no such frame.
         """
-        q = self._fast_configuration(q)
+        q = self.check_configuration(q)
         frame_id = self.tool_frame_id if frame is None else self.get_frame_id(frame)
         model, data = self.model, self.data
         _forward_kinematics(model, data, q)
@@ -244,7 +240,7 @@ class Robot:
     def _frame_jacobian(
         self, q: npt.ArrayLike, frame: str | None, reference: pin.ReferenceFrame
     ) -> FloatArray:
-        q = self._fast_configuration(q)
+        q = self.check_configuration(q)
         frame_id = self.tool_frame_id if frame is None else self.get_frame_id(frame)
         return _compute_frame_jacobian(self.model, self.data, q, frame_id, reference)
 
