@@ -31,7 +31,7 @@ from workbench.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
 
-SEED_COUNT = 1024
+SEED_COUNT = 512
 """Candidate first guesses (mid-range included) when no ``q0`` is given."""
 
 SEED_SPREAD = 0.65
@@ -84,7 +84,10 @@ class Chain:
         self.span = np.where(np.isfinite(hi), hi, kernel.UNBOUNDED_SPAN) - self.low
         self._seeds: FloatArray | None = None
         self.no_start = np.empty((0, n))  # "no q0" for the batch kernel
-        self.no_seeds = np.empty((16 + n, 0))  # when a q0 is given
+        # No candidates (when a q0 is given), read-only like the real ones.
+        self.no_seeds = (np.empty((16, 0), np.float32), np.empty((0, n)))
+        for array in self.no_seeds:
+            array.setflags(write=False)
 
     def matches(self, robot: Robot) -> bool:
         """Whether ``robot`` still has this chain's model, limits and tool frame."""
@@ -122,42 +125,44 @@ class Chain:
         return q
 
     @property
-    def seeds(self) -> FloatArray:
-        """(16 + n, SEED_COUNT) first-guess candidates, one per column (built once).
+    def seeds(self) -> tuple[npt.NDArray[np.float32], FloatArray]:
+        """First-guess candidates (built on first use), read-only.
 
-        Each column: 16 features of the candidate's tool pose, such that their
-        dot product with the row-major target matrix is the squared position
-        gap plus SEED_ROTATION_WEIGHT times the squared Frobenius rotation gap,
-        up to terms that do not depend on the candidate; then its coordinates.
+        Returns:
+            ``features`` (16, SEED_COUNT) float32: per candidate (column), 16
+            numbers whose dot product with the row-major target matrix is the
+            squared position gap plus SEED_ROTATION_WEIGHT times the squared
+            Frobenius rotation gap, up to terms that do not depend on the
+            candidate; and ``starts`` (SEED_COUNT, n), their coordinates.
         """
         if self._seeds is None:
             self._seeds = self._build_seeds()
         return self._seeds
 
-    def _build_seeds(self) -> FloatArray:
+    def _build_seeds(self) -> tuple[npt.NDArray[np.float32], FloatArray]:
         half = np.minimum(0.5 * self.span, kernel.UNBOUNDED_SPAN)
         draws = np.random.default_rng(SEED_RNG).uniform(
             -1.0, 1.0, (SEED_COUNT - 1, self.n)
         )
         mid = self.to_chain(self.mid)
-        values = np.vstack((mid, mid + SEED_SPREAD * half * draws))
-        np.clip(values, self.packed[: self.n, 16], self.packed[: self.n, 17], values)
-        seeds = np.zeros((SEED_COUNT, 16 + self.n))
+        starts = np.vstack((mid, mid + SEED_SPREAD * half * draws))
+        np.clip(starts, self.packed[: self.n, 16], self.packed[: self.n, 17], starts)
+        features = np.zeros((SEED_COUNT, 4, 4))
         # Pinocchio's FK (not the compiled chain's): no compilation for this.
         model, data = self.model, self.model.createData()
-        configurations = self.to_configuration(values, self.mid)
-        for row, value, q in zip(seeds, values, configurations, strict=True):
+        for row, q in zip(
+            features, self.to_configuration(starts, self.mid), strict=True
+        ):
             pin.forwardKinematics(model, data, q)
             pose = pin.updateFramePlacement(model, data, self.frame_id)
             position = pose.translation
-            features = row[:16].reshape(4, 4)
-            features[:3, :3] = (-2.0 * SEED_ROTATION_WEIGHT) * pose.rotation
-            features[:3, 3] = -2.0 * position
-            features[3, 3] = position.dot(position)
-            row[16:] = value
-        seeds = np.ascontiguousarray(seeds.T)
-        seeds.setflags(write=False)
-        return seeds
+            row[:3, :3] = (-2.0 * SEED_ROTATION_WEIGHT) * pose.rotation
+            row[:3, 3] = -2.0 * position
+            row[3, 3] = position.dot(position)
+        features = np.ascontiguousarray(features.reshape(SEED_COUNT, 16).T, np.float32)
+        features.setflags(write=False)
+        starts.setflags(write=False)
+        return features, starts
 
 
 def _pack_placement(row: FloatArray, placement: pin.SE3) -> None:
@@ -188,6 +193,8 @@ def _pack_joint(
     revolute = angular > 0.0
     row[12:15] = motion[3:] / angular if revolute else motion[:3] / linear
     row[15] = kernel.REVOLUTE if revolute else kernel.PRISMATIC
+    aligned = np.flatnonzero(np.abs(row[12:15]) == 1.0)
+    row[19] = aligned[0] if revolute and aligned.size == 1 else -1
     if joint.nq == 2:  # continuous: (cos, sin)
         row[16], row[17], row[18] = -math.inf, math.inf, kernel.WRAP_UNBOUNDED
         return

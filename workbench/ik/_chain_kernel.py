@@ -19,7 +19,10 @@ joint on the path from the base to the tool frame:
 * ``[16]``, ``[17]`` lower and upper limits [rad or m] (inf when unbounded);
 * ``[18]`` ``WRAP_NONE``, ``WRAP_FULL_TURN`` (a bounded revolute joint whose
   range spans a full turn: it comes back in at the other end) or
-  ``WRAP_UNBOUNDED`` (a continuous joint: never clipped).
+  ``WRAP_UNBOUNDED`` (a continuous joint: never clipped);
+* ``[19]`` for a revolute joint about a coordinate axis (x, y or z, either
+  sign: most URDF joints) its index 0, 1 or 2, whose cheaper rotation the
+  forward kinematics then uses; else -1.
 
 Row ``n`` holds the tool frame placement in the last joint's frame in
 ``[0:12]``. Chain coordinates are one value per joint (an angle for a
@@ -41,7 +44,7 @@ import numpy.typing as npt
 
 FloatArray = npt.NDArray[np.float64]
 
-CHAIN_WIDTH = 19
+CHAIN_WIDTH = 20
 REVOLUTE, PRISMATIC = 0.0, 1.0
 WRAP_NONE, WRAP_FULL_TURN, WRAP_UNBOUNDED = 0.0, 1.0, 2.0
 
@@ -125,8 +128,17 @@ def _forward(chain: FloatArray, q: FloatArray, frames: FloatArray):
             for i in range(3):
                 f[9 + i] += q[k] * (f[3 * i] * x + f[3 * i + 1] * y + f[3 * i + 2] * z)
             continue
-        # Rodrigues: exp(a^ q) = cos I + sin a^ + (1 - cos) a a^T.
         s, co = math.sin(q[k]), math.cos(q[k])
+        m = int(c[19])
+        if m >= 0:  # about coordinate axis m: a plane rotation of columns u, v
+            u, v = (m + 1) % 3, (m + 2) % 3
+            s *= c[12 + m]  # the axis sign
+            for i in range(3):
+                au, av = f[3 * i + u], f[3 * i + v]
+                f[3 * i + u] = au * co + av * s
+                f[3 * i + v] = av * co - au * s
+            continue
+        # Rodrigues: exp(a^ q) = cos I + sin a^ + (1 - cos) a a^T.
         v = 1.0 - co
         e00, e11, e22 = co + v * x * x, co + v * y * y, co + v * z * z
         e01, e10 = v * x * y - s * z, v * x * y + s * z
@@ -308,30 +320,32 @@ def _roughly_rigid(pose: FloatArray) -> bool:
 
 
 @_jit
-def _first_guess(seeds: FloatArray, target: FloatArray, q: FloatArray):
-    """Copy into ``q`` the candidate whose tool pose is nearest ``target``.
+def _first_guess(features: np.ndarray, starts: FloatArray, target: FloatArray, q):
+    """Copy into ``q`` the candidate start whose tool pose is nearest ``target``.
 
-    ``seeds`` (16 + n, count), one column per candidate: 16 features of its
-    tool pose (the score is their dot product with the row-major target
-    matrix), then its coordinates. Candidates run along rows (SIMD-friendly).
+    ``features`` (16, count) float32: per candidate (column), 16 numbers whose
+    dot product with the row-major target matrix is its score (the smallest
+    wins); ``starts`` (count, n): the candidates' coordinates. Candidates run
+    along rows, and in single precision, so that the scoring is SIMD code.
     """
-    count = seeds.shape[1]
+    count = features.shape[1]
     if count == 0:
         return
-    score = np.empty(count)
+    score = np.empty(count, dtype=np.float32)
+    row = features[15]
     for c in range(count):
-        score[c] = seeds[15, c]
+        score[c] = row[c]
     for i in range(3):
         for j in range(4):
-            t, row = target[i, j], seeds[4 * i + j]
+            t, row = np.float32(target[i, j]), features[4 * i + j]
             for c in range(count):
                 score[c] += t * row[c]
-    best = 0
+    best, low = 0, score[0]
     for c in range(1, count):
-        if score[c] < score[best]:
-            best = c
+        if score[c] < low:
+            best, low = c, score[c]
     for k in range(q.shape[0]):
-        q[k] = seeds[16 + k, best]
+        q[k] = starts[best, k]
 
 
 @_jit
@@ -425,7 +439,10 @@ def _iterate(chain, target, q, q_ref, best_q, stats, tol2, max_steps, frames, wo
 
 
 @_jit
-def run(chain, target, q, q_ref, best_q, stats, tol2, max_steps, guess, seeds, check):
+def run(
+    chain, target, q, q_ref, best_q, stats, tol2, max_steps, guess, features, starts,
+    check,
+):  # fmt: skip
     """One run of damped Newton steps from ``q``, until it converges or stalls.
 
     Args:
@@ -438,9 +455,10 @@ def run(chain, target, q, q_ref, best_q, stats, tol2, max_steps, guess, seeds, c
             updated in place.
         tol2: Squared convergence threshold on |e|.
         max_steps: Step budget over all runs.
-        guess: Start from the candidate of ``seeds`` nearest the target
+        guess: Start from the candidate nearest the target
             instead of ``q``.
-        seeds: (16 + n, count) candidates (:func:`_first_guess`).
+        features: (16, count) float32 candidate features (:func:`_first_guess`).
+        starts: (count, n) candidate coordinates.
         check: Apply the fast rigidity test to ``target`` first.
 
     Returns:
@@ -451,7 +469,7 @@ def run(chain, target, q, q_ref, best_q, stats, tol2, max_steps, guess, seeds, c
         return NOT_RIGID
     n = q.shape[0]
     if guess:
-        _first_guess(seeds, target, q)
+        _first_guess(features, starts, target, q)
     frames, work = np.empty((n + 1, 12)), np.empty((23, max(n, 6)))
     return _iterate(
         chain, target, q, q_ref, best_q, stats, tol2, max_steps, frames, work
@@ -471,16 +489,18 @@ def _splitmix(state: np.ndarray) -> float:
 
 @_jit
 def solve_batch(
-    chain, targets, q_ref, q_start, seeds, tol2, max_steps, seed, out_q, out_stats
-):
+    chain, targets, q_ref, q_start, features, starts, tol2, max_steps, seed, out_q,
+    out_stats,
+):  # fmt: skip
     """Solve every target of ``targets`` (N, 4, 4), restarts drawn in compiled code.
 
     Args:
         chain: (n + 1, CHAIN_WIDTH) chain.
         targets: (N, 4, 4) targets, already checked finite and rigid.
         q_ref: (1 or N, n) pull references (one for all, or one per target).
-        q_start: (0, 1 or N, n) starts; none: the nearest candidate of ``seeds``.
-        seeds: (16 + n, count) candidates.
+        q_start: (0, 1 or N, n) starts; none: the nearest candidate.
+        features: (16, count) float32 candidate features (:func:`_first_guess`).
+        starts: (count, n) candidate coordinates.
         tol2: Squared convergence threshold on |e|.
         max_steps: Step budget per target.
         seed: Seed of the restart draws; target i draws from SplitMix64 seeded
@@ -503,7 +523,7 @@ def solve_batch(
         stats[ERR2] = math.inf
         ref = q_ref[i if q_ref.shape[0] > 1 else 0]
         if q_start.shape[0] == 0:
-            _first_guess(seeds, target, q)
+            _first_guess(features, starts, target, q)
         else:
             start = q_start[i if q_start.shape[0] > 1 else 0]
             for k in range(n):

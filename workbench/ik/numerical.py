@@ -141,12 +141,12 @@ def numeric(
     if q0 is None:
         q_ref, q_base = chain.mid_values, chain.mid
         q = np.empty(chain.n)
-        seeds, guess = chain.seeds, True
+        (features, starts), guess = chain.seeds, True
     else:
         q_base = reference_configuration(robot, chain, q0)
         q_ref = chain.to_chain(q_base)
         q = q_ref.copy()
-        seeds, guess = chain.no_seeds, False
+        (features, starts), guess = chain.no_seeds, False
     deadline = time.perf_counter() + time_budget
     tol2 = tol * tol
     best_q = np.empty(chain.n)
@@ -162,7 +162,8 @@ def numeric(
         tol2,
         max_iterations,
         guess,
-        seeds,
+        features,
+        starts,
         True,
     )
     if status == kernel.NOT_RIGID:
@@ -170,7 +171,7 @@ def numeric(
         matrix = np.ascontiguousarray(as_se3(target).homogeneous)
         status = run(
             packed, matrix, q, q_ref, best_q, stats, tol2, max_iterations, guess,
-            seeds, False,
+            features, starts, False,
         )  # fmt: skip
     restarts = 0
     generator = None
@@ -183,7 +184,7 @@ def numeric(
         restarts += 1
         status = run(
             packed, matrix, q, q_ref, best_q, stats, tol2, max_iterations, False,
-            seeds, False,
+            features, starts, False,
         )  # fmt: skip
     if not chain.identity:
         best_q = chain.to_configuration(best_q, q_base)

@@ -114,7 +114,7 @@ def numeric_batch(
         poses,
         np.ascontiguousarray(q_ref),
         np.ascontiguousarray(q_start),
-        seeds,
+        *seeds,
         float(tol) ** 2,
         int(max_iterations),
         seed % 2**64,
