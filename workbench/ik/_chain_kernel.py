@@ -5,8 +5,13 @@ machine on first use, then loaded from the cache). The module is kept whole,
 although longer than the usual ~300 lines: Numba's cache of a function is not
 invalidated when a function it calls changes in *another* file, so the
 kernels that call each other live in one file. Only :func:`run`,
-:func:`solve_batch` and :func:`chain_kinematics` are entry points; the rest
-is inlined into them.
+:func:`solve_batch` and :func:`chain_kinematics` are entry points.
+
+Compile time matters (the first ``numeric`` call with an empty cache): no
+array slicing assignments or other library overloads (each compiles as a
+function of its own), no literal arguments (each literal value compiles a
+specialisation), and a shallow call tree (Numba re-optimises the code of every
+callee in each caller).
 
 The chain (built by ``workbench.ik._chain`` from the Pinocchio model) is one
 float64 array of shape (n + 1, CHAIN_WIDTH). Row ``k < n`` describes the k-th
@@ -83,8 +88,9 @@ MAX_STEP = 1.5
 SINGULAR_STEP = 10.0
 """A Newton step longer than this [rad] means a (near-)singular Jacobian."""
 
-ACTIVE_SET_ERROR = 0.3
-"""Redundant arms re-solve a step that crosses a limit while |e| < this."""
+ACTIVE_SET_ERROR = NULL_OFF_ERROR
+"""Redundant arms re-solve a step that crosses a limit while |e| < this (the
+null-space pull is off then)."""
 
 UNBOUNDED_SPAN = math.pi
 """Restarts draw unbounded coordinates within +-this [rad]."""
@@ -349,10 +355,39 @@ def _first_guess(features: np.ndarray, starts: FloatArray, target: FloatArray, q
 
 
 @_jit
-def _iterate(chain, target, q, q_ref, best_q, stats, tol2, max_steps, frames, work):
-    """The steps of one run (see :func:`run`); ``frames``, ``work`` scratch."""
+def run(
+    chain, target, q, q_ref, best_q, stats, tol2, max_steps, guess, features, starts,
+    check,
+):  # fmt: skip
+    """One run of damped Newton steps from ``q``, until it converges or stalls.
+
+    Args:
+        chain: (n + 1, CHAIN_WIDTH) chain (module docstring).
+        target: (4, 4) homogeneous target of the tool in the base frame [m].
+        q: (n,) start, chain coordinates; overwritten (the last iterate).
+        q_ref: (n,) configuration redundant arms are pulled towards.
+        best_q: (n,) best configuration so far, updated in place.
+        stats: (N_STATS,) running statistics (ERR2 inf and STEPS 0 at first),
+            updated in place.
+        tol2: Squared convergence threshold on |e|.
+        max_steps: Step budget over all runs.
+        guess: Start from the candidate nearest the target
+            instead of ``q``.
+        features: (16, count) float32 candidate features (:func:`_first_guess`).
+        starts: (count, n) candidate coordinates.
+        check: Apply the fast rigidity test to ``target`` first.
+
+    Returns:
+        CONVERGED, STALLED (a restart is due), EXHAUSTED (no steps left) or
+        NOT_RIGID (``target`` failed the fast rigidity test; nothing done).
+    """
+    if check and not _roughly_rigid(target):
+        return NOT_RIGID
     n = q.shape[0]
-    m = max(n, 6)
+    if guess:
+        _first_guess(features, starts, target, q)
+    # Scratch space: frames of the joints and tool, matrices and vectors.
+    frames, work = np.empty((n + 1, 12)), np.empty((23, max(n, 6)))
     jac, jac_free, normal = work[0:6], work[6:12], work[12:18]
     e, dq, pull, q_next, y = work[18], work[19], work[20], work[21], work[22]
     square, redundant = n == 6, n > 6
@@ -390,7 +425,7 @@ def _iterate(chain, target, q, q_ref, best_q, stats, tol2, max_steps, frames, wo
                 for j in range(6):
                     normal[i, j] = jac[i, j]
                 dq[i] = e[i]
-            if _solve(normal, dq, 6):
+            if _solve(normal, dq, n):  # n == 6
                 step2 = 0.0
                 for k in range(6):
                     step2 += dq[k] * dq[k]
@@ -430,50 +465,13 @@ def _iterate(chain, target, q, q_ref, best_q, stats, tol2, max_steps, frames, wo
                 free = chain[k, 16] <= q_next[k] <= chain[k, 17]
                 for r in range(6):
                     jac_free[r, k] = jac[r, k] if free else 0.0
-            _damped_step(jac_free, n, e, pull, False, damping, normal, y, dq)
+            # use_pull is False here (err2 < ACTIVE_SET_ERROR^2 = NULL_OFF_ERROR^2);
+            # passed as the variable: a literal False would compile a copy.
+            _damped_step(jac_free, n, e, pull, use_pull, damping, normal, y, dq)
             for k in range(n):
                 q_next[k] = q[k] - dq[k]
         for k in range(n):
             q[k] = min(max(q_next[k], chain[k, 16]), chain[k, 17])
-    return m  # unreachable
-
-
-@_jit
-def run(
-    chain, target, q, q_ref, best_q, stats, tol2, max_steps, guess, features, starts,
-    check,
-):  # fmt: skip
-    """One run of damped Newton steps from ``q``, until it converges or stalls.
-
-    Args:
-        chain: (n + 1, CHAIN_WIDTH) chain (module docstring).
-        target: (4, 4) homogeneous target of the tool in the base frame [m].
-        q: (n,) start, chain coordinates; overwritten (the last iterate).
-        q_ref: (n,) configuration redundant arms are pulled towards.
-        best_q: (n,) best configuration so far, updated in place.
-        stats: (N_STATS,) running statistics (ERR2 inf and STEPS 0 at first),
-            updated in place.
-        tol2: Squared convergence threshold on |e|.
-        max_steps: Step budget over all runs.
-        guess: Start from the candidate nearest the target
-            instead of ``q``.
-        features: (16, count) float32 candidate features (:func:`_first_guess`).
-        starts: (count, n) candidate coordinates.
-        check: Apply the fast rigidity test to ``target`` first.
-
-    Returns:
-        CONVERGED, STALLED (a restart is due), EXHAUSTED (no steps left) or
-        NOT_RIGID (``target`` failed the fast rigidity test; nothing done).
-    """
-    if check and not _roughly_rigid(target):
-        return NOT_RIGID
-    n = q.shape[0]
-    if guess:
-        _first_guess(features, starts, target, q)
-    frames, work = np.empty((n + 1, 12)), np.empty((23, max(n, 6)))
-    return _iterate(
-        chain, target, q, q_ref, best_q, stats, tol2, max_steps, frames, work
-    )
 
 
 @_jit
@@ -514,7 +512,6 @@ def solve_batch(
         lo, hi = chain[k, 16], chain[k, 17]
         low[k] = lo if math.isfinite(lo) else -UNBOUNDED_SPAN
         span[k] = (hi if math.isfinite(hi) else UNBOUNDED_SPAN) - low[k]
-    frames, work = np.empty((n + 1, 12)), np.empty((23, max(n, 6)))
     state = np.empty(1, dtype=np.uint64)
     for i in range(targets.shape[0]):
         stats, target = out_stats[i], targets[i]
@@ -522,19 +519,19 @@ def solve_batch(
             stats[j] = 0.0
         stats[ERR2] = math.inf
         ref = q_ref[i if q_ref.shape[0] > 1 else 0]
-        if q_start.shape[0] == 0:
-            _first_guess(features, starts, target, q)
-        else:
+        guess = q_start.shape[0] == 0
+        if not guess:
             start = q_start[i if q_start.shape[0] > 1 else 0]
             for k in range(n):
                 q[k] = start[k]
         state[0] = np.uint64(seed) + np.uint64(i) * _GOLDEN
+        check = False
         while (
-            _iterate(
-                chain, target, q, ref, out_q[i], stats, tol2, max_steps, frames, work
-            )
+            run(chain, target, q, ref, out_q[i], stats, tol2, max_steps, guess,
+                features, starts, check)
             == STALLED
-        ):
+        ):  # fmt: skip
+            guess = False
             for k in range(n):
                 q[k] = low[k] + span[k] * _splitmix(state)
             stats[RESTARTS] += 1.0
