@@ -56,6 +56,13 @@ class Chain:
         mid: (nq,) read-only middle of the limits (neutral for continuous
             joints, 0 where unbounded): the default pull reference.
         low, span: (n,) box restarts draw from, chain coordinates.
+        seeds: The first-guess candidates: ``features`` (16, SEED_COUNT)
+            float32, per candidate (column) 16 numbers whose dot product with
+            the row-major target matrix is the squared position gap plus
+            SEED_ROTATION_WEIGHT times the squared Frobenius rotation gap, up
+            to terms that do not depend on the candidate; and ``starts``
+            (SEED_COUNT, n), their coordinates. Read-only.
+        no_seeds: The same, empty (when a first guess is given).
     """
 
     def __init__(self, robot: Robot) -> None:
@@ -82,8 +89,11 @@ class Chain:
         lo, hi = packed[:n, 16], packed[:n, 17]
         self.low = np.where(np.isfinite(lo), lo, -kernel.UNBOUNDED_SPAN)
         self.span = np.where(np.isfinite(hi), hi, kernel.UNBOUNDED_SPAN) - self.low
-        self._seeds: FloatArray | None = None
+        self.seeds = self._build_seeds()
         self.no_start = np.empty((0, n))  # "no q0" for the batch kernel
+        # The state of a solve before its first run (see _chain_kernel.run).
+        self.fresh_state = np.zeros(2 * n + kernel.N_STATS)
+        self.fresh_state[2 * n + kernel.ERR2] = math.inf
         # No candidates (when a q0 is given), read-only like the real ones.
         self.no_seeds = (np.empty((16, 0), np.float32), np.empty((0, n)))
         for array in self.no_seeds:
@@ -124,22 +134,8 @@ class Chain:
         q[..., self.idx_q[self.unbounded] + 1] = np.sin(angles)
         return q
 
-    @property
-    def seeds(self) -> tuple[npt.NDArray[np.float32], FloatArray]:
-        """First-guess candidates (built on first use), read-only.
-
-        Returns:
-            ``features`` (16, SEED_COUNT) float32: per candidate (column), 16
-            numbers whose dot product with the row-major target matrix is the
-            squared position gap plus SEED_ROTATION_WEIGHT times the squared
-            Frobenius rotation gap, up to terms that do not depend on the
-            candidate; and ``starts`` (SEED_COUNT, n), their coordinates.
-        """
-        if self._seeds is None:
-            self._seeds = self._build_seeds()
-        return self._seeds
-
     def _build_seeds(self) -> tuple[npt.NDArray[np.float32], FloatArray]:
+        """The first-guess candidates (:attr:`seeds`), read-only."""
         half = np.minimum(0.5 * self.span, kernel.UNBOUNDED_SPAN)
         draws = np.random.default_rng(SEED_RNG).uniform(
             -1.0, 1.0, (SEED_COUNT - 1, self.n)

@@ -355,20 +355,17 @@ def _first_guess(features: np.ndarray, starts: FloatArray, target: FloatArray, q
 
 
 @_jit
-def run(
-    chain, target, q, q_ref, best_q, stats, tol2, max_steps, guess, features, starts,
-    check,
-):  # fmt: skip
+def run(chain, target, q_ref, state, tol2, max_steps, guess, features, starts, check):
     """One run of damped Newton steps from ``q``, until it converges or stalls.
 
     Args:
         chain: (n + 1, CHAIN_WIDTH) chain (module docstring).
         target: (4, 4) homogeneous target of the tool in the base frame [m].
-        q: (n,) start, chain coordinates; overwritten (the last iterate).
         q_ref: (n,) configuration redundant arms are pulled towards.
-        best_q: (n,) best configuration so far, updated in place.
-        stats: (N_STATS,) running statistics (ERR2 inf and STEPS 0 at first),
-            updated in place.
+        state: (2 n + N_STATS,) the start ``q`` (overwritten by the last
+            iterate), the best configuration so far and the running
+            statistics (ERR2 inf and STEPS 0 at first), all updated in place:
+            one array, so that a call from Python passes (and allocates) one.
         tol2: Squared convergence threshold on |e|.
         max_steps: Step budget over all runs.
         guess: Start from the candidate nearest the target
@@ -383,7 +380,8 @@ def run(
     """
     if check and not _roughly_rigid(target):
         return NOT_RIGID
-    n = q.shape[0]
+    n = chain.shape[0] - 1
+    q, best_q, stats = state[:n], state[n : 2 * n], state[2 * n :]
     if guess:
         _first_guess(features, starts, target, q)
     # Scratch space: frames of the joints and tool, matrices and vectors.
@@ -507,14 +505,16 @@ def solve_batch(
         out_stats: (N, N_STATS) statistics per target.
     """
     n = chain.shape[0] - 1
-    low, span, q = np.empty(n), np.empty(n), np.empty(n)
+    low, span = np.empty(n), np.empty(n)
     for k in range(n):
         lo, hi = chain[k, 16], chain[k, 17]
         low[k] = lo if math.isfinite(lo) else -UNBOUNDED_SPAN
         span[k] = (hi if math.isfinite(hi) else UNBOUNDED_SPAN) - low[k]
-    state = np.empty(1, dtype=np.uint64)
+    state = np.empty(2 * n + N_STATS)
+    q, best_q, stats = state[:n], state[n : 2 * n], state[2 * n :]
+    draws = np.empty(1, dtype=np.uint64)
     for i in range(targets.shape[0]):
-        stats, target = out_stats[i], targets[i]
+        target = targets[i]
         for j in range(N_STATS):
             stats[j] = 0.0
         stats[ERR2] = math.inf
@@ -524,17 +524,21 @@ def solve_batch(
             start = q_start[i if q_start.shape[0] > 1 else 0]
             for k in range(n):
                 q[k] = start[k]
-        state[0] = np.uint64(seed) + np.uint64(i) * _GOLDEN
+        draws[0] = np.uint64(seed) + np.uint64(i) * _GOLDEN
         check = False
         while (
-            run(chain, target, q, ref, out_q[i], stats, tol2, max_steps, guess,
-                features, starts, check)
+            run(chain, target, ref, state, tol2, max_steps, guess, features, starts,
+                check)
             == STALLED
         ):  # fmt: skip
             guess = False
             for k in range(n):
-                q[k] = low[k] + span[k] * _splitmix(state)
+                q[k] = low[k] + span[k] * _splitmix(draws)
             stats[RESTARTS] += 1.0
+        for k in range(n):
+            out_q[i, k] = best_q[k]
+        for j in range(N_STATS):
+            out_stats[i, j] = stats[j]
 
 
 @_jit

@@ -138,40 +138,29 @@ def numeric(
             raise InputError(f"time_budget must be > 0 [s], got {time_budget!r}")
         tol, max_iterations = float(tol), int(max_iterations)
     chain = get_chain(robot)
+    n = chain.n
+    state = chain.fresh_state.copy()  # [q, best q, statistics], see kernel.run
     if q0 is None:
         q_ref, q_base = chain.mid_values, chain.mid
-        q = np.empty(chain.n)
         (features, starts), guess = chain.seeds, True
     else:
         q_base = reference_configuration(robot, chain, q0)
         q_ref = chain.to_chain(q_base)
-        q = q_ref.copy()
+        state[:n] = q_ref
         (features, starts), guess = chain.no_seeds, False
     deadline = time.perf_counter() + time_budget
     tol2 = tol * tol
-    best_q = np.empty(chain.n)
-    stats = _FRESH_STATS.copy()
     run, packed = kernel.run, chain.packed
     status = run(
-        packed,
-        matrix,
-        q,
-        q_ref,
-        best_q,
-        stats,
-        tol2,
-        max_iterations,
-        guess,
-        features,
-        starts,
+        packed, matrix, q_ref, state, tol2, max_iterations, guess, features, starts,
         True,
-    )
+    )  # fmt: skip
     if status == kernel.NOT_RIGID:
         # The exact checks: raise, or accept a pose rigid within the tolerance.
         matrix = np.ascontiguousarray(as_se3(target).homogeneous)
         status = run(
-            packed, matrix, q, q_ref, best_q, stats, tol2, max_iterations, guess,
-            features, starts, False,
+            packed, matrix, q_ref, state, tol2, max_iterations, guess, features,
+            starts, False,
         )  # fmt: skip
     restarts = 0
     generator = None
@@ -180,23 +169,21 @@ def numeric(
         # short, e.g. by the process being descheduled.
         if generator is None:
             generator = _generator(rng)
-        q = chain.low + chain.span * generator.random(chain.n)
+        state[:n] = chain.low + chain.span * generator.random(n)
         restarts += 1
         status = run(
-            packed, matrix, q, q_ref, best_q, stats, tol2, max_iterations, False,
-            features, starts, False,
+            packed, matrix, q_ref, state, tol2, max_iterations, False, features,
+            starts, False,
         )  # fmt: skip
+    best_q = state[n : 2 * n]
     if not chain.identity:
         best_q = chain.to_configuration(best_q, q_base)
     best_q.setflags(write=False)
-    err2, position, rotation, steps, _ = stats.tolist()
+    err2, position, rotation, steps, _ = state[2 * n :].tolist()
     return _result(
         best_q, err2 <= tol2, int(steps), math.sqrt(err2), position, rotation, restarts
     )
 
-
-_FRESH_STATS = np.array([math.inf, 0.0, 0.0, 0.0, 0.0])
-"""The statistics of ``_chain_kernel.run`` before the first run."""
 
 _new_object = object.__new__
 _SETTERS = [getattr(IKResult, name).__set__ for name in IKResult.__slots__]
