@@ -117,7 +117,7 @@ def numeric_batch(
         *seeds,
         float(tol) ** 2,
         int(max_iterations),
-        seed % 2**64,
+        seed % 2**63,  # always an int64 for the kernel
         values,
         stats,
     )
