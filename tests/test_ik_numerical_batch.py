@@ -188,3 +188,10 @@ def test_bad_input_raises(
     targets = arguments.pop("targets")
     with pytest.raises(error, match=re.escape(fragment)):
         numeric_batch(puma, targets, **arguments)
+
+
+def test_read_only_inputs(ur5: Robot, rng: np.random.Generator) -> None:
+    targets = fk_targets(ur5, rng, 5)
+    expected = numeric_batch(ur5, targets)
+    targets.setflags(write=False)
+    np.testing.assert_array_equal(numeric_batch(ur5, targets).q, expected.q)

@@ -91,6 +91,7 @@ class Chain:
         self.span = np.where(np.isfinite(hi), hi, kernel.UNBOUNDED_SPAN) - self.low
         self.seeds = self._build_seeds()
         self.no_start = np.empty((0, n))  # "no q0" for the batch kernel
+        self.no_start.setflags(write=False)  # as a given q0: one signature
         # The state of a solve before its first run (see _chain_kernel.run).
         self.fresh_state = np.zeros(2 * n + kernel.N_STATS)
         self.fresh_state[2 * n + kernel.ERR2] = math.inf
@@ -98,6 +99,14 @@ class Chain:
         self.no_seeds = (np.empty((16, 0), np.float32), np.empty((0, n)))
         for array in self.no_seeds:
             array.setflags(write=False)
+        # Load (or compile) the kernel now, not under a solve's time budget.
+        # (Its arguments have the types of every later call: read-only chain,
+        # reference and candidates, writable target and state.)
+        warm_up = self.fresh_state.copy()
+        kernel.run(
+            packed, np.eye(4), self.mid_values, warm_up, 0.0, 0, False, *self.no_seeds,
+            True,
+        )  # fmt: skip
 
     def matches(self, robot: Robot) -> bool:
         """Whether ``robot`` still has this chain's model, limits and tool frame."""

@@ -525,13 +525,15 @@ def solve_batch(
             for k in range(n):
                 q[k] = start[k]
         draws[0] = np.uint64(seed) + np.uint64(i) * _GOLDEN
-        check = False
+        # Targets are checked already; False as a computed bool, not a literal
+        # (a literal argument would compile another specialisation of run).
+        check = i < 0
         while (
             run(chain, target, ref, state, tol2, max_steps, guess, features, starts,
                 check)
             == STALLED
         ):  # fmt: skip
-            guess = False
+            guess = check  # False (see above)
             for k in range(n):
                 q[k] = low[k] + span[k] * _splitmix(draws)
             stats[RESTARTS] += 1.0

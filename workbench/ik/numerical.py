@@ -120,6 +120,7 @@ def numeric(
         and target.dtype == np.float64
         and target.shape == (4, 4)
         and target.flags.c_contiguous
+        and target.flags.writeable  # one compiled signature for all calls
     ):
         matrix = target  # finite and rigid: checked by the kernel
     else:
@@ -146,6 +147,7 @@ def numeric(
     else:
         q_base = reference_configuration(robot, chain, q0)
         q_ref = chain.to_chain(q_base)
+        q_ref.setflags(write=False)  # as chain.mid_values: one compiled signature
         state[:n] = q_ref
         (features, starts), guess = chain.no_seeds, False
     deadline = time.perf_counter() + time_budget

@@ -87,7 +87,8 @@ def numeric_batch(
             or ``rng`` is invalid, or a joint of the arm is neither revolute
             nor prismatic.
     """
-    poses = np.ascontiguousarray(as_targets(targets))
+    # Writable and C-contiguous (copied only if not): one compiled signature.
+    poses = np.require(as_targets(targets), requirements=["C", "W"])
     check_poses(poses, 0)
     check_options(tol, max_iterations, rng)
     chain = get_chain(robot)
@@ -102,6 +103,7 @@ def numeric_batch(
     else:
         q_base = _first_guesses(robot, chain, q0, count)
         q_ref = q_start = chain.to_chain(q_base)
+        q_ref.setflags(write=False)  # as chain.mid_values: one compiled signature
         seeds = chain.no_seeds
     if isinstance(rng, np.random.Generator):
         seed = int(rng.integers(0, 2**63))
