@@ -27,7 +27,7 @@ import pinocchio as pin
 
 from workbench.errors import InputError
 from workbench.ik import _chain_kernel as kernel
-from workbench.robot import Robot
+from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -44,7 +44,7 @@ from workbench.ik._puma import (
     get_geometry,
 )
 from workbench.ik._targets import as_targets, check_poses, pose_rows
-from workbench.robot import Robot
+from workbench.model.robot import Robot
 from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]

@@ -35,8 +35,8 @@ import pinocchio as pin
 from workbench.errors import InputError
 from workbench.ik import _chain_kernel as kernel
 from workbench.ik._chain import Chain, get_chain
+from workbench.model.robot import Robot
 from workbench.poses import as_se3
-from workbench.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -21,7 +21,7 @@ from workbench.ik import _chain_kernel as kernel
 from workbench.ik._chain import Chain, get_chain
 from workbench.ik._targets import as_targets, check_poses
 from workbench.ik.numerical import check_options, reference_configuration
-from workbench.robot import Robot
+from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
 

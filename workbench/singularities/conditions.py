@@ -24,9 +24,9 @@ the three signed distances (the *conditions*)
 The signs come from each robot's own table: they differ between ``puma560``
 (Angeles, :math:`K = -a_2 L_3`) and ``puma560-kang`` (Kang, :math:`K = +a_2 L_3`).
 The derivation is in ``docs/errata-kang-singularities.md``; the loci in joint
-space are in :mod:`workbench.singularity_loci`, the degenerate directions in
-:mod:`workbench.singularity_directions`, the numeric measures of any robot in
-:mod:`workbench.singularity_measures`.
+space are in :mod:`workbench.singularities.loci`, the degenerate directions in
+:mod:`workbench.singularities.directions`, the numeric measures of any robot in
+:mod:`workbench.singularities.measures`.
 """
 
 from __future__ import annotations
@@ -38,9 +38,9 @@ from typing import ClassVar
 import numpy as np
 import numpy.typing as npt
 
-from workbench.dh import DHTable
 from workbench.errors import InputError
-from workbench.robot import Robot
+from workbench.model.dh import DHTable
+from workbench.model.robot import Robot
 from workbench.validation import as_finite_array
 
 FloatArray = npt.NDArray[np.float64]
