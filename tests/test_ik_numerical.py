@@ -251,3 +251,21 @@ def test_bad_input_raises(
     target = arguments.pop("target")
     with pytest.raises(error, match=re.escape(fragment)):
         numeric(puma, target, **arguments)
+
+
+def test_the_time_budget_starts_after_setup(rng: np.random.Generator) -> None:
+    """A new robot's first solve: building its chain and loading the compiled
+    kernel do not eat the default 0.1 s budget, so restarts still happen."""
+    robot = load_robot("ur5")  # a new object: its chain is built in this call
+    target = pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.0]))  # out of reach
+    result = numeric(robot, target, rng=rng)
+    assert not result.success
+    assert result.restarts >= 1
+
+
+def test_read_only_target_is_accepted(puma: Robot, rng: np.random.Generator) -> None:
+    target = puma.fk(random_configuration(puma, rng)).homogeneous
+    target.setflags(write=False)
+    result = numeric(puma, target)
+    assert result.success
+    assert max(pose_errors(puma, result.q, pin.SE3(target))) <= ATOL_IK

@@ -1,7 +1,7 @@
 """Inverse kinematics: closed form for PUMA-type arms, numerical for any arm.
 
 Public entry points (see docs/interface.md): ``analytic``, ``analytic_batch``,
-``numeric``, plus the damped-least-squares tools.
+``numeric``, ``numeric_batch``, plus the damped-least-squares tools.
 """
 
 from workbench.ik.closed_form import (
@@ -16,6 +16,7 @@ from workbench.ik.closed_form import (
 )
 from workbench.ik.damped import DLS_EPSILON, DLS_LAMBDA_MAX, dls_inverse, dls_step
 from workbench.ik.numerical import IKResult, numeric
+from workbench.ik.numerical_batch import IKBatchResult, numeric_batch
 from workbench.ik.qp import QP_DAMPING, DifferentialIKError, qp_step
 
 __all__ = [
@@ -25,6 +26,7 @@ __all__ = [
     "QP_DAMPING",
     "WRIST_SINGULAR_TOL",
     "DifferentialIKError",
+    "IKBatchResult",
     "IKResult",
     "IKSolution",
     "UnreachableError",
@@ -35,5 +37,6 @@ __all__ = [
     "dls_step",
     "nearest",
     "numeric",
+    "numeric_batch",
     "qp_step",
 ]

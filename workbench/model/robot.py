@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from functools import cached_property
 from pathlib import Path
 
@@ -20,11 +21,17 @@ from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]
 
-_REFERENCE_FRAMES = {
-    "local": pin.ReferenceFrame.LOCAL,
-    "world": pin.ReferenceFrame.WORLD,
-    "local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
-}
+_LOCAL = pin.ReferenceFrame.LOCAL
+_WORLD = pin.ReferenceFrame.WORLD
+_LOCAL_WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+_FLOAT64 = np.dtype(np.float64)
+
+# Module-level names for the per-call paths of fk / jacobian.
+_forward_kinematics = pin.forwardKinematics
+_update_frame_placement = pin.updateFramePlacement
+_compute_frame_jacobian = pin.computeFrameJacobian
 
 
 def _positive_limits(values: npt.ArrayLike, size: int, name: str) -> FloatArray:
@@ -80,6 +87,7 @@ class Robot:
         self.dh_table = dh_table
         self.model = model
         self.data = model.createData()
+        self._finite_test = np.full(model.nq, 1e-300)  # see check_configuration
         self.urdf_path = urdf_path
         self._package_dirs = package_dirs
         self.tool_frame = tool_frame
@@ -172,10 +180,25 @@ class Robot:
     def check_configuration(self, q: npt.ArrayLike) -> FloatArray:
         """Validate ``q``: shape (nq,), finite. Returns it as float64.
 
+        A float64 array is returned as is (not copied), as ``np.asarray``
+        would. Its test is cheap and exact: ``q . w`` with every
+        ``w_i = 1e-300`` is finite iff every entry is (NaN and inf propagate;
+        finite terms are below 2e8, so the sum cannot overflow, and no
+        floating-point warning is raised either way).
+
         Raises:
             DimensionError: If the joint count is wrong.
             NonFiniteError: If an entry is NaN or infinite.
         """
+        weights = self._finite_test
+        if (
+            q.__class__ is np.ndarray
+            and q.dtype is _FLOAT64
+            and q.shape == weights.shape
+            and math.isfinite(q.dot(weights))
+            and weights.shape[0] == self.model.nq
+        ):
+            return q
         return as_vector(q, self.nq, "q")
 
     def get_frame_id(self, frame: str | None) -> int:
@@ -202,20 +225,24 @@ class Robot:
 
         Returns:
             ``transform_frame_to_base`` (Pinocchio's ``oMf``), a copy.
+
+        Raises:
+            DimensionError: If ``q`` does not have nq entries.
+            NonFiniteError: If an entry of ``q`` is NaN or infinite.
+            FrameNotFoundError: If the model has no such frame.
         """
         q = self.check_configuration(q)
-        frame_id = self.get_frame_id(frame)
-        pin.forwardKinematics(self.model, self.data, q)
-        return pin.updateFramePlacement(self.model, self.data, frame_id).copy()
+        frame_id = self.tool_frame_id if frame is None else self.get_frame_id(frame)
+        model, data = self.model, self.data
+        _forward_kinematics(model, data, q)
+        return _update_frame_placement(model, data, frame_id).copy()
 
     def _frame_jacobian(
-        self, q: npt.ArrayLike, frame: str | None, reference: str
+        self, q: npt.ArrayLike, frame: str | None, reference: pin.ReferenceFrame
     ) -> FloatArray:
         q = self.check_configuration(q)
-        frame_id = self.get_frame_id(frame)
-        return pin.computeFrameJacobian(
-            self.model, self.data, q, frame_id, _REFERENCE_FRAMES[reference]
-        )
+        frame_id = self.tool_frame_id if frame is None else self.get_frame_id(frame)
+        return _compute_frame_jacobian(self.model, self.data, q, frame_id, reference)
 
     def jacobian(self, q: npt.ArrayLike, frame: str | None = None) -> FloatArray:
         """Jacobian of a frame, LOCAL_WORLD_ALIGNED (the default everywhere).
@@ -227,16 +254,21 @@ class Robot:
         Returns:
             Shape (6, nv): rows [linear velocity of the frame origin (m/s);
             angular velocity (rad/s)], both in base axes, per unit joint speed.
+
+        Raises:
+            DimensionError: If ``q`` does not have nq entries.
+            NonFiniteError: If an entry of ``q`` is NaN or infinite.
+            FrameNotFoundError: If the model has no such frame.
         """
-        return self._frame_jacobian(q, frame, "local_world_aligned")
+        return self._frame_jacobian(q, frame, _LOCAL_WORLD_ALIGNED)
 
     def jacobian_local(self, q: npt.ArrayLike, frame: str | None = None) -> FloatArray:
         """Jacobian of a frame, LOCAL: body twist in the frame's own axes, (6, nv)."""
-        return self._frame_jacobian(q, frame, "local")
+        return self._frame_jacobian(q, frame, _LOCAL)
 
     def jacobian_world(self, q: npt.ArrayLike, frame: str | None = None) -> FloatArray:
         """Jacobian of a frame, WORLD: the spatial twist at the base origin, (6, nv)."""
-        return self._frame_jacobian(q, frame, "world")
+        return self._frame_jacobian(q, frame, _WORLD)
 
     def jacobian_time_derivative(
         self, q: npt.ArrayLike, v: npt.ArrayLike, frame: str | None = None

@@ -1,0 +1,559 @@
+r"""Compiled serial-chain kinematics and the Levenberg–Marquardt loop of ``numeric``.
+
+Everything here is compiled with Numba (``cache=True``: compiled once per
+machine on first use, then loaded from the cache). The module is kept whole,
+although longer than the usual ~300 lines: Numba's cache of a function is not
+invalidated when a function it calls changes in *another* file, so the
+kernels that call each other live in one file. Only :func:`run`,
+:func:`solve_batch` and :func:`chain_kinematics` are entry points.
+
+Compile time matters (the first ``numeric`` call with an empty cache): no
+array slicing assignments or other library overloads (each compiles as a
+function of its own), no literal arguments (each literal value compiles a
+specialisation), and a shallow call tree (Numba re-optimises the code of every
+callee in each caller).
+
+The chain (built by ``workbench.ik._chain`` from the Pinocchio model) is one
+float64 array of shape (n + 1, CHAIN_WIDTH). Row ``k < n`` describes the k-th
+joint on the path from the base to the tool frame:
+
+* ``[0:9]`` rotation, ``[9:12]`` translation of the joint placement in its
+  parent joint's frame (Pinocchio's ``jointPlacements``), row-major;
+* ``[12:15]`` unit axis in the joint frame; ``[15]`` ``REVOLUTE`` or
+  ``PRISMATIC``;
+* ``[16]``, ``[17]`` lower and upper limits [rad or m] (inf when unbounded);
+* ``[18]`` ``WRAP_NONE``, ``WRAP_FULL_TURN`` (a bounded revolute joint whose
+  range spans a full turn: it comes back in at the other end) or
+  ``WRAP_UNBOUNDED`` (a continuous joint: never clipped);
+* ``[19]`` for a revolute joint about a coordinate axis (x, y or z, either
+  sign: most URDF joints) its index 0, 1 or 2, whose cheaper rotation the
+  forward kinematics then uses; else -1.
+
+Row ``n`` holds the tool frame placement in the last joint's frame in
+``[0:12]``. Chain coordinates are one value per joint (an angle for a
+continuous joint, whose Pinocchio ``q`` is (cos, sin)).
+
+Poses are Pinocchio's: :math:`{}^oM_k = {}^oM_{k-1}\,M_k^{place}\,
+\exp(\hat a_k q_k)` and :math:`{}^oM_f = {}^oM_n\,M_f^{place}`. The Jacobian
+is Pinocchio's LOCAL frame Jacobian of the tool, rows [linear; angular].
+The error of a configuration is :math:`e = \log_6(T^{-1}\,{}^oM_f)`, (6,).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+import numpy.typing as npt
+
+FloatArray = npt.NDArray[np.float64]
+
+CHAIN_WIDTH = 20
+REVOLUTE, PRISMATIC = 0.0, 1.0
+WRAP_NONE, WRAP_FULL_TURN, WRAP_UNBOUNDED = 0.0, 1.0, 2.0
+
+#: Status codes of :func:`run`.
+CONVERGED, STALLED, EXHAUSTED, NOT_RIGID = 0, 1, 2, 3
+
+#: Columns of the per-target statistics of :func:`run` / :func:`solve_batch`:
+#: squared error, position error [m], rotation error [rad], steps, restarts.
+ERR2, POSITION, ROTATION, STEPS, RESTARTS = 0, 1, 2, 3, 4
+N_STATS = 5
+
+DAMPING_GAIN = 3e-2
+"""mu in lambda = mu |e|^2 + lambda_0 [1/m^2 ~ 1/rad^2 scale]."""
+
+DAMPING_FLOOR = 1e-9
+"""lambda_0: keeps J J^T + lambda I positive definite at singularities."""
+
+STALL_STEPS = 4
+"""A run ends when its error has not dropped by 10 % for this many steps."""
+
+STALL_RATIO = 0.81
+"""Squared-error ratio of one 10 % decrease."""
+
+RUN_STEPS = 40
+"""A run ends after this many steps, converging or not."""
+
+NULL_GAIN = 0.1
+"""Gain of the null-space pull to ``q_ref`` (redundant arms only) [1/step]."""
+
+NULL_OFF_ERROR = 0.3
+"""The null-space pull stops once |e| falls below this [m ~ rad]."""
+
+MAX_STEP = 1.5
+"""Newton steps (n = 6) are shortened to this norm [rad]."""
+
+SINGULAR_STEP = 10.0
+"""A Newton step longer than this [rad] means a (near-)singular Jacobian."""
+
+ACTIVE_SET_ERROR = NULL_OFF_ERROR
+"""Redundant arms re-solve a step that crosses a limit while |e| < this (the
+null-space pull is off then)."""
+
+UNBOUNDED_SPAN = math.pi
+"""Restarts draw unbounded coordinates within +-this [rad]."""
+
+#: Fast acceptance of a target: columns x, y of R orthonormal, z = x × y and
+#: the bottom row, each within RIGIDITY_TOL / 5 (``workbench.poses``), as one
+#: sum of squares. A target that fails it takes the exact checks in Python.
+FAST_TOL2 = (1e-6 / 5.0) ** 2
+
+_MAX_STEP2, _SINGULAR_STEP2 = MAX_STEP**2, SINGULAR_STEP**2
+_NULL_OFF_ERROR2, _ACTIVE_SET_ERROR2 = NULL_OFF_ERROR**2, ACTIVE_SET_ERROR**2
+_PI, _TAU = math.pi, 2.0 * math.pi
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+
+_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+
+
+@_jit
+def _forward(chain: FloatArray, q: FloatArray, frames: FloatArray):
+    """Poses of the joints (rows 0..n-1) and the tool (row n) in the base frame.
+
+    ``frames`` (n + 1, 12) is filled: rotation (row-major) then position.
+    """
+    n = chain.shape[0] - 1
+    for k in range(n + 1):
+        c, f = chain[k], frames[k]
+        if k == 0:  # the placement itself
+            for i in range(12):
+                f[i] = c[i]
+        else:  # parent pose times the placement
+            g = frames[k - 1]
+            for i in range(3):
+                g0, g1, g2 = g[3 * i], g[3 * i + 1], g[3 * i + 2]
+                for j in range(3):
+                    f[3 * i + j] = g0 * c[j] + g1 * c[3 + j] + g2 * c[6 + j]
+                f[9 + i] = g[9 + i] + g0 * c[9] + g1 * c[10] + g2 * c[11]
+        if k == n:
+            break
+        x, y, z = c[12], c[13], c[14]
+        if c[15] == PRISMATIC:  # translation q a along the joint axis
+            for i in range(3):
+                f[9 + i] += q[k] * (f[3 * i] * x + f[3 * i + 1] * y + f[3 * i + 2] * z)
+            continue
+        s, co = math.sin(q[k]), math.cos(q[k])
+        m = int(c[19])
+        if m >= 0:  # about coordinate axis m: a plane rotation of columns u, v
+            u, v = (m + 1) % 3, (m + 2) % 3
+            s *= c[12 + m]  # the axis sign
+            for i in range(3):
+                au, av = f[3 * i + u], f[3 * i + v]
+                f[3 * i + u] = au * co + av * s
+                f[3 * i + v] = av * co - au * s
+            continue
+        # Rodrigues: exp(a^ q) = cos I + sin a^ + (1 - cos) a a^T.
+        v = 1.0 - co
+        e00, e11, e22 = co + v * x * x, co + v * y * y, co + v * z * z
+        e01, e10 = v * x * y - s * z, v * x * y + s * z
+        e02, e20 = v * x * z + s * y, v * x * z - s * y
+        e12, e21 = v * y * z - s * x, v * y * z + s * x
+        for i in range(3):
+            a0, a1, a2 = f[3 * i], f[3 * i + 1], f[3 * i + 2]
+            f[3 * i] = a0 * e00 + a1 * e10 + a2 * e20
+            f[3 * i + 1] = a0 * e01 + a1 * e11 + a2 * e21
+            f[3 * i + 2] = a0 * e02 + a1 * e12 + a2 * e22
+
+
+@_jit
+def _jacobian(chain: FloatArray, frames: FloatArray, jac: FloatArray):
+    """LOCAL Jacobian of the tool into ``jac[:, :n]``, from :func:`_forward`."""
+    n = chain.shape[0] - 1
+    f = frames[n]
+    for k in range(n):
+        c, g = chain[k], frames[k]
+        x, y, z = c[12], c[13], c[14]
+        wx = g[0] * x + g[1] * y + g[2] * z  # joint axis in base axes
+        wy = g[3] * x + g[4] * y + g[5] * z
+        wz = g[6] * x + g[7] * y + g[8] * z
+        if c[15] == REVOLUTE:  # linear w x (p_f - p_k), angular w
+            dx, dy, dz = f[9] - g[9], f[10] - g[10], f[11] - g[11]
+            lx, ly, lz = wy * dz - wz * dy, wz * dx - wx * dz, wx * dy - wy * dx
+            turn = 1.0
+        else:  # linear w, angular 0
+            lx, ly, lz = wx, wy, wz
+            turn = 0.0
+        for i in range(3):  # into the tool's axes: R_f^T
+            jac[i, k] = f[i] * lx + f[3 + i] * ly + f[6 + i] * lz
+            jac[3 + i, k] = turn * (f[i] * wx + f[3 + i] * wy + f[6 + i] * wz)
+
+
+@_jit
+def _error(target: FloatArray, frames: FloatArray, e: FloatArray) -> float:
+    r"""``e = log6(T^-1 oMf)`` (6,) of the tool (last row of ``frames``); |p_err|."""
+    f, t = frames[frames.shape[0] - 1], target
+    dx, dy, dz = f[9] - t[0, 3], f[10] - t[1, 3], f[11] - t[2, 3]
+    # R = R_t^T R_f (row-major in e's scratch-free scalars), p = R_t^T (p_f - p_t).
+    r00 = t[0, 0] * f[0] + t[1, 0] * f[3] + t[2, 0] * f[6]
+    r01 = t[0, 0] * f[1] + t[1, 0] * f[4] + t[2, 0] * f[7]
+    r02 = t[0, 0] * f[2] + t[1, 0] * f[5] + t[2, 0] * f[8]
+    r10 = t[0, 1] * f[0] + t[1, 1] * f[3] + t[2, 1] * f[6]
+    r11 = t[0, 1] * f[1] + t[1, 1] * f[4] + t[2, 1] * f[7]
+    r12 = t[0, 1] * f[2] + t[1, 1] * f[5] + t[2, 1] * f[8]
+    r20 = t[0, 2] * f[0] + t[1, 2] * f[3] + t[2, 2] * f[6]
+    r21 = t[0, 2] * f[1] + t[1, 2] * f[4] + t[2, 2] * f[7]
+    r22 = t[0, 2] * f[2] + t[1, 2] * f[5] + t[2, 2] * f[8]
+    px = t[0, 0] * dx + t[1, 0] * dy + t[2, 0] * dz
+    py = t[0, 1] * dx + t[1, 1] * dy + t[2, 1] * dz
+    pz = t[0, 2] * dx + t[1, 2] * dy + t[2, 2] * dz
+    # log3, robust at 0 and at pi: theta = atan2(|vee| / 2, (tr - 1) / 2).
+    vx, vy, vz = r21 - r12, r02 - r20, r10 - r01
+    co = 0.5 * (r00 + r11 + r22 - 1.0)
+    si = 0.5 * math.sqrt(vx * vx + vy * vy + vz * vz)
+    theta = math.atan2(si, co)
+    if co > -0.9:  # w = theta / (2 sin theta) vee, Taylor near 0
+        h = 0.5 + theta * theta / 12.0 if theta < 1e-4 else 0.5 * theta / si
+        wx, wy, wz = h * vx, h * vy, h * vz
+    else:  # near pi: the axis from the symmetric part cos I + (1 - cos) a a^T
+        v = 1.0 - co
+        if r00 >= r11 and r00 >= r22:
+            ax = math.sqrt(max(r00 - co, 0.0) / v)
+            ay, az = 0.5 * (r01 + r10) / (v * ax), 0.5 * (r02 + r20) / (v * ax)
+        elif r11 >= r22:
+            ay = math.sqrt(max(r11 - co, 0.0) / v)
+            ax, az = 0.5 * (r01 + r10) / (v * ay), 0.5 * (r12 + r21) / (v * ay)
+        else:
+            az = math.sqrt(max(r22 - co, 0.0) / v)
+            ax, ay = 0.5 * (r02 + r20) / (v * az), 0.5 * (r12 + r21) / (v * az)
+        if ax * vx + ay * vy + az * vz < 0.0:  # vee = 2 sin(theta) a
+            ax, ay, az = -ax, -ay, -az
+        wx, wy, wz = theta * ax, theta * ay, theta * az
+    # v = alpha p - w x p / 2 + beta (w . p) w  (the inverse of SE(3)'s V).
+    t2 = theta * theta
+    if theta < 1e-2:
+        alpha, beta = 1.0 - t2 / 12.0 - t2 * t2 / 720.0, 1.0 / 12.0 + t2 / 720.0
+    else:
+        alpha = 0.5 * theta / math.tan(0.5 * theta)
+        beta = (1.0 - alpha) / t2
+    wp = beta * (wx * px + wy * py + wz * pz)
+    e[0] = alpha * px - 0.5 * (wy * pz - wz * py) + wp * wx
+    e[1] = alpha * py - 0.5 * (wz * px - wx * pz) + wp * wy
+    e[2] = alpha * pz - 0.5 * (wx * py - wy * px) + wp * wz
+    e[3], e[4], e[5] = wx, wy, wz
+    return math.sqrt(px * px + py * py + pz * pz)
+
+
+@_jit
+def _solve(a: FloatArray, b: FloatArray, m: int) -> bool:
+    """Solve a x = b (first m rows/columns) in place, x in b; False if singular.
+
+    LU with partial pivoting.
+    """
+    for k in range(m):
+        p = k
+        for i in range(k + 1, m):
+            if abs(a[i, k]) > abs(a[p, k]):
+                p = i
+        if a[p, k] == 0.0:
+            return False
+        if p != k:
+            for j in range(m):
+                a[k, j], a[p, j] = a[p, j], a[k, j]
+            b[k], b[p] = b[p], b[k]
+        for i in range(k + 1, m):
+            f = a[i, k] / a[k, k]
+            for j in range(k + 1, m):
+                a[i, j] -= f * a[k, j]
+            b[i] -= f * b[k]
+    for k in range(m - 1, -1, -1):
+        s = b[k]
+        for j in range(k + 1, m):
+            s -= a[k, j] * b[j]
+        b[k] = s / a[k, k]
+    return True
+
+
+@_jit
+def _damped_step(jac, n, e, pull, use_pull, damping, normal, y, dq):
+    r"""Damped least-squares step (to subtract from q) into ``dq[:n]``.
+
+    n >= 6: :math:`J^T (J J^T + \lambda I)^{-1} (e + J z) - z` (z = ``pull``
+    when ``use_pull``); n < 6: :math:`(J^T J + \lambda I)^{-1} J^T e`.
+    ``normal`` (>= 6, >= 6) and ``y`` (>= 6,) are scratch space.
+    """
+    m = min(n, 6)
+    for i in range(m):
+        for j in range(m):
+            s = 0.0
+            if n < 6:  # J^T J
+                for r in range(6):
+                    s += jac[r, i] * jac[r, j]
+            else:  # J J^T
+                for k in range(n):
+                    s += jac[i, k] * jac[j, k]
+            normal[i, j] = s
+        normal[i, i] += damping
+        if n < 6:  # J^T e
+            s = 0.0
+            for r in range(6):
+                s += jac[r, i] * e[r]
+        else:  # e + J z
+            s = e[i]
+            if use_pull:
+                for k in range(n):
+                    s += jac[i, k] * pull[k]
+        y[i] = s
+    _solve(normal, y, m)  # positive definite: never singular
+    for k in range(n):
+        if n < 6:
+            dq[k] = y[k]
+            continue
+        s = 0.0
+        for i in range(6):  # J^T y (- z)
+            s += jac[i, k] * y[i]
+        dq[k] = s - pull[k] if use_pull else s
+
+
+@_jit
+def _roughly_rigid(pose: FloatArray) -> bool:
+    """The fast acceptance test of a target (finite, rigid to RIGIDITY_TOL / 5)."""
+    r00, r01, r02 = pose[0, 0], pose[0, 1], pose[0, 2]
+    r10, r11, r12 = pose[1, 0], pose[1, 1], pose[1, 2]
+    r20, r21, r22 = pose[2, 0], pose[2, 1], pose[2, 2]
+    e0 = r00 * r00 + r10 * r10 + r20 * r20 - 1.0
+    e1 = r01 * r01 + r11 * r11 + r21 * r21 - 1.0
+    e2 = r00 * r01 + r10 * r11 + r20 * r21
+    ex = r10 * r21 - r20 * r11 - r02  # x × y - z
+    ey = r20 * r01 - r00 * r21 - r12
+    ez = r00 * r11 - r10 * r01 - r22
+    b0, b1, b2, b3 = pose[3, 0], pose[3, 1], pose[3, 2], pose[3, 3] - 1.0
+    err2 = e0 * e0 + e1 * e1 + e2 * e2 + ex * ex + ey * ey + ez * ez
+    err2 += b0 * b0 + b1 * b1 + b2 * b2 + b3 * b3
+    # a NaN fails the comparison; an infinite translation makes the sum NaN
+    return err2 <= FAST_TOL2 and (pose[0, 3] + pose[1, 3] + pose[2, 3]) * 0.0 == 0.0
+
+
+@_jit
+def _first_guess(features: np.ndarray, starts: FloatArray, target: FloatArray, q):
+    """Copy into ``q`` the candidate start whose tool pose is nearest ``target``.
+
+    ``features`` (16, count) float32: per candidate (column), 16 numbers whose
+    dot product with the row-major target matrix is its score (the smallest
+    wins); ``starts`` (count, n): the candidates' coordinates. Candidates run
+    along rows, and in single precision, so that the scoring is SIMD code.
+    """
+    count = features.shape[1]
+    if count == 0:
+        return
+    score = np.empty(count, dtype=np.float32)
+    row = features[15]
+    for c in range(count):
+        score[c] = row[c]
+    for i in range(3):
+        for j in range(4):
+            t, row = np.float32(target[i, j]), features[4 * i + j]
+            for c in range(count):
+                score[c] += t * row[c]
+    best, low = 0, score[0]
+    for c in range(1, count):
+        if score[c] < low:
+            best, low = c, score[c]
+    for k in range(q.shape[0]):
+        q[k] = starts[best, k]
+
+
+@_jit
+def run(chain, target, q_ref, state, tol2, max_steps, guess, features, starts, check):
+    """One run of damped Newton steps from ``q``, until it converges or stalls.
+
+    Args:
+        chain: (n + 1, CHAIN_WIDTH) chain (module docstring).
+        target: (4, 4) homogeneous target of the tool in the base frame [m].
+        q_ref: (n,) configuration redundant arms are pulled towards.
+        state: (2 n + N_STATS,) the start ``q`` (overwritten by the last
+            iterate), the best configuration so far and the running
+            statistics (ERR2 inf and STEPS 0 at first), all updated in place:
+            one array, so that a call from Python passes (and allocates) one.
+        tol2: Squared convergence threshold on |e|.
+        max_steps: Step budget over all runs.
+        guess: Start from the candidate nearest the target
+            instead of ``q``.
+        features: (16, count) float32 candidate features (:func:`_first_guess`).
+        starts: (count, n) candidate coordinates.
+        check: Apply the fast rigidity test to ``target`` first.
+
+    Returns:
+        CONVERGED, STALLED (a restart is due), EXHAUSTED (no steps left) or
+        NOT_RIGID (``target`` failed the fast rigidity test; nothing done).
+    """
+    if check and not _roughly_rigid(target):
+        return NOT_RIGID
+    n = chain.shape[0] - 1
+    q, best_q, stats = state[:n], state[n : 2 * n], state[2 * n :]
+    if guess:
+        _first_guess(features, starts, target, q)
+    # Scratch space: frames of the joints and tool, matrices and vectors.
+    frames, work = np.empty((n + 1, 12)), np.empty((23, max(n, 6)))
+    jac, jac_free, normal = work[0:6], work[6:12], work[12:18]
+    e, dq, pull, q_next, y = work[18], work[19], work[20], work[21], work[22]
+    square, redundant = n == 6, n > 6
+    steps = int(stats[STEPS])
+    run_start = stall_at = steps
+    stall_level = math.inf
+    while True:
+        _forward(chain, q, frames)
+        position = _error(target, frames, e)
+        err2 = 0.0
+        for i in range(6):
+            err2 += e[i] * e[i]
+        if err2 < stats[ERR2]:
+            stats[ERR2], stats[POSITION] = err2, position
+            stats[ROTATION] = math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5])
+            for k in range(n):
+                best_q[k] = q[k]
+            if err2 <= tol2:
+                stats[STEPS] = steps
+                return CONVERGED
+        if err2 < stall_level:
+            stall_level, stall_at = STALL_RATIO * err2, steps
+        if steps >= max_steps:
+            stats[STEPS] = steps
+            return EXHAUSTED
+        if steps - stall_at >= STALL_STEPS or steps - run_start >= RUN_STEPS:
+            stats[STEPS] = steps
+            return STALLED
+        steps += 1
+
+        _jacobian(chain, frames, jac)
+        newton = False
+        if square:  # Newton step J^-1 e
+            for i in range(6):
+                for j in range(6):
+                    normal[i, j] = jac[i, j]
+                dq[i] = e[i]
+            if _solve(normal, dq, n):  # n == 6
+                step2 = 0.0
+                for k in range(6):
+                    step2 += dq[k] * dq[k]
+                if step2 <= _MAX_STEP2:
+                    newton = True
+                elif step2 < _SINGULAR_STEP2:  # long: shortened
+                    shorten = MAX_STEP / math.sqrt(step2)
+                    for k in range(6):
+                        dq[k] *= shorten
+                    newton = True
+                # else near-singular J (or NaN): the damped step
+        damping = DAMPING_GAIN * err2 + DAMPING_FLOOR
+        use_pull = redundant and err2 > _NULL_OFF_ERROR2
+        if not newton:
+            if use_pull:
+                for k in range(n):
+                    d = q_ref[k] - q[k]
+                    if chain[k, 18] == WRAP_UNBOUNDED:  # shortest way round
+                        d -= _TAU * math.floor(d / _TAU + 0.5)
+                    pull[k] = NULL_GAIN * d
+            _damped_step(jac, n, e, pull, use_pull, damping, normal, y, dq)
+        clipped = False
+        for k in range(n):
+            x = q[k] - dq[k]
+            lo, hi = chain[k, 16], chain[k, 17]
+            if chain[k, 18] == WRAP_FULL_TURN:  # comes back in at the other end
+                if x > hi:
+                    x -= _TAU
+                elif x < lo:
+                    x += _TAU
+            q_next[k] = x
+            clipped |= x < lo or x > hi
+        if clipped and redundant and err2 < _ACTIVE_SET_ERROR2:
+            # Freeze the joints pushed out: the others take over their motion.
+            # (No pull here: it stops above ACTIVE_SET_ERROR.)
+            for k in range(n):
+                free = chain[k, 16] <= q_next[k] <= chain[k, 17]
+                for r in range(6):
+                    jac_free[r, k] = jac[r, k] if free else 0.0
+            # use_pull is False here (err2 < ACTIVE_SET_ERROR^2 = NULL_OFF_ERROR^2);
+            # passed as the variable: a literal False would compile a copy.
+            _damped_step(jac_free, n, e, pull, use_pull, damping, normal, y, dq)
+            for k in range(n):
+                q_next[k] = q[k] - dq[k]
+        for k in range(n):
+            q[k] = min(max(q_next[k], chain[k, 16]), chain[k, 17])
+
+
+@_jit
+def _splitmix(state: np.ndarray) -> float:
+    """Next uniform draw in [0, 1) of the SplitMix64 generator ``state`` (1,) uint64."""
+    state[0] += _GOLDEN
+    z = state[0]
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    z ^= z >> np.uint64(31)
+    return float(z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
+
+
+@_jit
+def solve_batch(
+    chain, targets, q_ref, q_start, features, starts, tol2, max_steps, seed, out_q,
+    out_stats,
+):  # fmt: skip
+    """Solve every target of ``targets`` (N, 4, 4), restarts drawn in compiled code.
+
+    Args:
+        chain: (n + 1, CHAIN_WIDTH) chain.
+        targets: (N, 4, 4) targets, already checked finite and rigid.
+        q_ref: (1 or N, n) pull references (one for all, or one per target).
+        q_start: (0, 1 or N, n) starts; none: the nearest candidate.
+        features: (16, count) float32 candidate features (:func:`_first_guess`).
+        starts: (count, n) candidate coordinates.
+        tol2: Squared convergence threshold on |e|.
+        max_steps: Step budget per target.
+        seed: Seed of the restart draws; target i draws from SplitMix64 seeded
+            with ``seed + i * golden``, so a result does not depend on the batch.
+        out_q: (N, n) best configuration per target.
+        out_stats: (N, N_STATS) statistics per target.
+    """
+    n = chain.shape[0] - 1
+    low, span = np.empty(n), np.empty(n)
+    for k in range(n):
+        lo, hi = chain[k, 16], chain[k, 17]
+        low[k] = lo if math.isfinite(lo) else -UNBOUNDED_SPAN
+        span[k] = (hi if math.isfinite(hi) else UNBOUNDED_SPAN) - low[k]
+    state = np.empty(2 * n + N_STATS)
+    q, best_q, stats = state[:n], state[n : 2 * n], state[2 * n :]
+    draws = np.empty(1, dtype=np.uint64)
+    for i in range(targets.shape[0]):
+        target = targets[i]
+        for j in range(N_STATS):
+            stats[j] = 0.0
+        stats[ERR2] = math.inf
+        ref = q_ref[i if q_ref.shape[0] > 1 else 0]
+        guess = q_start.shape[0] == 0
+        if not guess:
+            start = q_start[i if q_start.shape[0] > 1 else 0]
+            for k in range(n):
+                q[k] = start[k]
+        draws[0] = np.uint64(seed) + np.uint64(i) * _GOLDEN
+        # Targets are checked already; False as a computed bool, not a literal
+        # (a literal argument would compile another specialisation of run).
+        check = i < 0
+        while (
+            run(chain, target, ref, state, tol2, max_steps, guess, features, starts,
+                check)
+            == STALLED
+        ):  # fmt: skip
+            guess = check  # False (see above)
+            for k in range(n):
+                q[k] = low[k] + span[k] * _splitmix(draws)
+            stats[RESTARTS] += 1.0
+        for k in range(n):
+            out_q[i, k] = best_q[k]
+        for j in range(N_STATS):
+            out_stats[i, j] = stats[j]
+
+
+@_jit
+def chain_kinematics(chain, q, jac):
+    """Tool pose (4, 4) in the base frame at ``q`` (n,); LOCAL Jacobian into ``jac``."""
+    n = chain.shape[0] - 1
+    frames = np.empty((n + 1, 12))
+    _forward(chain, q, frames)
+    _jacobian(chain, frames, jac)
+    pose = np.empty((4, 4))
+    f = frames[n]
+    for i in range(4):
+        for j in range(3):
+            pose[i, j] = f[3 * i + j] if i < 3 else 0.0
+        pose[i, 3] = f[9 + i] if i < 3 else 1.0
+    return pose
