@@ -1,0 +1,478 @@
+r"""Compiled closed form of UR-type arms (axes 2, 3, 4 parallel): all eight branches.
+
+The arm is the fitted chain base · DH(θ) · tool of
+:mod:`workbench.ik.structure` with α1, α4, α5 = ±90°, α2 = α3 = 0, a5 = 0 and
+an empty last row, so the target of the DH chain is
+:math:`M = B^{-1} T E^{-1}` and the wrist point (axes 5 and 6 meet there) is
+its origin p. With σ_i the sign of α_i and :math:`D = d_2 + d_3 + d_4`:
+
+* θ1: z1 = σ1 (s1, −c1, 0) and z1 · p = D (every link but the first moves
+  in planes ⊥ z1), two solutions, none inside the cylinder r < |D|;
+* θ5: z1 · z5 = −σ4 σ5 c5, two solutions ±θ5;
+* θ6: z1 in the tool frame is (σ4 s5 c6, −σ4 s5 s6, ·); free when s5 = 0
+  (wrist singular);
+* θ2 + θ3 + θ4 and the planar two-link arm (a2, a3) to the origin of frame 3,
+  two elbows.
+
+Labels follow the PUMA's (``closed_form`` module docs): shoulder right / left
+(σ1 D x > 0, x the wrist point along x1), elbow up / down (the elbow above /
+below the line from the shoulder to the origin of frame 3, heights along z0),
+wrist up / down (σ5 sin θ5 > 0 / < 0: z5 along +x4 / −x4). Branch ``b`` =
+4·left + 2·down + wrist-down.
+
+Like ``_puma_kernel``, every angle is an atan2 of arguments computed first, so
+that a batch makes all atan2 calls in one vectorised numpy call. The helpers
+that ``_puma_kernel`` also has are repeated here: Numba's cache is not
+invalidated across files, so a kernel calls only functions of its own file.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+import numpy.typing as npt
+
+from workbench.ik._puma import LIMIT_TOL, WRIST_SINGULAR_TOL
+from workbench.ik.structure import KinematicStructure
+from workbench.poses import RIGIDITY_TOL
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Status codes, as ``_puma_kernel``'s.
+OK, NOT_RIGID, OUT_OF_REACH, IN_CYLINDER = 0, 1, 2, 3
+
+GEOMETRY_DTYPE = np.dtype(
+    [
+        ("sigma1", "f8"),
+        ("sigma4", "f8"),
+        ("sigma5", "f8"),
+        ("offset", "f8"),  # D = d2 + d3 + d4
+        ("d1", "f8"),
+        ("a1", "f8"),
+        ("a2", "f8"),
+        ("a3", "f8"),
+        ("a4", "f8"),
+        ("d5", "f8"),
+        ("reach_low", "f8"),
+        ("reach_high", "f8"),
+        ("cylinder2", "f8"),
+        ("theta_offset", "f8", 6),
+        ("joint_sign", "f8", 6),
+        ("plain", "f8", 6),
+        ("lower", "f8", 6),
+        ("upper", "f8", 6),
+        ("base_inv", "f8", (4, 4)),
+        ("tool_inv", "f8", (4, 4)),
+    ],
+    align=True,
+)
+
+#: Angle slots: θ1 per shoulder; θ5 and θ6 of wrist-up per shoulder; θ3 of
+#: elbow-up per (shoulder, wrist); θ2 and θ4 per branch.
+U1, U5, U6, U3, U2, U4 = 0, 2, 4, 6, 10, 18
+N_ANGLES = 26
+#: Bit ``DEAD + 2·shoulder + wrist`` of the mask: that pair cannot reach.
+DEAD = 26
+
+_FAST_TOL2 = (RIGIDITY_TOL / 5.0) ** 2
+_PI = math.pi
+_TAU = 2.0 * math.pi
+
+
+def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
+    """The constants of a UR-type arm as a read-only (1,) record array.
+
+    Args:
+        structure: Its fitted structure (family ``"ur"``).
+        lower: Lower joint limits, (6,) [rad].
+        upper: Upper joint limits, (6,) [rad].
+    """
+    j = structure.table.joints
+    g = np.zeros(1, dtype=GEOMETRY_DTYPE)
+    g["sigma1"] = math.copysign(1.0, j[0].alpha)
+    g["sigma4"] = math.copysign(1.0, j[3].alpha)
+    g["sigma5"] = math.copysign(1.0, j[4].alpha)
+    g["offset"] = j[1].d + j[2].d + j[3].d
+    g["d1"], g["a1"], g["a2"], g["a3"] = j[0].d, j[0].a, j[1].a, j[2].a
+    g["a4"], g["d5"] = j[3].a, j[4].d
+    low, high = abs(abs(j[1].a) - abs(j[2].a)), abs(j[1].a) + abs(j[2].a)
+    slack = 1e-12 * high
+    g["reach_low"], g["reach_high"] = low - slack, high + slack
+    g["cylinder2"] = j[1].d + j[2].d + j[3].d
+    g["cylinder2"] = g["cylinder2"] ** 2 * (1.0 - 1e-12)
+    offsets = [x.theta_offset for x in j]
+    g["theta_offset"], g["joint_sign"] = offsets, structure.joint_sign
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    g["plain"] = [
+        o == 0.0 and s == 1.0 and lo >= -_PI and hi <= _PI
+        for o, s, lo, hi in zip(offsets, structure.joint_sign, lower, upper)
+    ]
+    g["lower"], g["upper"] = lower - LIMIT_TOL, upper + LIMIT_TOL
+    g["base_inv"] = np.linalg.inv(structure.base)
+    g["tool_inv"] = np.linalg.inv(structure.tool)
+    g.setflags(write=False)
+    return g
+
+
+_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+_jit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+
+
+@_jit_inline
+def _remainder(x: float) -> float:
+    """IEEE remainder of ``x`` by 2π, in [−π, π]."""
+    if -_PI <= x <= _PI:
+        return x
+    if -3.0 * _PI <= x <= 3.0 * _PI:
+        return x - _TAU if x > 0.0 else x + _TAU
+    r = np.fmod(x, _TAU)
+    if r > _PI:
+        return r - _TAU
+    if r < -_PI:
+        return r + _TAU
+    return r
+
+
+@_jit_inline
+def _joint_value(geo, j: int, theta: float, prev: FloatArray, has_prev: bool) -> float:
+    """Joint value of DH angle ``theta`` (as ``_puma_kernel._joint_value``)."""
+    sign = geo.joint_sign[j]
+    if has_prev:
+        return prev[j] + _remainder(sign * (theta - geo.theta_offset[j]) - prev[j])
+    if geo.plain[j] != 0.0:
+        return theta if theta > -_PI else _PI
+    y = _remainder(sign * (theta - geo.theta_offset[j]))
+    if y <= -_PI:
+        y += _TAU
+    lo, hi = geo.lower[j], geo.upper[j]
+    if lo <= y <= hi:
+        return y
+    for turns in (1.0, -1.0, 2.0, -2.0):
+        z = y + turns * _TAU
+        if lo <= z <= hi:
+            return z
+    return y
+
+
+@_jit_inline
+def _roughly_rigid(pose: FloatArray) -> bool:
+    """Fast acceptance test of a pose (as ``_puma_kernel._roughly_rigid``)."""
+    r00, r01, r02 = pose[0, 0], pose[0, 1], pose[0, 2]
+    r10, r11, r12 = pose[1, 0], pose[1, 1], pose[1, 2]
+    r20, r21, r22 = pose[2, 0], pose[2, 1], pose[2, 2]
+    e0 = r00 * r00 + r10 * r10 + r20 * r20 - 1.0
+    e1 = r01 * r01 + r11 * r11 + r21 * r21 - 1.0
+    e2 = r00 * r01 + r10 * r11 + r20 * r21
+    ex = r10 * r21 - r20 * r11 - r02
+    ey = r20 * r01 - r00 * r21 - r12
+    ez = r00 * r11 - r10 * r01 - r22
+    b0, b1, b2, b3 = pose[3, 0], pose[3, 1], pose[3, 2], pose[3, 3] - 1.0
+    err2 = e0 * e0 + e1 * e1 + e2 * e2 + ex * ex + ey * ey + ez * ez
+    err2 += b0 * b0 + b1 * b1 + b2 * b2 + b3 * b3
+    return err2 <= _FAST_TOL2 and (pose[0, 3] + pose[1, 3] + pose[2, 3]) * 0.0 == 0.0
+
+
+@_jit_inline
+def _frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
+    """Rows 0..2 of ``base_inv · pose · tool_inv`` into ``out``."""
+    b, e = geo.base_inv, geo.tool_inv
+    for i in range(3):
+        for j in range(4):
+            acc = b[i, 3] if j == 3 else 0.0
+            for k in range(3):
+                c = pose[k, 3] if j == 3 else 0.0
+                for m in range(3):
+                    c += pose[k, m] * e[m, j]
+                acc += b[i, k] * c
+            out[i, j] = acc
+
+
+@_jit_inline
+def angle_arguments(
+    geo,
+    target: FloatArray,
+    prev: FloatArray,
+    y: FloatArray,
+    x: FloatArray,
+    scratch: FloatArray,
+) -> tuple[int, int]:
+    """The arguments (y, x) of the atan2 of each angle slot of one pose.
+
+    Args:
+        geo: The arm's record (:data:`GEOMETRY_DTYPE`).
+        target: (4, 4) pose of the tool frame, checked rigid and finite.
+        prev: (6,) previous configuration [rad], or (0,) for none.
+        y: (N_ANGLES,) output, first arguments of the atan2.
+        x: (N_ANGLES,) output, second arguments.
+        scratch: (4, 4) work space.
+
+    Returns:
+        ``(status, mask)``: :data:`OK`, :data:`OUT_OF_REACH` or
+        :data:`IN_CYLINDER`; bit ``slot`` of the mask: the slot holds its angle
+        in ``y`` (θ1 on the base axis, θ6 at a wrist singularity, which the bit
+        ``U6 + shoulder`` also flags); bit ``DEAD + pair``: the (shoulder, wrist)
+        pair cannot reach, its in-plane distance [m] in ``x[U3 + pair]``.
+    """
+    has_prev = prev.shape[0] != 0
+    _frame_pose(geo, target, scratch)
+    m = scratch
+    nx, ny, nz = m[0, 0], m[1, 0], m[2, 0]
+    ox, oy, oz = m[0, 1], m[1, 1], m[2, 1]
+    ax, ay, az = m[0, 2], m[1, 2], m[2, 2]
+    px, py, pz = m[0, 3], m[1, 3], m[2, 3]
+    r2 = px * px + py * py
+    if r2 < geo.cylinder2:
+        x[U3] = math.sqrt(r2)
+        return IN_CYLINDER, 0
+    s1g, s4g, s5g = geo.sigma1, geo.sigma4, geo.sigma5
+    sd = s1g * geo.offset
+    right = 1.0 if sd >= 0.0 else -1.0
+    rho = math.sqrt(max(r2 - geo.offset * geo.offset, 0.0))
+    a2, a3, a4, d5 = geo.a2, geo.a3, geo.a4, geo.d5
+    mask = 0
+    for arm in range(2):
+        x1 = right * rho if arm == 0 else -right * rho
+        if r2 > 0.0:
+            c1, s1 = (px * x1 - py * sd) / r2, (py * x1 + px * sd) / r2
+            y[U1 + arm], x[U1 + arm] = s1, c1
+        else:  # wrist point on the base axis (D = 0): theta1 free
+            t1 = geo.theta_offset[0]
+            if has_prev:
+                t1 += geo.joint_sign[0] * prev[0]
+            c1, s1 = math.cos(t1), math.sin(t1)
+            y[U1 + arm] = t1
+            mask |= 1 << (U1 + arm)
+        c5 = -s4g * s5g * s1g * (s1 * ax - c1 * ay)
+        c5 = min(max(c5, -1.0), 1.0)
+        s5 = s5g * math.sqrt(1.0 - c5 * c5)  # wrist-up: sigma5 s5 >= 0
+        y[U5 + arm], x[U5 + arm] = s5, c5
+        vx, vy = s1g * (s1 * nx - c1 * ny), s1g * (s1 * ox - c1 * oy)
+        if abs(s5) > WRIST_SINGULAR_TOL:
+            y6, x6 = -s4g * vy * s5, s4g * vx * s5
+            y[U6 + arm], x[U6 + arm] = y6, x6
+            h = math.sqrt(y6 * y6 + x6 * x6)
+            c6, s6 = x6 / h, y6 / h
+        else:  # theta6 free: its offset, or the previous value
+            t6 = geo.theta_offset[5]
+            if has_prev:
+                t6 += geo.joint_sign[5] * prev[5]
+            c6, s6 = math.cos(t6), math.sin(t6)
+            y[U6 + arm] = t6
+            mask |= 1 << (U6 + arm)
+        for wrist in range(2):
+            pair = 2 * arm + wrist
+            sw = 1.0 if wrist == 0 else -1.0  # the other wrist: -s5, theta6 + pi
+            cs6, ss6, ss5 = sw * c6, sw * s6, sw * s5
+            # x4 = R14 e_x = (c234, s234) in frame 1
+            wx = cs6 * c5 * nx - ss6 * c5 * ox + s5g * ss5 * ax
+            wy = cs6 * c5 * ny - ss6 * c5 * oy + s5g * ss5 * ay
+            wz = cs6 * c5 * nz - ss6 * c5 * oz + s5g * ss5 * az
+            c234, s234 = c1 * wx + s1 * wy, s1g * wz
+            # origin of frame 4 = p - d5 z4, z4 = sigma5 (s6 n + c6 o)
+            qx = px - d5 * s5g * (ss6 * nx + cs6 * ox) - geo.a1 * c1
+            qy = py - d5 * s5g * (ss6 * ny + cs6 * oy) - geo.a1 * s1
+            qz = pz - d5 * s5g * (ss6 * nz + cs6 * oz) - geo.d1
+            big_x = c1 * qx + s1 * qy - a4 * c234
+            big_y = s1g * qz - a4 * s234
+            dist2 = big_x * big_x + big_y * big_y
+            dist = math.sqrt(dist2)
+            if not (geo.reach_low <= dist <= geo.reach_high):
+                mask |= 1 << (DEAD + pair)
+                y[U3 + pair], x[U3 + pair] = 0.0, dist
+                for elbow in range(2):
+                    b = 4 * arm + 2 * elbow + wrist
+                    y[U2 + b], x[U2 + b], y[U4 + b], x[U4 + b] = 0.0, 1.0, 0.0, 1.0
+                continue
+            c3 = (dist2 - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)
+            c3 = min(max(c3, -1.0), 1.0)
+            up = -1.0 if s1g * a2 * a3 * big_x > 0.0 else 1.0
+            s3_up = up * math.sqrt(1.0 - c3 * c3)
+            y[U3 + pair], x[U3 + pair] = s3_up, c3
+            for elbow in range(2):
+                b = 4 * arm + 2 * elbow + wrist
+                s3 = s3_up if elbow == 0 else -s3_up
+                k1, k2 = a2 + a3 * c3, a3 * s3
+                c2, s2 = big_x * k1 + big_y * k2, big_y * k1 - big_x * k2
+                y[U2 + b], x[U2 + b] = s2, c2
+                norm = math.sqrt(c2 * c2 + s2 * s2)
+                if norm > 0.0:
+                    c2, s2 = c2 / norm, s2 / norm
+                else:
+                    c2, s2 = 1.0, 0.0
+                c23, s23 = c2 * c3 - s2 * s3, s2 * c3 + c2 * s3
+                y[U4 + b] = s234 * c23 - c234 * s23
+                x[U4 + b] = c234 * c23 + s234 * s23
+    if mask >> DEAD == 15:
+        return OUT_OF_REACH, mask
+    return OK, mask
+
+
+@_jit_inline
+def assemble(
+    geo,
+    angles: FloatArray,
+    prev: FloatArray,
+    q: FloatArray,
+    within: npt.NDArray[np.bool_],
+    mask: int,
+) -> None:
+    """Joint values of the eight branches from the DH angles of a pose.
+
+    Args:
+        geo: The arm's record.
+        angles: (N_ANGLES,) DH angles [rad] of the slots, each in [−π, π].
+        prev: (6,) previous configuration [rad], or (0,) for none.
+        q: (8, 6) output [rad]; NaN rows for a pair that cannot reach.
+        within: (8,) output, within the limits; or (0,) to skip the tests.
+        mask: From :func:`angle_arguments`.
+    """
+    has_prev = prev.shape[0] != 0
+    for arm in range(2):
+        q1 = _joint_value(geo, 0, angles[U1 + arm], prev, has_prev)
+        t5, t6 = angles[U5 + arm], angles[U6 + arm]
+        for wrist in range(2):
+            pair = 2 * arm + wrist
+            dead = mask >> (DEAD + pair) & 1
+            if wrist:
+                t5, t6 = -t5, (t6 - _PI if t6 > 0.0 else t6 + _PI)
+            q5 = _joint_value(geo, 4, t5, prev, has_prev)
+            q6 = _joint_value(geo, 5, t6, prev, has_prev)
+            for elbow in range(2):
+                b = 4 * arm + 2 * elbow + wrist
+                if dead:
+                    for j in range(6):
+                        q[b, j] = np.nan
+                    if within.shape[0]:
+                        within[b] = False
+                    continue
+                t3 = angles[U3 + pair]
+                q[b, 0] = q1
+                q[b, 1] = _joint_value(geo, 1, angles[U2 + b], prev, has_prev)
+                q[b, 2] = _joint_value(geo, 2, -t3 if elbow else t3, prev, has_prev)
+                q[b, 3] = _joint_value(geo, 3, angles[U4 + b], prev, has_prev)
+                q[b, 4], q[b, 5] = q5, q6
+                if within.shape[0]:
+                    ok = True
+                    for j in range(6):
+                        ok &= geo.lower[j] <= q[b, j] <= geo.upper[j]
+                    within[b] = ok
+
+
+@_jit
+def solve_pose(
+    geometry: np.ndarray,
+    pose: FloatArray,
+    prev: FloatArray,
+    q: FloatArray,
+    flags: npt.NDArray[np.bool_],
+    check: bool = True,
+) -> int:
+    """All eight branches of one pose (as ``_puma_kernel.solve_pose``).
+
+    Args:
+        geometry: (1,) record array of :data:`GEOMETRY_DTYPE`.
+        pose: (4, 4) target pose of the tool frame.
+        prev: (6,) previous configuration [rad], or (0,) for none.
+        q: (8, 6) output [rad], NaN rows for branches that cannot reach.
+        flags: (12,) output: per branch within the limits (8), then per
+            (shoulder, elbow) pair of branches 2·pair, 2·pair + 1, wrist
+            singular (4).
+        check: Run the fast rigidity test first.
+
+    Returns:
+        :data:`OK`, :data:`NOT_RIGID`, :data:`OUT_OF_REACH` or
+        :data:`IN_CYLINDER`.
+    """
+    geo = geometry[0]
+    if check and not _roughly_rigid(pose):
+        return NOT_RIGID
+    y, x = np.empty(N_ANGLES), np.empty(N_ANGLES)
+    status, mask = angle_arguments(geo, pose, prev, y, x, np.empty((4, 4)))
+    if status != OK:
+        return status
+    angles = np.empty(N_ANGLES)
+    for slot in range(N_ANGLES):
+        if mask >> slot & 1:
+            angles[slot] = y[slot]
+        else:
+            angles[slot] = math.atan2(y[slot], x[slot])
+    assemble(geo, angles, prev, q, flags[:8], mask)
+    for pair in range(4):
+        flags[8 + pair] = mask >> (U6 + (pair >> 1)) & 1
+    return OK
+
+
+@_jit
+def diagnose(geometry: np.ndarray, pose: FloatArray) -> tuple[int, float]:
+    """Why a pose is unreachable: status and the distance that fails [m].
+
+    Returns:
+        ``(IN_CYLINDER, distance of the wrist point from the base axis)`` or
+        ``(OUT_OF_REACH, in-plane distance nearest the reach)``, else
+        ``(OK, 0.0)``.
+    """
+    geo = geometry[0]
+    y, x = np.empty(N_ANGLES), np.empty(N_ANGLES)
+    status, mask = angle_arguments(geo, pose, np.empty(0), y, x, np.empty((4, 4)))
+    if status == OUT_OF_REACH:
+        best, worst = 0.0, math.inf
+        for pair in range(4):
+            d = x[U3 + pair]
+            miss = max(geo.reach_low - d, d - geo.reach_high)
+            if miss < worst:
+                best, worst = d, miss
+        return status, best
+    if status == IN_CYLINDER:
+        return status, x[U3]
+    return OK, 0.0
+
+
+@_jit
+def batch_arguments(
+    geometry: np.ndarray,
+    poses: FloatArray,
+    y: FloatArray,
+    x: FloatArray,
+    status: npt.NDArray[np.int8],
+    exact: npt.NDArray[np.int32],
+    check: bool = True,
+) -> int:
+    """Stage 1 of a batch (as ``_puma_kernel.batch_arguments``)."""
+    geo = geometry[0]
+    none, scratch = np.empty(0), np.empty((4, 4))
+    for i in range(poses.shape[0]):
+        if check and not _roughly_rigid(poses[i]):
+            return i
+        status[i], exact[i] = angle_arguments(
+            geo, poses[i], none, y[i], x[i], scratch
+        )
+    return -1
+
+
+@_jit
+def batch_assemble(
+    geometry: np.ndarray,
+    angles: FloatArray,
+    y: FloatArray,
+    status: npt.NDArray[np.int8],
+    exact: npt.NDArray[np.int32],
+    q: FloatArray,
+    valid: npt.NDArray[np.bool_],
+) -> None:
+    """Stage 3 of a batch (as ``_puma_kernel.batch_assemble``)."""
+    geo = geometry[0]
+    none, no_within = np.empty(0), np.empty(0, dtype=np.bool_)
+    for i in range(angles.shape[0]):
+        if status[i] != OK:
+            q[i] = np.nan
+            valid[i] = False
+            continue
+        mask = exact[i]
+        for slot in range(N_ANGLES):
+            if mask >> slot & 1:
+                angles[i, slot] = y[i, slot]
+        assemble(geo, angles[i], none, q[i], no_within, mask)
+        for b in range(8):
+            valid[i, b] = not (mask >> (DEAD + 2 * (b >> 2) + (b & 1)) & 1)
