@@ -23,6 +23,7 @@ folded into the target.
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass
 from functools import lru_cache
@@ -280,7 +281,8 @@ def get_geometry(robot: Robot) -> PumaGeometry:
     """
     table = robot.dh_table
     if table is not None and robot.tool_frame == table.tool_frame:
-        return geometry_from_dh(table, robot.lower, robot.upper)
+        with contextlib.suppress(UnsupportedRobotError):  # else: from the axes
+            return geometry_from_dh(table, robot.lower, robot.upper)
     structure = get_structure(robot)
     if structure.family != "opw":
         raise UnsupportedRobotError(

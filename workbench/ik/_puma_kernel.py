@@ -109,7 +109,8 @@ def pack_geometry(geo: PumaGeometry) -> np.ndarray:
     packed["lower"], packed["upper"] = geo.bounds
     identity = np.eye(4)
     packed["framed"] = not (
-        np.array_equal(geo.base_inv, identity) and np.array_equal(geo.tool_inv, identity)
+        np.array_equal(geo.base_inv, identity)
+        and np.array_equal(geo.tool_inv, identity)
     )
     packed.setflags(write=False)
     return packed
@@ -323,7 +324,9 @@ def angle_arguments(
             c1, s1 = (px * x1 - py * sd) / r2, (py * x1 + px * sd) / r2
             y[T1 + arm], x[T1 + arm] = s1, c1
         else:  # wrist centre on the base axis (D = 0): theta1 is free
-            t1 = geo.theta_offset[0] + (geo.joint_sign[0] * prev[0] if has_prev else 0.0)
+            t1 = geo.theta_offset[0]
+            if has_prev:
+                t1 += geo.joint_sign[0] * prev[0]
             c1, s1 = math.cos(t1), math.sin(t1)
             y[T1 + arm] = t1
             exact |= 1 << (T1 + arm)
@@ -415,9 +418,7 @@ def assemble(
         for elbow in range(2):
             pair = 2 * arm + elbow
             q2 = _joint_value(geo, 1, angles[T2 + pair], prev, has_prev)
-            q3 = _joint_value(
-                geo, 2, angles[T3 + pair], prev, has_prev
-            )
+            q3 = _joint_value(geo, 2, angles[T3 + pair], prev, has_prev)
             t4, t5, t6 = angles[T4 + pair], angles[T5 + pair], angles[T6 + pair]
             # the flip twin: (theta4 + pi, -theta5, theta6 + pi)
             t4f = t4 - _PI if t4 > 0.0 else t4 + _PI
@@ -511,9 +512,7 @@ def batch_arguments(
     for i in range(poses.shape[0]):
         if check and not _roughly_rigid(poses[i]):
             return i
-        status[i], exact[i] = angle_arguments(
-            geo, poses[i], none, y[i], x[i], scratch
-        )
+        status[i], exact[i] = angle_arguments(geo, poses[i], none, y[i], x[i], scratch)
     return -1
 
 

@@ -107,7 +107,9 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
     g["plain"] = [
         o == 0.0 and s == 1.0 and lo >= -_PI and hi <= _PI
-        for o, s, lo, hi in zip(offsets, structure.joint_sign, lower, upper)
+        for o, s, lo, hi in zip(
+            offsets, structure.joint_sign, lower, upper, strict=True
+        )
     ]
     g["lower"], g["upper"] = lower - LIMIT_TOL, upper + LIMIT_TOL
     g["base_inv"] = np.linalg.inv(structure.base)
@@ -415,7 +417,7 @@ def diagnose(geometry: np.ndarray, pose: FloatArray) -> tuple[int, float]:
     """
     geo = geometry[0]
     y, x = np.empty(N_ANGLES), np.empty(N_ANGLES)
-    status, mask = angle_arguments(geo, pose, np.empty(0), y, x, np.empty((4, 4)))
+    status, _ = angle_arguments(geo, pose, np.empty(0), y, x, np.empty((4, 4)))
     if status == OUT_OF_REACH:
         best, worst = 0.0, math.inf
         for pair in range(4):
@@ -445,9 +447,7 @@ def batch_arguments(
     for i in range(poses.shape[0]):
         if check and not _roughly_rigid(poses[i]):
             return i
-        status[i], exact[i] = angle_arguments(
-            geo, poses[i], none, y[i], x[i], scratch
-        )
+        status[i], exact[i] = angle_arguments(geo, poses[i], none, y[i], x[i], scratch)
     return -1
 
 

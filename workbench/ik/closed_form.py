@@ -49,8 +49,8 @@ from workbench.ik._puma import (
     check_reach,
     get_geometry,
 )
-from workbench.ik.structure import get_structure
 from workbench.ik._targets import as_targets, check_poses, pose_rows
+from workbench.ik.structure import get_structure
 from workbench.robot import Robot
 from workbench.validation import as_vector
 
@@ -85,12 +85,18 @@ def get_solver(robot: Robot) -> tuple[str, object, np.ndarray]:
             says which axes fail which test).
     """
     table = robot.dh_table
-    if table is not None and robot.tool_frame == table.tool_frame:
-        return "opw", kernel, kernel.packed_geometry(robot)
-    structure = get_structure(robot)
+    if table is None or robot.tool_frame != table.tool_frame:
+        structure = get_structure(robot)
+    else:
+        try:
+            return "opw", kernel, kernel.packed_geometry(robot)
+        except UnsupportedRobotError:  # the table is not PUMA-type: the axes
+            structure = get_structure(robot)
     if structure.family == "ur":
-        return "ur", ur_kernel, ur_kernel.pack_geometry(
-            structure, robot.lower, robot.upper
+        return (
+            "ur",
+            ur_kernel,
+            ur_kernel.pack_geometry(structure, robot.lower, robot.upper),
         )
     return "opw", kernel, kernel.packed_geometry(robot)
 

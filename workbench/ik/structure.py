@@ -205,31 +205,33 @@ def fit_dh(
     return rows, base, tool
 
 
-def _tests(w: FloatArray, p: FloatArray) -> dict[str, tuple[str, float]]:
-    """Every structure test a family may use: name -> (what fails, deviation)."""
+def _tests(w: FloatArray, p: FloatArray) -> dict[str, tuple[str, float, str]]:
+    """Every structure test a family may use: name -> (what fails, deviation, unit)."""
     c = {(i, j): float(np.linalg.norm(np.cross(w[i], w[j]))) for i in range(6)
          for j in range(i + 1, 6)}  # fmt: skip
 
-    def perpendicular(i: int, j: int) -> tuple[str, float]:
+    def perpendicular(i: int, j: int) -> tuple[str, float, str]:
         dev = abs(math.asin(min(1.0, abs(float(w[i] @ w[j])))))
-        return f"axes {i + 1} and {j + 1} are not perpendicular", dev
+        return f"axes {i + 1} and {j + 1} are not perpendicular", dev, "rad"
 
-    def parallel(i: int, j: int) -> tuple[str, float]:
-        return f"axes {i + 1} and {j + 1} are not parallel", math.asin(min(1.0, c[i, j]))
+    def parallel(i: int, j: int) -> tuple[str, float, str]:
+        angle = math.asin(min(1.0, c[i, j]))
+        return f"axes {i + 1} and {j + 1} are not parallel", angle, "rad"
 
-    def meet(i: int, j: int) -> tuple[str, float]:
+    def meet(i: int, j: int) -> tuple[str, float, str]:
         if c[i, j] <= _TINY:
             gap = float(np.linalg.norm(np.cross(p[j] - p[i], w[i])))
         else:
             gap = abs(float((p[j] - p[i]) @ np.cross(w[i], w[j]))) / c[i, j]
-        return f"axes {i + 1} and {j + 1} do not meet", gap
+        return f"axes {i + 1} and {j + 1} do not meet", gap, "m"
 
-    def concurrent() -> tuple[str, float]:
+    def concurrent() -> tuple[str, float, str]:
         if min(c[3, 4], c[4, 5]) <= _TINY:
-            return "axes 4, 5, 6 do not meet in one point", math.inf
+            return "axes 4, 5, 6 do not meet in one point", math.inf, "m"
         f45 = _common_normal(p[3], w[3], p[4], w[4], 0.0)[1]
         f56 = _common_normal(p[4], w[4], p[5], w[5], 0.0)[0]
-        return "axes 4, 5, 6 do not meet in one point", float(np.linalg.norm(f45 - f56))
+        gap = float(np.linalg.norm(f45 - f56))
+        return "axes 4, 5, 6 do not meet in one point", gap, "m"
 
     return {
         "1⊥2": perpendicular(0, 1),
@@ -323,15 +325,15 @@ def get_structure(robot: Robot, tol: float = STRUCTURE_TOL) -> KinematicStructur
         signs = _signs(family, w)
         rows, base, tool = fit_dh(robot, signs, tol)
         rows = _ideal_rows(family, rows)
-        j = rows
-        if abs(j[1][2]) <= tol or (family == "ur" and abs(j[2][2]) <= tol):
-            failures[family] = [("the upper arm or forearm has zero length", 0.0)]
+        if abs(rows[1][2]) <= tol or (family == "ur" and abs(rows[2][2]) <= tol):
+            failures[family] = [("the upper arm or forearm has zero length", 0.0, "m")]
             continue
+        limits = zip(robot.lower, robot.upper, strict=True)
         table = DHTable(
             robot.name,
             tuple(
                 DHJoint(al, a, d, th, lo, hi)
-                for (th, d, a, al), lo, hi in zip(rows, robot.lower, robot.upper)
+                for (th, d, a, al), (lo, hi) in zip(rows, limits, strict=True)
             ),
             tool_frame=robot.tool_frame,
             source="fitted to the joint axes of the model",
@@ -347,7 +349,7 @@ def get_structure(robot: Robot, tol: float = STRUCTURE_TOL) -> KinematicStructur
         )
     reasons = "; ".join(
         f"not {_FAMILY_NAMES[f]}: "
-        + ", ".join(f"{what} (off by {dev:.3g})" for what, dev in failed)
+        + ", ".join(f"{what} (off by {dev:.3g} {unit})" for what, dev, unit in failed)
         for f, failed in failures.items()
     )
     raise UnsupportedRobotError(
