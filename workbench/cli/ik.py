@@ -147,6 +147,7 @@ def _numeric_row(robot: Robot, target: pin.SE3) -> dict[str, object]:
         "q_deg": np.rad2deg(result.q),
         "within_limits": True,
         "wrist_singular": False,
+        "shoulder_singular": False,
         "residual": residual(robot, result.q, target),
     }
 
@@ -174,6 +175,7 @@ def run(args: argparse.Namespace) -> int:
                 "q_deg": np.rad2deg(s.q),
                 "within_limits": s.within_limits,
                 "wrist_singular": s.wrist_singular,
+                "shoulder_singular": s.shoulder_singular,
                 "residual": residual(robot, s.q, target),
             }
             for s in solutions
@@ -194,6 +196,8 @@ def run(args: argparse.Namespace) -> int:
         flags = "" if row["within_limits"] else "  (outside joint limits)"
         if row["wrist_singular"]:
             flags += "  (wrist singular)"
+        if row["shoulder_singular"]:
+            flags += "  (shoulder singular)"
         print(f"{row['branch']:26s} q [deg] {format_vector(row['q_deg'], 3)}{flags}")
         print(f"{'':26s} residual {row['residual']:.2e}")
     return 0

@@ -235,6 +235,13 @@ N_ANGLES = 22
 #: Bit ``DEAD + arm`` of the mask of :func:`angle_arguments`: that arm cannot
 #: reach the wrist centre (only with a shoulder offset a1 != 0).
 DEAD = 22
+#: Bit of the mask set when the shoulder is singular: the wrist centre is
+#: within SHOULDER_SINGULAR_TOL of the cylinder |D| (of the base axis when
+#: D = 0), where the right and left arms meet.
+SHOULDER = 24
+#: Distance [m] of the wrist centre's projection from the shoulder-singular
+#: surface below which the shoulder counts as singular.
+SHOULDER_SINGULAR_TOL = 1e-10
 
 
 @_jit_inline
@@ -295,10 +302,10 @@ def angle_arguments(
     rho2 = max(r2 - geo.offset * geo.offset, 0.0)
     rho, y1 = math.sqrt(rho2), s1g * pz
     distance = math.sqrt(r2 + pz * pz)  # from the shoulder when a1 = 0
+    exact = (1 << SHOULDER) if rho <= SHOULDER_SINGULAR_TOL else 0
     # rows of A = Rx(alpha1)^T Rz(-theta1) R' that do not depend on theta1
     a10, a11, a12 = s1g * nz, s1g * oz, s1g * az
     s13 = s3g * s1g
-    exact = 0
     for arm in range(2):  # right, left
         x1 = right * rho if arm == 0 else -right * rho
         xp = x1 - geo.a1  # wrist centre from the shoulder, along x1
@@ -454,8 +461,8 @@ def solve_pose(
             representative nearest it, and a free θ4/θ6 split by continuity;
             or (0,) for none.
         q: (8, 6) output, joint values [rad].
-        flags: (12,) output: per branch, within the limits (8), then per
-            (arm, elbow) pair, wrist singular (4).
+        flags: (13,) output: per branch, within the limits (8), then per
+            (arm, elbow) pair, wrist singular (4), then shoulder singular.
         check: Run the fast rigidity test first (False once the exact
             checks of ``_targets`` accepted the pose).
 
@@ -479,6 +486,7 @@ def solve_pose(
     assemble(geo, angles, prev, q, flags[:8], exact)
     for pair in range(4):
         flags[8 + pair] = exact >> (T4 + pair) & 1
+    flags[12] = exact >> SHOULDER & 1
     return OK
 
 

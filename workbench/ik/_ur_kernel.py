@@ -69,12 +69,17 @@ GEOMETRY_DTYPE = np.dtype(
     align=True,
 )
 
-#: Angle slots: θ1 per shoulder; θ5 and θ6 of wrist-up per shoulder; θ3 of
-#: elbow-up per (shoulder, wrist); θ2 and θ4 per branch.
-U1, U5, U6, U3, U2, U4 = 0, 2, 4, 6, 10, 18
-N_ANGLES = 26
+#: Angle slots: θ1 per shoulder; θ5 of wrist-up per shoulder; θ6 and θ3 of
+#: elbow-up per (shoulder, wrist) pair; θ2 and θ4 per branch.
+U1, U5, U6, U3, U2, U4 = 0, 2, 4, 8, 12, 20
+N_ANGLES = 28
 #: Bit ``DEAD + 2·shoulder + wrist`` of the mask: that pair cannot reach.
-DEAD = 26
+DEAD = 28
+#: Bit ``SINGULAR + shoulder`` of the mask: the wrist is singular (s5 = 0).
+SINGULAR = 32
+#: Bit of the mask: shoulder singular (as ``_puma_kernel.SHOULDER``).
+SHOULDER = 34
+SHOULDER_SINGULAR_TOL = 1e-10
 
 _FAST_TOL2 = (RIGIDITY_TOL / 5.0) ** 2
 _PI = math.pi
@@ -192,6 +197,56 @@ def _frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
 
 
 @_jit_inline
+def _planar(geo, c1, s1, c5, c6, s6, s5, m, big_px, big_py):
+    """x4 = (c234, s234) and the origin of frame 3 (X, Y) in the arm plane.
+
+    For one (θ1, θ5, θ6): x4 = R14 e_x, and frame 3's origin = wrist point −
+    d5 z4 − a4 x4, z4 = σ5 (s6 n + c6 o), seen from the shoulder in frame 1.
+    """
+    s1g, s5g = geo.sigma1, geo.sigma5
+    wx = c6 * c5 * m[0, 0] - s6 * c5 * m[0, 1] + s5g * s5 * m[0, 2]
+    wy = c6 * c5 * m[1, 0] - s6 * c5 * m[1, 1] + s5g * s5 * m[1, 2]
+    wz = c6 * c5 * m[2, 0] - s6 * c5 * m[2, 1] + s5g * s5 * m[2, 2]
+    c234, s234 = c1 * wx + s1 * wy, s1g * wz
+    zx = s5g * (s6 * m[0, 0] + c6 * m[0, 1])
+    zy = s5g * (s6 * m[1, 0] + c6 * m[1, 1])
+    zz = s5g * (s6 * m[2, 0] + c6 * m[2, 1])
+    big_x = big_px - geo.d5 * (c1 * zx + s1 * zy) - geo.a4 * c234
+    big_y = big_py - geo.d5 * s1g * zz - geo.a4 * s234
+    return c234, s234, big_x, big_y
+
+
+@_jit_inline
+def _reach_turn(geo, c1, s1, m, big_px, big_py, big_x, big_y, dist):
+    """Turn of θ6 [rad] at a wrist singularity that brings frame 3 within reach.
+
+    With z5 ∥ z1, turning θ6 turns the offset v = wrist point − frame 3 origin
+    rigidly in the arm plane (at the rate −(n_P × o_P) = ±1); the turn is the
+    smallest one to the nearest reachable distance (0 if none is reachable).
+    """
+    vx, vy = big_px - big_x, big_py - big_y
+    pn, rm = math.sqrt(big_px * big_px + big_py * big_py), math.sqrt(vx * vx + vy * vy)
+    low = max(geo.reach_low, abs(pn - rm))
+    high = min(geo.reach_high, pn + rm)
+    if low > high or pn * rm == 0.0:
+        return 0.0
+    margin = 1e-9 * geo.reach_high  # strictly inside, against rounding
+    if high - low > 2.0 * margin:
+        low, high = low + margin, high - margin
+    t = min(max(dist, low), high)
+    cos_angle = (pn * pn + rm * rm - t * t) / (2.0 * pn * rm)
+    angle = math.acos(min(max(cos_angle, -1.0), 1.0))
+    a_p, a_v = math.atan2(big_py, big_px), math.atan2(vy, vx)
+    turn_a = _remainder(a_p + angle - a_v)
+    turn_b = _remainder(a_p - angle - a_v)
+    turn = turn_a if abs(turn_a) <= abs(turn_b) else turn_b
+    npx, npy = c1 * m[0, 0] + s1 * m[1, 0], geo.sigma1 * m[2, 0]
+    opx, opy = c1 * m[0, 1] + s1 * m[1, 1], geo.sigma1 * m[2, 1]
+    rate = -(npx * opy - npy * opx)
+    return turn / rate
+
+
+@_jit_inline
 def angle_arguments(
     geo,
     target: FloatArray,
@@ -213,9 +268,10 @@ def angle_arguments(
     Returns:
         ``(status, mask)``: :data:`OK`, :data:`OUT_OF_REACH` or
         :data:`IN_CYLINDER`; bit ``slot`` of the mask: the slot holds its angle
-        in ``y`` (θ1 on the base axis, θ6 at a wrist singularity, which the bit
-        ``U6 + shoulder`` also flags); bit ``DEAD + pair``: the (shoulder, wrist)
-        pair cannot reach, its in-plane distance [m] in ``x[U3 + pair]``.
+        in ``y`` (θ1 on the base axis, θ6 at a wrist singularity); bit
+        ``SINGULAR + shoulder`` flags a singular wrist; bit
+        ``DEAD + pair``: the (shoulder, wrist) pair cannot reach, its in-plane
+        distance [m] in ``x[U3 + pair]``.
     """
     has_prev = prev.shape[0] != 0
     _frame_pose(geo, target, scratch)
@@ -233,7 +289,9 @@ def angle_arguments(
     right = 1.0 if sd >= 0.0 else -1.0
     rho = math.sqrt(max(r2 - geo.offset * geo.offset, 0.0))
     a2, a3, a4, d5 = geo.a2, geo.a3, geo.a4, geo.d5
-    mask = 0
+    mask = np.int64(0)
+    if rho <= SHOULDER_SINGULAR_TOL:
+        mask |= np.int64(1) << SHOULDER
     for arm in range(2):
         x1 = right * rho if arm == 0 else -right * rho
         if r2 > 0.0:
@@ -247,39 +305,50 @@ def angle_arguments(
             y[U1 + arm] = t1
             mask |= 1 << (U1 + arm)
         c5 = -s4g * s5g * s1g * (s1 * ax - c1 * ay)
-        c5 = min(max(c5, -1.0), 1.0)
-        s5 = s5g * math.sqrt(1.0 - c5 * c5)  # wrist-up: sigma5 s5 >= 0
-        y[U5 + arm], x[U5 + arm] = s5, c5
+        # z1 in the tool frame: (sigma4 s5 c6, -sigma4 s5 s6, .); |s5| from it
         vx, vy = s1g * (s1 * nx - c1 * ny), s1g * (s1 * ox - c1 * oy)
-        if abs(s5) > WRIST_SINGULAR_TOL:
-            y6, x6 = -s4g * vy * s5, s4g * vx * s5
-            y[U6 + arm], x[U6 + arm] = y6, x6
-            h = math.sqrt(y6 * y6 + x6 * x6)
-            c6, s6 = x6 / h, y6 / h
-        else:  # theta6 free: its offset, or the previous value
+        s5 = s5g * math.sqrt(vx * vx + vy * vy)  # wrist-up: sigma5 s5 >= 0
+        y[U5 + arm], x[U5 + arm] = s5, c5
+        singular = abs(s5) <= WRIST_SINGULAR_TOL
+        if singular:  # theta6 free: its offset, or the previous value
             t6 = geo.theta_offset[5]
             if has_prev:
                 t6 += geo.joint_sign[5] * prev[5]
             c6, s6 = math.cos(t6), math.sin(t6)
-            y[U6 + arm] = t6
-            mask |= 1 << (U6 + arm)
+            mask |= 1 << (SINGULAR + arm)
+        else:
+            y6, x6 = -s4g * vy * s5, s4g * vx * s5
+            h = math.sqrt(y6 * y6 + x6 * x6)
+            c6, s6 = x6 / h, y6 / h
+        # wrist point from the shoulder, in the arm plane (frame 1)
+        big_px, big_py = c1 * px + s1 * py - geo.a1, s1g * (pz - geo.d1)
         for wrist in range(2):
             pair = 2 * arm + wrist
             sw = 1.0 if wrist == 0 else -1.0  # the other wrist: -s5, theta6 + pi
             cs6, ss6, ss5 = sw * c6, sw * s6, sw * s5
-            # x4 = R14 e_x = (c234, s234) in frame 1
-            wx = cs6 * c5 * nx - ss6 * c5 * ox + s5g * ss5 * ax
-            wy = cs6 * c5 * ny - ss6 * c5 * oy + s5g * ss5 * ay
-            wz = cs6 * c5 * nz - ss6 * c5 * oz + s5g * ss5 * az
-            c234, s234 = c1 * wx + s1 * wy, s1g * wz
-            # origin of frame 4 = p - d5 z4, z4 = sigma5 (s6 n + c6 o)
-            qx = px - d5 * s5g * (ss6 * nx + cs6 * ox) - geo.a1 * c1
-            qy = py - d5 * s5g * (ss6 * ny + cs6 * oy) - geo.a1 * s1
-            qz = pz - d5 * s5g * (ss6 * nz + cs6 * oz) - geo.d1
-            big_x = c1 * qx + s1 * qy - a4 * c234
-            big_y = s1g * qz - a4 * s234
+            c234, s234, big_x, big_y = _planar(
+                geo, c1, s1, c5, cs6, ss6, ss5, m, big_px, big_py
+            )
             dist2 = big_x * big_x + big_y * big_y
             dist = math.sqrt(dist2)
+            if singular:
+                t6p = t6 if wrist == 0 else (t6 - _PI if t6 > 0.0 else t6 + _PI)
+                if not (geo.reach_low <= dist <= geo.reach_high):
+                    # turn theta6 (and with it frame 4 about the wrist point)
+                    # until frame 3 is within reach, if it can be
+                    t6p += _reach_turn(
+                        geo, c1, s1, m, big_px, big_py, big_x, big_y, dist
+                    )
+                    cs6, ss6 = math.cos(t6p), math.sin(t6p)
+                    c234, s234, big_x, big_y = _planar(
+                        geo, c1, s1, c5, cs6, ss6, ss5, m, big_px, big_py
+                    )
+                    dist2 = big_x * big_x + big_y * big_y
+                    dist = math.sqrt(dist2)
+                y[U6 + pair] = t6p
+                mask |= 1 << (U6 + pair)
+            else:
+                y[U6 + pair], x[U6 + pair] = ss6, cs6
             if not (geo.reach_low <= dist <= geo.reach_high):
                 mask |= 1 << (DEAD + pair)
                 y[U3 + pair], x[U3 + pair] = 0.0, dist
@@ -306,7 +375,7 @@ def angle_arguments(
                 c23, s23 = c2 * c3 - s2 * s3, s2 * c3 + c2 * s3
                 y[U4 + b] = s234 * c23 - c234 * s23
                 x[U4 + b] = c234 * c23 + s234 * s23
-    if mask >> DEAD == 15:
+    if mask >> DEAD & 15 == 15:
         return OUT_OF_REACH, mask
     return OK, mask
 
@@ -333,14 +402,12 @@ def assemble(
     has_prev = prev.shape[0] != 0
     for arm in range(2):
         q1 = _joint_value(geo, 0, angles[U1 + arm], prev, has_prev)
-        t5, t6 = angles[U5 + arm], angles[U6 + arm]
+        t5 = angles[U5 + arm]
         for wrist in range(2):
             pair = 2 * arm + wrist
             dead = mask >> (DEAD + pair) & 1
-            if wrist:
-                t5, t6 = -t5, (t6 - _PI if t6 > 0.0 else t6 + _PI)
-            q5 = _joint_value(geo, 4, t5, prev, has_prev)
-            q6 = _joint_value(geo, 5, t6, prev, has_prev)
+            q5 = _joint_value(geo, 4, -t5 if wrist else t5, prev, has_prev)
+            q6 = _joint_value(geo, 5, angles[U6 + pair], prev, has_prev)
             for elbow in range(2):
                 b = 4 * arm + 2 * elbow + wrist
                 if dead:
@@ -378,9 +445,9 @@ def solve_pose(
         pose: (4, 4) target pose of the tool frame.
         prev: (6,) previous configuration [rad], or (0,) for none.
         q: (8, 6) output [rad], NaN rows for branches that cannot reach.
-        flags: (12,) output: per branch within the limits (8), then per
+        flags: (13,) output: per branch within the limits (8), then per
             (shoulder, elbow) pair of branches 2·pair, 2·pair + 1, wrist
-            singular (4).
+            singular (4), then shoulder singular.
         check: Run the fast rigidity test first.
 
     Returns:
@@ -402,7 +469,8 @@ def solve_pose(
             angles[slot] = math.atan2(y[slot], x[slot])
     assemble(geo, angles, prev, q, flags[:8], mask)
     for pair in range(4):
-        flags[8 + pair] = mask >> (U6 + (pair >> 1)) & 1
+        flags[8 + pair] = mask >> (SINGULAR + (pair >> 1)) & 1
+    flags[12] = mask >> SHOULDER & 1
     return OK
 
 

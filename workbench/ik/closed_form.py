@@ -121,6 +121,7 @@ class IKSolution:
         wrist_singular: True if |sin θ5| <= :data:`WRIST_SINGULAR_TOL`; θ4 and θ6
             (UR: θ6 and θ2 + θ3 + θ4) are then one member of a one-parameter
             family.
+        shoulder_singular: True if the two shoulder (arm) solutions meet.
 
     The eight solutions of one :func:`analytic` call share its result arrays
     (each ``q`` is a row of one read-only (8, 6) array). Equality is identity;
@@ -162,11 +163,19 @@ class IKSolution:
         """True if |sin θ5| <= :data:`WRIST_SINGULAR_TOL`."""
         return self._shared[1][8 + (self._index >> 1)]
 
+    @property
+    def shoulder_singular(self) -> bool:
+        """True if the right and left arms meet (the wrist centre is on the
+        cylinder |D| around the base axis, to 1e-10 m); on the base axis θ1 is
+        free and this is one member of a one-parameter family."""
+        return self._shared[1][12]
+
     def __repr__(self) -> str:
         return (
             f"IKSolution(q={self.q!r}, branch={self.branch!r}, index={self.index}, "
             f"within_limits={self.within_limits}, "
-            f"wrist_singular={self.wrist_singular})"
+            f"wrist_singular={self.wrist_singular}, "
+            f"shoulder_singular={self.shoulder_singular})"
         )
 
     def __reduce__(self) -> tuple[object, tuple[object, ...]]:
@@ -183,7 +192,14 @@ def _frozen_field(name: str) -> property:
     return property(getter, refuse, refuse, getter.__doc__)
 
 
-for _name in ("q", "branch", "index", "within_limits", "wrist_singular"):
+for _name in (
+    "q",
+    "branch",
+    "index",
+    "within_limits",
+    "wrist_singular",
+    "shoulder_singular",
+):
     setattr(IKSolution, _name, _frozen_field(_name))
 del _name
 
@@ -279,7 +295,7 @@ def solve_one(
     Raises:
         UnreachableError, NonFiniteError, InputError: As :func:`analytic`.
     """
-    q, flags = np.empty((8, 6)), np.empty(12, dtype=bool)
+    q, flags = np.empty((8, 6)), np.empty(13, dtype=bool)
     status = solver.solve_pose(geometry, pose, prev, q, flags)
     if status == kernel.NOT_RIGID:  # the exact checks raise, or accept it
         pose_rows(pose)
@@ -339,7 +355,7 @@ def analytic_batch(
     size = min(count, _CHUNK)
     y, x, angles = np.empty((3, size, solver.N_ANGLES))
     status = np.empty(size, dtype=np.int8)
-    exact = np.empty(size, dtype=np.int32)
+    exact = np.empty(size, dtype=np.int64)
     for start in range(0, count, _CHUNK):
         chunk = poses[start : start + _CHUNK]
         n = len(chunk)
