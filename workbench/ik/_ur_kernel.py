@@ -276,9 +276,9 @@ def angle_arguments(
     has_prev = prev.shape[0] != 0
     _frame_pose(geo, target, scratch)
     m = scratch
-    nx, ny, nz = m[0, 0], m[1, 0], m[2, 0]
-    ox, oy, oz = m[0, 1], m[1, 1], m[2, 1]
-    ax, ay, az = m[0, 2], m[1, 2], m[2, 2]
+    nx, ny = m[0, 0], m[1, 0]
+    ox, oy = m[0, 1], m[1, 1]
+    ax, ay = m[0, 2], m[1, 2]
     px, py, pz = m[0, 3], m[1, 3], m[2, 3]
     r2 = px * px + py * py
     if r2 < geo.cylinder2:
@@ -288,7 +288,7 @@ def angle_arguments(
     sd = s1g * geo.offset
     right = 1.0 if sd >= 0.0 else -1.0
     rho = math.sqrt(max(r2 - geo.offset * geo.offset, 0.0))
-    a2, a3, a4, d5 = geo.a2, geo.a3, geo.a4, geo.d5
+    a2, a3 = geo.a2, geo.a3
     mask = np.int64(0)
     if rho <= SHOULDER_SINGULAR_TOL:
         mask |= np.int64(1) << SHOULDER

@@ -165,9 +165,12 @@ class IKSolution:
 
     @property
     def shoulder_singular(self) -> bool:
-        """True if the right and left arms meet (the wrist centre is on the
-        cylinder |D| around the base axis, to 1e-10 m); on the base axis θ1 is
-        free and this is one member of a one-parameter family."""
+        """True if the right and left arms meet (shoulder singularity).
+
+        The wrist centre is then on the cylinder |D| around the base axis (to
+        1e-10 m); on the base axis itself θ1 is free and this solution is one
+        member of a one-parameter family.
+        """
         return self._shared[1][12]
 
     def __repr__(self) -> str:

@@ -8,7 +8,9 @@ a point), and a standard DH table is fitted to those lines:
   the base origin, x0 along the base x axis projected on the plane ⊥ z0;
 * frame k (k = 1..5) has z_k on axis k + 1, x_k along the common normal of
   axes k and k + 1 (through the previous origin when they are parallel,
-  along z_{k-1} × z_k when they meet);
+  along ±z_{k-1} × z_k when they meet, the sign with x_k · x_{k-1} >= 0 at
+  q = 0, so that the theta offset is within ±90°: the wrist labels then
+  refer to the robot's own zero, as the DH tables of the PUMA models do);
 * frame 6 is frame 5 turned by θ6 (its row is all zero).
 
 Each axis direction is the joint's positive direction times a sign
@@ -179,8 +181,10 @@ def fit_dh(
         length = float(np.linalg.norm(n))
         if length > _TINY:
             x = n / length
-        elif not parallel:
+        elif not parallel:  # axes meet: the sign that keeps theta_offset small
             x = np.cross(z_prev, z[k]) / sn
+            if float(x @ x_prev) < 0.0:
+                x = -x
         else:  # the same line twice: keep x
             x = x_prev
         x = x - z[k] * float(x @ z[k])  # exactly ⊥ z_k (parallel within tol)
@@ -268,9 +272,13 @@ def _signs(family: str, w: FloatArray) -> tuple[float, ...]:
 
 
 def _ideal_rows(
-    family: str, rows: list[tuple[float, float, float, float]]
+    family: str, rows: list[tuple[float, float, float, float]], tol: float
 ) -> list[tuple[float, float, float, float]]:
-    """The fitted rows with the family's right angles and zeros made exact."""
+    """The fitted rows with the family's right angles and zeros made exact.
+
+    Lengths within ``tol`` of 0 become 0 too: the sign of a shoulder offset of
+    1e-32 m must not decide which arm is the right one.
+    """
     half = math.pi / 2.0
     right = {0, 2, 3, 4} if family == "opw" else {0, 3, 4}
     zero_a = {3, 4} if family == "opw" else {4}
@@ -284,6 +292,8 @@ def _ideal_rows(
             a = 0.0
         if family == "opw" and k == 4:
             d = 0.0
+        d = 0.0 if abs(d) <= tol else d
+        a = 0.0 if abs(a) <= tol else a
         out.append((theta, d, a, alpha))
     return out
 
@@ -324,7 +334,7 @@ def get_structure(robot: Robot, tol: float = STRUCTURE_TOL) -> KinematicStructur
             continue
         signs = _signs(family, w)
         rows, base, tool = fit_dh(robot, signs, tol)
-        rows = _ideal_rows(family, rows)
+        rows = _ideal_rows(family, rows, tol)
         if abs(rows[1][2]) <= tol or (family == "ur" and abs(rows[2][2]) <= tol):
             failures[family] = [("the upper arm or forearm has zero length", 0.0, "m")]
             continue
