@@ -173,15 +173,17 @@ def frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
                 out[i, j] = pose[i, j]
         return
     b, e = geo.base_inv, geo.tool_inv
-    for i in range(3):
+    for i in range(3):  # pose · tool_inv
+        p0, p1, p2 = pose[i, 0], pose[i, 1], pose[i, 2]
         for j in range(4):
-            acc = b[i, 3] if j == 3 else 0.0
-            for k in range(3):
-                c = pose[k, 3] if j == 3 else 0.0
-                for m in range(3):
-                    c += pose[k, m] * e[m, j]
-                acc += b[i, k] * c
-            out[i, j] = acc
+            out[i, j] = p0 * e[0, j] + p1 * e[1, j] + p2 * e[2, j]
+        out[i, 3] += pose[i, 3]
+    for j in range(4):  # base_inv · that, column by column, in place
+        c0, c1, c2 = out[0, j], out[1, j], out[2, j]
+        for i in range(3):
+            out[i, j] = b[i, 0] * c0 + b[i, 1] * c1 + b[i, 2] * c2
+    for i in range(3):
+        out[i, 3] += b[i, 3]
 
 
 @_jit
@@ -461,8 +463,9 @@ def solve_pose(
             representative nearest it, and a free θ4/θ6 split by continuity;
             or (0,) for none.
         q: (8, 6) output, joint values [rad].
-        flags: (13,) output: per branch, within the limits (8), then per
-            (arm, elbow) pair, wrist singular (4), then shoulder singular.
+        flags: (14,) output: per branch, within the limits (8), then per
+            (arm, elbow) pair, wrist singular (4), then shoulder singular, then
+            "an arm cannot reach" (its branches are NaN).
         check: Run the fast rigidity test first (False once the exact
             checks of ``_targets`` accepted the pose).
 
@@ -487,6 +490,7 @@ def solve_pose(
     for pair in range(4):
         flags[8 + pair] = exact >> (T4 + pair) & 1
     flags[12] = exact >> SHOULDER & 1
+    flags[13] = exact >> DEAD & 3 != 0
     return OK
 
 

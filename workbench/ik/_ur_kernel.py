@@ -185,15 +185,17 @@ def _roughly_rigid(pose: FloatArray) -> bool:
 def _frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
     """Rows 0..2 of ``base_inv · pose · tool_inv`` into ``out``."""
     b, e = geo.base_inv, geo.tool_inv
-    for i in range(3):
+    for i in range(3):  # pose · tool_inv
+        p0, p1, p2 = pose[i, 0], pose[i, 1], pose[i, 2]
         for j in range(4):
-            acc = b[i, 3] if j == 3 else 0.0
-            for k in range(3):
-                c = pose[k, 3] if j == 3 else 0.0
-                for m in range(3):
-                    c += pose[k, m] * e[m, j]
-                acc += b[i, k] * c
-            out[i, j] = acc
+            out[i, j] = p0 * e[0, j] + p1 * e[1, j] + p2 * e[2, j]
+        out[i, 3] += pose[i, 3]
+    for j in range(4):  # base_inv · that, column by column, in place
+        c0, c1, c2 = out[0, j], out[1, j], out[2, j]
+        for i in range(3):
+            out[i, j] = b[i, 0] * c0 + b[i, 1] * c1 + b[i, 2] * c2
+    for i in range(3):
+        out[i, 3] += b[i, 3]
 
 
 @_jit_inline
@@ -317,18 +319,22 @@ def angle_arguments(
             c6, s6 = math.cos(t6), math.sin(t6)
             mask |= 1 << (SINGULAR + arm)
         else:
-            y6, x6 = -s4g * vy * s5, s4g * vx * s5
-            h = math.sqrt(y6 * y6 + x6 * x6)
-            c6, s6 = x6 / h, y6 / h
+            inv = s4g / s5  # |(c6, s6)| = |v| / |s5| = 1
+            c6, s6 = vx * inv, -vy * inv
         # wrist point from the shoulder, in the arm plane (frame 1)
         big_px, big_py = c1 * px + s1 * py - geo.a1, s1g * (pz - geo.d1)
+        c234_up = s234_up = big_x_up = big_y_up = 0.0
         for wrist in range(2):
             pair = 2 * arm + wrist
             sw = 1.0 if wrist == 0 else -1.0  # the other wrist: -s5, theta6 + pi
             cs6, ss6, ss5 = sw * c6, sw * s6, sw * s5
-            c234, s234, big_x, big_y = _planar(
-                geo, c1, s1, c5, cs6, ss6, ss5, m, big_px, big_py
-            )
+            if wrist == 0 or singular:
+                c234, s234, big_x, big_y = _planar(
+                    geo, c1, s1, c5, cs6, ss6, ss5, m, big_px, big_py
+                )
+            else:  # x4 and z4 turn over: frame 3 mirrored about the wrist point
+                c234, s234 = -c234_up, -s234_up
+                big_x, big_y = 2.0 * big_px - big_x_up, 2.0 * big_py - big_y_up
             dist2 = big_x * big_x + big_y * big_y
             dist = math.sqrt(dist2)
             if singular:
@@ -349,6 +355,7 @@ def angle_arguments(
                 mask |= 1 << (U6 + pair)
             else:
                 y[U6 + pair], x[U6 + pair] = ss6, cs6
+                c234_up, s234_up, big_x_up, big_y_up = c234, s234, big_x, big_y
             if not (geo.reach_low <= dist <= geo.reach_high):
                 mask |= 1 << (DEAD + pair)
                 y[U3 + pair], x[U3 + pair] = 0.0, dist
@@ -367,11 +374,9 @@ def angle_arguments(
                 k1, k2 = a2 + a3 * c3, a3 * s3
                 c2, s2 = big_x * k1 + big_y * k2, big_y * k1 - big_x * k2
                 y[U2 + b], x[U2 + b] = s2, c2
-                norm = math.sqrt(c2 * c2 + s2 * s2)
-                if norm > 0.0:
-                    c2, s2 = c2 / norm, s2 / norm
-                else:
-                    c2, s2 = 1.0, 0.0
+                if c2 == 0.0 and s2 == 0.0:  # frame 3 on axis 2: theta2 free
+                    c2 = 1.0
+                # unnormalised (c2, s2): theta4's atan2 arguments scale alike
                 c23, s23 = c2 * c3 - s2 * s3, s2 * c3 + c2 * s3
                 y[U4 + b] = s234 * c23 - c234 * s23
                 x[U4 + b] = c234 * c23 + s234 * s23
@@ -447,7 +452,8 @@ def solve_pose(
         q: (8, 6) output [rad], NaN rows for branches that cannot reach.
         flags: (13,) output: per branch within the limits (8), then per
             (shoulder, elbow) pair of branches 2·pair, 2·pair + 1, wrist
-            singular (4), then shoulder singular.
+            singular (4), then shoulder singular, then "a pair cannot reach"
+            (its branches are NaN).
         check: Run the fast rigidity test first.
 
     Returns:
@@ -471,6 +477,7 @@ def solve_pose(
     for pair in range(4):
         flags[8 + pair] = mask >> (SINGULAR + (pair >> 1)) & 1
     flags[12] = mask >> SHOULDER & 1
+    flags[13] = mask >> DEAD & 15 != 0
     return OK
 
 

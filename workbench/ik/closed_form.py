@@ -252,10 +252,11 @@ def analytic(
     prev = _NO_PREVIOUS if q_previous is None else _previous(robot, q_previous)
     q, flags = solve_one(robot, geometry, pose, prev, solver)
     q.setflags(write=False)
-    shared = (q, flags.tolist(), UR_BRANCHES if family == "ur" else BRANCHES)
-    reached = q[:, 0] == q[:, 0]  # False on the NaN rows of an arm out of reach
-    if reached.all():
+    flag_list = flags.tolist()
+    shared = (q, flag_list, UR_BRANCHES if family == "ur" else BRANCHES)
+    if not flag_list[13]:
         return [IKSolution(shared, index) for index in _INDICES]
+    reached = q[:, 0] == q[:, 0]  # False on the NaN rows of an arm out of reach
     return [IKSolution(shared, index) for index in _INDICES if reached[index]]
 
 
@@ -298,7 +299,7 @@ def solve_one(
     Raises:
         UnreachableError, NonFiniteError, InputError: As :func:`analytic`.
     """
-    q, flags = np.empty((8, 6)), np.empty(13, dtype=bool)
+    q, flags = np.empty((8, 6)), np.empty(14, dtype=bool)
     status = solver.solve_pose(geometry, pose, prev, q, flags)
     if status == kernel.NOT_RIGID:  # the exact checks raise, or accept it
         pose_rows(pose)
