@@ -277,8 +277,11 @@ def angle_arguments(
         wrist, bit ``DEAD + arm`` an arm that cannot reach (its slots hold 0).
     """
     has_prev = prev.shape[0] != 0
-    frame_pose(geo, target, scratch)
-    pose = scratch
+    if geo.framed != 0.0:
+        frame_pose(geo, target, scratch)
+        pose = scratch
+    else:  # the DH chain's own frames: no copy
+        pose = target
     nx, ny, nz = pose[0, 0], pose[1, 0], pose[2, 0]
     ox, oy, oz = pose[0, 1], pose[1, 1], pose[2, 1]
     ax, ay, az = pose[0, 2], pose[1, 2], pose[2, 2]
@@ -305,6 +308,7 @@ def angle_arguments(
     rho, y1 = math.sqrt(rho2), s1g * pz
     distance = math.sqrt(r2 + pz * pz)  # from the shoulder when a1 = 0
     exact = (1 << SHOULDER) if rho <= SHOULDER_SINGULAR_TOL else 0
+    k = big_a = root = 0.0
     # rows of A = Rx(alpha1)^T Rz(-theta1) R' that do not depend on theta1
     a10, a11, a12 = s1g * nz, s1g * oz, s1g * az
     s13 = s3g * s1g
@@ -320,15 +324,17 @@ def angle_arguments(
                     y[slot if slot == T1 + arm else slot + pair] = 0.0
                     x[slot if slot == T1 + arm else slot + pair] = 1.0
             continue
-        k = (xp * xp + pz * pz - a2 * a2 - ell * ell) / (2.0 * a2 * ell)
-        k = min(max(k, -1.0), 1.0)  # cos(gamma), gamma = theta3 + beta
-        big_a = a2 + ell * k
+        if arm == 0 or geo.a1 != 0.0:  # a1 = 0: both arms alike, up to sides
+            k = (xp * xp + pz * pz - a2 * a2 - ell * ell) / (2.0 * a2 * ell)
+            k = min(max(k, -1.0), 1.0)  # cos(gamma), gamma = theta3 + beta
+            big_a = a2 + ell * k
+            root = math.sqrt(1.0 - k * k)
         # elbow-up: sin(gamma) of the sign of up_sign times that of xp
         if xp != 0.0:
             side = 1.0 if xp > 0.0 else -1.0
         else:
             side = right if arm == 0 else -right
-        sg = geo.up_sign * side * math.sqrt(1.0 - k * k)
+        sg = geo.up_sign * side * root
         if r2 > 0.0:
             c1, s1 = (px * x1 - py * sd) / r2, (py * x1 + px * sd) / r2
             y[T1 + arm], x[T1 + arm] = s1, c1
