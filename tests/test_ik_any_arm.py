@@ -384,3 +384,20 @@ def test_cli_solver_is_named(capsys) -> None:
         capsys, "ik", "--robot", "ur5", "--matrix", *map(repr, far.ravel().tolist())
     )
     assert code == EXIT_INFEASIBLE and "out of reach" in err
+
+
+# -- analytic singularities ------------------------------------------------------------
+
+
+def test_det_j_is_the_product_of_the_factors(arm) -> None:
+    """det J = K · shoulder · elbow · wrist to 1e-9 relative, Pinocchio's J."""
+    from workbench.singularities import compute_det_j_analytic, get_factorisation
+
+    rng = np.random.default_rng(9)
+    qs = rng.uniform(arm.lower, arm.upper, size=(N_RANDOM // 10, 6))
+    analytic_det = compute_det_j_analytic(arm, qs)
+    pinocchio_det = np.array([np.linalg.det(arm.jacobian(q)) for q in qs])
+    scale = abs(get_factorisation(arm).constant) * max(abs(arm.fk(qs[0]).translation))
+    np.testing.assert_allclose(
+        analytic_det, pinocchio_det, rtol=1e-9, atol=1e-12 * scale
+    )
