@@ -401,3 +401,28 @@ def test_det_j_is_the_product_of_the_factors(arm) -> None:
     np.testing.assert_allclose(
         analytic_det, pinocchio_det, rtol=1e-9, atol=1e-12 * scale
     )
+
+
+@pytest.mark.parametrize("name", ["ur5", "kuka-kr6-r700"])
+def test_round_trip_property(name: str) -> None:
+    """Hypothesis: q -> FK -> every branch reaches the pose, q among them."""
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    robot = load_robot(name)
+    unit = st.floats(0.0, 1.0, allow_nan=False)
+
+    @settings(max_examples=300)
+    @given(st.lists(unit, min_size=6, max_size=6))
+    def round_trip(u: list[float]) -> None:
+        q = robot.lower + np.asarray(u) * (robot.upper - robot.lower)
+        target = robot.fk(q).homogeneous
+        solutions = analytic(robot, target)
+        qs = [s.q for s in solutions]
+        assert fk_errors(robot, qs, [target] * len(qs)).max() <= ATOL_FK
+        steps = [np.abs(wrapped(x - q)).max() for x in qs]
+        assert min(steps) <= ATOL_SAME_Q_SINGULAR or any(
+            s.wrist_singular or s.shoulder_singular for s in solutions
+        )
+
+    round_trip()

@@ -103,7 +103,10 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     g["d1"], g["a1"], g["a2"], g["a3"] = j[0].d, j[0].a, j[1].a, j[2].a
     g["a4"], g["d5"] = j[3].a, j[4].d
     low, high = abs(abs(j[1].a) - abs(j[2].a)), abs(j[1].a) + abs(j[2].a)
-    slack = 1e-12 * high
+    # frame 3 comes from θ6, which a near-singular wrist knows to ~1e-16 / |s5|:
+    # a pose at the folded or stretched elbow may land ~1e-11 m outside, and
+    # clamping it costs at most the slack in position
+    slack = 1e-10 * high
     g["reach_low"], g["reach_high"] = low - slack, high + slack
     g["cylinder2"] = j[1].d + j[2].d + j[3].d
     g["cylinder2"] = g["cylinder2"] ** 2 * (1.0 - 1e-12)
