@@ -10,8 +10,8 @@ import pytest
 
 from tests.conftest import run_cli as run
 from workbench import paper_data
-from workbench.catalog import get_own_urdf_dir
 from workbench.cli import EXIT_BAD_INPUT
+from workbench.model.catalog import get_own_urdf_dir
 
 # Table II is printed to two decimals: a computed value matches when it rounds to it.
 PRINTED_DECIMALS = 2

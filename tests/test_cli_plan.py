@@ -11,7 +11,7 @@ import pytest
 from tests.conftest import run_cli as run
 from workbench import paper_data
 from workbench.cli import EXIT_BAD_INPUT, EXIT_INFEASIBLE
-from workbench.trajectory_csv import read_trajectory_csv
+from workbench.trajectory.csv_io import read_trajectory_csv
 
 PICK = [str(x) for x in paper_data.ANGELES_PICK_Q_DEG]
 PLACE = [str(x) for x in paper_data.ANGELES_PLACE_Q_DEG]

@@ -11,7 +11,10 @@ import pytest
 from tests.conftest import run_cli as run
 from workbench import load_robot
 from workbench.cli import EXIT_BAD_INPUT
-from workbench.singularities import compute_conditions, compute_det_j_analytic
+from workbench.singularities.conditions import (
+    compute_conditions,
+    compute_det_j_analytic,
+)
 
 ATOL_DEG_INPUT = 1e-9  # degrees typed with 10 decimals, converted to rad
 REL_DET = 1e-9

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from workbench.demo import compare_table2, format_table2
-from workbench.demo_pick_and_place import (
+from workbench.demo.pick_and_place import (
     format_pick_and_place,
     run_pick_and_place_demo,
 )
+from workbench.demo.run import compare_table2, format_table2
 
 ATOL_PRINTED = 1e-9
 

@@ -13,7 +13,7 @@ import pytest
 
 from tests.conftest import PUMA_NAMES, random_configurations
 from workbench import DHTable, DHTableError, generate_urdf, load_robot
-from workbench.catalog import get_own_urdf_dir
+from workbench.model.catalog import get_own_urdf_dir
 
 ATOL_EXACT = 1e-12
 ATOL_FD = 1e-6

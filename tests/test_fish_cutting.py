@@ -25,7 +25,7 @@ from workbench.tasks.fish_program import (
     compute_home_configuration,
     compute_waypoints,
 )
-from workbench.trajectory_csv import read_trajectory_csv
+from workbench.trajectory.csv_io import read_trajectory_csv
 
 SETUP = FishCuttingSetup()
 

@@ -391,7 +391,10 @@ def test_cli_solver_is_named(capsys) -> None:
 
 def test_det_j_is_the_product_of_the_factors(arm) -> None:
     """det J = K · shoulder · elbow · wrist to 1e-9 relative, Pinocchio's J."""
-    from workbench.singularities import compute_det_j_analytic, get_factorisation
+    from workbench.singularities.conditions import (
+        compute_det_j_analytic,
+        get_factorisation,
+    )
 
     rng = np.random.default_rng(9)
     qs = rng.uniform(arm.lower, arm.upper, size=(N_RANDOM // 10, 6))

@@ -16,7 +16,6 @@ from hypothesis import strategies as st
 from tests.conftest import run_cli as run
 from workbench import Robot, load_robot, paper_data
 from workbench.cli import EXIT_BAD_INPUT, EXIT_INFEASIBLE
-from workbench.dh import DHJoint, DHTable
 from workbench.errors import (
     DimensionError,
     InfeasibleError,
@@ -34,8 +33,9 @@ from workbench.ik.closed_form import (
     analytic_batch,
     nearest,
 )
+from workbench.model.dh import DHJoint, DHTable
+from workbench.model.urdf_generator import generate_urdf
 from workbench.poses import ANGELES7_PRINTED_TOL, se3_from_angeles7
-from workbench.urdf_generator import generate_urdf
 
 ATOL_FK = 1e-9  # every branch reproduces the target (observed ~1e-15)
 ATOL_SAME_Q = 1e-6  # [rad] the generating q is among the branches

@@ -8,7 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from workbench.ik import DLS_EPSILON, DLS_LAMBDA_MAX, dls_inverse
-from workbench.trajectory._inverse_velocity import (
+from workbench.planning._inverse_velocity import (
     _orthogonalise_rows,
     damped_solve,
     solve_velocity,

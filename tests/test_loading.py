@@ -19,7 +19,11 @@ from workbench import (
     get_robot_names,
     load_robot,
 )
-from workbench.catalog import CATALOG, get_catalog_urdf, get_example_robot_data_dir
+from workbench.model.catalog import (
+    CATALOG,
+    get_catalog_urdf,
+    get_example_robot_data_dir,
+)
 
 ARMS = {"ur5": (6, "tool0"), "panda": (7, "panda_hand_tcp"), "xarm7": (7, "link_eef")}
 
@@ -150,7 +154,7 @@ def test_wrong_joint_count_and_nan(puma) -> None:
 
 
 def test_unknown_locked_joint_is_reported(monkeypatch) -> None:
-    from workbench import catalog
+    from workbench.model import catalog
 
     entry = catalog.CatalogEntry(
         "ur_description/urdf/ur5_robot.urdf", "tool0", ("gripper",)

@@ -282,8 +282,8 @@ def test_start_outside_limits_and_robot_without_closed_form(puma_kang):
 
 
 def test_samples_and_states_are_immutable(puma_kang):
+    from workbench.planning.cartesian_paths import CartesianState
     from workbench.trajectory import PlannerSample
-    from workbench.trajectory.cartesian_paths import CartesianState
 
     planner = _planner(puma_kang)
     planner.append(PointToPoint(*_random_goal(planner, np.random.default_rng(5))))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
-from workbench.plot_arm import compute_arm_points, plot_arm, set_equal_axes
+from workbench.plots.arm import compute_arm_points, plot_arm, set_equal_axes
 
 ATOL_EXACT = 1e-12
 

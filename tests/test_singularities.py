@@ -12,7 +12,8 @@ import pytest
 from conftest import random_configurations
 
 from workbench import InputError, NonFiniteError, Robot, generate_urdf, load_robot
-from workbench.singularities import (
+from workbench.singularities.along_path import find_closest_approaches
+from workbench.singularities.conditions import (
     SINGULARITY_KINDS,
     NotPumaTypeError,
     classify_configuration,
@@ -20,20 +21,19 @@ from workbench.singularities import (
     compute_det_j_analytic,
     get_puma_factorisation,
 )
-from workbench.singularity_directions import compute_degenerate_direction
-from workbench.singularity_loci import (
+from workbench.singularities.directions import compute_degenerate_direction
+from workbench.singularities.loci import (
     compute_example_configurations,
     get_elbow_singular_theta3,
     solve_shoulder_theta2,
 )
-from workbench.singularity_measures import (
+from workbench.singularities.measures import (
     compute_dh_jacobians,
     compute_joint_grid,
     compute_measures,
     cross_check_det_j,
 )
-from workbench.singularity_trajectory import find_closest_approaches
-from workbench.trajectory_csv import (
+from workbench.trajectory.csv_io import (
     JointTrajectorySamples,
     read_trajectory_csv,
     write_trajectory_csv,
@@ -346,7 +346,7 @@ def test_measures_of_a_redundant_arm_have_no_determinant() -> None:
 
 
 def test_condition_number_is_inf_when_exactly_singular(puma) -> None:
-    from workbench.singularity_measures import compute_measures_from_jacobians
+    from workbench.singularities.measures import compute_measures_from_jacobians
 
     jac = np.eye(6)
     jac[5, 5] = 0.0

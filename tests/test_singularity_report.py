@@ -87,7 +87,7 @@ def test_degenerate_directions_and_arms_sections(kang_report) -> None:
     report, text = kang_report
     assert "Degenerate directions" in text
     assert text.count("<tr><td>") >= 5
-    if "arms" in report.figures:  # needs workbench.plot_arm
+    if "arms" in report.figures:  # needs workbench.plots.arm
         assert "arm in each singular configuration" in text
 
 
@@ -128,8 +128,8 @@ def test_report_of_any_closed_form_arm_classifies(name: str) -> None:
 
 def test_core_modules_do_not_import_matplotlib() -> None:
     code = (
-        "import sys, workbench.singularities, workbench.singularity_measures, "
-        "workbench.singularity_directions, workbench.singularity_trajectory, "
+        "import sys, workbench.singularities.conditions, workbench.singularities.measures, "
+        "workbench.singularities.directions, workbench.singularities.along_path, "
         "workbench.cli.singularities, workbench.cli.report, workbench.reports; "
         "bad = [m for m in sys.modules if re.match('matplotlib|meshcat', m)]; "
         "assert not bad, bad"

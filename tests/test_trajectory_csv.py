@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from workbench.trajectory_csv import (
+from workbench.trajectory.csv_io import (
     JointTrajectorySamples,
     TrajectoryFileError,
     read_trajectory_csv,

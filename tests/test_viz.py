@@ -24,7 +24,7 @@ from tests.conftest import random_configurations, run_cli
 from workbench import FrameNotFoundError, InputError, URDFLoadError, load_robot
 from workbench.cli import EXIT_BAD_INPUT
 from workbench.errors import DimensionError
-from workbench.trajectory_csv import JointTrajectorySamples, write_trajectory_csv
+from workbench.trajectory.csv_io import JointTrajectorySamples, write_trajectory_csv
 from workbench.viz import (
     SingularityGauge,
     Viewer,

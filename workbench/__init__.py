@@ -2,7 +2,6 @@
 
 import logging
 
-from workbench.dh import DHJoint, DHTable
 from workbench.errors import (
     DHTableError,
     DimensionError,
@@ -16,9 +15,10 @@ from workbench.errors import (
     URDFLoadError,
     WorkbenchError,
 )
-from workbench.loading import get_robot_names, load_robot
-from workbench.robot import Robot
-from workbench.urdf_generator import generate_urdf
+from workbench.model.dh import DHJoint, DHTable
+from workbench.model.loading import get_robot_names, load_robot
+from workbench.model.robot import Robot
+from workbench.model.urdf_generator import generate_urdf
 
 logging.getLogger(__name__).addHandler(logging.NullHandler())
 

@@ -6,9 +6,9 @@ import argparse
 from pathlib import Path
 
 from workbench.cli._common import add_json_flag, print_json
-from workbench.demo import format_fish_cutting, run_demo
-from workbench.demo_pick_and_place import format_pick_and_place
-from workbench.loading import load_robot
+from workbench.demo.pick_and_place import format_pick_and_place
+from workbench.demo.run import format_fish_cutting, run_demo
+from workbench.model.loading import load_robot
 
 
 def register(commands: argparse._SubParsersAction) -> None:

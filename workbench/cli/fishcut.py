@@ -11,10 +11,10 @@ from pathlib import Path
 
 from workbench.cli._common import add_json_flag, add_robot_argument, print_json
 from workbench.errors import InputError
-from workbench.loading import load_robot
+from workbench.model.loading import load_robot
 from workbench.tasks import FishCuttingSetup, SimulatedFish, run_fish_cutting
 from workbench.tasks.fish_cutting import summarize_fish_cutting
-from workbench.trajectory_csv import write_trajectory_csv
+from workbench.trajectory.csv_io import write_trajectory_csv
 
 DEFAULT_ROBOT = "puma560-kang"
 _DEFAULTS = FishCuttingSetup()

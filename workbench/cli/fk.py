@@ -14,7 +14,7 @@ from workbench.cli._common import (
     joint_values_rad,
     print_json,
 )
-from workbench.loading import load_robot
+from workbench.model.loading import load_robot
 from workbench.poses import angeles7_from_se3, quat_wxyz_from_rotation
 
 

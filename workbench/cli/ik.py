@@ -29,14 +29,14 @@ from workbench.ik.closed_form import (
     nearest,
 )
 from workbench.ik.numerical import numeric
-from workbench.loading import load_robot
+from workbench.model.loading import load_robot
+from workbench.model.robot import Robot
 from workbench.poses import (
     ANGELES7_PRINTED_TOL,
     as_se3,
     rotation_from_quat_wxyz,
     se3_from_angeles7,
 )
-from workbench.robot import Robot
 
 #: Largest accepted | |q| - 1 | of a typed quaternion (then normalised): four
 #: decimals, as in "0.7071 0 0 0.7071", are enough.

@@ -15,10 +15,10 @@ from workbench.cli._common import (
     print_json,
 )
 from workbench.errors import InputError
-from workbench.loading import load_robot
+from workbench.model.loading import load_robot
 from workbench.trajectory import minimum_duration, pick_and_place
+from workbench.trajectory.csv_io import write_trajectory_csv
 from workbench.trajectory.normal_spline import DEFAULT_N_POINTS
-from workbench.trajectory_csv import write_trajectory_csv
 
 EXIT_INFEASIBLE = 3
 DEFAULT_RATE_HZ = 100.0
@@ -98,7 +98,7 @@ def run_pick_place(args: argparse.Namespace) -> int:
     if samples is not None:
         write_trajectory_csv(args.csv, samples)
     if args.plot:
-        from workbench.trajectory_plots import plot_joint_trajectory
+        from workbench.plots.trajectory import plot_joint_trajectory
 
         plot_joint_trajectory(
             traj,

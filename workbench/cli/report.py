@@ -9,8 +9,8 @@ from typing import TextIO
 
 from workbench.cli._common import add_json_flag, add_robot_argument, print_json
 from workbench.errors import InputError
-from workbench.loading import load_robot
-from workbench.trajectory_csv import read_trajectory_csv
+from workbench.model.loading import load_robot
+from workbench.trajectory.csv_io import read_trajectory_csv
 
 #: Width of the progress bar [characters].
 BAR_WIDTH = 30

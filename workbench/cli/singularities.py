@@ -16,9 +16,9 @@ from workbench.cli._common import (
     joint_values_rad,
     print_json,
 )
-from workbench.loading import load_robot
-from workbench.robot import Robot
-from workbench.singularities import (
+from workbench.model.loading import load_robot
+from workbench.model.robot import Robot
+from workbench.singularities.conditions import (
     CONDITION_UNITS,
     ELBOW_TOL,
     SHOULDER_TOL,
@@ -29,7 +29,7 @@ from workbench.singularities import (
     compute_conditions,
     get_factorisation,
 )
-from workbench.singularity_measures import compute_measures
+from workbench.singularities.measures import compute_measures
 
 
 def register(commands: argparse._SubParsersAction) -> None:

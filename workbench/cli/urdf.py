@@ -6,9 +6,9 @@ import argparse
 from pathlib import Path
 
 from workbench.cli._common import add_json_flag, print_json
-from workbench.dh import DHTable
 from workbench.errors import InputError
-from workbench.urdf_generator import generate_urdf
+from workbench.model.dh import DHTable
+from workbench.model.urdf_generator import generate_urdf
 
 
 def register(commands: argparse._SubParsersAction) -> None:

@@ -10,9 +10,9 @@ import numpy.typing as npt
 
 from workbench.cli._common import add_robot_argument, finite_float, joint_values_rad
 from workbench.errors import InputError
-from workbench.loading import load_robot
-from workbench.robot import Robot
-from workbench.trajectory_csv import (
+from workbench.model.loading import load_robot
+from workbench.model.robot import Robot
+from workbench.trajectory.csv_io import (
     JointTrajectorySamples,
     TrajectoryFileError,
     read_trajectory_csv,

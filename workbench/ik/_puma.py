@@ -31,10 +31,10 @@ from functools import lru_cache
 import numpy as np
 import numpy.typing as npt
 
-from workbench.dh import DHTable
 from workbench.errors import InfeasibleError
 from workbench.ik.structure import UnsupportedRobotError, get_structure
-from workbench.robot import Robot
+from workbench.model.dh import DHTable
+from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
 

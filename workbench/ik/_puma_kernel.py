@@ -36,8 +36,8 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.ik._puma import WRIST_SINGULAR_TOL, PumaGeometry, get_geometry
+from workbench.model.robot import Robot
 from workbench.poses import RIGIDITY_TOL
-from workbench.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
 

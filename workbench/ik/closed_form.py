@@ -51,7 +51,7 @@ from workbench.ik._puma import (
 )
 from workbench.ik._targets import as_targets, check_poses, pose_rows
 from workbench.ik.structure import get_structure
-from workbench.robot import Robot
+from workbench.model.robot import Robot
 from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]

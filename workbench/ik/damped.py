@@ -50,8 +50,8 @@ import scipy.sparse
 from qpsolvers import solve_qp
 
 from workbench.errors import DimensionError, InfeasibleError, InputError
+from workbench.model.robot import Robot
 from workbench.poses import as_se3
-from workbench.robot import Robot
 from workbench.validation import as_finite_array, as_vector
 
 FloatArray = npt.NDArray[np.float64]

@@ -76,8 +76,8 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InputError
+from workbench.model.robot import Robot
 from workbench.poses import as_se3
-from workbench.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
 

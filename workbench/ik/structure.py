@@ -42,9 +42,9 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from workbench.dh import DHJoint, DHTable
 from workbench.errors import InputError
-from workbench.robot import Robot
+from workbench.model.dh import DHJoint, DHTable
+from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -14,10 +14,10 @@ from matplotlib import patheffects
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
-from workbench.robot import Robot
-from workbench.singularity_directions import DegenerateDirection
-from workbench.singularity_measures import JointGrid
-from workbench.singularity_trajectory import ClosestApproach
+from workbench.model.robot import Robot
+from workbench.singularities.along_path import ClosestApproach
+from workbench.singularities.directions import DegenerateDirection
+from workbench.singularities.measures import JointGrid
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -173,12 +173,12 @@ def figure_arms(
     """The arm in each shoulder and elbow singular configuration (Kang Figs. 2-3).
 
     Each panel shows the stick figure through the DH frame origins
-    (:mod:`workbench.plot_arm`), the base axis z0, the degenerate direction u
+    (:mod:`workbench.plots.arm`), the base axis z0, the degenerate direction u
     at the wrist centre (red), Kang's stated axis (dashed) and, for the
     shoulder, the singular plane x1 = 0; for the elbow, the shoulder-to-wrist
     line along which u points.
     """
-    from workbench.plot_arm import compute_arm_points, plot_arm, set_equal_axes
+    from workbench.plots.arm import compute_arm_points, plot_arm, set_equal_axes
 
     names = [n for n in examples if not n.startswith("wrist")]
     rows = (len(names) + 1) // 2

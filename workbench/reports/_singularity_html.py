@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from workbench.singularities import CONDITION_UNITS, SINGULARITY_KINDS
+from workbench.singularities.conditions import CONDITION_UNITS, SINGULARITY_KINDS
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -19,8 +19,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from workbench.robot import Robot
-from workbench.singularities import (
+from workbench.model.robot import Robot
+from workbench.singularities.along_path import find_closest_approaches
+from workbench.singularities.conditions import (
     NotPumaTypeError,
     PumaFactorisation,
     classify_configuration,
@@ -28,17 +29,16 @@ from workbench.singularities import (
     get_factorisation,
     get_puma_factorisation,
 )
-from workbench.singularity_directions import compute_degenerate_direction
-from workbench.singularity_loci import (
+from workbench.singularities.directions import compute_degenerate_direction
+from workbench.singularities.loci import (
     compute_example_configurations,
     get_elbow_singular_theta3,
 )
-from workbench.singularity_measures import (
+from workbench.singularities.measures import (
     compute_joint_grid,
     compute_measures,
     cross_check_det_j,
 )
-from workbench.singularity_trajectory import find_closest_approaches
 
 FloatArray = npt.NDArray[np.float64]
 #: ``progress(stage, done, total)``.

@@ -12,7 +12,7 @@
 
 Kang's one-period step is a velocity pulse; here the step is a rest-to-rest
 trapezoid of the same height added to the horizontal motion, so the command
-keeps a continuous velocity. As in :mod:`workbench.trajectory.motion_primitives`
+keeps a continuous velocity. As in :mod:`workbench.planning.motion_primitives`
 the start ``P1`` and the ``vi`` flag are the actual state.
 """
 
@@ -24,16 +24,16 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
-from workbench.tasks.fish import BONE, FLESH
-from workbench.trajectory.cartesian_motion import hold_rotation, plan_line, plan_stop
-from workbench.trajectory.cartesian_paths import (
+from workbench.planning.cartesian_motion import hold_rotation, plan_line, plan_stop
+from workbench.planning.cartesian_paths import (
     CartesianLimits,
     CartesianMotion,
     CartesianState,
     OffsetPath,
 )
-from workbench.trajectory.motion_primitives import MotionPrimitive
-from workbench.trajectory.trapezoidal_profile import replan_trapezoid
+from workbench.planning.motion_primitives import MotionPrimitive
+from workbench.planning.trapezoidal_profile import replan_trapezoid
+from workbench.tasks.fish import BONE, FLESH
 from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]

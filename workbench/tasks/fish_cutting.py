@@ -33,7 +33,9 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InfeasibleError
-from workbench.robot import Robot
+from workbench.model.robot import Robot
+from workbench.planning.online_planner import OnlinePlanner
+from workbench.planning.servo_interpolation import interpolate_servo
 from workbench.tasks.fish import SimulatedFish
 from workbench.tasks.fish_program import (
     FishCuttingSetup,
@@ -42,9 +44,7 @@ from workbench.tasks.fish_program import (
     compute_home_configuration,
     get_world_transforms,
 )
-from workbench.trajectory.online_planner import OnlinePlanner
-from workbench.trajectory.servo_interpolation import interpolate_servo
-from workbench.trajectory_csv import JointTrajectorySamples
+from workbench.trajectory.csv_io import JointTrajectorySamples
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -16,16 +16,16 @@ import pinocchio as pin
 
 from workbench.errors import InfeasibleError
 from workbench.ik.closed_form import analytic, nearest
-from workbench.robot import Robot
-from workbench.tasks.cuts import HorizontalCut, VerticalDownCut
-from workbench.tasks.fish import SimulatedFish
-from workbench.trajectory.cartesian_paths import CartesianLimits
-from workbench.trajectory.motion_primitives import (
+from workbench.model.robot import Robot
+from workbench.planning.cartesian_paths import CartesianLimits
+from workbench.planning.motion_primitives import (
     MotionPrimitive,
     PointToPoint,
     SemiCircleUp,
     StraightLine,
 )
+from workbench.tasks.cuts import HorizontalCut, VerticalDownCut
+from workbench.tasks.fish import SimulatedFish
 
 FloatArray = npt.NDArray[np.float64]
 

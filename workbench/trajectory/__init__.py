@@ -3,6 +3,33 @@
 Public entry points (see INTERFACE.md): ``pick_and_place``, ``minimum_duration``.
 """
 
+from workbench.planning.cartesian_motion import plan_move, plan_stop
+from workbench.planning.cartesian_paths import (
+    CartesianLimits,
+    CartesianMotion,
+    CartesianState,
+)
+from workbench.planning.motion_primitives import (
+    Hold,
+    MotionPrimitive,
+    PointToPoint,
+    SemiCircleUp,
+    Stop,
+    StraightLine,
+)
+from workbench.planning.online_planner import OnlinePlanner, PlannerSample
+from workbench.planning.orientation_profile import (
+    OrientationProfile,
+    compute_relative_axis_angle,
+    orientation,
+)
+from workbench.planning.servo_interpolation import interpolate_servo
+from workbench.planning.trapezoidal_profile import (
+    TrapezoidalProfile,
+    replan_trapezoid,
+    stopping_profile,
+    trapezoid,
+)
 from workbench.trajectory.cartesian import (
     CartesianSamples,
     IKChoice,
@@ -12,26 +39,12 @@ from workbench.trajectory.cartesian import (
     pick_and_place_from_poses,
     select_ik_solution,
 )
-from workbench.trajectory.cartesian_motion import plan_move, plan_stop
-from workbench.trajectory.cartesian_paths import (
-    CartesianLimits,
-    CartesianMotion,
-    CartesianState,
-)
 from workbench.trajectory.limits import (
     JointExtrema,
     LimitViolation,
     check_limits,
     minimum_duration,
     raise_for_violations,
-)
-from workbench.trajectory.motion_primitives import (
-    Hold,
-    MotionPrimitive,
-    PointToPoint,
-    SemiCircleUp,
-    Stop,
-    StraightLine,
 )
 from workbench.trajectory.normal_spline import (
     NormalSpline,
@@ -41,26 +54,13 @@ from workbench.trajectory.normal_spline import (
     compute_normal_spline,
     get_normal_spline,
 )
-from workbench.trajectory.online_planner import OnlinePlanner, PlannerSample
-from workbench.trajectory.orientation_profile import (
-    OrientationProfile,
-    compute_relative_axis_angle,
-    orientation,
-)
 from workbench.trajectory.pick_and_place import JointTrajectory, pick_and_place
 from workbench.trajectory.segments import SegmentedTrajectory, pick_via_place
-from workbench.trajectory.servo_interpolation import interpolate_servo
 from workbench.trajectory.time_optimal import (
     TimeOptimalComparison,
     compare_time_optimal,
     compute_time_optimal_duration,
     compute_toppra_duration,
-)
-from workbench.trajectory.trapezoidal_profile import (
-    TrapezoidalProfile,
-    replan_trapezoid,
-    stopping_profile,
-    trapezoid,
 )
 
 __all__ = [

@@ -20,8 +20,8 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InfeasibleError, InputError
+from workbench.model.robot import Robot
 from workbench.poses import ANGELES7_TOL, angeles7_from_se3, as_se3, se3_from_angeles7
-from workbench.robot import Robot
 from workbench.trajectory.normal_spline import DEFAULT_N_POINTS
 from workbench.trajectory.pick_and_place import JointTrajectory, pick_and_place
 

@@ -25,7 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError, JointLimitError
-from workbench.robot import Robot
+from workbench.model.robot import Robot
 from workbench.trajectory.normal_spline import DEFAULT_N_POINTS, get_normal_spline
 from workbench.validation import as_vector
 

@@ -25,7 +25,8 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
-from workbench.robot import Robot
+from workbench.model.robot import Robot
+from workbench.trajectory.csv_io import JointTrajectorySamples
 from workbench.trajectory.limits import (
     JointExtrema,
     LimitViolation,
@@ -38,7 +39,6 @@ from workbench.trajectory.normal_spline import (
     SplineExtremum,
     get_normal_spline,
 )
-from workbench.trajectory_csv import JointTrajectorySamples
 from workbench.validation import as_vector
 
 if TYPE_CHECKING:

@@ -14,7 +14,8 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
-from workbench.robot import Robot
+from workbench.model.robot import Robot
+from workbench.trajectory.csv_io import JointTrajectorySamples
 from workbench.trajectory.limits import (
     JointExtrema,
     LimitViolation,
@@ -28,7 +29,6 @@ from workbench.trajectory.pick_and_place import (
     check_duration,
     pick_and_place,
 )
-from workbench.trajectory_csv import JointTrajectorySamples
 from workbench.validation import as_finite_array
 
 FloatArray = npt.NDArray[np.float64]

@@ -28,7 +28,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InfeasibleError, InputError
-from workbench.robot import Robot
+from workbench.model.robot import Robot
 from workbench.trajectory.limits import (
     _rate_limit,
     _require_vector_space,

@@ -12,7 +12,7 @@ import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
 
 from workbench.errors import DimensionError, NonFiniteError, URDFLoadError
-from workbench.robot import Robot
+from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
 

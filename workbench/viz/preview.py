@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from workbench.robot import Robot
-from workbench.trajectory_csv import JointTrajectorySamples
+from workbench.model.robot import Robot
+from workbench.trajectory.csv_io import JointTrajectorySamples
 from workbench.viz.viewer import Viewer
 
 
@@ -27,7 +27,7 @@ def write_trajectory_html(
     Args:
         robot: The robot the trajectory is for.
         samples: ``samples.t`` shape (K,) [s], ``samples.q`` shape (K, nq) [rad]
-            (e.g. from :func:`workbench.trajectory_csv.read_trajectory_csv`).
+            (e.g. from :func:`workbench.trajectory.csv_io.read_trajectory_csv`).
         path: Output file (``.html``).
         title: Page title; default names the robot.
         color_by_singularity: Colour the arm red (singular) to green (far).

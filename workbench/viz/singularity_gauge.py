@@ -2,7 +2,7 @@ r"""How far a configuration is from a singularity, as a number in [0, 1] and a c
 
 Two methods, chosen per robot by :meth:`SingularityGauge.from_robot`:
 
-* ``"analytic"`` (PUMA-type DH tables, :mod:`workbench.singularities`): the
+* ``"analytic"`` (PUMA-type DH tables, :mod:`workbench.singularities.conditions`): the
   smallest of the three signed distances made dimensionless,
   :math:`\min(|s| / (a_2 + L_3),\ |e|,\ |w|)`, with the shoulder distance
   :math:`s` [m] divided by the arm's reach :math:`a_2 + L_3` and the elbow and
@@ -30,8 +30,8 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from workbench.robot import Robot
-from workbench.singularities import (
+from workbench.model.robot import Robot
+from workbench.singularities.conditions import (
     NotPumaTypeError,
     compute_conditions,
     get_puma_factorisation,

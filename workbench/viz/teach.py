@@ -16,9 +16,9 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import WorkbenchError
+from workbench.model.robot import Robot
 from workbench.poses import angeles7_from_se3
-from workbench.robot import Robot
-from workbench.singularities import NotPumaTypeError, compute_conditions
+from workbench.singularities.conditions import NotPumaTypeError, compute_conditions
 from workbench.viz.singularity_gauge import SingularityGauge
 from workbench.viz.viewer import Viewer
 

@@ -20,8 +20,8 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import DimensionError, InputError
+from workbench.model.robot import Robot
 from workbench.poses import as_se3
-from workbench.robot import Robot
 from workbench.viz import _shapes
 from workbench.viz._arm import Arm, as_configurations, to_node_name
 from workbench.viz._camera import CameraView, frame_points

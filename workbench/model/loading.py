@@ -10,10 +10,10 @@ from pathlib import Path
 
 import pinocchio as pin
 
-from workbench.catalog import CATALOG, get_catalog_urdf
-from workbench.dh import DHTable
 from workbench.errors import JointNotFoundError, RobotNotFoundError, URDFLoadError
-from workbench.robot import Robot
+from workbench.model.catalog import CATALOG, get_catalog_urdf
+from workbench.model.dh import DHTable
+from workbench.model.robot import Robot
 
 
 def get_robot_names() -> list[str]:

@@ -4,7 +4,7 @@ Every path has a ``duration`` [s] and ``sample(t)``: position paths give
 ``(p, v)``, orientation paths ``(R, omega)``, all in one frame (world or
 base), angular velocity in that frame's axes; a :class:`CartesianMotion`
 pairs one of each on one clock. Paths are immutable; they are planned by
-:mod:`workbench.trajectory.cartesian_motion` and sampled once per planning
+:mod:`workbench.planning.cartesian_motion` and sampled once per planning
 cycle, so ``sample`` is kept lean.
 """
 
@@ -19,7 +19,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InputError
-from workbench.trajectory.trapezoidal_profile import TrapezoidalProfile
+from workbench.planning.trapezoidal_profile import TrapezoidalProfile
 
 FloatArray = npt.NDArray[np.float64]
 

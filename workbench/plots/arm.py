@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from workbench.robot import Robot
+from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
 

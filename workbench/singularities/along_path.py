@@ -1,9 +1,9 @@
 """Closest approach of a joint trajectory to each singularity.
 
-For a PUMA-type arm the signed distances of :mod:`workbench.singularities`
+For a PUMA-type arm the signed distances of :mod:`workbench.singularities.conditions`
 are followed along the samples; for any arm the smallest singular value of
 the Jacobian is followed as well. Read a CSV trajectory with
-:func:`workbench.trajectory_csv.read_trajectory_csv` and pass its ``t`` and
+:func:`workbench.trajectory.csv_io.read_trajectory_csv` and pass its ``t`` and
 ``q``.
 """
 
@@ -15,13 +15,13 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
-from workbench.robot import Robot
-from workbench.singularities import (
+from workbench.model.robot import Robot
+from workbench.singularities.conditions import (
     CONDITION_UNITS,
     NotPumaTypeError,
     compute_conditions,
 )
-from workbench.singularity_measures import compute_measures
+from workbench.singularities.measures import compute_measures
 from workbench.validation import as_finite_array
 
 FloatArray = npt.NDArray[np.float64]

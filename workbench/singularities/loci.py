@@ -6,7 +6,7 @@ r"""Singular loci of PUMA-type arms in joint space, and a configuration on each.
 * shoulder: for each θ3 two values of θ2 (:func:`solve_shoulder_theta2`);
 * wrist: θ5 = −θ0,5 (mod π).
 
-The factorisation behind them is in :mod:`workbench.singularities`.
+The factorisation behind them is in :mod:`workbench.singularities.conditions`.
 """
 
 from __future__ import annotations
@@ -16,9 +16,9 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from workbench.dh import DHTable
-from workbench.robot import Robot
-from workbench.singularities import PumaFactorisation, get_puma_factorisation
+from workbench.model.dh import DHTable
+from workbench.model.robot import Robot
+from workbench.singularities.conditions import PumaFactorisation, get_puma_factorisation
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -31,8 +31,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
-from workbench.poses import as_rotation
-from workbench.trajectory.cartesian_paths import (
+from workbench.planning.cartesian_paths import (
     ZERO_TOL,
     CartesianLimits,
     CartesianMotion,
@@ -45,14 +44,15 @@ from workbench.trajectory.cartesian_paths import (
     PositionPath,
     TurnedOrientation,
 )
-from workbench.trajectory.orientation_profile import (
+from workbench.planning.orientation_profile import (
     OrientationProfile,
     compute_relative_axis_angle,
 )
-from workbench.trajectory.trapezoidal_profile import (
+from workbench.planning.trapezoidal_profile import (
     replan_trapezoid,
     stopping_profile,
 )
+from workbench.poses import as_rotation
 from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]

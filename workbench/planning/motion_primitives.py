@@ -24,8 +24,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
-from workbench.poses import as_rotation
-from workbench.trajectory.cartesian_motion import (
+from workbench.planning.cartesian_motion import (
     add_residual,
     hold_rotation,
     plan_line,
@@ -33,7 +32,7 @@ from workbench.trajectory.cartesian_motion import (
     plan_stop,
     split_velocity,
 )
-from workbench.trajectory.cartesian_paths import (
+from workbench.planning.cartesian_paths import (
     ArcPath,
     CartesianLimits,
     CartesianMotion,
@@ -41,7 +40,8 @@ from workbench.trajectory.cartesian_paths import (
     FixedOrientation,
     FixedPosition,
 )
-from workbench.trajectory.trapezoidal_profile import replan_trapezoid
+from workbench.planning.trapezoidal_profile import replan_trapezoid
+from workbench.poses import as_rotation
 from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]
@@ -153,7 +153,7 @@ class Stop(MotionPrimitive):
     """Come to rest at full linear and angular deceleration."""
 
     def plan(self, state: CartesianState, limits: CartesianLimits) -> CartesianMotion:
-        """See :func:`~workbench.trajectory.cartesian_motion.plan_stop`."""
+        """See :func:`~workbench.planning.cartesian_motion.plan_stop`."""
         return plan_stop(state, limits)
 
 

@@ -11,7 +11,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
-from workbench.trajectory_csv import JointTrajectorySamples
+from workbench.trajectory.csv_io import JointTrajectorySamples
 
 
 def interpolate_servo(

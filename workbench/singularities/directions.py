@@ -26,8 +26,8 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
-from workbench.robot import Robot
-from workbench.singularities import SINGULARITY_KINDS, get_puma_factorisation
+from workbench.model.robot import Robot
+from workbench.singularities.conditions import SINGULARITY_KINDS, get_puma_factorisation
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -2,7 +2,7 @@
 
 Angeles et al. (1988): Table III through the forward kinematics of the
 ``puma560`` model, compared with their Table II; then Section V end to end
-(:mod:`workbench.demo_pick_and_place`): IK of Table II, the normal-spline
+(:mod:`workbench.demo.pick_and_place`): IK of Table II, the normal-spline
 trajectory, limits, minimum duration, Cartesian histories, singularities and
 the figures.
 """
@@ -19,12 +19,12 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench import paper_data
-from workbench.demo_pick_and_place import run_pick_and_place_demo
-from workbench.loading import load_robot
+from workbench.demo.pick_and_place import run_pick_and_place_demo
+from workbench.model.loading import load_robot
+from workbench.model.robot import Robot
 from workbench.poses import angeles7_from_se3
-from workbench.robot import Robot
 from workbench.tasks.fish_cutting import run_fish_cutting, summarize_fish_cutting
-from workbench.trajectory_csv import read_trajectory_csv, write_trajectory_csv
+from workbench.trajectory.csv_io import read_trajectory_csv, write_trajectory_csv
 
 _log = logging.getLogger(__name__)
 

@@ -22,8 +22,8 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InputError
+from workbench.planning.trapezoidal_profile import TrapezoidalProfile, trapezoid
 from workbench.poses import as_rotation, axis_angle_from_rotation
-from workbench.trajectory.trapezoidal_profile import TrapezoidalProfile, trapezoid
 from workbench.validation import as_finite_array
 
 FloatArray = npt.NDArray[np.float64]
@@ -145,7 +145,7 @@ def orientation(
         max_velocity: Angular speed bound, > 0 [rad/s].
         max_acceleration: Angular acceleration bound, > 0 [rad/s²].
         initial_velocity: Angular speed about the axis at t = 0 [rad/s], as
-            in :func:`~workbench.trajectory.trapezoidal_profile.trapezoid`.
+            in :func:`~workbench.planning.trapezoidal_profile.trapezoid`.
         final_velocity: Angular speed at the end [rad/s].
 
     Returns:

@@ -9,13 +9,13 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from workbench.dh import DHTable
 from workbench.errors import (
     DimensionError,
     FrameNotFoundError,
     InputError,
     URDFLoadError,
 )
+from workbench.model.dh import DHTable
 from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]

@@ -12,7 +12,7 @@ The rows of :math:`J` mix m/s and rad/s, so these numbers depend on the length
 unit (SI here); only their zeros do not. Everything here is vectorised over a
 leading batch axis; the (θ2, θ3) grids of a DH robot use a batched numpy
 Jacobian instead of a Python loop over Pinocchio, and the determinant of a
-PUMA-type arm uses the analytic factorisation of :mod:`workbench.singularities`.
+PUMA-type arm uses the analytic factorisation of :mod:`workbench.singularities.conditions`.
 """
 
 from __future__ import annotations
@@ -24,10 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from workbench.dh import DHTable
 from workbench.errors import InputError
-from workbench.robot import Robot
-from workbench.singularities import NotPumaTypeError, compute_det_j_analytic
+from workbench.model.dh import DHTable
+from workbench.model.robot import Robot
+from workbench.singularities.conditions import NotPumaTypeError, compute_det_j_analytic
 from workbench.validation import as_finite_array
 
 FloatArray = npt.NDArray[np.float64]

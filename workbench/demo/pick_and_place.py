@@ -17,8 +17,8 @@ import numpy as np
 
 from workbench import paper_data
 from workbench.errors import WorkbenchError
+from workbench.model.robot import Robot
 from workbench.poses import ANGELES7_PRINTED_TOL, se3_from_angeles7
-from workbench.robot import Robot
 from workbench.trajectory import (
     compare_time_optimal,
     compute_cartesian_trajectory,
@@ -27,7 +27,7 @@ from workbench.trajectory import (
     pick_and_place,
     pick_and_place_from_poses,
 )
-from workbench.trajectory_csv import write_trajectory_csv
+from workbench.trajectory.csv_io import write_trajectory_csv
 
 _log = logging.getLogger(__name__)
 
@@ -70,7 +70,7 @@ def _ik_table(robot: Robot) -> dict[str, Any]:
 
 def _singularities(robot: Robot, t: np.ndarray, q: np.ndarray) -> dict[str, Any]:
     try:
-        from workbench.singularity_trajectory import find_closest_approaches
+        from workbench.singularities.along_path import find_closest_approaches
     except ImportError:  # the singularity analysis is another module's job
         return {}
     approaches = find_closest_approaches(robot, t, q)
@@ -159,7 +159,7 @@ def run_pick_and_place_demo(
 
 
 def _write_figures(traj, cart, out_dir: Path) -> dict[str, str]:
-    from workbench.trajectory_plots import (
+    from workbench.plots.trajectory import (
         plot_cartesian,
         plot_joint_trajectory,
         plot_normal_spline,

@@ -3,7 +3,7 @@ r"""Online, multi-rate Cartesian trajectory planner for PUMA-type arms (Kang 200
 Once per planning cycle, :meth:`OnlinePlanner.step` runs Kang's chain:
 
 1. Cartesian motion command of the tool tip (world frame) from the active
-   :class:`~workbench.trajectory.motion_primitives.MotionPrimitive`;
+   :class:`~workbench.planning.motion_primitives.MotionPrimitive`;
 2. wrist-centre (robot tool frame) command, then the robot base frame;
 3. closed-form inverse kinematics, the branch nearest the configuration
    extrapolated from the last two commands (continuity, Kang's θ4 flip rule,
@@ -24,7 +24,7 @@ or give a new goal (:meth:`~OnlinePlanner.set_goal`): the new motion is
 planned from the state commanded at the last cycle, so position and velocity
 stay continuous. The servo level interpolates the joint commands between
 planning instants with cubic Hermite polynomials
-(:func:`~workbench.trajectory.servo_interpolation.interpolate_servo`).
+(:func:`~workbench.planning.servo_interpolation.interpolate_servo`).
 """
 
 from __future__ import annotations
@@ -47,15 +47,15 @@ from workbench.ik.closed_form import (
     solve_one,
 )
 from workbench.ik.damped import DLS_EPSILON, DLS_LAMBDA_MAX, dls_inverse
-from workbench.robot import Robot
-from workbench.trajectory._inverse_velocity import solve_velocity
-from workbench.trajectory._tracking import command_joints, track, wrist_command
-from workbench.trajectory.cartesian_paths import (
+from workbench.model.robot import Robot
+from workbench.planning._inverse_velocity import solve_velocity
+from workbench.planning._tracking import command_joints, track, wrist_command
+from workbench.planning.cartesian_paths import (
     ZERO_TOL,
     CartesianLimits,
     CartesianState,
 )
-from workbench.trajectory.motion_primitives import (
+from workbench.planning.motion_primitives import (
     Hold,
     MotionPrimitive,
     PointToPoint,

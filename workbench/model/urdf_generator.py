@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 from xml.sax.saxutils import quoteattr
 
-from workbench.dh import DHTable
+from workbench.model.dh import DHTable
 
 #: Link radius as a fraction of the table's longest |a| or |d|.
 _LINK_RADIUS_RATIO = 0.06

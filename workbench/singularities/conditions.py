@@ -42,9 +42,9 @@ Tests check :math:`\det J = K s e w` against Pinocchio's Jacobian to 1e-9
 relative on every supported model. Loci in joint space and degenerate
 directions (below) are derived for the PUMA tables only.
 The derivation is in ``docs/errata-kang-singularities.md``; the loci in joint
-space are in :mod:`workbench.singularity_loci`, the degenerate directions in
-:mod:`workbench.singularity_directions`, the numeric measures of any robot in
-:mod:`workbench.singularity_measures`.
+space are in :mod:`workbench.singularities.loci`, the degenerate directions in
+:mod:`workbench.singularities.directions`, the numeric measures of any robot in
+:mod:`workbench.singularities.measures`.
 """
 
 from __future__ import annotations
@@ -56,9 +56,9 @@ from typing import ClassVar
 import numpy as np
 import numpy.typing as npt
 
-from workbench.dh import DHTable
 from workbench.errors import InputError
-from workbench.robot import Robot
+from workbench.model.dh import DHTable
+from workbench.model.robot import Robot
 from workbench.validation import as_finite_array
 
 FloatArray = npt.NDArray[np.float64]

@@ -1,0 +1,1 @@
+"""The papers' examples end to end (``workbench demo``)."""

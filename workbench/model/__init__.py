@@ -1,0 +1,1 @@
+"""Robot models: DH tables, URDF generation, the robot catalog, loading, Robot."""

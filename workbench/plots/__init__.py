@@ -1,0 +1,1 @@
+"""Matplotlib figures: joint trajectories, the arm in 3D."""
