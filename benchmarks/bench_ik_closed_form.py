@@ -1,27 +1,32 @@
-"""Closed-form IK of the PUMA 560: workbench vs peers, all eight branches.
+"""Closed-form IK of any arm: workbench vs peers, all eight branches.
 
-Run: ``python benchmarks/bench_ik_closed_form.py [--poses N] [--quick]``.
+Run: ``python benchmarks/bench_ik_closed_form.py [--poses N] [--quick]
+[--robots puma560,ur5,kuka-kr6-r700]``.
 
 * single pose: median time of one call from Python that returns all eight
   branches (ours: ``analytic``; Robotics Toolbox: eight ``ikine_a`` calls, one
-  per configuration string, since it returns one branch per call);
+  per configuration string, since it returns one branch per call; EAIK:
+  ``IK``; ik-geo: ``get_ik``; ``ik.numeric``: one solution only);
 * batch: poses per second, all eight branches each (ours: ``analytic_batch``;
-  RTB: ``ikine_a`` on an (N, 4, 4) array, once per configuration string).
+  RTB: ``ikine_a`` on an (N, 4, 4) array, once per configuration string;
+  EAIK: ``IK_batched`` with one worker thread, i.e. per core).
 
 Times are CPU time of this process (``time.process_time``), so that other
 jobs on a shared machine inflate them less than wall time would; a reference
 loop, ``sum(range(1000))``, is timed the same way to calibrate the machine.
 
-Peers are optional: a missing one is reported and skipped. Each peer solves
-its own PUMA 560 model (RTB's DH table differs from ours in d1, d3, α signs);
-every tool's answers are checked against its own forward kinematics, so the
-timings compare equal work.
+Peers are optional (the ``bench`` extra): a missing one is reported and
+skipped. RTB solves its own PUMA 560 model (its DH table differs from ours in
+d1, d3, α signs); EAIK and ik-geo get the same chain as ours, read from the
+model's joint axes. Every tool's answers are checked against forward
+kinematics; a peer whose answers miss the pose is reported, not timed.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import math
 import statistics
 import time
 import warnings
@@ -112,37 +117,186 @@ def bench_rtb(poses: int, quick: bool) -> dict[str, float] | str:
     return {"single_us": one, "batch_poses_per_s": rate}
 
 
+def _chain(robot):
+    """Axes H (6, 3), offsets P (7, 3) and the tool rotation at q = 0."""
+    import pinocchio as pin
+
+    from workbench.ik.structure import axis_lines
+
+    directions, points = axis_lines(robot)
+    data = robot.model.createData()
+    pin.framesForwardKinematics(robot.model, data, np.zeros(6))
+    tool = data.oMf[robot.tool_frame_id]
+    offsets = np.diff(np.vstack([np.zeros(3), points, tool.translation]), axis=0)
+    return directions, offsets, tool.rotation
+
+
+def _problem(name: str, count: int = 2000):
+    robot = load_robot(name)
+    rng = np.random.default_rng(0)
+    qs = rng.uniform(robot.lower, robot.upper, size=(count, 6))
+    return robot, np.array([robot.fk(q).homogeneous for q in qs])
+
+
+def bench_any(name: str, poses: int, quick: bool) -> dict[str, float]:
+    """Ours on any robot: single pose and batch, every answer checked."""
+    robot, targets = _problem(name)
+    q_batch, valid = analytic_batch(robot, targets)
+    worst = max(
+        float(np.abs(robot.fk(q).homogeneous - t).max())
+        for t, qq, ok in zip(targets[:200], q_batch[:200], valid[:200], strict=True)
+        for q in qq[ok]
+    )
+    assert worst < 1e-9, worst
+    cycle = iter(range(10**9))
+    one = _median_us(
+        lambda: analytic(robot, targets[next(cycle) % 2000]),
+        repeat=7 if quick else 25,
+        number=200,
+    )
+    big = np.tile(targets, (max(poses // len(targets), 1), 1, 1))
+    rate = _rate(lambda: analytic_batch(robot, big), len(big), 3 if quick else 7)
+    return {"single_us": one, "batch_poses_per_s": rate, "fk_max_error": worst}
+
+
+def bench_eaik(name: str, poses: int, quick: bool) -> dict[str, float] | str:
+    try:
+        hp = importlib.import_module("eaik.IK_HP")
+    except ImportError as err:
+        return f"not importable ({err})"
+    robot, targets = _problem(name)
+    directions, offsets, rotation0 = _chain(robot)
+    peer = hp.HPRobot(directions, offsets)
+    shifted = targets.copy()
+    shifted[:, :3, :3] = targets[:, :3, :3] @ rotation0.T
+    worst = 0.0
+    for target, pose in zip(targets[:200], shifted[:200], strict=True):
+        solution = peer.IK(pose)
+        exact = ~np.asarray(solution.is_LS, dtype=bool)
+        for q in np.asarray(solution.Q)[exact]:
+            worst = max(worst, float(np.abs(robot.fk(q).homogeneous - target).max()))
+    if worst > 1e-9:
+        return f"answers miss the pose (max |FK(q) - target| = {worst:.2g})"
+    cycle = iter(range(10**9))
+    one = _median_us(
+        lambda: peer.IK(shifted[next(cycle) % 2000]),
+        repeat=7 if quick else 25,
+        number=200,
+    )
+    count = min(poses, 20_000 if quick else 100_000)
+    batch = [shifted[i % 2000] for i in range(count)]
+    rate = _rate(lambda: peer.IK_batched(batch, 1), count, 1 if quick else 3)
+    return {"single_us": one, "batch_poses_per_s": rate}
+
+
+def bench_ik_geo(name: str, poses: int, quick: bool) -> dict[str, float] | str:
+    try:
+        ik_geo = importlib.import_module("ik_geo")
+    except ImportError as err:
+        return f"not importable ({err})"
+    robot, targets = _problem(name)
+    directions, offsets, rotation0 = _chain(robot)
+    from workbench.ik.structure import get_structure
+
+    family = get_structure(robot).family
+    make = (
+        ik_geo.Robot.three_parallel_two_intersecting
+        if family == "ur"
+        else ik_geo.Robot.spherical_two_parallel
+    )
+    peer = make(directions, offsets)
+    worst = 0.0
+    for target in targets[:50]:
+        rotation = target[:3, :3] @ rotation0.T
+        answers = peer.get_ik(rotation.T, target[:3, 3])  # its R is transposed
+        errors = [
+            float(np.abs(robot.fk(np.array(q)).homogeneous - target).max())
+            for q, _ in answers
+        ]
+        worst = max(worst, min(errors, default=np.inf))
+    if worst > 1e-9:
+        return f"answers miss the pose (best |FK(q) - target| = {worst:.2g})"
+    cycle = iter(range(10**9))
+
+    def one_pose() -> object:
+        target = targets[next(cycle) % 2000]
+        return peer.get_ik((target[:3, :3] @ rotation0.T).T, target[:3, 3])
+
+    one = _median_us(one_pose, repeat=7 if quick else 25, number=200)
+    return {"single_us": one, "batch_poses_per_s": math.nan}
+
+
+def bench_numeric(name: str, poses: int, quick: bool) -> dict[str, float] | str:
+    from workbench.ik import numeric
+
+    robot, targets = _problem(name, 100)
+    cycle = iter(range(10**9))
+    one = _median_us(
+        lambda: numeric(robot, targets[next(cycle) % 100], rng=0),
+        repeat=3 if quick else 7,
+        number=10,
+    )
+    return {"single_us": one, "batch_poses_per_s": 1e6 / one}
+
+
+def _print_table(title: str, rows, ours) -> None:
+    print(title)
+    print(f"{'solver':44s} {'single [µs]':>12s} {'ratio':>7s} {'batch [poses/s]':>16s} "
+          f"{'ratio':>7s}")  # fmt: skip
+    for name, r in rows:
+        batch = r["batch_poses_per_s"]
+        speedup = ours["batch_poses_per_s"] / batch if batch == batch else math.nan
+        print(
+            f"{name:44s} {r['single_us']:12.1f} "
+            f"{r['single_us'] / ours['single_us']:6.1f}x "
+            f"{batch:16,.0f} {speedup:6.1f}x"
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--poses", type=int, default=1_000_000, help="batch size")
     parser.add_argument("--quick", action="store_true", help="fewer repeats")
+    parser.add_argument(
+        "--robots",
+        default="puma560,ur5,kuka-kr6-r700",
+        help="comma-separated models for the peers EAIK, ik-geo, ik.numeric",
+    )
     args = parser.parse_args()
-    ours = bench_workbench(args.poses, args.quick)
-    rows = [("workbench analytic / analytic_batch", ours)]
-    missing = []
-    for name, bench in (("Robotics Toolbox Puma560.ikine_a x8", bench_rtb),):
-        result = bench(args.poses, args.quick)
-        if isinstance(result, str):
-            missing.append(f"{name}: {result}")
-        else:
-            rows.append((name, result))
     reference = _median_us(lambda: sum(range(1000)), repeat=15, number=2000)
-    print("Closed-form PUMA 560 IK, all 8 branches per pose, one core, CPU time")
-    print(f"machine reference: sum(range(1000)) = {reference:.1f} µs")
-    print(f"{'solver':40s} {'single [µs]':>12s} {'ratio':>7s} {'batch [poses/s]':>16s} "
-          f"{'ratio':>7s}")  # fmt: skip
-    for name, r in rows:
-        print(
-            f"{name:40s} {r['single_us']:12.1f} "
-            f"{r['single_us'] / ours['single_us']:6.1f}x "
-            f"{r['batch_poses_per_s']:16,.0f} "
-            f"{ours['batch_poses_per_s'] / r['batch_poses_per_s']:6.1f}x"
+    print(f"machine reference: sum(range(1000)) = {reference:.1f} µs (CPU time)")
+    print("ratio: time relative to the workbench (single), workbench speed-up "
+          "(batch); ik.numeric gives one branch, batch = 1 / single")  # fmt: skip
+    missing = []
+    for name in args.robots.split(","):
+        ours = bench_any(name, args.poses, args.quick)
+        rows = [("workbench analytic / analytic_batch", ours)]
+        peers = (
+            ("EAIK IK / IK_batched (1 thread)", bench_eaik),
+            ("ik-geo get_ik", bench_ik_geo),
+            ("workbench ik.numeric (1 branch)", bench_numeric),
         )
-    print("ratio: time relative to the workbench (single), workbench speed-up (batch)")
-    print(f"workbench max |FK(q) - target| over 200 poses x 8 branches: "
-          f"{ours['fk_max_error']:.1e}")  # fmt: skip
+        if name == "puma560":
+            peers = (("Robotics Toolbox Puma560.ikine_a x8", _bench_rtb_any), *peers)
+        for label, bench in peers:
+            result = bench(name, args.poses, args.quick)
+            if isinstance(result, str):
+                missing.append(f"{label} on {name}: {result}")
+            else:
+                rows.append((label, result))
+        _print_table(
+            f"\n{name}: closed-form IK, all branches per pose, one core, CPU time",
+            rows,
+            ours,
+        )
+        print(f"workbench max |FK(q) - target|, 200 poses x every branch: "
+              f"{ours['fk_max_error']:.1e}")  # fmt: skip
     for line in missing:
         print(f"skipped {line}")
+
+
+def _bench_rtb_any(name: str, poses: int, quick: bool) -> dict[str, float] | str:
+    return bench_rtb(poses, quick)
 
 
 if __name__ == "__main__":

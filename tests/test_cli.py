@@ -155,12 +155,20 @@ def test_ik_falls_back_to_numerical_ik_for_other_arms(capsys) -> None:
     from workbench import load_robot
 
     q = np.array([0.1, -1.0, 1.0, 0.5, 0.3, 0.2])
-    matrix = load_robot("ur5").fk(q).homogeneous
+    matrix = load_robot("generic6r").fk(q).homogeneous
     code, out, _ = run(
-        capsys, "ik", "--robot", "ur5", "--matrix", *map(str, matrix.ravel()), "--json"
+        capsys,
+        "ik",
+        "--robot",
+        "generic6r",
+        "--matrix",
+        *map(str, matrix.ravel()),
+        "--json",
     )
     assert code == 0
-    (solution,) = json.loads(out)["solutions"]
+    result = json.loads(out)
+    (solution,) = result["solutions"]
+    assert result["solver"] == "numeric"
     assert solution["branch"] == "numeric" and solution["residual"] < 1e-9
 
 
@@ -183,5 +191,5 @@ def test_ik_numerical_out_of_reach_exits_3(capsys) -> None:
         "0",
         "1",
     ]
-    code, _, err = run(capsys, "ik", "--robot", "ur5", "--matrix", *far)
+    code, _, err = run(capsys, "ik", "--robot", "generic6r", "--matrix", *far)
     assert code == 3 and "no solution" in err and err.count("\n") == 1

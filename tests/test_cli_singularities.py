@@ -87,7 +87,7 @@ def test_singularities_text_output(capsys) -> None:
 def test_singularities_of_a_non_puma_robot(capsys) -> None:
     q_text = ["0", "-40", "70", "10", "60", "0"]
     code, out, _ = run(
-        capsys, "singularities", "--robot", "ur5", "--deg", *q_text, "--json"
+        capsys, "singularities", "--robot", "generic6r", "--deg", *q_text, "--json"
     )
     result = json.loads(out)
     assert code == 0
@@ -164,3 +164,21 @@ def test_report_bad_input(capsys, tmp_path, extra, fragment) -> None:
     assert code == EXIT_BAD_INPUT
     assert fragment in err
     assert len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("name", ["ur5", "kuka-kr6-r700"])
+def test_singularities_of_any_closed_form_arm(capsys, name) -> None:
+    """OPW and UR-type arms get the analytic classes; q5 at DH θ5 = 0 is wrist."""
+    from workbench import load_robot
+    from workbench.ik import get_structure
+
+    structure = get_structure(load_robot(name))
+    q5 = -structure.joint_sign[4] * structure.table.joints[4].theta_offset
+    q = [0.3, -0.7, 1.2, 0.4, q5, 0.2]
+    code, out, _ = run(
+        capsys, "singularities", "--robot", name, "--rad", *map(repr, q), "--json"
+    )
+    result = json.loads(out)
+    assert code == 0 and result["family"] == structure.family
+    assert abs(result["near"]["wrist"]) < 1e-12 and "wrist" in result["singular"]
+    assert abs(result["det_j"]) < 1e-12

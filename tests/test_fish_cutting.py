@@ -247,7 +247,7 @@ def test_cli_json_csv_and_html(tmp_path, capsys, run):
     ("args", "code", "fragment"),
     [
         (["--max-velocity", "0.6"], 3, "velocity"),  # fails mid-run
-        (["--robot", "ur5"], 2, "closed-form IK"),
+        (["--robot", "generic6r"], 2, "closed-form IK"),
         (["--servo-rate", "150"], 2, "integer multiple"),
         (["--max-velocity", "nan"], 2, "max_velocity"),
         (["--robot", "nope"], 2, "unknown robot"),
@@ -264,3 +264,15 @@ def test_cli_bad_input_writes_nothing(tmp_path, capsys, args, code, fragment):
 def test_cli_rejects_missing_folder(tmp_path, capsys):
     assert main(["fishcut", "--csv", str(tmp_path / "no" / "x.csv")]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_fishcut_runs_on_ur5(capsys) -> None:
+    """Kang's scene unchanged (the UR5 reaches as far as the PUMA): it runs."""
+    import json
+
+    from tests.conftest import run_cli
+
+    code, out, _ = run_cli(capsys, "fishcut", "--robot", "ur5", "--json")
+    result = json.loads(out)
+    assert code == 0 and result["robot"] == "ur5"
+    assert result["wrist_flips"] == 0 and result["cycles"] > 100

@@ -500,16 +500,22 @@ def test_bad_q_previous_and_empty_nearest(puma) -> None:
         nearest([], np.zeros(6))
 
 
-def test_unsupported_robots(puma) -> None:
+def test_unsupported_robots(puma, rng) -> None:
+    """Without a DH table the structure comes from the axes: same branches."""
     no_table = Robot(
         "plain", puma.model, puma.urdf_path, puma.tool_frame, package_dirs=[]
     )
-    with pytest.raises(UnsupportedRobotError, match="PUMA-type DH model"):
-        analytic(no_table, np.eye(4))
+    for q in rng.uniform(puma.lower, puma.upper, size=(50, 6)):
+        target = puma.fk(q)
+        with_table, from_axes = analytic(puma, target), analytic(no_table, target)
+        assert [s.branch for s in from_axes] == [s.branch for s in with_table]
+        np.testing.assert_allclose(
+            [s.q for s in from_axes], [s.q for s in with_table], rtol=0, atol=1e-9
+        )
     joints = list(puma.dh_table.joints)
     joints[1] = replace(joints[1], alpha=math.pi / 2.0)
     bent = robot_from_table(replace(puma.dh_table, name="bent", joints=tuple(joints)))
-    with pytest.raises(UnsupportedRobotError, match=r"alpha2 = 1\.5708"):
+    with pytest.raises(UnsupportedRobotError, match=r"axes 2 and 3 are not parallel"):
         analytic_batch(bent, np.eye(4)[None])
     assert WRIST_SINGULAR_TOL <= ATOL_FK / math.pi
 
@@ -604,17 +610,17 @@ def test_cli_no_branch_within_limits_and_non_puma(capsys, puma) -> None:
         "--all",
     )
     assert code == 0 and out.count("outside joint limits") == 8
-    # A URDF path has no DH table: numerical IK, which keeps to the joint limits.
+    # A URDF path has no DH table: the closed form from the joint axes.
     path = str(puma.urdf_path)
     code, _, err = run(
         capsys, "ik", "--robot", path, "--matrix", *map(repr, numbers.tolist())
     )
-    assert code == EXIT_INFEASIBLE and "numerical IK found no solution" in err
+    assert code == EXIT_INFEASIBLE and "none of the 8" in err
     inside = puma.fk(np.deg2rad([10.0, -40.0, 170.0, 20.0, 40.0, 30.0])).homogeneous
     code, out, _ = run(
         capsys, "ik", "--robot", path, "--matrix", *map(repr, inside.ravel().tolist())
     )
-    assert code == 0 and "numeric" in out
+    assert code == 0 and "solver closed-form" in out
 
 
 # -- fast paths (performance work) agree with the general ones ----------------------

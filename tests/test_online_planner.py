@@ -15,6 +15,7 @@ from workbench import (
     NonFiniteError,
     load_robot,
 )
+from workbench.ik import get_branches, get_structure
 from workbench.ik.closed_form import analytic, nearest
 from workbench.planning import (
     CartesianLimits,
@@ -277,7 +278,7 @@ def test_start_outside_limits_and_robot_without_closed_form(puma_kang):
     with pytest.raises(JointLimitError, match="joint2"):
         OnlinePlanner(puma_kang, q, LIMITS)
     with pytest.raises(InputError, match="closed-form IK"):
-        OnlinePlanner(load_robot("ur5"), np.zeros(6), LIMITS)
+        OnlinePlanner(load_robot("generic6r"), np.zeros(6), LIMITS)
 
 
 def test_samples_and_states_are_immutable(puma_kang):
@@ -324,3 +325,68 @@ def test_cycle_solves_a_pose_only_the_exact_rigidity_checks_accept(puma_kang):
     rotation[:, 0] *= 1.0 + 1e-5  # beyond RIGIDITY_TOL
     with pytest.raises(InputError, match="orthonormal"):
         planner._command_joints(state.position, zero, rotation, zero)
+
+
+@pytest.mark.parametrize("name", ["ur5", "kuka-kr6-r700", "abb-irb2400"])
+def test_any_closed_form_arm_runs_the_primitives(name):
+    """OnlinePlanner and its primitives on OPW and UR-type arms: exact poses."""
+    robot = load_robot(name)
+    structure = get_structure(robot)
+    if structure.family == "ur":  # elbow bent, away from every singularity
+        q0 = np.array([0.4, -1.2, 1.5, -0.9, 0.8, 0.5])
+    else:
+        q0 = (robot.lower + robot.upper) / 2.0 + 0.3
+        q0[4] = structure.joint_sign[4] * (0.8 - structure.table.joints[4].theta_offset)
+        q0 = np.remainder(q0 + np.pi, 2.0 * np.pi) - np.pi
+    planner = OnlinePlanner(robot, q0, LIMITS)
+    rng = np.random.default_rng(1)
+    planner.append(PointToPoint(*_random_goal(planner, rng)))
+    planner.append(StraightLine(planner.state.position + np.array([0.03, -0.02, 0.02])))
+    samples = []
+    while not planner.done:
+        samples.append(planner.step())
+        assert planner.cycle < 3000
+    labels = set(get_branches(robot))
+    for s in samples:
+        pose = robot.fk(s.q)
+        np.testing.assert_allclose(pose.translation, s.position, atol=1e-12)
+        np.testing.assert_allclose(pose.rotation, s.rotation, atol=1e-12)
+        assert s.branch in labels
+    q = np.array([s.q for s in samples])
+    assert np.abs(np.diff(q, axis=0)).max() < 0.05
+
+
+def test_ur_line_through_the_wrist_singularity_keeps_the_wrist_continuous():
+    """UR5: a straight line through sin θ5 = 0; θ6 and θ4 continuous, DLS rates."""
+    robot = load_robot("ur5")
+    structure = get_structure(robot)
+    q_mid = np.array([0.4, -1.2, 1.5, -0.9, 0.0, 0.5])
+    q_mid[4] = -structure.joint_sign[4] * structure.table.joints[4].theta_offset
+    q_mid[4] = np.remainder(q_mid[4] + np.pi, 2.0 * np.pi) - np.pi
+    mid = robot.fk(q_mid)
+    assert any(s.wrist_singular for s in analytic(robot, mid))
+    step = np.array([0.0, 0.0, 0.05])
+    start = pin.SE3(mid.rotation, mid.translation - step)
+    q0 = nearest(analytic(robot, start, q_previous=q_mid), q_mid).q
+    planner = OnlinePlanner(robot, q0, LIMITS)
+    planner.append(StraightLine(mid.translation + step))
+    samples = []
+    while not planner.done:
+        samples.append(planner.step())
+    q = np.array([s.q for s in samples])
+    qd = np.array([s.qd for s in samples])
+    theta5 = structure.table.joints[4].theta_offset + structure.joint_sign[4] * q[:, 4]
+    sin5 = np.abs(np.sin(theta5))
+    k = int(np.argmin(sin5))
+    assert sin5[k] < 1e-3  # the line passes the singular region
+    assert np.abs(np.diff(q, axis=0)).max() < 0.01  # no π flip of θ4 or θ6
+    assert np.all(np.abs(qd) <= robot.velocity_limit)
+    for s in samples:
+        np.testing.assert_allclose(robot.fk(s.q).translation, s.position, atol=1e-12)
+    damped = np.array([s.damped for s in samples])
+    assert damped[k]
+    twist = np.array(
+        [np.concatenate([s.velocity, s.angular_velocity]) for s in samples]
+    )
+    exact = np.linalg.lstsq(robot.jacobian(q[k]), twist[k], rcond=1e-20)[0]
+    assert np.linalg.norm(qd[k]) < np.linalg.norm(exact)  # DLS: bounded rates

@@ -393,9 +393,17 @@ def test_svd_grid_matches_pinocchio(puma, rng) -> None:
 
 
 def test_grid_of_a_robot_without_dh_table_uses_pinocchio() -> None:
-    ur5 = load_robot("ur5")
+    ur5 = load_robot("ur5")  # a closed-form family: det J from its factors
     axis = np.linspace(-1, 1, 4)
     grid = compute_joint_grid(ur5, axis, axis, q_fixed=np.full(6, 0.5))
+    assert grid.method == "analytic"
+    generic = load_robot("generic6r")  # no family: SVD of its DH Jacobians
+    grid = compute_joint_grid(generic, axis, axis, q_fixed=np.full(6, 0.5))
+    assert grid.method == "numpy DH"
+    from workbench import Robot
+
+    plain = Robot("plain", generic.model, generic.urdf_path, "flange", package_dirs=[])
+    grid = compute_joint_grid(plain, axis, axis, q_fixed=np.full(6, 0.5))
     assert grid.method == "pinocchio"
     assert set(grid.values) >= {"det_j", "sigma_min"}
 
@@ -414,8 +422,8 @@ def test_grid_errors(puma) -> None:
 
 
 def test_not_puma_type_errors(puma) -> None:
-    with pytest.raises(NotPumaTypeError, match="no DH table"):
-        compute_conditions(load_robot("ur5"), np.zeros(6))
+    with pytest.raises(NotPumaTypeError, match="axes 2 and 3 are not parallel"):
+        compute_conditions(load_robot("generic6r"), np.zeros(6))
     rows = list(puma.dh_table.joints)
     rows[3] = dataclasses.replace(rows[3], a=0.1)
     table = dataclasses.replace(puma.dh_table, joints=tuple(rows))
@@ -458,7 +466,7 @@ def test_closest_approach_and_crossing(puma_kang, tmp_path) -> None:
 
 
 def test_closest_approach_of_any_robot_and_errors() -> None:
-    ur5 = load_robot("ur5")
+    ur5 = load_robot("generic6r")
     t = np.linspace(0, 1, 5)
     approaches = find_closest_approaches(ur5, t, np.full((5, 6), 0.5))
     assert set(approaches) == {"sigma_min"}

@@ -105,12 +105,25 @@ def test_angeles_report_has_its_own_elbow_angles_and_progress() -> None:
 
 def test_report_of_a_robot_without_dh_table() -> None:
     report = build_singularity_report(
-        load_robot("ur5"), grid_size=12, svd_grid_size=8, samples=10
+        load_robot("generic6r"), grid_size=12, svd_grid_size=8, samples=10
     )
     assert report.summary["elbow_theta3_deg"] is None
     assert report.summary["puma_type"] is False
     assert set(report.figures) == {"det_j_map", "sigma_min_map"}
     assert "numeric measures only" in report.html
+
+
+@pytest.mark.parametrize("name", ["ur5", "kuka-kr6-r700"])
+def test_report_of_any_closed_form_arm_classifies(name: str) -> None:
+    report = build_singularity_report(
+        load_robot(name), grid_size=12, svd_grid_size=8, samples=300
+    )
+    summary = report.summary
+    assert summary["family"] in ("opw", "ur") and summary["puma_type"] is False
+    assert summary["cross_check"]["max_relative_error"] <= REL_DET
+    assert sum(summary["classes"].values()) >= 300
+    assert "recognised from the joint axes" in report.html
+    assert "classes of those" in report.html
 
 
 def test_core_modules_do_not_import_matplotlib() -> None:

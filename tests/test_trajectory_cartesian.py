@@ -134,3 +134,18 @@ def test_panda_from_poses_uses_numerical_ik(rng) -> None:
     )
     with pytest.raises(InputError, match="no closed-form IK"):
         trajectory.select_ik_solution(panda, panda.fk(q0), branch="right/elbow-up/flip")
+
+
+def test_ur5_from_poses_uses_the_closed_form(rng) -> None:
+    """A UR-type arm gets labelled closed-form branches, not numerical IK."""
+    from workbench.trajectory.cartesian import select_ik_solution
+
+    ur5 = load_robot("ur5")
+    q = np.array([0.4, -1.2, 1.5, -0.9, 0.8, 0.5])
+    choice = select_ik_solution(
+        ur5, ur5.fk(q), branch="shoulder-left/elbow-up/wrist-up"
+    )
+    assert choice.branch == "shoulder-left/elbow-up/wrist-up"
+    np.testing.assert_allclose(
+        ur5.fk(choice.q).homogeneous, ur5.fk(q).homogeneous, atol=1e-9
+    )

@@ -94,7 +94,8 @@ def run(args: argparse.Namespace) -> int:
     fish = SimulatedFish(args.seed)
     scene = load_scene(args, lambda: None)  # a --scene file is checked first
     result = run_fish_cutting(robot, fish, setup)  # (a non-PUMA robot fails here)
-    if scene is None and not args.no_collision:
+    # Kang's cell is built around a PUMA's pedestal; other arms: self-collision only.
+    if scene is None and not args.no_collision and robot.dh_table is not None:
         scene = get_fish_cutting_scene(robot, fish, setup)
     checker = build_checker(robot, scene, explicit=args.scene is not None)
     clearance = None

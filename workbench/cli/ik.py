@@ -1,11 +1,13 @@
-"""``workbench ik``: inverse kinematics, closed form for PUMA-type arms.
+"""``workbench ik``: inverse kinematics, closed form for OPW and UR-type arms.
 
-Any other robot falls back to numerical IK (one solution, branch "numeric").
+Any other robot falls back to numerical IK (one solution, branch "numeric"),
+and the output says so: ``solver`` is ``"closed-form"`` or ``"numeric"``.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import Any
 
 import numpy as np
@@ -24,6 +26,7 @@ from workbench.ik.closed_form import (
     IKSolution,
     UnsupportedRobotError,
     analytic,
+    get_solver,
     nearest,
 )
 from workbench.ik.numerical import numeric
@@ -47,14 +50,20 @@ def register(commands: argparse._SubParsersAction) -> None:
     """Add the ``ik`` command."""
     parser = commands.add_parser(
         "ik",
-        help="inverse kinematics (closed form for PUMA models, else numerical)",
-        description="Joint values that put the tool frame (the wrist centre) at a "
-        "pose. Prints the branch within the joint limits nearest to q = 0, or with "
-        "--all every closed-form branch. Robots that are not PUMA-type get one "
-        "numerical solution (branch 'numeric'). residual = max(position error [m], "
-        "rotation error [rad]) of FK(q) against the target.",
+        help="inverse kinematics (closed form for OPW and UR-type arms, else "
+        "numerical)",
+        description="Joint values that put the tool frame at a pose. Prints the "
+        "branch within the joint limits nearest to q = 0, or with --all every "
+        "closed-form branch. Arms of the OPW (PUMA, KUKA, ABB, ...) and UR families "
+        "are recognised from their joint axes; any other robot gets one numerical "
+        "solution (solver 'numeric', branch 'numeric'). residual = max(position "
+        "error [m], rotation error [rad]) of FK(q) against the target.",
     )
     add_robot_argument(parser)
+    parser.add_argument(
+        "--tool-frame",
+        help="tool frame whose pose is the target (default: the robot's)",
+    )
     pose = parser.add_mutually_exclusive_group(required=True)
     pose.add_argument(
         "--angeles7",
@@ -119,8 +128,8 @@ def _pick(solutions: list[IKSolution], nq: int) -> IKSolution:
     feasible = [s for s in solutions if s.within_limits]
     if not feasible:
         raise InfeasibleError(
-            "the pose is reachable, but none of the 8 closed-form branches is "
-            "within the joint limits (use --all to see them)"
+            f"the pose is reachable, but none of the {len(solutions)} closed-form "
+            "branches is within the joint limits (use --all to see them)"
         )
     return nearest(feasible, np.zeros(nq))
 
@@ -139,20 +148,26 @@ def _numeric_row(robot: Robot, target: pin.SE3) -> dict[str, object]:
         "q_deg": np.rad2deg(result.q),
         "within_limits": True,
         "wrist_singular": False,
+        "shoulder_singular": False,
         "residual": residual(robot, result.q, target),
     }
 
 
 def run(args: argparse.Namespace) -> int:
     """Print the solution(s); returns the exit code."""
-    robot = load_robot(args.robot)
+    robot = load_robot(args.robot, tool_frame=args.tool_frame)
     target = target_from_args(args)
     rows: list[dict[str, Any]]
     try:
-        solutions = analytic(robot, target)
-    except UnsupportedRobotError:
+        family = get_solver(robot)[0]
+    except UnsupportedRobotError as err:
+        solver, reason = "numeric", str(err)
+        if args.all and not args.json:
+            print(f"no closed form: {reason}", file=sys.stderr)
         rows = [_numeric_row(robot, target)]
     else:
+        solver, reason = "closed-form", f"{family.upper()} family"
+        solutions = analytic(robot, target)
         if not args.all:
             solutions = [_pick(solutions, robot.nq)]
         rows = [
@@ -162,18 +177,29 @@ def run(args: argparse.Namespace) -> int:
                 "q_deg": np.rad2deg(s.q),
                 "within_limits": s.within_limits,
                 "wrist_singular": s.wrist_singular,
+                "shoulder_singular": s.shoulder_singular,
                 "residual": residual(robot, s.q, target),
             }
             for s in solutions
         ]
     if args.json:
-        print_json({"robot": robot.name, "frame": robot.tool_frame, "solutions": rows})
+        print_json(
+            {
+                "robot": robot.name,
+                "frame": robot.tool_frame,
+                "solver": solver,
+                "solver_note": reason,
+                "solutions": rows,
+            }
+        )
         return 0
-    print(f"robot {robot.name}   frame {robot.tool_frame}")
+    print(f"robot {robot.name}   frame {robot.tool_frame}   solver {solver}")
     for row in rows:
         flags = "" if row["within_limits"] else "  (outside joint limits)"
         if row["wrist_singular"]:
             flags += "  (wrist singular)"
+        if row["shoulder_singular"]:
+            flags += "  (shoulder singular)"
         print(f"{row['branch']:26s} q [deg] {format_vector(row['q_deg'], 3)}{flags}")
         print(f"{'':26s} residual {row['residual']:.2e}")
     return 0

@@ -30,7 +30,9 @@ def register(commands: argparse._SubParsersAction) -> None:
         description=(
             "det J over (θ2, θ3) with the shoulder and elbow loci, σmin map, the "
             "arm in each singular configuration, analytic vs Pinocchio check, "
-            "degenerate directions; numeric maps only for non-PUMA robots."
+            "degenerate directions; for other OPW or UR-type arms the factors, "
+            "their check and the classes of random configurations; numeric maps "
+            "only for other robots."
         ),
     )
     add_robot_argument(sing)

@@ -27,7 +27,7 @@ from workbench.singularities.conditions import (
     NotPumaTypeError,
     classify_configuration,
     compute_conditions,
-    get_puma_factorisation,
+    get_factorisation,
 )
 from workbench.singularities.measures import compute_measures
 
@@ -39,7 +39,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         help="singularity analysis at one configuration",
         description=(
             "det J, singular values, manipulability and condition number of the "
-            "tool Jacobian (any robot), and for the PUMA models the signed "
+            "tool Jacobian (any robot), and for OPW and UR-type arms the signed "
             "distances to the shoulder [m], elbow [sine] and wrist [sin θ5] loci. "
             "In JSON an infinite condition number is null."
         ),
@@ -79,7 +79,9 @@ def analyse_configuration(robot: Robot, q: np.ndarray) -> dict[str, Any]:
         return result
     result["near"] = {kind: float(value) for kind, value in conditions.items()}
     result["singular"] = list(classify_configuration(robot, q))
-    result["det_j_constant"] = get_puma_factorisation(robot).constant
+    factorisation = get_factorisation(robot)
+    result["det_j_constant"] = factorisation.constant
+    result["family"] = factorisation.family
     return result
 
 
@@ -105,10 +107,11 @@ def run(args: argparse.Namespace) -> int:
     print(f"manipulability   {result['manipulability']:.6e}")
     print(f"condition number {'inf' if condition is None else f'{condition:.6g}'}")
     if result["singular"] is None:
-        print("near             n/a (no PUMA-type DH table: numeric measures only)")
+        print("near             n/a (no OPW or UR structure: numeric measures only)")
         return 0
     for kind in SINGULARITY_KINDS:
         value, unit = result["near"][kind], CONDITION_UNITS[kind]
         print(f"near {kind:<11} {value:+.6f}  [{unit}]")
+    print(f"family           {result['family'].upper()} (det J = K s e w)")
     print(f"singular         {', '.join(result['singular']) or 'none'}")
     return 0

@@ -1,4 +1,4 @@
-"""Inverse kinematics: closed form for PUMA-type arms, numerical for any arm.
+"""Inverse kinematics: closed form for OPW and UR-type arms, numerical for any arm.
 
 Public entry points (see docs/interface.md): ``analytic``, ``analytic_batch``,
 ``numeric``, ``numeric_batch``, plus the damped-least-squares tools.
@@ -6,35 +6,47 @@ Public entry points (see docs/interface.md): ``analytic``, ``analytic_batch``,
 
 from workbench.ik.closed_form import (
     BRANCHES,
+    UR_BRANCHES,
     WRIST_SINGULAR_TOL,
     IKSolution,
     UnreachableError,
     UnsupportedRobotError,
     analytic,
     analytic_batch,
+    get_branches,
     nearest,
 )
 from workbench.ik.damped import DLS_EPSILON, DLS_LAMBDA_MAX, dls_inverse, dls_step
 from workbench.ik.numerical import IKResult, numeric
 from workbench.ik.numerical_batch import IKBatchResult, numeric_batch
 from workbench.ik.qp import QP_DAMPING, DifferentialIKError, qp_step
+from workbench.ik.structure import (
+    STRUCTURE_TOL,
+    KinematicStructure,
+    get_structure,
+)
 
 __all__ = [
     "BRANCHES",
     "DLS_EPSILON",
     "DLS_LAMBDA_MAX",
     "QP_DAMPING",
+    "STRUCTURE_TOL",
+    "UR_BRANCHES",
     "WRIST_SINGULAR_TOL",
     "DifferentialIKError",
     "IKBatchResult",
     "IKResult",
     "IKSolution",
+    "KinematicStructure",
     "UnreachableError",
     "UnsupportedRobotError",
     "analytic",
     "analytic_batch",
     "dls_inverse",
     "dls_step",
+    "get_branches",
+    "get_structure",
     "nearest",
     "numeric",
     "numeric_batch",

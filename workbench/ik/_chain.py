@@ -164,10 +164,12 @@ class Chain:
             row[:3, :3] = (-2.0 * SEED_ROTATION_WEIGHT) * pose.rotation
             row[:3, 3] = -2.0 * position
             row[3, 3] = position.dot(position)
-        features = np.ascontiguousarray(features.reshape(SEED_COUNT, 16).T, np.float32)
-        features.setflags(write=False)
+        columns = np.ascontiguousarray(
+            features.reshape(SEED_COUNT, 16).T, dtype=np.float32
+        )
+        columns.setflags(write=False)
         starts.setflags(write=False)
-        return features, starts
+        return columns, starts
 
 
 def _pack_placement(row: FloatArray, placement: pin.SE3) -> None:
@@ -188,7 +190,8 @@ def _pack_joint(
         motion = np.array(data.S).ravel()
     linear = angular = 0.0
     if motion is not None:
-        linear, angular = np.linalg.norm(motion[:3]), np.linalg.norm(motion[3:])
+        linear = float(np.linalg.norm(motion[:3]))
+        angular = float(np.linalg.norm(motion[3:]))
     if motion is None or (linear > 0.0) == (angular > 0.0):
         raise InputError(
             f"numerical IK supports revolute, continuous and prismatic joints; "

@@ -145,11 +145,11 @@ def _forward(chain: FloatArray, q: FloatArray, frames: FloatArray):
                 f[3 * i + v] = av * co - au * s
             continue
         # Rodrigues: exp(a^ q) = cos I + sin a^ + (1 - cos) a a^T.
-        v = 1.0 - co
-        e00, e11, e22 = co + v * x * x, co + v * y * y, co + v * z * z
-        e01, e10 = v * x * y - s * z, v * x * y + s * z
-        e02, e20 = v * x * z + s * y, v * x * z - s * y
-        e12, e21 = v * y * z - s * x, v * y * z + s * x
+        vers = 1.0 - co
+        e00, e11, e22 = co + vers * x * x, co + vers * y * y, co + vers * z * z
+        e01, e10 = vers * x * y - s * z, vers * x * y + s * z
+        e02, e20 = vers * x * z + s * y, vers * x * z - s * y
+        e12, e21 = vers * y * z - s * x, vers * y * z + s * x
         for i in range(3):
             a0, a1, a2 = f[3 * i], f[3 * i + 1], f[3 * i + 2]
             f[3 * i] = a0 * e00 + a1 * e10 + a2 * e20

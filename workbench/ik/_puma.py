@@ -4,8 +4,9 @@ A *PUMA-type* arm here is any 6R arm whose standard DH table
 (:math:`T_i = R_z(\theta_i) T_z(d_i) T_x(a_i) R_x(\alpha_i)`, with
 :math:`\theta_i = q_i + \theta_{0,i}`) has
 
-* :math:`a_1 = 0` and :math:`\alpha_1 = \pm 90°` (shoulder axis z1 meets the
-  base axis z0 at right angles, at height :math:`d_1`);
+* :math:`\alpha_1 = \pm 90°` (shoulder axis z1 at right angles to the base
+  axis z0, at height :math:`d_1`, at the distance :math:`a_1` from it: the
+  shoulder offset of KUKA, ABB and Fanuc arms; 0 on the PUMA);
 * :math:`\alpha_2 = 0` (joints 2 and 3 parallel: a planar elbow);
 * :math:`\alpha_3, \alpha_4, \alpha_5 = \pm 90°` and
   :math:`a_4 = a_5 = d_5 = a_6 = 0` (a spherical wrist centred at the origin of
@@ -14,11 +15,15 @@ A *PUMA-type* arm here is any 6R arm whose standard DH table
   offset :math:`D = d_2 + d_3` and every theta offset are free.
 
 Both PUMA models of the workbench are of this type, with opposite signs of
-:math:`\alpha_1, \alpha_4, \alpha_5`.
+:math:`\alpha_1, \alpha_4, \alpha_5`. A robot without a DH table (any URDF)
+gets one fitted to its joint axes by :mod:`workbench.ik.structure`, with a
+joint sign per axis (θ = s q + θ0) and the constant base and tool transforms
+folded into the target.
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass
 from functools import lru_cache
@@ -26,7 +31,8 @@ from functools import lru_cache
 import numpy as np
 import numpy.typing as npt
 
-from workbench.errors import InfeasibleError, InputError
+from workbench.errors import InfeasibleError
+from workbench.ik.structure import UnsupportedRobotError, get_structure
 from workbench.model.dh import DHTable
 from workbench.model.robot import Robot
 
@@ -46,10 +52,6 @@ LIMIT_TOL = 1e-9
 #: are then split by continuity; the split costs at most this times π of
 #: orientation error, so the tolerance is kept below the 1e-9 accuracy goal.
 WRIST_SINGULAR_TOL = 1e-10
-
-
-class UnsupportedRobotError(InputError):
-    """The robot has no DH table of PUMA type, so there is no closed form."""
 
 
 class UnreachableError(InfeasibleError):
@@ -94,6 +96,7 @@ class PumaGeometry:
         sigma1, sigma3, sigma4, sigma5: Signs of alpha 1, 3, 4, 5.
         d1: Shoulder height on the base axis [m].
         offset: Shoulder offset :math:`D = d_2 + d_3` along z1 [m].
+        a1: Shoulder offset along x1, from the base axis to the shoulder [m].
         a2: Upper arm length [m].
         forearm: :math:`L = \sqrt{a_3^2 + d_4^2}` [m].
         cos_beta, sin_beta: Direction of the forearm in frame 2.
@@ -107,8 +110,12 @@ class PumaGeometry:
             zero offset and limits inside [−π, π].
         bounds: ``(lower - LIMIT_TOL, upper + LIMIT_TOL)``, the tests of
             "within limits".
+        joint_sign: DH angle θ = s q + θ0 per joint, (6,) of ±1.0.
+        base_inv: (4, 4) inverse of the pose of DH frame 0 in the base frame.
+        tool_inv: (4, 4) inverse of the pose of the tool in DH frame 6.
         reach: Reachable distance of the wrist centre from the shoulder (the
-            point of the base axis at height d1), ``(low, high)`` [m].
+            point on axis 2 nearest axis 1), in the arm's plane when
+            a1 != 0, ``(low, high)`` [m].
         reach_test: ``(low, high, cylinder)``: the distance bounds of
             :func:`check_reach` with its slack folded in, and the squared
             radius below which the wrist centre is inside the cylinder.
@@ -120,6 +127,7 @@ class PumaGeometry:
     sigma5: float
     d1: float
     offset: float
+    a1: float
     a2: float
     forearm: float
     cos_beta: float
@@ -132,14 +140,19 @@ class PumaGeometry:
     lower: tuple[float, ...]
     upper: tuple[float, ...]
     plain: tuple[bool, ...]
+    joint_sign: tuple[float, ...]
+    base_inv: np.ndarray
+    tool_inv: np.ndarray
     bounds: tuple[tuple[float, ...], tuple[float, ...]]
     reach: tuple[float, float]
     reach_test: tuple[float, float, float]
 
 
-def _sign_of_right_angle(alpha: float, name: str, robot: str) -> float:
+def _sign_of_right_angle(
+    alpha: float, name: str, robot: str, tol: float = _DH_TOL
+) -> float:
     for sign in (1.0, -1.0):
-        if abs(math.remainder(alpha - sign * math.pi / 2.0, TAU)) <= _DH_TOL:
+        if abs(math.remainder(alpha - sign * math.pi / 2.0, TAU)) <= tol:
             return sign
     raise UnsupportedRobotError(
         f"robot {robot!r} is not PUMA-type: {name} = {math.degrees(alpha):.6g} deg, "
@@ -156,7 +169,13 @@ def _require_zero(value: float, name: str, robot: str) -> None:
 
 
 def geometry_from_dh(
-    table: DHTable, lower: npt.ArrayLike, upper: npt.ArrayLike
+    table: DHTable,
+    lower: npt.ArrayLike,
+    upper: npt.ArrayLike,
+    *,
+    joint_sign: tuple[float, ...] = (1.0,) * 6,
+    base: npt.ArrayLike | None = None,
+    tool: npt.ArrayLike | None = None,
 ) -> PumaGeometry:
     """Check that ``table`` is PUMA-type and compute its constants.
 
@@ -164,6 +183,9 @@ def geometry_from_dh(
         table: Standard DH table of the arm.
         lower: Lower joint limits, shape (6,) [rad].
         upper: Upper joint limits, shape (6,) [rad].
+        joint_sign: DH angle θ = s q + θ0 per joint, (6,) of ±1.
+        base: (4, 4) pose of DH frame 0 in the base frame; None for identity.
+        tool: (4, 4) pose of the tool in the last DH frame; None for identity.
 
     Raises:
         UnsupportedRobotError: If the table is not PUMA-type (the message names
@@ -180,7 +202,7 @@ def geometry_from_dh(
     sigma4 = _sign_of_right_angle(j4.alpha, "alpha4", name)
     sigma5 = _sign_of_right_angle(j5.alpha, "alpha5", name)
     _require_zero(math.remainder(j2.alpha, TAU), "alpha2", name)
-    for value, label in ((j1.a, "a1"), (j4.a, "a4"), (j5.a, "a5"), (j5.d, "d5")):
+    for value, label in ((j4.a, "a4"), (j5.a, "a5"), (j5.d, "d5")):
         _require_zero(value, label, name)
     _require_zero(j6.a, "a6", name)
     forearm = math.hypot(j3.a, j4.d)
@@ -192,14 +214,18 @@ def geometry_from_dh(
     lower_t = tuple(float(x) for x in np.asarray(lower, dtype=np.float64))
     upper_t = tuple(float(x) for x in np.asarray(upper, dtype=np.float64))
     offsets = tuple(j.theta_offset for j in table.joints)
+    signs = tuple(float(x) for x in joint_sign)
     plain = tuple(
-        o == 0.0 and lo >= -math.pi and hi <= math.pi
-        for o, lo, hi in zip(offsets, lower_t, upper_t, strict=True)
+        o == 0.0 and s == 1.0 and lo >= -math.pi and hi <= math.pi
+        for o, s, lo, hi in zip(offsets, signs, lower_t, upper_t, strict=True)
     )
-    reach = (
-        math.hypot(abs(j2.a) - forearm, offset),
-        math.hypot(abs(j2.a) + forearm, offset),
-    )
+    if j1.a == 0.0:  # distance in 3-D from the shoulder, the offset included
+        reach = (
+            math.hypot(abs(j2.a) - forearm, offset),
+            math.hypot(abs(j2.a) + forearm, offset),
+        )
+    else:  # distance in the arm's plane, per arm
+        reach = (abs(abs(j2.a) - forearm), abs(j2.a) + forearm)
     slack = 1e-12 * reach[1]
     return PumaGeometry(
         sigma1=sigma1,
@@ -208,6 +234,7 @@ def geometry_from_dh(
         sigma5=sigma5,
         d1=j1.d,
         offset=offset,
+        a1=j1.a,
         a2=j2.a,
         forearm=forearm,
         cos_beta=j3.a / forearm,
@@ -220,6 +247,9 @@ def geometry_from_dh(
         lower=lower_t,
         upper=upper_t,
         plain=plain,
+        joint_sign=signs,
+        base_inv=np.linalg.inv(np.eye(4) if base is None else np.asarray(base)),
+        tool_inv=np.linalg.inv(np.eye(4) if tool is None else np.asarray(tool)),
         bounds=(
             tuple(x - LIMIT_TOL for x in lower_t),
             tuple(x + LIMIT_TOL for x in upper_t),
@@ -237,26 +267,36 @@ def geometry_from_dh(
 def get_geometry(robot: Robot) -> PumaGeometry:
     """The :class:`PumaGeometry` of a robot, built on first use and cached.
 
+    From the robot's DH table when it has one and the tool frame is the
+    table's last frame (the PUMA models); else from the DH chain fitted to its
+    joint axes (:func:`~workbench.ik.structure.get_structure`), base and tool
+    transforms included.
+
     The cache is keyed by the robot object itself (identity), so a lookup costs
     no hashing of the DH table; a robot with other limits
     (:meth:`Robot.with_limits`) is another key. At most 16 robots are kept.
 
     Raises:
-        UnsupportedRobotError: If the robot has no DH table, its tool frame is
-            not the table's last frame, or the table is not PUMA-type.
+        UnsupportedRobotError: If the robot is not of the OPW/PUMA family.
     """
     table = robot.dh_table
-    if table is None:
+    if table is not None and robot.tool_frame == table.tool_frame:
+        with contextlib.suppress(UnsupportedRobotError):  # else: from the axes
+            return geometry_from_dh(table, robot.lower, robot.upper)
+    structure = get_structure(robot)
+    if structure.family != "opw":
         raise UnsupportedRobotError(
-            f"robot {robot.name!r} has no DH table: closed-form IK needs a "
-            "PUMA-type DH model (puma560, puma560-kang); use numerical IK"
+            f"robot {robot.name!r} is of the {structure.family.upper()} family, "
+            "not PUMA/OPW"
         )
-    if robot.tool_frame != table.tool_frame:
-        raise UnsupportedRobotError(
-            f"closed-form IK solves for the DH tool frame {table.tool_frame!r}, "
-            f"robot {robot.name!r} has tool frame {robot.tool_frame!r}"
-        )
-    return geometry_from_dh(table, robot.lower, robot.upper)
+    return geometry_from_dh(
+        structure.table,
+        robot.lower,
+        robot.upper,
+        joint_sign=structure.joint_sign,
+        base=structure.base,
+        tool=structure.tool,
+    )
 
 
 def check_reach(geo: PumaGeometry, px: float, py: float, pz: float) -> None:
@@ -264,15 +304,21 @@ def check_reach(geo: PumaGeometry, px: float, py: float, pz: float) -> None:
 
     Args:
         geo: Arm constants.
-        px: Wrist centre x in the base frame [m].
-        py: Wrist centre y in the base frame [m].
-        pz: Wrist centre z in the base frame, from the shoulder height d1 [m].
+        px: Wrist centre x in DH frame 0 [m].
+        py: Wrist centre y in DH frame 0 [m].
+        pz: Wrist centre z in DH frame 0, from the shoulder height d1 [m].
     """
     r2 = px * px + py * py
-    distance = math.sqrt(r2 + pz * pz)
     low, high, cylinder2 = geo.reach_test
-    if not low <= distance <= high:
+    distance = math.sqrt(r2 + pz * pz)
+    if geo.a1 == 0.0 and not low <= distance <= high:
         raise UnreachableError(distance, geo.reach, "reach")
     if r2 < cylinder2:
         radius = abs(geo.offset)
         raise UnreachableError(math.sqrt(r2), (radius, radius), "cylinder")
+    if geo.a1 != 0.0:  # the arm whose in-plane distance is nearer the reach
+        rho = math.sqrt(max(r2 - geo.offset * geo.offset, 0.0))
+        options = [math.hypot(x - geo.a1, pz) for x in (rho, -rho)]
+        distance = min(options, key=lambda r: max(low - r, r - high))
+        if not low <= distance <= high:
+            raise UnreachableError(distance, geo.reach, "reach")

@@ -53,6 +53,7 @@ GEOMETRY_DTYPE = np.dtype(
         ("sigma5", "f8"),
         ("d1", "f8"),
         ("offset", "f8"),
+        ("a1", "f8"),
         ("a2", "f8"),
         ("forearm", "f8"),
         ("cos_beta", "f8"),
@@ -68,6 +69,10 @@ GEOMETRY_DTYPE = np.dtype(
         ("plain", "f8", 6),  # see PumaGeometry.plain (1.0 or 0.0)
         ("lower", "f8", 6),  # limits widened by LIMIT_TOL
         ("upper", "f8", 6),
+        ("joint_sign", "f8", 6),
+        ("framed", "f8"),  # 1.0 when base_inv or tool_inv is not the identity
+        ("base_inv", "f8", (4, 4)),
+        ("tool_inv", "f8", (4, 4)),
     ],
     align=True,
 )
@@ -102,6 +107,11 @@ def pack_geometry(geo: PumaGeometry) -> np.ndarray:
             packed[name] = getattr(geo, name)
     packed["reach_low"], packed["reach_high"], packed["cylinder2"] = geo.reach_test
     packed["lower"], packed["upper"] = geo.bounds
+    identity = np.eye(4)
+    packed["framed"] = not (
+        np.array_equal(geo.base_inv, identity)
+        and np.array_equal(geo.tool_inv, identity)
+    )
     packed.setflags(write=False)
     return packed
 
@@ -133,11 +143,12 @@ def _remainder(x: float) -> float:
 @_jit_inline
 def _joint_value(geo, j: int, theta: float, prev: FloatArray, has_prev: bool) -> float:
     """Joint value of DH angle ``theta``: near ``prev[j]`` if given, else wrapped."""
+    sign = geo.joint_sign[j]
     if has_prev:
-        return prev[j] + _remainder(theta - geo.theta_offset[j] - prev[j])
+        return prev[j] + _remainder(sign * (theta - geo.theta_offset[j]) - prev[j])
     if geo.plain[j] != 0.0:  # theta in [-pi, pi] is its own value, but -pi is pi
         return theta if theta > -_PI else _PI
-    y = _remainder(theta - geo.theta_offset[j])
+    y = _remainder(sign * (theta - geo.theta_offset[j]))
     if y <= -_PI:
         y += _TAU
     lo, hi = geo.lower[j], geo.upper[j]
@@ -151,8 +162,44 @@ def _joint_value(geo, j: int, theta: float, prev: FloatArray, has_prev: bool) ->
 
 
 @_jit_inline
+def frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
+    """Rows 0..2 of ``base_inv · pose · tool_inv``: the target of the DH chain.
+
+    Args:
+        geo: The arm's record.
+        pose: (4, 4) pose of the tool frame in the base frame.
+        out: (4, 4) scratch; rows 0..2 are written.
+    """
+    if geo.framed == 0.0:
+        for i in range(3):
+            for j in range(4):
+                out[i, j] = pose[i, j]
+        return
+    b, e = geo.base_inv, geo.tool_inv
+    for i in range(3):  # pose · tool_inv
+        p0, p1, p2 = pose[i, 0], pose[i, 1], pose[i, 2]
+        for j in range(4):
+            out[i, j] = p0 * e[0, j] + p1 * e[1, j] + p2 * e[2, j]
+        out[i, 3] += pose[i, 3]
+    for j in range(4):  # base_inv · that, column by column, in place
+        c0, c1, c2 = out[0, j], out[1, j], out[2, j]
+        for i in range(3):
+            out[i, j] = b[i, 0] * c0 + b[i, 1] * c1 + b[i, 2] * c2
+    for i in range(3):
+        out[i, 3] += b[i, 3]
+
+
+@_jit
 def wrist_centre(geo, pose: FloatArray) -> tuple[float, float, float]:
-    """Wrist centre (x, y, z − d1) [m] in the base frame: z relative to the shoulder."""
+    """Wrist centre (x, y, z − d1) [m] in DH frame 0, z relative to the shoulder."""
+    framed = np.empty((4, 4))
+    frame_pose(geo, pose, framed)
+    return _centre(geo, framed)
+
+
+@_jit_inline
+def _centre(geo, pose: FloatArray) -> tuple[float, float, float]:
+    """Wrist centre of a pose of the last DH frame, as :func:`wrist_centre`."""
     ax, ay, az = pose[0, 2], pose[1, 2], pose[2, 2]
     if geo.sin_alpha6 != 0.0:  # z column of R Rx(-alpha6), that is z5
         ca, sa = geo.cos_alpha6, geo.sin_alpha6
@@ -185,16 +232,31 @@ def _roughly_rigid(pose: FloatArray) -> bool:
     return err2 <= _FAST_TOL2 and (pose[0, 3] + pose[1, 3] + pose[2, 3]) * 0.0 == 0.0
 
 
-#: Slots of the 20 angles of one pose that come from an atan2: θ1 per arm;
-#: θ3 per sign of sin γ (+: right arm elbow-up and left arm elbow-down); θ2,
-#: θ4, θ5 (of the no-flip twin) and θ6 per (arm, elbow) pair = 2·left + down.
-T1, T3, T2, T4, T5, T6 = 0, 2, 4, 8, 12, 16
-N_ANGLES = 20
+#: Slots of the 22 angles of one pose that come from an atan2: θ1 per arm;
+#: θ3, θ2, θ4, θ5 (of the no-flip twin) and θ6 per (arm, elbow) pair =
+#: 2·left + down.
+T1, T3, T2, T4, T5, T6 = 0, 2, 6, 10, 14, 18
+N_ANGLES = 22
+#: Bit ``DEAD + arm`` of the mask of :func:`angle_arguments`: that arm cannot
+#: reach the wrist centre (only with a shoulder offset a1 != 0).
+DEAD = 22
+#: Bit of the mask set when the shoulder is singular: the wrist centre is
+#: within SHOULDER_SINGULAR_TOL of the cylinder |D| (of the base axis when
+#: D = 0), where the right and left arms meet.
+SHOULDER = 24
+#: Distance [m] of the wrist centre's projection from the shoulder-singular
+#: surface below which the shoulder counts as singular.
+SHOULDER_SINGULAR_TOL = 1e-10
 
 
 @_jit_inline
 def angle_arguments(
-    geo, pose: FloatArray, prev: FloatArray, y: FloatArray, x: FloatArray
+    geo,
+    target: FloatArray,
+    prev: FloatArray,
+    y: FloatArray,
+    x: FloatArray,
+    scratch: FloatArray,
 ) -> tuple[int, int]:
     """The arguments (y, x) of the atan2 of each angle slot of one pose.
 
@@ -205,18 +267,24 @@ def angle_arguments(
 
     Args:
         geo: The arm's record (:data:`GEOMETRY_DTYPE`).
-        pose: (4, 4) target pose, already checked rigid and finite.
+        target: (4, 4) target pose, already checked rigid and finite.
         prev: (6,) previous configuration [rad], or (0,) for none.
         y: (N_ANGLES,) output, first arguments of the atan2.
         x: (N_ANGLES,) output, second arguments.
+        scratch: (4, 4) work space.
 
     Returns:
         ``(status, exact)``: :data:`OK`, :data:`OUT_OF_REACH` or
         :data:`IN_CYLINDER` (``y``, ``x`` then undefined), and the bit mask of the
         slots that hold their angle; bit ``T4 + pair`` also marks a singular
-        wrist.
+        wrist, bit ``DEAD + arm`` an arm that cannot reach (its slots hold 0).
     """
     has_prev = prev.shape[0] != 0
+    if geo.framed != 0.0:
+        frame_pose(geo, target, scratch)
+        pose = scratch
+    else:  # the DH chain's own frames: no copy
+        pose = target
     nx, ny, nz = pose[0, 0], pose[1, 0], pose[2, 0]
     ox, oy, oz = pose[0, 1], pose[1, 1], pose[2, 1]
     ax, ay, az = pose[0, 2], pose[1, 2], pose[2, 2]
@@ -225,10 +293,11 @@ def angle_arguments(
         ox, ax = ca * ox - sa * ax, sa * ox + ca * ax
         oy, ay = ca * oy - sa * ay, sa * oy + ca * ay
         oz, az = ca * oz - sa * az, sa * oz + ca * az
-    px, py, pz = wrist_centre(geo, pose)
+    px, py, pz = _centre(geo, pose)
     r2 = px * px + py * py
-    distance = math.sqrt(r2 + pz * pz)
-    if not (geo.reach_low <= distance <= geo.reach_high):
+    if geo.a1 == 0.0 and not (
+        geo.reach_low <= math.sqrt(r2 + pz * pz) <= geo.reach_high
+    ):
         return OUT_OF_REACH, 0
     if r2 < geo.cylinder2:
         return IN_CYLINDER, 0
@@ -240,31 +309,42 @@ def angle_arguments(
     # planar arm in the plane of z1: wrist centre at (x1, y1) = (+-rho, s1 pz)
     rho2 = max(r2 - geo.offset * geo.offset, 0.0)
     rho, y1 = math.sqrt(rho2), s1g * pz
-    k = (rho2 + pz * pz - a2 * a2 - ell * ell) / (2.0 * a2 * ell)
-    k = min(max(k, -1.0), 1.0)  # cos(gamma), gamma = theta3 + beta
-    big_a = a2 + ell * k
-    # elbow: sin(gamma) = +sg on the right arm elbow-up and left arm elbow-down
-    sg = geo.up_sign * right * math.sqrt(1.0 - k * k)
-    c3p, s3p = (
-        k * geo.cos_beta + sg * geo.sin_beta,
-        sg * geo.cos_beta - k * geo.sin_beta,
-    )
-    c3m, s3m = (
-        k * geo.cos_beta - sg * geo.sin_beta,
-        -sg * geo.cos_beta - k * geo.sin_beta,
-    )
-    y[T3], x[T3], y[T3 + 1], x[T3 + 1] = s3p, c3p, s3m, c3m
+    distance = math.sqrt(r2 + pz * pz)  # from the shoulder when a1 = 0
+    exact = (1 << SHOULDER) if rho <= SHOULDER_SINGULAR_TOL else 0
+    k = big_a = root = 0.0
     # rows of A = Rx(alpha1)^T Rz(-theta1) R' that do not depend on theta1
     a10, a11, a12 = s1g * nz, s1g * oz, s1g * az
     s13 = s3g * s1g
-    exact = 0
     for arm in range(2):  # right, left
         x1 = right * rho if arm == 0 else -right * rho
+        xp = x1 - geo.a1  # wrist centre from the shoulder, along x1
+        if geo.a1 != 0.0:
+            distance = math.sqrt(xp * xp + pz * pz)
+        if not (geo.reach_low <= distance <= geo.reach_high):
+            exact |= 1 << (DEAD + arm)
+            for slot in (T1 + arm, T3, T2, T4, T5, T6):
+                for pair in range(2 * arm, 2 * arm + 2):
+                    y[slot if slot == T1 + arm else slot + pair] = 0.0
+                    x[slot if slot == T1 + arm else slot + pair] = 1.0
+            continue
+        if arm == 0 or geo.a1 != 0.0:  # a1 = 0: both arms alike, up to sides
+            k = (xp * xp + pz * pz - a2 * a2 - ell * ell) / (2.0 * a2 * ell)
+            k = min(max(k, -1.0), 1.0)  # cos(gamma), gamma = theta3 + beta
+            big_a = a2 + ell * k
+            root = math.sqrt(1.0 - k * k)
+        # elbow-up: sin(gamma) of the sign of up_sign times that of xp
+        if xp != 0.0:
+            side = 1.0 if xp > 0.0 else -1.0
+        else:
+            side = right if arm == 0 else -right
+        sg = geo.up_sign * side * root
         if r2 > 0.0:
             c1, s1 = (px * x1 - py * sd) / r2, (py * x1 + px * sd) / r2
             y[T1 + arm], x[T1 + arm] = s1, c1
         else:  # wrist centre on the base axis (D = 0): theta1 is free
-            t1 = geo.theta_offset[0] + (prev[0] if has_prev else 0.0)
+            t1 = geo.theta_offset[0]
+            if has_prev:
+                t1 += geo.joint_sign[0] * prev[0]
             c1, s1 = math.cos(t1), math.sin(t1)
             y[T1 + arm] = t1
             exact |= 1 << (T1 + arm)
@@ -274,11 +354,12 @@ def angle_arguments(
         m12 = s13 * (s1 * ax - c1 * ay)
         for elbow in range(2):  # up, down
             pair = 2 * arm + elbow
-            if arm == elbow:
-                c3, s3, big_b = c3p, s3p, ell * sg
-            else:
-                c3, s3, big_b = c3m, s3m, -ell * sg
-            c2, s2 = x1 * big_a + y1 * big_b, y1 * big_a - x1 * big_b
+            sgb = sg if elbow == 0 else -sg
+            c3 = k * geo.cos_beta + sgb * geo.sin_beta
+            s3 = sgb * geo.cos_beta - k * geo.sin_beta
+            y[T3 + pair], x[T3 + pair] = s3, c3
+            big_b = ell * sgb
+            c2, s2 = xp * big_a + y1 * big_b, y1 * big_a - xp * big_b
             y[T2 + pair], x[T2 + pair] = s2, c2
             norm = math.sqrt(c2 * c2 + s2 * s2)
             if norm > 0.0:
@@ -295,7 +376,9 @@ def angle_arguments(
                 y[T4 + pair], x[T4 + pair] = m12, m02
                 c4, s4 = m02, m12
             else:  # theta4 free: 0, or split by continuity with prev
-                t4 = geo.theta_offset[3] + (prev[3] if has_prev else 0.0)
+                t4 = geo.theta_offset[3]
+                if has_prev:
+                    t4 += geo.joint_sign[3] * prev[3]
                 c4, s4 = math.cos(t4), math.sin(t4)
                 if has_prev:  # move theta4 and theta6 by the same amount
                     t6 = math.atan2(
@@ -304,7 +387,8 @@ def angle_arguments(
                     # z5 along +z3 (m22 > 0): theta4 + theta6 fixed, else the
                     # difference
                     kappa = -1.0 if m22 > 0.0 else 1.0
-                    t4 -= kappa * _remainder(t6 - geo.theta_offset[5] - prev[5]) / 2.0
+                    step6 = t6 - geo.theta_offset[5] - geo.joint_sign[5] * prev[5]
+                    t4 -= kappa * _remainder(step6) / 2.0
                     c4, s4 = math.cos(t4), math.sin(t4)
                 y[T4 + pair] = t4
                 exact |= 1 << (T4 + pair)
@@ -312,6 +396,8 @@ def angle_arguments(
             y[T5 + pair], x[T5 + pair] = sigma5 * h, -g * m22
             y[T6 + pair] = g * (s4 * m00 - c4 * m10)
             x[T6 + pair] = g * (s4 * m01 - c4 * m11)
+    if exact >> DEAD == 3:
+        return OUT_OF_REACH, 0
     return OK, exact
 
 
@@ -322,8 +408,9 @@ def assemble(
     prev: FloatArray,
     q: FloatArray,
     within: npt.NDArray[np.bool_],
+    exact: int,
 ) -> None:
-    """Joint values of the eight branches from the 20 DH angles of a pose.
+    """Joint values of the eight branches from the 22 DH angles of a pose.
 
     Args:
         geo: The arm's record.
@@ -333,16 +420,23 @@ def assemble(
         q: (8, 6) output [rad].
         within: (8,) output, branch within the limits (± LIMIT_TOL); or (0,)
             to skip the tests.
+        exact: Mask of :func:`angle_arguments`: the branches of an arm with
+            bit ``DEAD + arm`` are NaN (and not within the limits).
     """
     has_prev = prev.shape[0] != 0
     for arm in range(2):
+        if exact >> (DEAD + arm) & 1:
+            for b in range(4 * arm, 4 * arm + 4):
+                for j in range(6):
+                    q[b, j] = np.nan
+                if within.shape[0]:
+                    within[b] = False
+            continue
         q1 = _joint_value(geo, 0, angles[T1 + arm], prev, has_prev)
         for elbow in range(2):
             pair = 2 * arm + elbow
             q2 = _joint_value(geo, 1, angles[T2 + pair], prev, has_prev)
-            q3 = _joint_value(
-                geo, 2, angles[T3 if arm == elbow else T3 + 1], prev, has_prev
-            )
+            q3 = _joint_value(geo, 2, angles[T3 + pair], prev, has_prev)
             t4, t5, t6 = angles[T4 + pair], angles[T5 + pair], angles[T6 + pair]
             # the flip twin: (theta4 + pi, -theta5, theta6 + pi)
             t4f = t4 - _PI if t4 > 0.0 else t4 + _PI
@@ -378,8 +472,9 @@ def solve_pose(
             representative nearest it, and a free θ4/θ6 split by continuity;
             or (0,) for none.
         q: (8, 6) output, joint values [rad].
-        flags: (12,) output: per branch, within the limits (8), then per
-            (arm, elbow) pair, wrist singular (4).
+        flags: (14,) output: per branch, within the limits (8), then per
+            (arm, elbow) pair, wrist singular (4), then shoulder singular, then
+            "an arm cannot reach" (its branches are NaN).
         check: Run the fast rigidity test first (False once the exact
             checks of ``_targets`` accepted the pose).
 
@@ -391,7 +486,7 @@ def solve_pose(
     if check and not _roughly_rigid(pose):
         return NOT_RIGID
     y, x = np.empty(N_ANGLES), np.empty(N_ANGLES)
-    status, exact = angle_arguments(geo, pose, prev, y, x)
+    status, exact = angle_arguments(geo, pose, prev, y, x, np.empty((4, 4)))
     if status != OK:
         return status
     angles = np.empty(N_ANGLES)
@@ -400,9 +495,11 @@ def solve_pose(
             angles[slot] = y[slot]
         else:
             angles[slot] = math.atan2(y[slot], x[slot])
-    assemble(geo, angles, prev, q, flags[:8])
+    assemble(geo, angles, prev, q, flags[:8], exact)
     for pair in range(4):
         flags[8 + pair] = exact >> (T4 + pair) & 1
+    flags[12] = exact >> SHOULDER & 1
+    flags[13] = exact >> DEAD & 3 != 0
     return OK
 
 
@@ -432,11 +529,11 @@ def batch_arguments(
         (nothing written from it on).
     """
     geo = geometry[0]
-    none = np.empty(0)
+    none, scratch = np.empty(0), np.empty((4, 4))
     for i in range(poses.shape[0]):
         if check and not _roughly_rigid(poses[i]):
             return i
-        status[i], exact[i] = angle_arguments(geo, poses[i], none, y[i], x[i])
+        status[i], exact[i] = angle_arguments(geo, poses[i], none, y[i], x[i], scratch)
     return -1
 
 
@@ -464,17 +561,20 @@ def batch_assemble(
     geo = geometry[0]
     none, no_within = np.empty(0), np.empty(0, dtype=np.bool_)
     for i in range(angles.shape[0]):
-        reachable = status[i] == OK
-        valid[i] = reachable
-        if not reachable:
+        if status[i] != OK:
             q[i] = np.nan
+            valid[i] = False
             continue
         mask = exact[i]
         if mask:
             for slot in range(N_ANGLES):
                 if mask >> slot & 1:
                     angles[i, slot] = y[i, slot]
-        assemble(geo, angles[i], none, q[i], no_within)
+        assemble(geo, angles[i], none, q[i], no_within, mask)
+        for arm in range(2):
+            alive = not (mask >> (DEAD + arm) & 1)
+            for b in range(4 * arm, 4 * arm + 4):
+                valid[i, b] = alive
 
 
 @_jit

@@ -1,13 +1,17 @@
-r"""Closed-form inverse kinematics of PUMA-type arms: all eight branches.
+r"""Closed-form inverse kinematics of OPW (PUMA-type) and UR-type arms.
 
-The solution is derived from the robot's own DH table (see
-:mod:`workbench.ik._puma` for which tables qualify), not from one printed
-table; ``docs/errata-kang-ik.md`` derives it and lists what is wrong in Kang
-(2007)'s printed formulas.
+The solution is derived from the robot's own DH table when it has one (the
+PUMA models, see :mod:`workbench.ik._puma` for which tables qualify), else from
+the DH chain fitted to its joint axes (:mod:`workbench.ik.structure`, which
+recognises the family), not from one printed table; ``docs/errata-kang-ik.md``
+derives the OPW solution and lists what is wrong in Kang (2007)'s printed
+formulas, ``docs/closed-form-ik.md`` covers any arm. The target is always the
+pose of the robot's tool frame: base and tool transforms are folded in.
 
-Branch labels are physical, so that one posture of the PUMA carries the same
-label in both DH models of the workbench (and agrees with the ``l/r``, ``u/d``,
-``n/f`` letters of Robotics Toolbox's ``Puma560.ikine_a``):
+OPW branch labels (UR labels: :data:`UR_BRANCHES`, defined in
+:mod:`workbench.ik._ur_kernel`) are physical, so that one posture of the PUMA
+carries the same label in both DH models of the workbench (and agrees with the
+``l/r``, ``u/d``, ``n/f`` letters of Robotics Toolbox's ``Puma560.ikine_a``):
 
 * ``right`` / ``left``: the shoulder offset :math:`D = d_2 + d_3` lies to the
   right / left of the horizontal direction from the base axis to the wrist
@@ -26,8 +30,10 @@ Branch ``i`` of :data:`BRANCHES` (also the second axis of
 
 from __future__ import annotations
 
+import types
 from collections.abc import Sequence
 from dataclasses import FrozenInstanceError
+from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
@@ -35,6 +41,7 @@ import pinocchio as pin
 
 from workbench.errors import InputError
 from workbench.ik import _puma_kernel as kernel
+from workbench.ik import _ur_kernel as ur_kernel
 from workbench.ik._puma import (
     TAU,
     WRIST_SINGULAR_TOL,
@@ -44,6 +51,7 @@ from workbench.ik._puma import (
     get_geometry,
 )
 from workbench.ik._targets import as_targets, check_poses, pose_rows
+from workbench.ik.structure import get_structure
 from workbench.model.robot import Robot
 from workbench.validation import as_vector
 
@@ -57,6 +65,47 @@ BRANCHES: tuple[str, ...] = tuple(
     for wrist in ("no-flip", "flip")
 )
 
+#: Branch names of UR-type arms; index = 4·left + 2·down + wrist-down.
+UR_BRANCHES: tuple[str, ...] = tuple(
+    f"shoulder-{arm}/elbow-{elbow}/wrist-{wrist}"
+    for arm in ("right", "left")
+    for elbow in ("up", "down")
+    for wrist in ("up", "down")
+)
+
+
+@lru_cache(maxsize=16)
+def get_solver(robot: Robot) -> tuple[str, types.ModuleType, np.ndarray]:
+    """The closed form of a robot: family, compiled kernel, packed constants.
+
+    Cached per robot object. The family is ``"opw"`` for PUMA-type arms
+    (``_puma_kernel``) and ``"ur"`` (``_ur_kernel``).
+
+    Raises:
+        UnsupportedRobotError: If the robot has no closed form (the message
+            says which axes fail which test).
+    """
+    table = robot.dh_table
+    if table is None or robot.tool_frame != table.tool_frame:
+        structure = get_structure(robot)
+    else:
+        try:
+            return "opw", kernel, kernel.packed_geometry(robot)
+        except UnsupportedRobotError:  # the table is not PUMA-type: the axes
+            structure = get_structure(robot)
+    if structure.family == "ur":
+        return (
+            "ur",
+            ur_kernel,
+            ur_kernel.pack_geometry(structure, robot.lower, robot.upper),
+        )
+    return "opw", kernel, kernel.packed_geometry(robot)
+
+
+def get_branches(robot: Robot) -> tuple[str, ...]:
+    """Branch labels of a robot's closed form (:data:`BRANCHES` or UR's)."""
+    return UR_BRANCHES if get_solver(robot)[0] == "ur" else BRANCHES
+
 
 class IKSolution:
     """One closed-form branch (immutable).
@@ -65,11 +114,15 @@ class IKSolution:
         q: Configuration, shape (6,) [rad], read-only; each angle is the
             representative (mod 2π) within the joint limits when one is, else
             in (−π, π] — or, when ``q_previous`` was given, the one nearest it.
-        branch: Label, e.g. ``"right/elbow-up/no-flip"`` (see module docs).
-        index: Position of ``branch`` in :data:`BRANCHES`.
+        branch: Label, e.g. ``"right/elbow-up/no-flip"`` (see module docs) or
+            ``"shoulder-left/elbow-up/wrist-down"`` (UR-type arms).
+        index: Position of ``branch`` in :data:`BRANCHES` (UR:
+            :data:`UR_BRANCHES`).
         within_limits: True if every joint of ``q`` is within its limits.
         wrist_singular: True if |sin θ5| <= :data:`WRIST_SINGULAR_TOL`; θ4 and θ6
-            are then one member of a one-parameter family.
+            (UR: θ6 and θ2 + θ3 + θ4) are then one member of a one-parameter
+            family.
+        shoulder_singular: True if the two shoulder (arm) solutions meet.
 
     The eight solutions of one :func:`analytic` call share its result arrays
     (each ``q`` is a row of one read-only (8, 6) array). Equality is identity;
@@ -79,7 +132,9 @@ class IKSolution:
 
     __slots__ = ("_index", "_shared")
 
-    def __init__(self, shared: tuple[FloatArray, list[bool]], index: int) -> None:
+    def __init__(
+        self, shared: tuple[FloatArray, list[bool], tuple[str, ...]], index: int
+    ) -> None:
         # private: built by analytic(); shared = (q of the 8 branches, flags)
         self._shared = shared
         self._index = index
@@ -92,7 +147,7 @@ class IKSolution:
     @property
     def branch(self) -> str:
         """Label, e.g. ``"right/elbow-up/no-flip"``."""
-        return BRANCHES[self._index]
+        return self._shared[2][self._index]
 
     @property
     def index(self) -> int:
@@ -109,11 +164,22 @@ class IKSolution:
         """True if |sin θ5| <= :data:`WRIST_SINGULAR_TOL`."""
         return self._shared[1][8 + (self._index >> 1)]
 
+    @property
+    def shoulder_singular(self) -> bool:
+        """True if the right and left arms meet (shoulder singularity).
+
+        The wrist centre is then on the cylinder |D| around the base axis (to
+        1e-10 m); on the base axis itself θ1 is free and this solution is one
+        member of a one-parameter family.
+        """
+        return self._shared[1][12]
+
     def __repr__(self) -> str:
         return (
             f"IKSolution(q={self.q!r}, branch={self.branch!r}, index={self.index}, "
             f"within_limits={self.within_limits}, "
-            f"wrist_singular={self.wrist_singular})"
+            f"wrist_singular={self.wrist_singular}, "
+            f"shoulder_singular={self.shoulder_singular})"
         )
 
     def __reduce__(self) -> tuple[object, tuple[object, ...]]:
@@ -130,7 +196,14 @@ def _frozen_field(name: str) -> property:
     return property(getter, refuse, refuse, getter.__doc__)
 
 
-for _name in ("q", "branch", "index", "within_limits", "wrist_singular"):
+for _name in (
+    "q",
+    "branch",
+    "index",
+    "within_limits",
+    "wrist_singular",
+    "shoulder_singular",
+):
     setattr(IKSolution, _name, _frozen_field(_name))
 del _name
 
@@ -141,31 +214,34 @@ def analytic(
     *,
     q_previous: npt.ArrayLike | None = None,
 ) -> list[IKSolution]:
-    """Every closed-form IK branch of a PUMA-type arm.
+    """Every closed-form IK branch of an OPW (PUMA-type) or UR-type arm.
 
     Args:
-        robot: Robot with a PUMA-type DH table (``puma560``, ``puma560-kang``).
-        target: Pose of the tool frame (the wrist centre frame 6) in the base
-            frame: ``pin.SE3`` or a (4, 4) homogeneous matrix [m].
+        robot: A 6R arm of either family (see :mod:`workbench.ik.structure`):
+            ``puma560``, ``puma560-kang``, ``ur5``, a KUKA/ABB/Fanuc URDF, ...
+        target: Pose of the robot's tool frame in the base frame: ``pin.SE3``
+            or a (4, 4) homogeneous matrix [m].
         q_previous: Optional configuration (6,) [rad] of the previous path
             sample. Each returned angle is then the representative (mod 2π)
             nearest to it, and at a wrist singularity θ4/θ6 are split so that
             the step from ``q_previous`` is shortest (else θ4 = 0).
 
     Returns:
-        Eight :class:`IKSolution`, in the order of :data:`BRANCHES`. At a
-        shoulder or elbow singularity some coincide; at a wrist singularity the
-        flip twin is the continuity member turned by π about z4 and z6.
+        One :class:`IKSolution` per branch that reaches the pose, in the order
+        of the labels (:data:`BRANCHES`, UR: :data:`UR_BRANCHES`): all eight
+        unless a shoulder offset (a1 != 0, or a UR arm) lets only some reach.
+        At a shoulder or elbow singularity some coincide; at a wrist
+        singularity the flip twin is the continuity member turned by π.
 
     Raises:
-        UnsupportedRobotError: If the robot has no PUMA-type DH table.
+        UnsupportedRobotError: If the robot has no closed form.
         UnreachableError: If the wrist centre is out of reach or inside the
-            cylinder of radius |d2 + d3| around the base axis.
+            cylinder of radius |D| (the shoulder offset) around the base axis.
         DimensionError: If ``target`` is not (4, 4) or ``q_previous`` not (6,).
         NonFiniteError: If an entry is NaN or infinite.
         InputError: If ``target`` is not rigid (see ``poses.RIGIDITY_TOL``).
     """
-    geometry = kernel.packed_geometry(robot)
+    family, solver, geometry = get_solver(robot)
     if type(target) is pin.SE3:
         pose = target.homogeneous
     elif (
@@ -175,10 +251,14 @@ def analytic(
     else:
         pose = np.array(pose_rows(target))  # every check, with its error
     prev = _NO_PREVIOUS if q_previous is None else _previous(robot, q_previous)
-    q, flags = solve_one(robot, geometry, pose, prev)
+    q, flags = solve_one(robot, geometry, pose, prev, solver)
     q.setflags(write=False)
-    shared = (q, flags.tolist())
-    return [IKSolution(shared, index) for index in _INDICES]
+    flag_list = flags.tolist()
+    shared = (q, flag_list, UR_BRANCHES if family == "ur" else BRANCHES)
+    if not flag_list[13]:
+        return [IKSolution(shared, index) for index in _INDICES]
+    reached = q[:, 0] == q[:, 0]  # False on the NaN rows of an arm out of reach
+    return [IKSolution(shared, index) for index in _INDICES if reached[index]]
 
 
 _INDICES = tuple(range(len(BRANCHES)))
@@ -198,15 +278,20 @@ def _previous(robot: Robot, q_previous: npt.ArrayLike) -> FloatArray:
 
 
 def solve_one(
-    robot: Robot, geometry: np.ndarray, pose: FloatArray, prev: FloatArray
+    robot: Robot,
+    geometry: np.ndarray,
+    pose: FloatArray,
+    prev: FloatArray,
+    solver: types.ModuleType = kernel,
 ) -> tuple[FloatArray, npt.NDArray[np.bool_]]:
     """The kernel's solve of one pose, its failures turned into errors.
 
     Args:
         robot: The robot ``geometry`` was packed from.
-        geometry: ``_puma_kernel.packed_geometry(robot)``.
+        geometry: ``get_solver(robot)[2]``.
         pose: (4, 4) float array, the target.
         prev: (6,) previous configuration [rad], or (0,) for none.
+        solver: ``get_solver(robot)[1]``, the compiled kernel module.
 
     Returns:
         ``q`` (8, 6) [rad] and ``flags`` (12,): within limits per branch, then
@@ -215,14 +300,27 @@ def solve_one(
     Raises:
         UnreachableError, NonFiniteError, InputError: As :func:`analytic`.
     """
-    q, flags = np.empty((8, 6)), np.empty(12, dtype=bool)
-    status = kernel.solve_pose(geometry, pose, prev, q, flags)
+    q, flags = np.empty((8, 6)), np.empty(14, dtype=bool)
+    status = solver.solve_pose(geometry, pose, prev, q, flags)
     if status == kernel.NOT_RIGID:  # the exact checks raise, or accept it
         pose_rows(pose)
-        status = kernel.solve_pose(geometry, pose, prev, q, flags, False)
+        status = solver.solve_pose(geometry, pose, prev, q, flags, False)
     if status != kernel.OK:
+        if solver is ur_kernel:
+            _explain_ur(geometry, pose)
         check_reach(get_geometry(robot), *kernel.wrist_centre(geometry[0], pose))
     return q, flags
+
+
+def _explain_ur(geometry: np.ndarray, pose: FloatArray) -> None:
+    """Raise the :class:`UnreachableError` of a pose a UR-type arm cannot reach."""
+    status, distance = ur_kernel.diagnose(geometry, pose)
+    geo = geometry[0]
+    if status == ur_kernel.IN_CYLINDER:
+        radius = abs(float(geo["offset"]))
+        raise UnreachableError(distance, (radius, radius), "cylinder")
+    a2, a3 = abs(float(geo["a2"])), abs(float(geo["a3"]))
+    raise UnreachableError(distance, (abs(a2 - a3), a2 + a3), "reach")
 
 
 def analytic_batch(
@@ -236,7 +334,7 @@ def analytic_batch(
     joint values (compiled loop).
 
     Args:
-        robot: Robot with a PUMA-type DH table (``puma560``, ``puma560-kang``).
+        robot: A 6R arm of either family (as :func:`analytic`).
         targets: Shape (N, 4, 4), homogeneous poses of the tool frame in the
             base frame [m].
 
@@ -244,33 +342,34 @@ def analytic_batch(
         ``q`` of shape (N, 8, 6) [rad], branch axis in the order of
         :data:`BRANCHES`, wrapped as by :func:`analytic` (θ4 = 0 at a wrist
         singularity), equal to it up to the last bits of the atan2; and
-        ``valid`` of shape (N, 8), True where the pose is reachable (then every
-        branch reaches it). Rows of unreachable poses are NaN. Joint limits are
+        ``valid`` of shape (N, 8), True where the branch reaches the pose
+        (every branch, unless a shoulder offset a1 or a UR arm lets only some
+        reach). Rows of branches that do not reach are NaN. Joint limits are
         not applied: test ``(robot.lower <= q) & (q <= robot.upper)`` for that.
 
     Raises:
-        UnsupportedRobotError: If the robot has no PUMA-type DH table.
+        UnsupportedRobotError: If the robot has no closed form.
         DimensionError: If ``targets`` is not (N, 4, 4).
         NonFiniteError: If an entry is NaN or infinite.
         InputError: If a pose is not rigid (``poses.RIGIDITY_TOL``).
     """
-    geometry = kernel.packed_geometry(robot)
+    _, solver, geometry = get_solver(robot)
     poses = as_targets(targets)
     count = len(poses)
     q, valid = np.empty((count, 8, 6)), np.empty((count, 8), dtype=bool)
     size = min(count, _CHUNK)
-    y, x, angles = np.empty((3, size, kernel.N_ANGLES))
+    y, x, angles = np.empty((3, size, solver.N_ANGLES))
     status = np.empty(size, dtype=np.int8)
-    exact = np.empty(size, dtype=np.int32)
+    exact = np.empty(size, dtype=np.int64)
     for start in range(0, count, _CHUNK):
         chunk = poses[start : start + _CHUNK]
         n = len(chunk)
         arguments = y[:n], x[:n], status[:n], exact[:n]
-        if kernel.batch_arguments(geometry, chunk, *arguments) >= 0:
+        if solver.batch_arguments(geometry, chunk, *arguments) >= 0:
             check_poses(chunk, start)  # the exact checks raise, or accept all
-            kernel.batch_arguments(geometry, chunk, *arguments, False)
+            solver.batch_arguments(geometry, chunk, *arguments, False)
         np.arctan2(y[:n], x[:n], out=angles[:n])
-        kernel.batch_assemble(
+        solver.batch_assemble(
             geometry,
             angles[:n],
             y[:n],
@@ -318,6 +417,7 @@ def nearest(solutions: Sequence[IKSolution], q_previous: npt.ArrayLike) -> IKSol
 
 __all__ = [
     "BRANCHES",
+    "UR_BRANCHES",
     "WRIST_SINGULAR_TOL",
     "IKSolution",
     "UnreachableError",

@@ -27,6 +27,7 @@ import math
 import numbers
 import time
 from dataclasses import dataclass
+from typing import TypeGuard
 
 import numpy as np
 import numpy.typing as npt
@@ -251,7 +252,7 @@ def check_options(tol: float, max_iterations: int, rng: object) -> None:
         )
 
 
-def _is_int(value: object) -> bool:
+def _is_int(value: object) -> TypeGuard[int]:
     return isinstance(value, numbers.Integral) and not isinstance(value, bool)
 
 

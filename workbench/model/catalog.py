@@ -47,6 +47,9 @@ _PANDA_FINGERS = ("panda_finger_joint1", "panda_finger_joint2")
 CATALOG: dict[str, CatalogEntry] = {
     "puma560": CatalogEntry("puma560.urdf", "wrist_center", own=True),
     "puma560-kang": CatalogEntry("puma560-kang.urdf", "wrist_center", own=True),
+    "kuka-kr6-r700": CatalogEntry("kuka-kr6-r700.urdf", "flange", own=True),
+    "abb-irb2400": CatalogEntry("abb-irb2400.urdf", "flange", own=True),
+    "generic6r": CatalogEntry("generic6r.urdf", "flange", own=True),
     "a1": CatalogEntry("a1_description/urdf/a1.urdf"),
     "alex_nub_hands": CatalogEntry("alex_description/urdf/alex_nub_hands.urdf"),
     "alex_psyonic_hands": CatalogEntry("alex_description/urdf/alex_psyonic_hands.urdf"),

@@ -129,7 +129,7 @@ def track(
     """
     q_pred = 2.0 * q - q_before
     q_all = np.empty((8, 6))
-    flags = np.empty(12, dtype=np.bool_)
+    flags = np.empty(14, dtype=np.bool_)
     status = kernel.solve_pose(geometry, pose, q_pred, q_all, flags, check)
     if status != kernel.OK:
         return status, q_pred, -1, False

@@ -40,10 +40,16 @@ import pinocchio as pin
 from workbench.errors import InputError, JointLimitError
 from workbench.ik import _puma_kernel as kernel
 from workbench.ik._velocity_kernel import solve_velocity
-from workbench.ik.closed_form import BRANCHES, analytic, nearest, solve_one
+from workbench.ik.closed_form import (
+    analytic,
+    get_branches,
+    get_solver,
+    nearest,
+    solve_one,
+)
 from workbench.ik.damped import DLS_EPSILON, DLS_LAMBDA_MAX, dls_inverse
 from workbench.model.robot import Robot
-from workbench.planning._tracking import command_joints, track
+from workbench.planning._tracking import command_joints, track, wrist_command
 from workbench.planning.cartesian_paths import (
     ZERO_TOL,
     CartesianLimits,
@@ -108,14 +114,16 @@ class OnlinePlanner:
     """Kang's online planner: Cartesian command, IK with continuity, DLS rates.
 
     Args:
-        robot: A PUMA-type robot (closed-form IK, e.g. ``puma560-kang``).
+        robot: An arm with closed-form IK: OPW (``puma560-kang``, the KUKA
+            and ABB models) or UR-type (``ur5``).
         q_start: Initial configuration (nq,) [rad], within the limits.
         limits: Cartesian speed and acceleration bounds of the tool tip.
         planning_rate: Planning cycles per second [Hz], > 0.
         servo_rate: Servo samples per second [Hz], an integer multiple of
             ``planning_rate``.
         transform_tip_to_tool: Pose of the tool tip in the robot's tool frame
-            (the wrist centre for the PUMA models); identity if None.
+            (the wrist centre for the PUMA models, ``tool0`` for UR); identity
+            if None.
         transform_base_to_world: Pose of the robot base in the world frame
             the motions are given in; identity if None.
         dls_epsilon: Size of the singular region (see ``workbench.ik``).
@@ -180,7 +188,8 @@ class OnlinePlanner:
         self._max_step2 = float(np.sum((2.0 * self.period * robot.velocity_limit) ** 2))
         # the frames of _tracking.command_joints
         self._frames = np.vstack([tip[0].T, -tip[1], base[0], base[1]])
-        self._geometry = kernel.packed_geometry(robot)
+        _, self._solver, self._geometry = get_solver(robot)
+        self._labels = get_branches(robot)
         oMf = robot.fk(q0)
         p = oMf.translation + oMf.rotation @ tip[1]
         rotation = oMf.rotation @ tip[0]
@@ -308,7 +317,7 @@ class OnlinePlanner:
         self._qd, self._branch = qd, index
         self._state = CartesianState(p, v, rotation, omega)
         return PlannerSample(
-            t, p, v, rotation, omega, q, qd, BRANCHES[index], damped, replanned
+            t, p, v, rotation, omega, q, qd, self._labels[index], damped, replanned
         )
 
     def _command_joints(
@@ -327,6 +336,11 @@ class OnlinePlanner:
         q_before = self._q if self._q_before is None else self._q_before
         pair = self._branch >> 1
         pose, twist = np.empty((4, 4)), np.empty(6)
+        if self._solver is not kernel:  # UR-type: the same steps, from Python
+            wrist_command(rotation, p, v, omega, self._frames, pose, twist)
+            q, index, within = self._track(pose, q_before, pair)
+            q.setflags(write=False)
+            return twist, q, index, within
         status, q, index, within = command_joints(
             rotation,
             p,
@@ -349,6 +363,19 @@ class OnlinePlanner:
             )
         q.setflags(write=False)
         return twist, q, index, within
+
+    def _track(
+        self, pose: FloatArray, q_before: FloatArray, pair: int
+    ) -> tuple[FloatArray, int, bool]:
+        """``_tracking.track`` for a kernel other than the PUMA one.
+
+        Raises:
+            UnreachableError, InputError: As :func:`~workbench.ik.analytic`.
+        """
+        q_pred = 2.0 * self._q - q_before
+        q_all, flags = solve_one(self.robot, self._geometry, pose, q_pred, self._solver)
+        index = kernel.continuing_branch(q_all, q_pred, pair, self._max_step2)
+        return q_all[index].copy(), index, bool(flags[index])
 
     def _position_rate(self, q: FloatArray, twist: FloatArray) -> FloatArray:
         """Rate of the joint position commands ending at ``q``: the DLS reference.

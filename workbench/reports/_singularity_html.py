@@ -46,11 +46,17 @@ def render(data: dict[str, Any], summary: dict[str, Any], figures: dict) -> str:
 
 def _head(robot: Any, fac: Any, data: dict[str, Any]) -> str:
     name = html.escape(robot.name)
-    kind = (
-        "PUMA-type DH table: analytic conditions and numeric measures."
-        if fac is not None
-        else "No PUMA-type DH table: numeric measures only (Pinocchio's Jacobian)."
-    )
+    family = data.get("family_fac")
+    if fac is not None:
+        kind = "PUMA-type DH table: analytic conditions and numeric measures."
+    elif family is not None:
+        kind = (
+            f"{family.family.upper()} family, recognised from the joint axes: "
+            "det J factorised into shoulder, elbow and wrist conditions; maps "
+            "and numeric measures."
+        )
+    else:
+        kind = "No OPW or UR structure: numeric measures only (Pinocchio's Jacobian)."
     return f"""<!DOCTYPE html><html lang="en"><head><meta charset="utf-8">
 <title>Singularities of {name}</title><style>{_CSS}</style></head><body>
 <h1>Singularities of {name}</h1>
@@ -75,6 +81,23 @@ def _key_numbers(data: dict[str, Any], summary: dict[str, Any]) -> str:
                 "analytic vs Pinocchio",
                 f"max relative error {check['max_relative_error']:.2e} over "
                 f"{check['samples']} random configurations",
+            ),
+        ]
+    family = data.get("family_fac")
+    if family is not None:
+        described = family.describe()
+        check, classes = summary["cross_check"], summary["classes"]
+        rows += [
+            ("det J", f"K · shoulder · elbow · wrist, K = {family.constant:+.6f} m²"),
+            *((kind, html.escape(described[kind])) for kind in SINGULARITY_KINDS),
+            (
+                "analytic vs Pinocchio",
+                f"max relative error {check['max_relative_error']:.2e} over "
+                f"{check['samples']} random configurations",
+            ),
+            (
+                "classes of those",
+                ", ".join(f"{k}: {v}" for k, v in classes.items()),
             ),
         ]
     rows += [

@@ -24,7 +24,9 @@ from workbench.singularities.along_path import find_closest_approaches
 from workbench.singularities.conditions import (
     NotPumaTypeError,
     PumaFactorisation,
+    classify_configuration,
     compute_conditions,
+    get_factorisation,
     get_puma_factorisation,
 )
 from workbench.singularities.directions import compute_degenerate_direction
@@ -123,6 +125,9 @@ def build_singularity_report(
         "sigma_min_map": _grid_summary(svd_grid),
     }
     overlay: dict[str, Any] = {"shoulder": None, "elbow_theta3": None, "examples": {}}
+    data["family_fac"] = None
+    if fac is None:  # another OPW or UR-type arm: factors, check and classes
+        data["family_fac"] = _family_data(robot, samples, seed, summary)
     if fac is not None:
         data |= _analytic_data(robot, fac, det_grid, samples, seed, summary)
         sub = det_grid.configurations()[::2, ::2]
@@ -165,6 +170,40 @@ def write_singularity_report(
     report = build_singularity_report(robot, **options)
     Path(path).write_text(report.html, encoding="utf-8")
     return report
+
+
+def _family_data(
+    robot: Robot, samples: int, seed: int, summary: dict[str, Any]
+) -> PumaFactorisation | None:
+    """Factors of det J, their check and the classes of random configurations.
+
+    For an OPW or UR-type arm without a PUMA DH table (``ur5``, the KUKA and
+    ABB models); None for an arm of neither family.
+    """
+    try:
+        fac = get_factorisation(robot)
+    except NotPumaTypeError:
+        return None
+    rng = np.random.default_rng(seed)
+    q = rng.uniform(robot.lower, robot.upper, (samples, 6))
+    check = cross_check_det_j(robot, q)
+    classes = [classify_configuration(robot, qi) for qi in q]
+    described = fac.describe()
+    summary |= {
+        "family": fac.family,
+        "det_j_constant": fac.constant,
+        "factors": {k: described[k] for k in ("shoulder", "elbow", "wrist")},
+        "cross_check": {
+            "samples": samples,
+            "max_relative_error": check.max_relative_error,
+        },
+        "classes": {
+            kind: sum(kind in c for c in classes)
+            for kind in ("shoulder", "elbow", "wrist")
+        }
+        | {"none": sum(not c for c in classes)},
+    }
+    return fac
 
 
 def _analytic_data(

@@ -1,4 +1,4 @@
-r"""Analytic singularities of PUMA-type arms: conditions, det J factors, classes.
+r"""Analytic singularities of OPW (PUMA-type) and UR-type arms: det J factors, classes.
 
 For a 6R arm whose standard DH table (:math:`\theta_i = q_i + \theta_{0,i}`) has
 :math:`a_1 = 0`, :math:`\alpha_1 = \pm 90°`, :math:`\alpha_2 = 0`,
@@ -23,6 +23,24 @@ the three signed distances (the *conditions*)
 
 The signs come from each robot's own table: they differ between ``puma560``
 (Angeles, :math:`K = -a_2 L_3`) and ``puma560-kang`` (Kang, :math:`K = +a_2 L_3`).
+
+Any other arm of the two closed-form families (:mod:`workbench.ik.structure`
+recognises them from the joint axes) gets the same factorisation from its
+fitted DH chain, :math:`\theta_i = s_i q_i + \theta_{0,i}`, with the product of
+the joint signs :math:`s_i` folded into K (the base and tool transforms do not
+change det J):
+
+* OPW with a shoulder offset a1 (KUKA, ABB, Fanuc): the shoulder distance is
+  :math:`s = a_1 + a_2 c_2 + a_3 c_{23} + \sigma_3 d_4 s_{23}`, the rest as above;
+* UR type (axes 2, 3, 4 parallel): :math:`K = -\sigma_1 \sigma_4 \sigma_5 a_2 a_3`,
+  shoulder :math:`s = a_1 + a_2 c_2 + a_3 c_{23} + a_4 c_{234} + \sigma_4 d_5
+  s_{234}` (the x1 coordinate of the point where axes 5 and 6 meet, from the
+  base axis), elbow :math:`e = s_3`, wrist :math:`w = s_5` (axis 6 parallel to
+  axes 2, 3, 4).
+
+Tests check :math:`\det J = K s e w` against Pinocchio's Jacobian to 1e-9
+relative on every supported model. Loci in joint space and degenerate
+directions (below) are derived for the PUMA tables only.
 The derivation is in ``docs/errata-kang-singularities.md``; the loci in joint
 space are in :mod:`workbench.singularities.loci`, the degenerate directions in
 :mod:`workbench.singularities.directions`, the numeric measures of any robot in
@@ -92,10 +110,25 @@ class PumaFactorisation:
     forearm: float
     constant: float
     theta_offset: tuple[float, ...]
+    family: str = "opw"
+    a1: float = 0.0
+    a4: float = 0.0
+    d5: float = 0.0
+    sigma4: float = 1.0
+    joint_sign: tuple[float, ...] = (1.0,) * 6
     kinds: ClassVar[tuple[str, ...]] = SINGULARITY_KINDS
 
     def describe(self) -> dict[str, str]:
         """The factors as plain-text formulas with this table's signs."""
+        if self.family == "ur":
+            sign = "+" if self.sigma4 > 0 else "−"
+            return {
+                "det_j": "det J = K · shoulder · elbow · wrist  [m³]",
+                "constant": f"K = ±a2 · a3 = {self.constant:+.6f} m²",
+                "shoulder": f"a1 + a2 c2 + a3 c23 + a4 c234 {sign} d5 s234  [m]",
+                "elbow": "s3",
+                "wrist": "s5",
+            }
         sign = "+" if self.sigma3 > 0 else "−"
         offsets = any(abs(o) > 0.0 for o in self.theta_offset)
         note = " (θi includes its DH theta offset)" if offsets else ""
@@ -105,7 +138,9 @@ class PumaFactorisation:
                 f"K = {-self.sigma1 * self.wrist_sign:+.0f} · a2 · √(a3² + d4²)"
                 f" = {self.constant:+.6f} m²"
             ),
-            "shoulder": f"a2 c2 + a3 c23 {sign} d4 s23  [m]{note}",
+            "shoulder": (
+                f"{'a1 + ' if self.a1 else ''}a2 c2 + a3 c23 {sign} d4 s23  [m]{note}"
+            ),
             "elbow": f"(a3 s3 {'−' if self.sigma3 > 0 else '+'} d4 c3) / √(a3² + d4²)",
             "wrist": "s5",
         }
@@ -158,6 +193,60 @@ def get_puma_factorisation(robot: Robot | DHTable) -> PumaFactorisation:
     )
 
 
+def get_factorisation(robot: Robot | DHTable) -> PumaFactorisation:
+    """The factorisation of det J of any OPW or UR-type arm.
+
+    From the robot's PUMA-type DH table when it has one
+    (:func:`get_puma_factorisation`), else from the DH chain fitted to its
+    joint axes (:func:`workbench.ik.get_structure`).
+
+    Raises:
+        NotPumaTypeError: If the robot fits neither family (the message names
+            the axes that fail which test).
+    """
+    if isinstance(robot, DHTable):
+        return get_puma_factorisation(robot)
+    if robot.dh_table is not None:
+        try:
+            return get_puma_factorisation(robot)
+        except NotPumaTypeError:
+            pass
+    from workbench.ik.structure import UnsupportedRobotError, get_structure
+
+    try:
+        structure = get_structure(robot)
+    except UnsupportedRobotError as err:
+        raise NotPumaTypeError(str(err)) from err
+    j = structure.table.joints
+    sigma = [math.copysign(1.0, joint.alpha) for joint in j]
+    signs = structure.joint_sign
+    product = float(np.prod(signs))
+    if structure.family == "ur":
+        constant = -sigma[0] * sigma[3] * sigma[4] * j[1].a * j[2].a * product
+        forearm = abs(j[2].a)
+    else:
+        forearm = math.hypot(j[2].a, j[3].d)
+        constant = -sigma[0] * sigma[3] * sigma[4] * j[1].a * forearm * product
+    return PumaFactorisation(
+        robot=robot.name,
+        sigma1=sigma[0],
+        sigma3=sigma[2],
+        wrist_sign=sigma[3] * sigma[4],
+        a2=j[1].a,
+        a3=j[2].a,
+        d4=j[3].d,
+        forearm=forearm,
+        constant=constant,
+        theta_offset=tuple(joint.theta_offset for joint in j),
+        family=structure.family,
+        a1=j[0].a,
+        a4=j[3].a,
+        d5=j[4].d,
+        sigma4=sigma[3],
+        joint_sign=signs,
+    )
+
+
 @dataclass(frozen=True, slots=True)
 class SingularityConditions:
     """Signed distances to the three singular loci (arrays broadcast over q[..., :]).
@@ -182,7 +271,7 @@ def _angles(fac: PumaFactorisation, q: npt.ArrayLike) -> FloatArray:
     if q.ndim == 0 or q.shape[-1] != 6:
         raise InputError(f"q must have shape (..., 6), got shape {q.shape}")
     q = as_finite_array(q, q.shape, "q")
-    return q + np.asarray(fac.theta_offset)
+    return q * np.asarray(fac.joint_sign) + np.asarray(fac.theta_offset)
 
 
 def compute_conditions(
@@ -191,21 +280,26 @@ def compute_conditions(
     """Signed distances of ``q`` to the shoulder, elbow and wrist loci.
 
     Args:
-        robot: A PUMA-type robot (or its DH table).
+        robot: An OPW or UR-type robot (or a PUMA-type DH table).
         q: Configurations, shape (..., 6) [rad].
 
     Returns:
         Arrays of shape ``q.shape[:-1]``; see :class:`SingularityConditions`.
 
     Raises:
-        NotPumaTypeError: If the robot is not of PUMA type.
+        NotPumaTypeError: If the robot fits neither family.
         InputError: If ``q`` is not (..., 6) or not finite.
     """
-    fac = get_puma_factorisation(robot)
+    fac = get_factorisation(robot)
     theta = _angles(fac, q)
     t2, t3, t5 = theta[..., 1], theta[..., 2], theta[..., 4]
     t23 = t2 + t3
-    shoulder = fac.a2 * np.cos(t2) + fac.a3 * np.cos(t23)
+    shoulder = fac.a1 + fac.a2 * np.cos(t2) + fac.a3 * np.cos(t23)
+    if fac.family == "ur":
+        t234 = t23 + theta[..., 3]
+        shoulder = shoulder + fac.a4 * np.cos(t234)
+        shoulder = shoulder + fac.sigma4 * fac.d5 * np.sin(t234)
+        return SingularityConditions(shoulder, np.sin(t3), np.sin(t5))
     shoulder = shoulder + fac.sigma3 * fac.d4 * np.sin(t23)
     elbow = (fac.a3 * np.sin(t3) - fac.sigma3 * fac.d4 * np.cos(t3)) / fac.forearm
     return SingularityConditions(shoulder, elbow, np.sin(t5))
@@ -217,7 +311,7 @@ def compute_det_j_analytic(robot: Robot | DHTable, q: npt.ArrayLike) -> FloatArr
     Equals ``np.linalg.det(robot.jacobian(q))`` for any tool point on the last
     link (moving the reference point does not change the determinant).
     """
-    fac = get_puma_factorisation(robot)
+    fac = get_factorisation(robot)
     c = compute_conditions(robot, q)
     return fac.constant * c.shoulder * c.elbow * c.wrist
 

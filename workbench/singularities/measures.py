@@ -241,7 +241,7 @@ def compute_joint_grid(
 def _grid_method(
     robot: Robot, quantity: str
 ) -> tuple[str, Callable[[FloatArray], dict[str, FloatArray]]]:
-    if quantity == "det_j" and robot.dh_table is not None:
+    if quantity == "det_j":
         try:
             compute_det_j_analytic(robot, np.zeros(robot.nq))
         except NotPumaTypeError:

@@ -166,15 +166,14 @@ def select_ik_solution(
     """
     target = as_target_pose(pose, angeles7_tol=angeles7_tol)
     near = None if q_near is None else robot.check_configuration(q_near)
-    if robot.dh_table is not None:
-        from workbench.ik import closed_form
+    from workbench.ik import closed_form
 
-        try:
-            solutions = closed_form.analytic(robot, target, q_previous=near)
-        except closed_form.UnsupportedRobotError:
-            solutions = None
-        if solutions is not None:
-            return _choose(robot, solutions, branch, near, closed_form)
+    try:  # any OPW or UR-type arm, recognised from its joint axes
+        solutions = closed_form.analytic(robot, target, q_previous=near)
+    except closed_form.UnsupportedRobotError:
+        solutions = None
+    if solutions is not None:
+        return _choose(robot, solutions, branch, near, closed_form)
     if branch is not None:
         raise InputError(
             f"branch {branch!r} given, but robot {robot.name} has no closed-form IK"

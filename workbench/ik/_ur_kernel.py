@@ -1,0 +1,556 @@
+r"""Compiled closed form of UR-type arms (axes 2, 3, 4 parallel): all eight branches.
+
+The arm is the fitted chain base · DH(θ) · tool of
+:mod:`workbench.ik.structure` with α1, α4, α5 = ±90°, α2 = α3 = 0, a5 = 0 and
+an empty last row, so the target of the DH chain is
+:math:`M = B^{-1} T E^{-1}` and the wrist point (axes 5 and 6 meet there) is
+its origin p. With σ_i the sign of α_i and :math:`D = d_2 + d_3 + d_4`:
+
+* θ1: z1 = σ1 (s1, −c1, 0) and z1 · p = D (every link but the first moves
+  in planes ⊥ z1), two solutions, none inside the cylinder r < |D|;
+* θ5: z1 · z5 = −σ4 σ5 c5, two solutions ±θ5;
+* θ6: z1 in the tool frame is (σ4 s5 c6, −σ4 s5 s6, ·); free when s5 = 0
+  (wrist singular);
+* θ2 + θ3 + θ4 and the planar two-link arm (a2, a3) to the origin of frame 3,
+  two elbows.
+
+Labels follow the PUMA's (``closed_form`` module docs): shoulder right / left
+(σ1 D x > 0, x the wrist point along x1), elbow up / down (the elbow above /
+below the line from the shoulder to the origin of frame 3, heights along z0),
+wrist up / down (σ5 sin θ5 > 0 / < 0: z5 along +x4 / −x4). Branch ``b`` =
+4·left + 2·down + wrist-down.
+
+Like ``_puma_kernel``, every angle is an atan2 of arguments computed first, so
+that a batch makes all atan2 calls in one vectorised numpy call. The helpers
+that ``_puma_kernel`` also has are repeated here: Numba's cache is not
+invalidated across files, so a kernel calls only functions of its own file.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+import numpy.typing as npt
+
+from workbench.ik._puma import LIMIT_TOL, WRIST_SINGULAR_TOL
+from workbench.ik.structure import KinematicStructure
+from workbench.poses import RIGIDITY_TOL
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Status codes, as ``_puma_kernel``'s.
+OK, NOT_RIGID, OUT_OF_REACH, IN_CYLINDER = 0, 1, 2, 3
+
+GEOMETRY_DTYPE = np.dtype(
+    [
+        ("sigma1", "f8"),
+        ("sigma4", "f8"),
+        ("sigma5", "f8"),
+        ("offset", "f8"),  # D = d2 + d3 + d4
+        ("d1", "f8"),
+        ("a1", "f8"),
+        ("a2", "f8"),
+        ("a3", "f8"),
+        ("a4", "f8"),
+        ("d5", "f8"),
+        ("reach_low", "f8"),
+        ("reach_high", "f8"),
+        ("cylinder2", "f8"),
+        ("theta_offset", "f8", 6),
+        ("joint_sign", "f8", 6),
+        ("plain", "f8", 6),
+        ("lower", "f8", 6),
+        ("upper", "f8", 6),
+        ("base_inv", "f8", (4, 4)),
+        ("tool_inv", "f8", (4, 4)),
+    ],
+    align=True,
+)
+
+#: Angle slots: θ1 per shoulder; θ5 of wrist-up per shoulder; θ6 and θ3 of
+#: elbow-up per (shoulder, wrist) pair; θ2 and θ4 per branch.
+U1, U5, U6, U3, U2, U4 = 0, 2, 4, 8, 12, 20
+N_ANGLES = 28
+#: Bit ``DEAD + 2·shoulder + wrist`` of the mask: that pair cannot reach.
+DEAD = 28
+#: Bit ``SINGULAR + shoulder`` of the mask: the wrist is singular (s5 = 0).
+SINGULAR = 32
+#: Bit of the mask: shoulder singular (as ``_puma_kernel.SHOULDER``).
+SHOULDER = 34
+SHOULDER_SINGULAR_TOL = 1e-10
+
+_FAST_TOL2 = (RIGIDITY_TOL / 5.0) ** 2
+_PI = math.pi
+_TAU = 2.0 * math.pi
+
+
+def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
+    """The constants of a UR-type arm as a read-only (1,) record array.
+
+    Args:
+        structure: Its fitted structure (family ``"ur"``).
+        lower: Lower joint limits, (6,) [rad].
+        upper: Upper joint limits, (6,) [rad].
+    """
+    j = structure.table.joints
+    g = np.zeros(1, dtype=GEOMETRY_DTYPE)
+    g["sigma1"] = math.copysign(1.0, j[0].alpha)
+    g["sigma4"] = math.copysign(1.0, j[3].alpha)
+    g["sigma5"] = math.copysign(1.0, j[4].alpha)
+    g["offset"] = j[1].d + j[2].d + j[3].d
+    g["d1"], g["a1"], g["a2"], g["a3"] = j[0].d, j[0].a, j[1].a, j[2].a
+    g["a4"], g["d5"] = j[3].a, j[4].d
+    low, high = abs(abs(j[1].a) - abs(j[2].a)), abs(j[1].a) + abs(j[2].a)
+    # frame 3 comes from θ6, which a near-singular wrist knows to ~1e-16 / |s5|:
+    # a pose at the folded or stretched elbow may land ~1e-11 m outside, and
+    # clamping it costs at most the slack in position
+    slack = 1e-10 * high
+    g["reach_low"], g["reach_high"] = low - slack, high + slack
+    g["cylinder2"] = j[1].d + j[2].d + j[3].d
+    g["cylinder2"] = g["cylinder2"] ** 2 * (1.0 - 1e-12)
+    offsets = [x.theta_offset for x in j]
+    g["theta_offset"], g["joint_sign"] = offsets, structure.joint_sign
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    g["plain"] = [
+        o == 0.0 and s == 1.0 and lo >= -_PI and hi <= _PI
+        for o, s, lo, hi in zip(
+            offsets, structure.joint_sign, lower, upper, strict=True
+        )
+    ]
+    g["lower"], g["upper"] = lower - LIMIT_TOL, upper + LIMIT_TOL
+    g["base_inv"] = np.linalg.inv(structure.base)
+    g["tool_inv"] = np.linalg.inv(structure.tool)
+    g.setflags(write=False)
+    return g
+
+
+_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+_jit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+
+
+@_jit_inline
+def _remainder(x: float) -> float:
+    """IEEE remainder of ``x`` by 2π, in [−π, π]."""
+    if -_PI <= x <= _PI:
+        return x
+    if -3.0 * _PI <= x <= 3.0 * _PI:
+        return x - _TAU if x > 0.0 else x + _TAU
+    r = np.fmod(x, _TAU)
+    if r > _PI:
+        return r - _TAU
+    if r < -_PI:
+        return r + _TAU
+    return r
+
+
+@_jit_inline
+def _joint_value(geo, j: int, theta: float, prev: FloatArray, has_prev: bool) -> float:
+    """Joint value of DH angle ``theta`` (as ``_puma_kernel._joint_value``)."""
+    sign = geo.joint_sign[j]
+    if has_prev:
+        return prev[j] + _remainder(sign * (theta - geo.theta_offset[j]) - prev[j])
+    if geo.plain[j] != 0.0:
+        return theta if theta > -_PI else _PI
+    y = _remainder(sign * (theta - geo.theta_offset[j]))
+    if y <= -_PI:
+        y += _TAU
+    lo, hi = geo.lower[j], geo.upper[j]
+    if lo <= y <= hi:
+        return y
+    for turns in (1.0, -1.0, 2.0, -2.0):
+        z = y + turns * _TAU
+        if lo <= z <= hi:
+            return z
+    return y
+
+
+@_jit_inline
+def _roughly_rigid(pose: FloatArray) -> bool:
+    """Fast acceptance test of a pose (as ``_puma_kernel._roughly_rigid``)."""
+    r00, r01, r02 = pose[0, 0], pose[0, 1], pose[0, 2]
+    r10, r11, r12 = pose[1, 0], pose[1, 1], pose[1, 2]
+    r20, r21, r22 = pose[2, 0], pose[2, 1], pose[2, 2]
+    e0 = r00 * r00 + r10 * r10 + r20 * r20 - 1.0
+    e1 = r01 * r01 + r11 * r11 + r21 * r21 - 1.0
+    e2 = r00 * r01 + r10 * r11 + r20 * r21
+    ex = r10 * r21 - r20 * r11 - r02
+    ey = r20 * r01 - r00 * r21 - r12
+    ez = r00 * r11 - r10 * r01 - r22
+    b0, b1, b2, b3 = pose[3, 0], pose[3, 1], pose[3, 2], pose[3, 3] - 1.0
+    err2 = e0 * e0 + e1 * e1 + e2 * e2 + ex * ex + ey * ey + ez * ez
+    err2 += b0 * b0 + b1 * b1 + b2 * b2 + b3 * b3
+    return err2 <= _FAST_TOL2 and (pose[0, 3] + pose[1, 3] + pose[2, 3]) * 0.0 == 0.0
+
+
+@_jit_inline
+def _frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
+    """Rows 0..2 of ``base_inv · pose · tool_inv`` into ``out``."""
+    b, e = geo.base_inv, geo.tool_inv
+    for i in range(3):  # pose · tool_inv
+        p0, p1, p2 = pose[i, 0], pose[i, 1], pose[i, 2]
+        for j in range(4):
+            out[i, j] = p0 * e[0, j] + p1 * e[1, j] + p2 * e[2, j]
+        out[i, 3] += pose[i, 3]
+    for j in range(4):  # base_inv · that, column by column, in place
+        c0, c1, c2 = out[0, j], out[1, j], out[2, j]
+        for i in range(3):
+            out[i, j] = b[i, 0] * c0 + b[i, 1] * c1 + b[i, 2] * c2
+    for i in range(3):
+        out[i, 3] += b[i, 3]
+
+
+@_jit_inline
+def _planar(geo, c1, s1, c5, c6, s6, s5, m, big_px, big_py):
+    """x4 = (c234, s234) and the origin of frame 3 (X, Y) in the arm plane.
+
+    For one (θ1, θ5, θ6): x4 = R14 e_x, and frame 3's origin = wrist point −
+    d5 z4 − a4 x4, z4 = σ5 (s6 n + c6 o), seen from the shoulder in frame 1.
+    """
+    s1g, s5g = geo.sigma1, geo.sigma5
+    wx = c6 * c5 * m[0, 0] - s6 * c5 * m[0, 1] + s5g * s5 * m[0, 2]
+    wy = c6 * c5 * m[1, 0] - s6 * c5 * m[1, 1] + s5g * s5 * m[1, 2]
+    wz = c6 * c5 * m[2, 0] - s6 * c5 * m[2, 1] + s5g * s5 * m[2, 2]
+    c234, s234 = c1 * wx + s1 * wy, s1g * wz
+    zx = s5g * (s6 * m[0, 0] + c6 * m[0, 1])
+    zy = s5g * (s6 * m[1, 0] + c6 * m[1, 1])
+    zz = s5g * (s6 * m[2, 0] + c6 * m[2, 1])
+    big_x = big_px - geo.d5 * (c1 * zx + s1 * zy) - geo.a4 * c234
+    big_y = big_py - geo.d5 * s1g * zz - geo.a4 * s234
+    return c234, s234, big_x, big_y
+
+
+@_jit_inline
+def _reach_turn(geo, c1, s1, m, big_px, big_py, big_x, big_y, dist):
+    """Turn of θ6 [rad] at a wrist singularity that brings frame 3 within reach.
+
+    With z5 ∥ z1, turning θ6 turns the offset v = wrist point − frame 3 origin
+    rigidly in the arm plane (at the rate −(n_P × o_P) = ±1); the turn is the
+    smallest one to the nearest reachable distance (0 if none is reachable).
+    """
+    vx, vy = big_px - big_x, big_py - big_y
+    pn, rm = math.sqrt(big_px * big_px + big_py * big_py), math.sqrt(vx * vx + vy * vy)
+    low = max(geo.reach_low, abs(pn - rm))
+    high = min(geo.reach_high, pn + rm)
+    if low > high or pn * rm == 0.0:
+        return 0.0
+    margin = 1e-9 * geo.reach_high  # strictly inside, against rounding
+    if high - low > 2.0 * margin:
+        low, high = low + margin, high - margin
+    t = min(max(dist, low), high)
+    cos_angle = (pn * pn + rm * rm - t * t) / (2.0 * pn * rm)
+    angle = math.acos(min(max(cos_angle, -1.0), 1.0))
+    a_p, a_v = math.atan2(big_py, big_px), math.atan2(vy, vx)
+    turn_a = _remainder(a_p + angle - a_v)
+    turn_b = _remainder(a_p - angle - a_v)
+    turn = turn_a if abs(turn_a) <= abs(turn_b) else turn_b
+    npx, npy = c1 * m[0, 0] + s1 * m[1, 0], geo.sigma1 * m[2, 0]
+    opx, opy = c1 * m[0, 1] + s1 * m[1, 1], geo.sigma1 * m[2, 1]
+    rate = -(npx * opy - npy * opx)
+    return turn / rate
+
+
+@_jit_inline
+def angle_arguments(
+    geo,
+    target: FloatArray,
+    prev: FloatArray,
+    y: FloatArray,
+    x: FloatArray,
+    scratch: FloatArray,
+) -> tuple[int, int]:
+    """The arguments (y, x) of the atan2 of each angle slot of one pose.
+
+    Args:
+        geo: The arm's record (:data:`GEOMETRY_DTYPE`).
+        target: (4, 4) pose of the tool frame, checked rigid and finite.
+        prev: (6,) previous configuration [rad], or (0,) for none.
+        y: (N_ANGLES,) output, first arguments of the atan2.
+        x: (N_ANGLES,) output, second arguments.
+        scratch: (4, 4) work space.
+
+    Returns:
+        ``(status, mask)``: :data:`OK`, :data:`OUT_OF_REACH` or
+        :data:`IN_CYLINDER`; bit ``slot`` of the mask: the slot holds its angle
+        in ``y`` (θ1 on the base axis, θ6 at a wrist singularity); bit
+        ``SINGULAR + shoulder`` flags a singular wrist; bit
+        ``DEAD + pair``: the (shoulder, wrist) pair cannot reach, its in-plane
+        distance [m] in ``x[U3 + pair]``.
+    """
+    has_prev = prev.shape[0] != 0
+    _frame_pose(geo, target, scratch)
+    m = scratch
+    nx, ny = m[0, 0], m[1, 0]
+    ox, oy = m[0, 1], m[1, 1]
+    ax, ay = m[0, 2], m[1, 2]
+    px, py, pz = m[0, 3], m[1, 3], m[2, 3]
+    r2 = px * px + py * py
+    if r2 < geo.cylinder2:
+        x[U3] = math.sqrt(r2)
+        return IN_CYLINDER, 0
+    s1g, s4g, s5g = geo.sigma1, geo.sigma4, geo.sigma5
+    sd = s1g * geo.offset
+    right = 1.0 if sd >= 0.0 else -1.0
+    rho = math.sqrt(max(r2 - geo.offset * geo.offset, 0.0))
+    a2, a3 = geo.a2, geo.a3
+    mask = np.int64(0)
+    if rho <= SHOULDER_SINGULAR_TOL:
+        mask |= np.int64(1) << SHOULDER
+    for arm in range(2):
+        x1 = right * rho if arm == 0 else -right * rho
+        if r2 > 0.0:
+            c1, s1 = (px * x1 - py * sd) / r2, (py * x1 + px * sd) / r2
+            y[U1 + arm], x[U1 + arm] = s1, c1
+        else:  # wrist point on the base axis (D = 0): theta1 free
+            t1 = geo.theta_offset[0]
+            if has_prev:
+                t1 += geo.joint_sign[0] * prev[0]
+            c1, s1 = math.cos(t1), math.sin(t1)
+            y[U1 + arm] = t1
+            mask |= 1 << (U1 + arm)
+        c5 = -s4g * s5g * s1g * (s1 * ax - c1 * ay)
+        # z1 in the tool frame: (sigma4 s5 c6, -sigma4 s5 s6, .); |s5| from it
+        vx, vy = s1g * (s1 * nx - c1 * ny), s1g * (s1 * ox - c1 * oy)
+        s5 = s5g * math.sqrt(vx * vx + vy * vy)  # wrist-up: sigma5 s5 >= 0
+        y[U5 + arm], x[U5 + arm] = s5, c5
+        singular = abs(s5) <= WRIST_SINGULAR_TOL
+        if singular:  # theta6 free: its offset, or the previous value
+            t6 = geo.theta_offset[5]
+            if has_prev:
+                t6 += geo.joint_sign[5] * prev[5]
+            c6, s6 = math.cos(t6), math.sin(t6)
+            mask |= 1 << (SINGULAR + arm)
+        else:
+            inv = s4g / s5  # |(c6, s6)| = |v| / |s5| = 1
+            c6, s6 = vx * inv, -vy * inv
+        # wrist point from the shoulder, in the arm plane (frame 1)
+        big_px, big_py = c1 * px + s1 * py - geo.a1, s1g * (pz - geo.d1)
+        c234_up = s234_up = big_x_up = big_y_up = 0.0
+        for wrist in range(2):
+            pair = 2 * arm + wrist
+            sw = 1.0 if wrist == 0 else -1.0  # the other wrist: -s5, theta6 + pi
+            cs6, ss6, ss5 = sw * c6, sw * s6, sw * s5
+            if wrist == 0 or singular:
+                c234, s234, big_x, big_y = _planar(
+                    geo, c1, s1, c5, cs6, ss6, ss5, m, big_px, big_py
+                )
+            else:  # x4 and z4 turn over: frame 3 mirrored about the wrist point
+                c234, s234 = -c234_up, -s234_up
+                big_x, big_y = 2.0 * big_px - big_x_up, 2.0 * big_py - big_y_up
+            dist2 = big_x * big_x + big_y * big_y
+            dist = math.sqrt(dist2)
+            if singular:
+                t6p = t6 if wrist == 0 else (t6 - _PI if t6 > 0.0 else t6 + _PI)
+                if not (geo.reach_low <= dist <= geo.reach_high):
+                    # turn theta6 (and with it frame 4 about the wrist point)
+                    # until frame 3 is within reach, if it can be
+                    t6p += _reach_turn(
+                        geo, c1, s1, m, big_px, big_py, big_x, big_y, dist
+                    )
+                    cs6, ss6 = math.cos(t6p), math.sin(t6p)
+                    c234, s234, big_x, big_y = _planar(
+                        geo, c1, s1, c5, cs6, ss6, ss5, m, big_px, big_py
+                    )
+                    dist2 = big_x * big_x + big_y * big_y
+                    dist = math.sqrt(dist2)
+                y[U6 + pair] = t6p
+                mask |= 1 << (U6 + pair)
+            else:
+                y[U6 + pair], x[U6 + pair] = ss6, cs6
+                c234_up, s234_up, big_x_up, big_y_up = c234, s234, big_x, big_y
+            if not (geo.reach_low <= dist <= geo.reach_high):
+                mask |= 1 << (DEAD + pair)
+                y[U3 + pair], x[U3 + pair] = 0.0, dist
+                for elbow in range(2):
+                    b = 4 * arm + 2 * elbow + wrist
+                    y[U2 + b], x[U2 + b], y[U4 + b], x[U4 + b] = 0.0, 1.0, 0.0, 1.0
+                continue
+            c3 = (dist2 - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)
+            c3 = min(max(c3, -1.0), 1.0)
+            up = -1.0 if s1g * a2 * a3 * big_x > 0.0 else 1.0
+            s3_up = up * math.sqrt(1.0 - c3 * c3)
+            y[U3 + pair], x[U3 + pair] = s3_up, c3
+            for elbow in range(2):
+                b = 4 * arm + 2 * elbow + wrist
+                s3 = s3_up if elbow == 0 else -s3_up
+                k1, k2 = a2 + a3 * c3, a3 * s3
+                c2, s2 = big_x * k1 + big_y * k2, big_y * k1 - big_x * k2
+                y[U2 + b], x[U2 + b] = s2, c2
+                if c2 == 0.0 and s2 == 0.0:  # frame 3 on axis 2: theta2 free
+                    c2 = 1.0
+                # unnormalised (c2, s2): theta4's atan2 arguments scale alike
+                c23, s23 = c2 * c3 - s2 * s3, s2 * c3 + c2 * s3
+                y[U4 + b] = s234 * c23 - c234 * s23
+                x[U4 + b] = c234 * c23 + s234 * s23
+    if mask >> DEAD & 15 == 15:
+        return OUT_OF_REACH, int(mask)
+    return OK, int(mask)
+
+
+@_jit_inline
+def assemble(
+    geo,
+    angles: FloatArray,
+    prev: FloatArray,
+    q: FloatArray,
+    within: npt.NDArray[np.bool_],
+    mask: int,
+) -> None:
+    """Joint values of the eight branches from the DH angles of a pose.
+
+    Args:
+        geo: The arm's record.
+        angles: (N_ANGLES,) DH angles [rad] of the slots, each in [−π, π].
+        prev: (6,) previous configuration [rad], or (0,) for none.
+        q: (8, 6) output [rad]; NaN rows for a pair that cannot reach.
+        within: (8,) output, within the limits; or (0,) to skip the tests.
+        mask: From :func:`angle_arguments`.
+    """
+    has_prev = prev.shape[0] != 0
+    for arm in range(2):
+        q1 = _joint_value(geo, 0, angles[U1 + arm], prev, has_prev)
+        t5 = angles[U5 + arm]
+        for wrist in range(2):
+            pair = 2 * arm + wrist
+            dead = mask >> (DEAD + pair) & 1
+            q5 = _joint_value(geo, 4, -t5 if wrist else t5, prev, has_prev)
+            q6 = _joint_value(geo, 5, angles[U6 + pair], prev, has_prev)
+            for elbow in range(2):
+                b = 4 * arm + 2 * elbow + wrist
+                if dead:
+                    for j in range(6):
+                        q[b, j] = np.nan
+                    if within.shape[0]:
+                        within[b] = False
+                    continue
+                t3 = angles[U3 + pair]
+                q[b, 0] = q1
+                q[b, 1] = _joint_value(geo, 1, angles[U2 + b], prev, has_prev)
+                q[b, 2] = _joint_value(geo, 2, -t3 if elbow else t3, prev, has_prev)
+                q[b, 3] = _joint_value(geo, 3, angles[U4 + b], prev, has_prev)
+                q[b, 4], q[b, 5] = q5, q6
+                if within.shape[0]:
+                    ok = True
+                    for j in range(6):
+                        ok &= geo.lower[j] <= q[b, j] <= geo.upper[j]
+                    within[b] = ok
+
+
+@_jit
+def solve_pose(
+    geometry: np.ndarray,
+    pose: FloatArray,
+    prev: FloatArray,
+    q: FloatArray,
+    flags: npt.NDArray[np.bool_],
+    check: bool = True,
+) -> int:
+    """All eight branches of one pose (as ``_puma_kernel.solve_pose``).
+
+    Args:
+        geometry: (1,) record array of :data:`GEOMETRY_DTYPE`.
+        pose: (4, 4) target pose of the tool frame.
+        prev: (6,) previous configuration [rad], or (0,) for none.
+        q: (8, 6) output [rad], NaN rows for branches that cannot reach.
+        flags: (13,) output: per branch within the limits (8), then per
+            (shoulder, elbow) pair of branches 2·pair, 2·pair + 1, wrist
+            singular (4), then shoulder singular, then "a pair cannot reach"
+            (its branches are NaN).
+        check: Run the fast rigidity test first.
+
+    Returns:
+        :data:`OK`, :data:`NOT_RIGID`, :data:`OUT_OF_REACH` or
+        :data:`IN_CYLINDER`.
+    """
+    geo = geometry[0]
+    if check and not _roughly_rigid(pose):
+        return NOT_RIGID
+    y, x = np.empty(N_ANGLES), np.empty(N_ANGLES)
+    status, mask = angle_arguments(geo, pose, prev, y, x, np.empty((4, 4)))
+    if status != OK:
+        return status
+    angles = np.empty(N_ANGLES)
+    for slot in range(N_ANGLES):
+        if mask >> slot & 1:
+            angles[slot] = y[slot]
+        else:
+            angles[slot] = math.atan2(y[slot], x[slot])
+    assemble(geo, angles, prev, q, flags[:8], mask)
+    for pair in range(4):
+        flags[8 + pair] = mask >> (SINGULAR + (pair >> 1)) & 1
+    flags[12] = mask >> SHOULDER & 1
+    flags[13] = mask >> DEAD & 15 != 0
+    return OK
+
+
+@_jit
+def diagnose(geometry: np.ndarray, pose: FloatArray) -> tuple[int, float]:
+    """Why a pose is unreachable: status and the distance that fails [m].
+
+    Returns:
+        ``(IN_CYLINDER, distance of the wrist point from the base axis)`` or
+        ``(OUT_OF_REACH, in-plane distance nearest the reach)``, else
+        ``(OK, 0.0)``.
+    """
+    geo = geometry[0]
+    y, x = np.empty(N_ANGLES), np.empty(N_ANGLES)
+    status, _ = angle_arguments(geo, pose, np.empty(0), y, x, np.empty((4, 4)))
+    if status == OUT_OF_REACH:
+        best, worst = 0.0, math.inf
+        for pair in range(4):
+            d = x[U3 + pair]
+            miss = max(geo.reach_low - d, d - geo.reach_high)
+            if miss < worst:
+                best, worst = d, miss
+        return status, best
+    if status == IN_CYLINDER:
+        return status, x[U3]
+    return OK, 0.0
+
+
+@_jit
+def batch_arguments(
+    geometry: np.ndarray,
+    poses: FloatArray,
+    y: FloatArray,
+    x: FloatArray,
+    status: npt.NDArray[np.int8],
+    exact: npt.NDArray[np.int32],
+    check: bool = True,
+) -> int:
+    """Stage 1 of a batch (as ``_puma_kernel.batch_arguments``)."""
+    geo = geometry[0]
+    none, scratch = np.empty(0), np.empty((4, 4))
+    for i in range(poses.shape[0]):
+        if check and not _roughly_rigid(poses[i]):
+            return i
+        status[i], exact[i] = angle_arguments(geo, poses[i], none, y[i], x[i], scratch)
+    return -1
+
+
+@_jit
+def batch_assemble(
+    geometry: np.ndarray,
+    angles: FloatArray,
+    y: FloatArray,
+    status: npt.NDArray[np.int8],
+    exact: npt.NDArray[np.int32],
+    q: FloatArray,
+    valid: npt.NDArray[np.bool_],
+) -> None:
+    """Stage 3 of a batch (as ``_puma_kernel.batch_assemble``)."""
+    geo = geometry[0]
+    none, no_within = np.empty(0), np.empty(0, dtype=np.bool_)
+    for i in range(angles.shape[0]):
+        if status[i] != OK:
+            q[i] = np.nan
+            valid[i] = False
+            continue
+        mask = exact[i]
+        for slot in range(N_ANGLES):
+            if mask >> slot & 1:
+                angles[i, slot] = y[i, slot]
+        assemble(geo, angles[i], none, q[i], no_within, mask)
+        for b in range(8):
+            valid[i, b] = not (mask >> (DEAD + 2 * (b >> 2) + (b & 1)) & 1)
