@@ -14,7 +14,7 @@ from workbench.cli._collision import (
     report_collision_error,
 )
 from workbench.cli._common import add_json_flag, add_robot_argument, print_json
-from workbench.collision import check_path
+from workbench.collision import Scene, check_path
 from workbench.export.atomic_files import atomic_file, check_output
 from workbench.model.loading import load_robot
 from workbench.tasks import FishCuttingSetup, SimulatedFish, run_fish_cutting
@@ -94,9 +94,13 @@ def run(args: argparse.Namespace) -> int:
     fish = SimulatedFish(args.seed)
     scene = load_scene(args, lambda: None)  # a --scene file is checked first
     result = run_fish_cutting(robot, fish, setup)  # (a non-PUMA robot fails here)
-    # Kang's cell is built around a PUMA's pedestal; other arms: self-collision only.
-    if scene is None and not args.no_collision and robot.dh_table is not None:
-        scene = get_fish_cutting_scene(robot, fish, setup)
+    if scene is None and not args.no_collision:
+        # Kang's cell is built around a PUMA's pedestal; other arms: self-collision
+        # only (as ``plan``'s default scene).
+        if robot.dh_table is None:
+            scene = Scene("empty")
+        else:
+            scene = get_fish_cutting_scene(robot, fish, setup)
     checker = build_checker(robot, scene, explicit=args.scene is not None)
     clearance = None
     if checker is not None:  # distances at the planning cycles, bound over the servo
