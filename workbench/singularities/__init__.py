@@ -2,8 +2,9 @@
 
 Modules, in the order they build on each other:
 
-- ``conditions``: det J of a PUMA-type arm factorised into its shoulder, elbow and wrist
-  conditions (Kang 2007, Section 3), derived from the robot's DH table;
+- ``conditions``: det J of an OPW (PUMA-type) or UR-type arm factorised into its
+  shoulder, elbow and wrist conditions (Kang 2007, Section 3 for the PUMA), derived
+  from the robot's kinematic structure;
 - ``measures``: SVD measures of any Jacobian, joint-space grids, the cross-check of the
   analytic det J against Pinocchio;
 - ``loci``: the elbow-singular θ3 and the shoulder-singular θ2 in closed form;
@@ -24,6 +25,7 @@ from workbench.singularities.conditions import (
     classify_configuration,
     compute_conditions,
     compute_det_j_analytic,
+    get_factorisation,
     get_puma_factorisation,
 )
 from workbench.singularities.directions import (
@@ -74,6 +76,7 @@ __all__ = [
     "cross_check_det_j",
     "find_closest_approaches",
     "get_elbow_singular_theta3",
+    "get_factorisation",
     "get_puma_factorisation",
     "solve_shoulder_theta2",
 ]
