@@ -42,6 +42,22 @@ def _random_goal(planner: OnlinePlanner, rng: np.random.Generator):
     return state.position + rng.uniform(-0.04, 0.04, 3), state.rotation @ turn
 
 
+def _line_through(robot, q_mid: np.ndarray, step: np.ndarray):
+    """Run a straight line from FK(q_mid) - step to FK(q_mid) + step [m].
+
+    Returns the planner samples and their q, qd as (K, nq) arrays.
+    """
+    mid = robot.fk(q_mid)
+    start = pin.SE3(mid.rotation, mid.translation - step)
+    q0 = nearest(analytic(robot, start, q_previous=q_mid), q_mid).q
+    planner = OnlinePlanner(robot, q0, LIMITS)
+    planner.append(StraightLine(mid.translation + step))
+    samples = []
+    while not planner.done:
+        samples.append(planner.step())
+    return samples, np.array([s.q for s in samples]), np.array([s.qd for s in samples])
+
+
 def _assert_same_state(primitive, planner):
     p, v, r, w = primitive.sample(planner.t)
     s = planner.state
@@ -193,17 +209,7 @@ def test_wrist_singularity_line_keeps_theta4_continuous_and_speeds_bounded(puma_
     only inside the singular region, and stay bounded where J^-1 would not.
     """
     q_mid = np.array([0.3, 0.5, 0.3, 0.6, 0.0, -0.2])
-    mid = puma_kang.fk(q_mid)
-    step = np.array([0.0, 0.05, 0.0])
-    start = pin.SE3(mid.rotation, mid.translation - step)
-    q0 = nearest(analytic(puma_kang, start, q_previous=q_mid), q_mid).q
-    planner = OnlinePlanner(puma_kang, q0, LIMITS)
-    planner.append(StraightLine(mid.translation + step))
-    samples = []
-    while not planner.done:
-        samples.append(planner.step())
-    q = np.array([s.q for s in samples])
-    qd = np.array([s.qd for s in samples])
+    samples, q, qd = _line_through(puma_kang, q_mid, np.array([0.0, 0.05, 0.0]))
     k = int(np.argmin(np.abs(q[:, 4])))
     assert abs(q[k, 4]) < 1e-9  # a sample sits on the singularity
     assert np.sign(q[0, 4]) != np.sign(q[-1, 4])  # and θ5 changes sign
@@ -365,16 +371,7 @@ def test_ur_line_through_the_wrist_singularity_keeps_the_wrist_continuous():
     q_mid[4] = np.remainder(q_mid[4] + np.pi, 2.0 * np.pi) - np.pi
     mid = robot.fk(q_mid)
     assert any(s.wrist_singular for s in analytic(robot, mid))
-    step = np.array([0.0, 0.0, 0.05])
-    start = pin.SE3(mid.rotation, mid.translation - step)
-    q0 = nearest(analytic(robot, start, q_previous=q_mid), q_mid).q
-    planner = OnlinePlanner(robot, q0, LIMITS)
-    planner.append(StraightLine(mid.translation + step))
-    samples = []
-    while not planner.done:
-        samples.append(planner.step())
-    q = np.array([s.q for s in samples])
-    qd = np.array([s.qd for s in samples])
+    samples, q, qd = _line_through(robot, q_mid, np.array([0.0, 0.0, 0.05]))
     theta5 = structure.table.joints[4].theta_offset + structure.joint_sign[4] * q[:, 4]
     sin5 = np.abs(np.sin(theta5))
     k = int(np.argmin(sin5))
