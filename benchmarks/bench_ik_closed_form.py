@@ -9,7 +9,8 @@ Run: ``python benchmarks/bench_ik_closed_form.py [--poses N] [--quick]
   ``IK``; ik-geo: ``get_ik``; ``ik.numeric``: one solution only);
 * batch: poses per second, all eight branches each (ours: ``analytic_batch``;
   RTB: ``ikine_a`` on an (N, 4, 4) array, once per configuration string;
-  EAIK: ``IK_batched`` with one worker thread, i.e. per core).
+  EAIK: ``IK_batched`` with one worker thread, i.e. per core; ik-geo has no
+  batch call: a Python loop of ``get_ik``).
 
 Times are CPU time of this process (``time.process_time``), so that other
 jobs on a shared machine inflate them less than wall time would; a reference
@@ -18,8 +19,10 @@ loop, ``sum(range(1000))``, is timed the same way to calibrate the machine.
 Peers are optional (the ``bench`` extra): a missing one is reported and
 skipped. RTB solves its own PUMA 560 model (its DH table differs from ours in
 d1, d3, α signs); EAIK and ik-geo get the same chain as ours, read from the
-model's joint axes. Every tool's answers are checked against forward
-kinematics; a peer whose answers miss the pose is reported, not timed.
+model's joint axes (for ik-geo with the points on axes that meet moved to
+where they meet, the form its solvers assume). Every tool's answers are
+checked against forward kinematics; a peer whose answers miss the pose is
+reported, not timed.
 """
 
 from __future__ import annotations
@@ -189,41 +192,70 @@ def bench_eaik(name: str, poses: int, quick: bool) -> dict[str, float] | str:
     return {"single_us": one, "batch_poses_per_s": rate}
 
 
+def _ik_geo_chain(robot, family: str):
+    """``_chain`` in ik-geo's form: points on axes that meet at their meeting point.
+
+    ik-geo's solvers take the offsets between axes that meet to be zero:
+    ``spherical_two_parallel`` (OPW) never reads p45 and p56, so the points on
+    axes 4, 5, 6 must be the wrist centre; ``three_parallel_two_intersecting``
+    (UR) adds p56 to p45 as if q5 did not turn it, so the points on axes 5 and 6
+    must be where they meet. ``axis_lines`` gives each axis's point nearest the
+    base origin instead, hence the move.
+    """
+    directions, offsets, rotation0 = _chain(robot)
+    points = np.cumsum(offsets, axis=0)  # points on axes 1-6, then the tool
+    k = 3 if family == "opw" else 4  # first of the axes that meet
+    a, u, b, v = points[k], directions[k], points[k + 1], directions[k + 1]
+    s = np.linalg.lstsq(np.column_stack([u, -v]), b - a, rcond=None)[0][0]
+    points[k:6] = a + s * u
+    return directions, np.diff(points, axis=0, prepend=0.0), rotation0
+
+
 def bench_ik_geo(name: str, poses: int, quick: bool) -> dict[str, float] | str:
     try:
         ik_geo = importlib.import_module("ik_geo")
     except ImportError as err:
         return f"not importable ({err})"
     robot, targets = _problem(name)
-    directions, offsets, rotation0 = _chain(robot)
     from workbench.ik.structure import get_structure
 
     family = get_structure(robot).family
+    directions, offsets, rotation0 = _ik_geo_chain(robot, family)
     make = (
         ik_geo.Robot.three_parallel_two_intersecting
         if family == "ur"
         else ik_geo.Robot.spherical_two_parallel
     )
     peer = make(directions, offsets)
-    worst = 0.0
-    for target in targets[:50]:
-        rotation = target[:3, :3] @ rotation0.T
-        answers = peer.get_ik(rotation.T, target[:3, 3])  # its R is transposed
-        errors = [
-            float(np.abs(robot.fk(np.array(q)).homogeneous - target).max())
-            for q, _ in answers
-        ]
-        worst = max(worst, min(errors, default=np.inf))
-    if worst > 1e-9:
-        return f"answers miss the pose (best |FK(q) - target| = {worst:.2g})"
+    # get_ik reads R[j] as column j (its bindings: rotation[(i, j)] = R[j][i])
+    rotations = np.swapaxes(targets[:, :3, :3] @ rotation0.T, 1, 2).copy()
+    translations = targets[:, :3, 3].copy()
+    worst, exact = 0.0, 0
+    for target, rotation, translation in zip(
+        targets[:200], rotations[:200], translations[:200], strict=True
+    ):
+        for q, is_ls in peer.get_ik(rotation, translation):
+            if not is_ls:
+                exact += 1
+                error = np.abs(robot.fk(np.array(q)).homogeneous - target).max()
+                worst = max(worst, float(error))
+    if worst > 1e-9 or exact == 0:
+        return f"answers miss the pose (max |FK(q) - target| = {worst:.2g})"
     cycle = iter(range(10**9))
 
     def one_pose() -> object:
-        target = targets[next(cycle) % 2000]
-        return peer.get_ik((target[:3, :3] @ rotation0.T).T, target[:3, 3])
+        i = next(cycle) % 2000
+        return peer.get_ik(rotations[i], translations[i])
 
     one = _median_us(one_pose, repeat=7 if quick else 25, number=200)
-    return {"single_us": one, "batch_poses_per_s": math.nan}
+    count = min(poses, 20_000 if quick else 100_000)
+
+    def loop() -> None:  # no batch API: one get_ik call per pose
+        for i in range(count):
+            peer.get_ik(rotations[i % 2000], translations[i % 2000])
+
+    rate = _rate(loop, count, 1 if quick else 3)
+    return {"single_us": one, "batch_poses_per_s": rate}
 
 
 def bench_numeric(name: str, poses: int, quick: bool) -> dict[str, float] | str:
@@ -273,7 +305,7 @@ def main() -> None:
         rows = [("workbench analytic / analytic_batch", ours)]
         peers = (
             ("EAIK IK / IK_batched (1 thread)", bench_eaik),
-            ("ik-geo get_ik", bench_ik_geo),
+            ("ik-geo get_ik (batch: Python loop)", bench_ik_geo),
             ("workbench ik.numeric (1 branch)", bench_numeric),
         )
         if name == "puma560":

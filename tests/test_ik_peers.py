@@ -1,10 +1,10 @@
-"""Closed-form IK of any arm cross-checked against EAIK and numerical IK.
+"""Closed-form IK of any arm cross-checked against EAIK, ik-geo and numerical IK.
 
-EAIK (the ``bench`` extra) solves the same chain by subproblem decomposition
-from the joint axes; the test is skipped when it is not installed. ik-geo is
-in the extra too, but its 1.0.3 Python bindings return least-squares answers
-that miss the pose on these arms (see ``benchmarks/bench_ik_closed_form.py``),
-so it is benchmarked, not used as a reference.
+EAIK and ik-geo (the ``bench`` extra) solve the same chain by subproblem
+decomposition from the joint axes; each test is skipped when its peer is not
+installed. ik-geo takes the chain in the form its solvers assume: the points
+on axes that meet (4, 5, 6 of an OPW arm, 5 and 6 of a UR arm) at the point
+where they meet, and the rotation as a list of columns.
 """
 
 from __future__ import annotations
@@ -58,6 +58,58 @@ def test_every_eaik_solution_is_a_branch_and_back(name: str) -> None:
         solution = peer.IK(pose)
         theirs = np.array(solution.Q)[~np.asarray(solution.is_LS, dtype=bool)]
         for q_peer in theirs:
+            assert np.abs(wrapped(ours - q_peer)).max(axis=1).min() <= ATOL_Q
+        for q_ours in ours:
+            assert np.abs(wrapped(theirs - q_ours)).max(axis=1).min() <= ATOL_Q
+        matched += len(ours)
+    assert matched >= 4 * N_POSES
+
+
+def ik_geo_robot(robot: Robot):
+    """ik-geo's model of the same chain, and the tool rotation at q = 0.
+
+    ik-geo takes H (6, 3) and P (7, 3) as EAIK does, but its solvers assume
+    zero offsets between axes that meet: ``spherical_two_parallel`` (OPW) never
+    reads p45 and p56, ``three_parallel_two_intersecting`` (UR) adds p56 to p45
+    as if q5 did not turn it. So the points on those axes are moved to where
+    the axes meet (``axis_lines`` gives each axis's point nearest the origin).
+    """
+    ik_geo = pytest.importorskip("ik_geo")
+    family = get_structure(robot).family
+    directions, points = axis_lines(robot)
+    k = 3 if family == "opw" else 4  # first of the axes that meet
+    a, u, b, v = points[k], directions[k], points[k + 1], directions[k + 1]
+    s = np.linalg.lstsq(np.column_stack([u, -v]), b - a, rcond=None)[0][0]
+    points = points.copy()
+    points[k:] = a + s * u
+    data = robot.model.createData()
+    pin.framesForwardKinematics(robot.model, data, np.zeros(6))
+    tool = data.oMf[robot.tool_frame_id]
+    offsets = np.diff(np.vstack([np.zeros(3), points, tool.translation]), axis=0)
+    make = (
+        ik_geo.Robot.three_parallel_two_intersecting
+        if family == "ur"
+        else ik_geo.Robot.spherical_two_parallel
+    )
+    return make(directions, offsets), tool.rotation
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_every_ik_geo_solution_is_a_branch_and_back(name: str) -> None:
+    robot = load_robot(name)
+    peer, rotation0 = ik_geo_robot(robot)
+    rng = np.random.default_rng(13)
+    matched = 0
+    for q in rng.uniform(robot.lower, robot.upper, size=(N_POSES, 6)):
+        target = robot.fk(q).homogeneous
+        ours = np.array([s.q for s in analytic(robot, target)])
+        # get_ik reads R[j] as column j of the rotation
+        rotation = (target[:3, :3] @ rotation0.T).T
+        answers = peer.get_ik(rotation, target[:3, 3])
+        theirs = np.array([q_p for q_p, is_ls in answers if not is_ls]).reshape(-1, 6)
+        for q_peer in theirs:
+            error = np.abs(robot.fk(q_peer).homogeneous - target).max()
+            assert error <= 1e-9
             assert np.abs(wrapped(ours - q_peer)).max(axis=1).min() <= ATOL_Q
         for q_ours in ours:
             assert np.abs(wrapped(theirs - q_ours)).max(axis=1).min() <= ATOL_Q
