@@ -20,7 +20,9 @@ ATOL_FD = 1e-6
 SAMPLES = 300
 
 
-@pytest.mark.parametrize("name", PUMA_NAMES)
+@pytest.mark.parametrize(
+    "name", [*PUMA_NAMES, "kuka-kr6-r700", "abb-irb2400", "generic6r"]
+)
 def test_committed_urdf_equals_fresh_generation(name: str) -> None:
     folder = get_own_urdf_dir()
     table = DHTable.from_json(folder / f"{name}.dh.json")
