@@ -9,8 +9,11 @@ import math
 import numpy as np
 import pytest
 
-from workbench import InfeasibleError, InputError
+from workbench import InfeasibleError, InputError, load_robot
 from workbench.cli import main
+from workbench.collision import CollisionChecker
+from workbench.ik import get_structure
+from workbench.ik.structure import axis_lines
 from workbench.tasks import (
     FishCuttingSetup,
     HorizontalCut,
@@ -22,9 +25,15 @@ from workbench.tasks.fish_program import (
     KANG_BASE_HEIGHT,
     KANG_HOME_ROTATION,
     KANG_HOME_WRIST_CENTER,
+    KANG_REACH,
+    check_waypoints,
     compute_home_configuration,
     compute_waypoints,
+    get_base_placement,
+    get_cell_scale,
+    get_world_transforms,
 )
+from workbench.tasks.fish_scene import get_fish_cutting_scene
 from workbench.trajectory.csv_io import read_trajectory_csv
 
 SETUP = FishCuttingSetup()
@@ -266,13 +275,155 @@ def test_cli_rejects_missing_folder(tmp_path, capsys):
     assert "does not exist" in capsys.readouterr().err
 
 
-def test_fishcut_runs_on_ur5(capsys) -> None:
-    """Kang's scene unchanged (the UR5 reaches as far as the PUMA): it runs."""
-    import json
+#: Cell scale of each arm from its data-sheet lengths [m], independent of the
+#: fitted DH table: reach to the wrist point over Kang's PUMA, to 0.01.
+ARM_SCALES = {
+    "ur3": (0.24365 + 0.21325 + 0.08535, 0.63),  # a2 + a3 + d5
+    "ur5": (0.425 + 0.39225 + 0.09465, 1.06),
+    "ur10": (0.612 + 0.5723 + 0.1157, 1.5),
+    "kuka-kr6-r700": (0.315 + math.hypot(0.035, 0.365), 0.79),  # a2 + |(a3, d4)|
+    "abb-irb2400": (0.705 + math.hypot(0.135, 0.755), 1.7),
+}
 
+
+@pytest.fixture(scope="module")
+def ur3_run():
+    """The default run on the UR3: Kang's cell scaled by 0.63."""
+    return run_fish_cutting(load_robot("ur3"))
+
+
+def test_cell_scale_is_one_for_both_pumas(puma_kang, puma):
+    for robot in (puma_kang, puma):
+        assert get_cell_scale(robot) == 1.0
+        base = get_base_placement(robot, SETUP)
+        assert np.array_equal(base.rotation, np.eye(3))
+        assert np.array_equal(base.translation, [0.0, 0.0, KANG_BASE_HEIGHT])
+    assert SETUP.scale == 1.0 and SETUP.scaled(1.0) == SETUP
+    assert KANG_REACH == pytest.approx(0.8641, abs=1e-4)  # a2 + hypot(a3, d4)
+
+
+@pytest.mark.parametrize("name", sorted(ARM_SCALES))
+def test_cell_scale_is_the_reach_ratio_of_the_data_sheet(name):
+    reach, expected = ARM_SCALES[name]
+    assert round(reach / KANG_REACH, 2) == expected
+    assert get_cell_scale(load_robot(name)) == expected
+
+
+def test_scaled_setup_scales_lengths_and_linear_limits_only():
+    big = SETUP.scaled(2.5)
+    assert big.scale == 2.5
+    for name in (
+        "tool_length", "max_velocity", "max_acceleration", "station_spacing",
+        "clearance",
+    ):  # fmt: skip
+        assert getattr(big, name) == pytest.approx(2.5 * getattr(SETUP, name))
+    for name in (
+        "max_angular_velocity", "max_angular_acceleration", "cutting_speed_ratio",
+        "planning_rate", "servo_rate", "stations", "max_cycles",
+    ):  # fmt: skip
+        assert getattr(big, name) == getattr(SETUP, name)
+    for setup in (SETUP, big, SETUP.scaled(0.5)):  # the arcs' radius stays >= v² / a
+        assert (
+            setup.station_spacing >= 2 * setup.max_velocity**2 / setup.max_acceleration
+        )
+    for bad in (0.0, -1.0, math.nan, math.inf):
+        with pytest.raises(InputError, match="scale"):
+            SETUP.scaled(bad)
+        with pytest.raises(InputError, match="scale"):
+            SimulatedFish().scaled(bad)
+    with pytest.raises(InputError, match="setup scale"):
+        FishCuttingSetup(scale=0.0)
+
+
+def test_scaled_fish_is_the_fish_scaled():
+    fish, big = SimulatedFish(seed=3), SimulatedFish(seed=3).scaled(1.7)
+    for y in np.linspace(0.18, 0.6, 15):
+        for x in (-0.03, 0.0, 0.004):
+            assert big.flesh_top(1.7 * x, 1.7 * y) == pytest.approx(
+                1.7 * fish.flesh_top(x, y), abs=1e-12
+            )
+            assert big.bone_top(1.7 * x, 1.7 * y) == pytest.approx(
+                1.7 * fish.bone_top(x, y), abs=1e-12
+            )
+
+
+@pytest.mark.parametrize("name", sorted(ARM_SCALES))
+def test_every_arm_reaches_the_scaled_cell_within_its_limits(name):
+    robot = load_robot(name)
+    setup = FishCuttingSetup().scaled(get_cell_scale(robot))
+    fish = SimulatedFish().scaled(setup.scale)
+    q_home = compute_home_configuration(robot, setup)
+    assert np.all((q_home >= robot.lower) & (q_home <= robot.upper))
+    check_waypoints(robot, fish, setup, q_home)  # raises on any miss
+    tip, base = get_world_transforms(robot, setup)
+    home = base * robot.fk(q_home)  # Kang's H scaled, orientation kept
+    np.testing.assert_allclose(home.rotation, KANG_HOME_ROTATION, atol=1e-12)
+    np.testing.assert_allclose(
+        home.translation, setup.scale * KANG_HOME_WRIST_CENTER, atol=1e-12
+    )
+    # the shoulder where the scaled PUMA's is: axis 1 the world z axis, axis 2
+    # horizontal at s * KANG_BASE_HEIGHT, a1 from axis 1 (the KUKA's, ABB's offset)
+    w, p = axis_lines(robot)  # joint axes at q = 0, base frame
+    w1, w2 = base.rotation @ w[0], base.rotation @ w[1]
+    p1, p2 = base.act(p[0]), base.act(p[1])
+    np.testing.assert_allclose(abs(w1[2]), 1.0, atol=1e-12)
+    np.testing.assert_allclose(p1[:2], 0.0, atol=1e-12)
+    assert w2[2] == pytest.approx(0.0, abs=1e-12)
+    assert p2[2] == pytest.approx(setup.scale * KANG_BASE_HEIGHT, abs=1e-12)
+    a1 = abs(p2[0] * w2[1] - p2[1] * w2[0]) / np.linalg.norm(w2[:2])
+    assert a1 == pytest.approx(abs(get_structure(robot).table.joints[0].a), abs=1e-12)
+    assert tip.translation[2] == pytest.approx(0.05 * setup.scale)
+
+
+def test_ur3_run_is_the_puma_run_scaled(ur3_run, run):
+    """Same program, same time line, same events; every length times s = 0.63."""
+    ur3, s = load_robot("ur3"), ur3_run.setup.scale
+    assert s == 0.63 and ur3_run.fish.table_z == pytest.approx(s * run.fish.table_z)
+    assert np.array_equal(ur3_run.t, run.t)
+    assert ur3_run.primitive == run.primitive
+    np.testing.assert_allclose(ur3_run.position / s, run.position, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(ur3_run.velocity / s, run.velocity, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(ur3_run.rotation, run.rotation, rtol=0, atol=1e-9)
+    assert [(e.t, e.kind, e.primitive) for e in ur3_run.events] == [
+        (e.t, e.kind, e.primitive) for e in run.events
+    ]
+    # the joint commands track that path, within the UR3's limits, no wrist flip
+    tip, base = get_world_transforms(ur3, ur3_run.setup)
+    for k in range(0, len(ur3_run.t), 7):
+        pose = base * ur3.fk(ur3_run.q[k]) * tip
+        np.testing.assert_allclose(pose.translation, ur3_run.position[k], atol=1e-9)
+        np.testing.assert_allclose(pose.rotation, ur3_run.rotation[k], atol=1e-9)
+    assert ur3_run.wrist_flips == 0 and np.abs(np.diff(ur3_run.q[:, 3])).max() < 0.05
+    assert np.all((ur3_run.servo.q >= ur3.lower) & (ur3_run.servo.q <= ur3.upper))
+    assert ur3_run.max_joint_speed <= ur3.velocity_limit.min()
+    np.testing.assert_allclose(ur3_run.position[-1], ur3_run.position[0], atol=1e-12)
+
+
+def test_ur3_clears_the_scaled_table_and_fish(ur3_run):
+    """The UR3 in its cell: table and fish (no pedestal), only the knife cuts."""
+    ur3 = load_robot("ur3")
+    scene = get_fish_cutting_scene(ur3, ur3_run.fish, ur3_run.setup)
+    names = [o.name for o in scene.obstacles]
+    assert names == ["cutting_table", "fish"]
+    assert scene.obstacles[1].allow == ("wrist_2_link", "wrist_3_link", "ee_link")
+    _, base = get_world_transforms(ur3, ur3_run.setup)
+    table = base * scene.obstacles[0].placement  # back in the world frame
+    top = table.translation[2] + scene.obstacles[0].size[2] / 2
+    assert top == pytest.approx(0.63 * SimulatedFish().table_z, abs=1e-12)
+    checker = CollisionChecker(ur3, scene, self_collision=False)
+    distances = [checker.compute_distances(q) for q in ur3_run.q[::10]]
+    assert np.min(distances) > 0.02  # [m]
+
+
+def test_cli_runs_any_closed_form_arm_in_its_scaled_cell(capsys, run) -> None:
     from tests.conftest import run_cli
 
-    code, out, _ = run_cli(capsys, "fishcut", "--robot", "ur5", "--json")
+    code, out, _ = run_cli(
+        capsys, "fishcut", "--robot", "ur3", "--json", "--no-collision"
+    )
     result = json.loads(out)
-    assert code == 0 and result["robot"] == "ur5"
-    assert result["wrist_flips"] == 0 and result["cycles"] > 100
+    assert code == 0 and result["robot"] == "ur3" and result["scale"] == 0.63
+    assert result["wrist_flips"] == 0 and result["cycles"] == len(run.t) - 1
+    assert [e["kind"] for e in result["events"]][:2] == ["flesh", "bone"]
+    code, out, _ = run_cli(capsys, "fishcut", "--json", "--no-collision")
+    assert code == 0 and json.loads(out)["scale"] == 1.0

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 
 from workbench.cli._collision import (
@@ -14,11 +15,12 @@ from workbench.cli._collision import (
     report_collision_error,
 )
 from workbench.cli._common import add_json_flag, add_robot_argument, print_json
-from workbench.collision import Scene, check_path
+from workbench.collision import check_path
 from workbench.export.atomic_files import atomic_file, check_output
 from workbench.model.loading import load_robot
 from workbench.tasks import FishCuttingSetup, SimulatedFish, run_fish_cutting
 from workbench.tasks.fish_cutting import summarize_fish_cutting
+from workbench.tasks.fish_program import get_cell_scale
 from workbench.tasks.fish_scene import get_fish_cutting_scene
 from workbench.trajectory.csv_io import write_trajectory_csv
 
@@ -33,7 +35,11 @@ def register(commands: argparse._SubParsersAction) -> None:
         help="Kang's fish-cutting program on a simulated fish, planned online",
         description=(
             "Run the fish-cutting program of Kang (2007, Fig. 7) on a simulated fish "
-            "with the online planner: Cartesian command, closed-form IK with branch "
+            "with the online planner, on any arm with a closed form (OPW or UR "
+            "type): Kang's cell is scaled to the arm's reach (every length and the "
+            "tool's speed and acceleration limits; scale 1 for the PUMA models) and "
+            "the arm's shoulder is put where the PUMA's is. Cartesian command, "
+            "closed-form IK with branch "
             "continuity and DLS joint rates each planning cycle, cubic Hermite "
             "interpolation at the servo rate. Touching the flesh slows the vertical "
             "cut, touching the bone stops it (or lifts the horizontal cut). The "
@@ -54,9 +60,9 @@ def register(commands: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--max-velocity",
         type=float,
-        default=_DEFAULTS.max_velocity,
         metavar="M_S",
-        help=f"tool speed limit [m/s] (default {_DEFAULTS.max_velocity:g})",
+        help=f"tool speed limit [m/s] (default {_DEFAULTS.max_velocity:g} times "
+        "the cell scale)",
     )
     parser.add_argument(
         "--planning-rate",
@@ -73,7 +79,9 @@ def register(commands: argparse._SubParsersAction) -> None:
         help=f"servo samples per second, a multiple of the planning rate "
         f"(default {_DEFAULTS.servo_rate:g})",
     )
-    add_collision_arguments(parser, "Kang's pedestal, cutting table and the fish")
+    add_collision_arguments(
+        parser, "Kang's cell scaled to the arm: table, fish, pedestal of a DH model"
+    )
     add_json_flag(parser)
     parser.set_defaults(
         run=run, progress_message="fishcut: running Kang's fish-cutting program online…"
@@ -86,21 +94,17 @@ def run(args: argparse.Namespace) -> int:
         if path is not None:
             check_output(path)
     robot = load_robot(args.robot)
-    setup = FishCuttingSetup(
-        max_velocity=args.max_velocity,
-        planning_rate=args.planning_rate,
-        servo_rate=args.servo_rate,
-    )
-    fish = SimulatedFish(args.seed)
     scene = load_scene(args, lambda: None)  # a --scene file is checked first
-    result = run_fish_cutting(robot, fish, setup)  # (a non-PUMA robot fails here)
+    scale = get_cell_scale(robot)  # (an arm without a closed form fails here)
+    setup = FishCuttingSetup(
+        planning_rate=args.planning_rate, servo_rate=args.servo_rate
+    ).scaled(scale)
+    if args.max_velocity is not None:
+        setup = dataclasses.replace(setup, max_velocity=args.max_velocity)
+    fish = SimulatedFish(args.seed).scaled(scale)
+    result = run_fish_cutting(robot, fish, setup)
     if scene is None and not args.no_collision:
-        # Kang's cell is built around a PUMA's pedestal; other arms: self-collision
-        # only (as ``plan``'s default scene).
-        if robot.dh_table is None:
-            scene = Scene("empty")
-        else:
-            scene = get_fish_cutting_scene(robot, fish, setup)
+        scene = get_fish_cutting_scene(robot, fish, setup)
     checker = build_checker(robot, scene, explicit=args.scene is not None)
     clearance = None
     if checker is not None:  # distances at the planning cycles, bound over the servo
@@ -128,7 +132,8 @@ def run(args: argparse.Namespace) -> int:
         print_json(summary)
         return 3 if report_collision_error(clearance) else 0
     print(
-        f"robot {robot.name}: {summary['cycles']} planning cycles at "
+        f"robot {robot.name}, Kang's cell scaled by {setup.scale:g}: "
+        f"{summary['cycles']} planning cycles at "
         f"{setup.planning_rate:g} Hz, {summary['duration']:.2f} s, servo "
         f"{setup.servo_rate:g} Hz"
     )

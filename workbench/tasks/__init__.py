@@ -1,9 +1,13 @@
-"""Tasks built on the online planner: Kang's fish cutting on a simulated fish."""
+"""Tasks built on the online planner: Kang's fish cutting on a simulated fish.
+
+Any OPW or UR-type arm runs it in Kang's cell scaled to its reach
+(:func:`get_cell_scale`; 1 for the PUMA models).
+"""
 
 from workbench.tasks.cuts import HorizontalCut, VerticalDownCut
 from workbench.tasks.fish import SimulatedFish
 from workbench.tasks.fish_cutting import FishCuttingResult, FishEvent, run_fish_cutting
-from workbench.tasks.fish_program import FishCuttingSetup, build_program
+from workbench.tasks.fish_program import FishCuttingSetup, build_program, get_cell_scale
 from workbench.tasks.fish_scene import get_fish_cutting_scene
 
 __all__ = [
@@ -14,6 +18,7 @@ __all__ = [
     "SimulatedFish",
     "VerticalDownCut",
     "build_program",
+    "get_cell_scale",
     "get_fish_cutting_scene",
     "run_fish_cutting",
 ]

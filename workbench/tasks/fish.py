@@ -103,9 +103,41 @@ class SimulatedFish:
         self.half_width, self.thickness = float(half_width), float(thickness)
         self.bone_height = float(bone_height)
         self.bone_half_width = float(bone_half_width)
+        self.flesh_variation = float(flesh_variation)
+        self.bone_variation = float(bone_variation)
         rng = np.random.default_rng(self.seed)
         self._flesh = self._harmonics(rng, flesh_variation)
         self._bone = self._harmonics(rng, bone_variation)
+
+    def scaled(self, factor: float) -> SimulatedFish:
+        """The same fish (same seed) with every length multiplied by ``factor``.
+
+        Positions, sizes and the bounds of the random height variations all
+        scale, so ``scaled(s).flesh_top(s x, s y) = s flesh_top(x, y)`` (to
+        rounding): the fish of Kang's cell scaled to another arm
+        (:func:`~workbench.tasks.fish_program.get_cell_scale`).
+
+        Raises:
+            InputError: If ``factor`` is not a positive finite number.
+        """
+        if not isinstance(factor, float | int) or not math.isfinite(factor):
+            raise InputError(f"fish scale must be a finite number, got {factor!r}")
+        if factor <= 0.0:
+            raise InputError(f"fish scale must be > 0, got {factor:g}")
+        f = float(factor)
+        return SimulatedFish(
+            self.seed,
+            head_y=f * self.head_y,
+            tail_y=f * self.tail_y,
+            center_x=f * self.center_x,
+            half_width=f * self.half_width,
+            table_z=f * self.table_z,
+            thickness=f * self.thickness,
+            bone_height=f * self.bone_height,
+            bone_half_width=f * self.bone_half_width,
+            flesh_variation=f * self.flesh_variation,
+            bone_variation=f * self.bone_variation,
+        )
 
     @staticmethod
     def _harmonics(rng: np.random.Generator, bound: float) -> list[tuple[float, ...]]:

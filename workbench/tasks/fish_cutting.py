@@ -1,9 +1,11 @@
 r"""Kang's fish-cutting program (2007, Fig. 7) on a simulated fish, planned online.
 
-The program, in the world frame of Fig. 7 (z up, the robot base
-:data:`~workbench.tasks.fish_program.KANG_BASE_HEIGHT` above the world origin),
-with the fish stations ``S_0 .. S_{n-1}`` along the backbone (``S_0`` is
-Kang's start pose ``A``), built by :func:`~workbench.tasks.fish_program.build_program`::
+The program, in the world frame of Fig. 7 (z up, the PUMA's base
+:data:`~workbench.tasks.fish_program.KANG_BASE_HEIGHT` above the world origin;
+another arm runs it in the cell scaled to its reach,
+:func:`~workbench.tasks.fish_program.get_cell_scale`), with the fish stations
+``S_0 .. S_{n-1}`` along the backbone (``S_0`` is Kang's start pose ``A``),
+built by :func:`~workbench.tasks.fish_program.build_program`::
 
     PointToPoint(H -> S_0)                        # PTP(H, A)
     for each station i:
@@ -42,6 +44,7 @@ from workbench.tasks.fish_program import (
     build_program,
     check_waypoints,
     compute_home_configuration,
+    get_cell_scale,
     get_world_transforms,
 )
 from workbench.trajectory.csv_io import JointTrajectorySamples
@@ -145,9 +148,11 @@ def run_fish_cutting(
     """Run the fish-cutting program online, cycle by cycle.
 
     Args:
-        robot: A PUMA-type robot (default use: ``puma560-kang``).
-        fish: The fish; default ``SimulatedFish(seed=0)``.
-        setup: Program parameters; default :class:`FishCuttingSetup`.
+        robot: An arm with closed-form IK (default use: ``puma560-kang``).
+        fish: The fish; default ``SimulatedFish(seed=0).scaled(setup.scale)``.
+        setup: Program parameters; default Kang's cell scaled to the arm,
+            ``FishCuttingSetup().scaled(get_cell_scale(robot))`` (Kang's
+            :class:`FishCuttingSetup` itself for the PUMA models).
         q_home: Start (and end) configuration; default
             :func:`compute_home_configuration` (zeros for ``puma560-kang``).
 
@@ -160,14 +165,14 @@ def run_fish_cutting(
             not finish within ``setup.max_cycles``.
         InputError: Bad parameters or a robot without closed-form IK.
     """
-    fish = fish or SimulatedFish()
-    setup = setup or FishCuttingSetup()
+    setup = setup or FishCuttingSetup().scaled(get_cell_scale(robot))
+    fish = fish or SimulatedFish().scaled(setup.scale)
     if q_home is None:
         q0 = compute_home_configuration(robot, setup)
     else:
         q0 = robot.check_configuration(q_home)
     check_waypoints(robot, fish, setup, q0)
-    tip, base = get_world_transforms(setup)
+    tip, base = get_world_transforms(robot, setup)
     planner = OnlinePlanner(
         robot,
         q0,
@@ -233,6 +238,7 @@ def summarize_fish_cutting(result: FishCuttingResult, robot_name: str) -> dict:
     setup = result.setup
     return {
         "robot": robot_name,
+        "scale": setup.scale,
         "cycles": len(result.t) - 1,
         "servo_rate_hz": setup.servo_rate,
         "planning_rate_hz": setup.planning_rate,

@@ -1,21 +1,33 @@
 """Kang's fish-cutting program (2007, Fig. 7): poses, parameters, primitives.
 
-The scene is Kang's world frame (z up; the robot base :data:`KANG_BASE_HEIGHT`
-above the origin). The program is the list of motion primitives that
-:func:`workbench.tasks.fish_cutting.run_fish_cutting` executes online; see
-that module for the sequence.
+The scene is Kang's world frame (z up; the PUMA's base, which is its
+shoulder, :data:`KANG_BASE_HEIGHT` above the origin). The program is the list
+of motion primitives that :func:`workbench.tasks.fish_cutting.run_fish_cutting`
+executes online; see that module for the sequence.
+
+Any arm with a closed form runs it in Kang's cell scaled to its size: the
+cell scale ``s`` (:func:`get_cell_scale`, the arm's reach over the PUMA's,
+1 for both PUMA models) multiplies every length of the cell (Kang's poses,
+the fish, the table, the tool, the station spacing and clearance) and the
+linear speed and acceleration limits (:meth:`FishCuttingSetup.scaled`), and
+the arm's shoulder is put where the scaled PUMA's shoulder is
+(:func:`get_base_placement`). The tool-tip path is then the PUMA's path
+times ``s``, on the same time line.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from workbench.errors import InfeasibleError
+from workbench.errors import InfeasibleError, InputError
 from workbench.ik.closed_form import analytic, nearest
+from workbench.ik.structure import KinematicStructure, get_structure
 from workbench.model.robot import Robot
 from workbench.planning.cartesian_paths import CartesianLimits
 from workbench.planning.motion_primitives import (
@@ -32,7 +44,9 @@ FloatArray = npt.NDArray[np.float64]
 
 #: Height [m] of the robot base frame above Kang's world origin: Fig. 7 puts the
 #: home wrist centre at world z = 0.24003 m (``H[2][3] + TOOL_LENGTH``), Table 1
-#: at base z = -0.4318 m, so 0.24003 + 0.4318.
+#: at base z = -0.4318 m, so 0.24003 + 0.4318. The PUMA's base frame is its
+#: shoulder; another arm's shoulder goes ``scale`` times this high
+#: (:func:`get_base_placement`).
 KANG_BASE_HEIGHT = 0.67183
 
 #: Kang's start pose ``A`` of Fig. 7 (world frame): tool z down, x along world y.
@@ -48,6 +62,15 @@ KANG_HOME_WRIST_CENTER = np.array([0.4521, -0.1254, 0.24003])
 KANG_HOME_ROTATION.setflags(write=False)
 KANG_HOME_WRIST_CENTER.setflags(write=False)
 
+#: Reach [m] of Kang's PUMA (Table 1), as :func:`get_arm_reach` measures it:
+#: upper arm a2 plus forearm sqrt(a3² + d4²), shoulder axis to wrist centre.
+KANG_REACH = 0.4318 + math.hypot(0.0203, 0.4318)
+
+#: The cell scale is rounded to this many decimals (1 %): models of one arm
+#: whose lengths differ by a fraction of a millimetre (the two PUMA tables:
+#: a3 = 20.3 mm and 19.05 mm) share one cell, exactly Kang's.
+CELL_SCALE_DECIMALS = 2
+
 
 @dataclass(frozen=True, slots=True)
 class FishCuttingSetup:
@@ -55,10 +78,20 @@ class FishCuttingSetup:
 
     Kang gives the poses ``H`` and ``A`` but not the tool length, speeds or
     rates; the values here are assumptions that keep the PUMA 560 within its
-    (assumed) joint speed limits.
+    (assumed) joint speed limits. The defaults are Kang's cell (``scale`` 1);
+    :meth:`scaled` gives the cell of another arm (:func:`get_cell_scale`).
+
+    ``scale`` multiplies Kang's poses ``A`` and ``H`` and the shoulder height
+    :data:`KANG_BASE_HEIGHT`; the other lengths and the linear limits are
+    held as they are used, already scaled. The semicircles between stations
+    need ``station_spacing >= 2 max_velocity² / max_acceleration`` (radius
+    above v² / a); scaling keeps it, since both sides scale by the factor.
+
+    Raises:
+        InputError: If ``scale`` is not a positive finite number.
     """
 
-    tool_length: float = 0.05  # [m] tool tip beyond the wrist centre, along z6
+    tool_length: float = 0.05  # [m] tool tip beyond the tool frame, along its z
     max_velocity: float = 0.15  # [m/s]
     max_acceleration: float = 1.0  # [m/s²]
     max_angular_velocity: float = 0.8  # [rad/s]
@@ -70,6 +103,32 @@ class FishCuttingSetup:
     station_spacing: float = 0.08  # [m] along the fish (>= 2 v² / a for the arcs)
     clearance: float = 0.01  # [m] retreat height above the nominal flesh
     max_cycles: int = 20_000
+    scale: float = 1.0  # cell size over Kang's PUMA cell (get_cell_scale)
+
+    def __post_init__(self) -> None:
+        _check_scale(self.scale, "setup scale")
+
+    def scaled(self, factor: float) -> FishCuttingSetup:
+        """The setup of a cell ``factor`` times as large (``scale`` multiplied).
+
+        Lengths (tool length, station spacing, clearance) and the linear
+        speed and acceleration limits are multiplied by ``factor``; angular
+        limits, rates and the cycle budget are kept. Times are unchanged: the
+        tool-tip path is the same path, ``factor`` times larger.
+
+        Raises:
+            InputError: If ``factor`` is not a positive finite number.
+        """
+        f = _check_scale(factor, "cell scale")
+        return dataclasses.replace(
+            self,
+            tool_length=f * self.tool_length,
+            max_velocity=f * self.max_velocity,
+            max_acceleration=f * self.max_acceleration,
+            station_spacing=f * self.station_spacing,
+            clearance=f * self.clearance,
+            scale=f * self.scale,
+        )
 
     @property
     def limits(self) -> CartesianLimits:
@@ -87,11 +146,79 @@ class FishCuttingSetup:
         return self.cutting_speed_ratio * self.max_velocity
 
 
-def get_world_transforms(setup: FishCuttingSetup) -> tuple[pin.SE3, pin.SE3]:
-    """``(transform_tip_to_tool, transform_base_to_world)`` of the scene."""
+def _check_scale(value: float, what: str) -> float:
+    if not isinstance(value, float | int) or not math.isfinite(value) or value <= 0:
+        raise InputError(f"{what} must be a positive finite number, got {value!r}")
+    return float(value)
+
+
+def get_arm_reach(structure: KinematicStructure) -> float:
+    """Reach [m] of an arm: shoulder axis to wrist point, arm stretched.
+
+    The wrist point is where the last wrist axes meet: the wrist centre of an
+    OPW arm (axes 4, 5, 6), the point of axes 5 and 6 of a UR arm. Its
+    largest distance from axis 2, in the plane normal to axis 2, is, with
+    ``a_k``, ``d_k`` of DH row k (1-based) of the fitted table:
+
+    * OPW: ``|a2| + hypot(a3, d4)`` (upper arm, then elbow to wrist centre);
+    * UR: ``|a2| + |a3| + |d5|`` (upper arm, forearm, then wrist 1 to the
+      wrist point, which joint 4 turns into line with them).
+
+    Offsets along axis 2 (the PUMA's d3, the UR's d4) and the flange length
+    are left out, as in the makers' "reach to the wrist point".
+    """
+    rows = structure.table.joints
+    if structure.family == "ur":
+        return abs(rows[1].a) + abs(rows[2].a) + abs(rows[4].d)
+    return abs(rows[1].a) + math.hypot(rows[2].a, rows[3].d)
+
+
+def get_cell_scale(robot: Robot) -> float:
+    """Scale of Kang's cell for ``robot``: its reach over the PUMA's.
+
+    ``round(get_arm_reach(structure) / KANG_REACH, 2)``: 1.0 for both PUMA
+    models, 0.63 for the UR3, 1.06 for the UR5, 1.5 for the UR10, 0.79 for
+    the KUKA KR 6 R700, 1.7 for the ABB IRB 2400 (the table in
+    ``docs/closed-form-ik.md``, section 6).
+
+    Raises:
+        UnsupportedRobotError: If the robot has no closed-form IK.
+    """
+    ratio = get_arm_reach(get_structure(robot)) / KANG_REACH
+    return round(ratio, CELL_SCALE_DECIMALS)
+
+
+def get_base_placement(robot: Robot, setup: FishCuttingSetup) -> pin.SE3:
+    """Pose of the robot's base frame in Kang's world frame (scaled cell).
+
+    The arm's shoulder, the point of axis 1 level with axis 2 (DH frame 0
+    moved ``d1`` along axis 1), is put where the PUMA's shoulder is in the
+    scaled cell: ``setup.scale * KANG_BASE_HEIGHT`` above the world origin,
+    axis 1 vertical, DH frame 0's x along the world x. Arms differ in where
+    their base frame is: the PUMA's is its shoulder; a UR's ``base_link`` is
+    d1 below it, the KUKA KR 6 R700's 0.4 m below (axis 2 a further 25 mm
+    out, a1). For the PUMA models this is ``KANG_BASE_HEIGHT`` straight up.
+
+    Raises:
+        UnsupportedRobotError: If the robot has no closed-form IK.
+    """
+    structure = get_structure(robot)
+    height = setup.scale * KANG_BASE_HEIGHT - structure.table.joints[0].d
+    frame0 = pin.SE3(np.eye(3), np.array([0.0, 0.0, height]))  # in the world
+    return frame0 * pin.SE3(structure.base).inverse()
+
+
+def get_world_transforms(
+    robot: Robot, setup: FishCuttingSetup
+) -> tuple[pin.SE3, pin.SE3]:
+    """``(transform_tip_to_tool, transform_base_to_world)`` of the scene.
+
+    The tool tip is ``setup.tool_length`` along z of the robot's tool frame
+    (the wrist centre of the PUMA models, the flange of the others); the
+    base is placed by :func:`get_base_placement`.
+    """
     tip = pin.SE3(np.eye(3), np.array([0.0, 0.0, setup.tool_length]))
-    base = pin.SE3(np.eye(3), np.array([0.0, 0.0, KANG_BASE_HEIGHT]))
-    return tip, base
+    return tip, get_base_placement(robot, setup)
 
 
 def compute_waypoints(
@@ -99,12 +226,13 @@ def compute_waypoints(
 ) -> dict[str, FloatArray]:
     """Named program waypoints (3,) [m], world frame, from the *nominal* fish.
 
-    Station ``i`` is ``KANG_START_POSITION`` moved ``i * station_spacing`` along
-    y. The bone guess is at the table (below any bone), the retreat point just
-    above the nominal flesh; the horizontal cut runs at the nominal backbone
-    height, from the last station back to the first.
+    Station ``i`` is ``setup.scale * KANG_START_POSITION`` moved
+    ``i * station_spacing`` along y. The bone guess is at the table (below any
+    bone), the retreat point just above the nominal flesh; the horizontal cut
+    runs at the nominal backbone height, from the last station back to the
+    first.
     """
-    a = KANG_START_POSITION
+    a = setup.scale * KANG_START_POSITION
     top = fish.table_z + fish.thickness + setup.clearance
     points: dict[str, FloatArray] = {}
     for i in range(setup.stations):
@@ -170,7 +298,7 @@ def check_waypoints(
     Raises:
         InfeasibleError: Naming the first waypoint out of reach or limits.
     """
-    tip, base = get_world_transforms(setup)
+    tip, base = get_world_transforms(robot, setup)
     q = q_home
     for name, point in compute_waypoints(fish, setup).items():
         target = base.inverse() * pin.SE3(KANG_START_ROTATION, point) * tip.inverse()
@@ -190,15 +318,20 @@ def check_waypoints(
 def compute_home_configuration(robot: Robot, setup: FishCuttingSetup) -> FloatArray:
     """The configuration of Kang's home pose ``H``, nearest zero, within limits.
 
-    For ``puma560-kang`` this is q = 0 (Kang's home); for another PUMA-type
-    model it is the same physical pose in that model's joint values, its base
-    placed like Kang's (:data:`KANG_BASE_HEIGHT` above the world origin).
+    ``H`` scaled: the robot's tool frame at ``setup.scale`` times Kang's wrist
+    centre :data:`KANG_HOME_WRIST_CENTER` (world frame), with Kang's
+    orientation :data:`KANG_HOME_ROTATION` (tool z down), the base placed by
+    :func:`get_base_placement`. For ``puma560-kang`` this is q = 0 (Kang's
+    home); for the other PUMA model it is the same physical pose in that
+    model's joint values; for another arm, the IK solution within its limits
+    nearest q = 0.
 
     Raises:
         InfeasibleError: If ``H`` has no IK solution within the limits.
+        UnsupportedRobotError: If the robot has no closed-form IK.
     """
-    _, base = get_world_transforms(setup)
-    wrist = pin.SE3(KANG_HOME_ROTATION, KANG_HOME_WRIST_CENTER)
+    _, base = get_world_transforms(robot, setup)
+    wrist = pin.SE3(KANG_HOME_ROTATION, setup.scale * KANG_HOME_WRIST_CENTER)
     target = base.inverse() * wrist
     zero = np.zeros(robot.nq)
     within = [s for s in analytic(robot, target, q_previous=zero) if s.within_limits]
@@ -210,9 +343,11 @@ def compute_home_configuration(robot: Robot, setup: FishCuttingSetup) -> FloatAr
 
 
 __all__ = [
+    "CELL_SCALE_DECIMALS",
     "KANG_BASE_HEIGHT",
     "KANG_HOME_ROTATION",
     "KANG_HOME_WRIST_CENTER",
+    "KANG_REACH",
     "KANG_START_POSITION",
     "KANG_START_ROTATION",
     "FishCuttingSetup",
@@ -220,5 +355,8 @@ __all__ = [
     "check_waypoints",
     "compute_home_configuration",
     "compute_waypoints",
+    "get_arm_reach",
+    "get_base_placement",
+    "get_cell_scale",
     "get_world_transforms",
 ]

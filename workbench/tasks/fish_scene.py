@@ -2,16 +2,21 @@
 
 Kang shows the cell but gives no dimensions, so these are assumptions around
 the simulated fish (:class:`~workbench.tasks.fish.SimulatedFish`) and the world
-frame of Fig. 7 (the base :data:`~workbench.tasks.fish_program.KANG_BASE_HEIGHT`
-above the world origin):
+frame of Fig. 7 (the base placed by
+:func:`~workbench.tasks.fish_program.get_base_placement`: for the PUMA,
+:data:`~workbench.tasks.fish_program.KANG_BASE_HEIGHT` above the world origin).
+Sizes are those of Kang's cell times the setup's ``scale`` (1 for the PUMA):
 
-* the PUMA's **pedestal** (as in Angeles' scene);
-* a **cutting table** 0.03 m thick whose top is the fish's ``table_z``,
-  :data:`TABLE_MARGIN` larger than the fish on every side;
+* the **pedestal** drawn under the base of an arm generated from a DH table
+  (the PUMA models, the KUKA and ABB models), as in Angeles' scene; arms from
+  other URDFs (UR) draw their own base and get none;
+* a **cutting table** :data:`TABLE_THICKNESS` thick whose top is the fish's
+  ``table_z``, :data:`TABLE_MARGIN` larger than the fish on every side;
 * the **fish**: a closed triangle mesh of its flesh surface over the table
   (``flesh_top`` on a grid, floored at the table). The knife cuts it by
-  design, so the wrist links that carry the knife (:data:`KNIFE_LINKS`) are
-  allowed to touch it; every other link is checked.
+  design, so the wrist links that carry the knife (:func:`get_knife_links`,
+  :data:`KNIFE_LINKS` for the PUMA) are allowed to touch it; every other link
+  is checked.
 """
 
 from __future__ import annotations
@@ -26,12 +31,17 @@ from workbench.collision.paper_scenes import TABLE_COLOR, get_pedestal
 from workbench.collision.scene import Obstacle, Scene
 from workbench.model.robot import Robot
 from workbench.tasks.fish import SimulatedFish
-from workbench.tasks.fish_program import FishCuttingSetup, get_world_transforms
+from workbench.tasks.fish_program import (
+    FishCuttingSetup,
+    get_cell_scale,
+    get_world_transforms,
+)
 
-#: Margin [m] of the table around the fish.
+#: Margin [m] of the table around the fish, in Kang's cell (times ``scale``).
 TABLE_MARGIN = 0.08
+#: Thickness [m] of the table, in Kang's cell (times ``scale``).
 TABLE_THICKNESS = 0.03
-#: Links that hold the knife: allowed to touch the fish.
+#: Links of the PUMA models that hold the knife: allowed to touch the fish.
 KNIFE_LINKS = ("link5", "link6", "wrist_center")
 FISH_COLOR = (0.85, 0.55, 0.45, 0.95)
 _GRID = (40, 12)  # samples along and across the fish
@@ -77,32 +87,51 @@ def build_fish_mesh(
     return vertices, np.array(triangles, dtype=np.int64)
 
 
+def get_knife_links(robot: Robot) -> tuple[str, ...]:
+    """Links with collision geometry moved by joints 5 and 6 only: the knife's.
+
+    ``("link5", "link6", "wrist_center")`` (:data:`KNIFE_LINKS`) for the PUMA
+    models, ``("wrist_2_link", "wrist_3_link", "ee_link")`` for a UR arm. They
+    hold the knife, so they may touch the fish it cuts.
+    """
+    model = robot.model
+    links: list[str] = []
+    for geometry in robot.collision_model.geometryObjects:
+        frame = model.frames[geometry.parentFrame]
+        if geometry.parentJoint >= model.njoints - 2 and frame.name not in links:
+            links.append(frame.name)
+    return tuple(links)
+
+
 def get_fish_cutting_scene(
     robot: Robot,
     fish: SimulatedFish | None = None,
     setup: FishCuttingSetup | None = None,
 ) -> Scene:
-    """Pedestal, cutting table and fish in the robot base frame.
+    """Pedestal (DH models), cutting table and fish in the robot base frame.
 
     Args:
-        robot: A PUMA model (default use: ``puma560-kang``).
-        fish: The fish; default ``SimulatedFish(0)``.
-        setup: Program parameters (for the world frame); default ones.
+        robot: An arm with closed-form IK (default use: ``puma560-kang``).
+        fish: The fish; default ``SimulatedFish(0).scaled(setup.scale)``.
+        setup: Program parameters (scale, world frame); default Kang's cell
+            scaled to the arm, as :func:`~workbench.tasks.run_fish_cutting`.
 
     Raises:
-        InputError: If the robot is not a PUMA model from a DH table.
+        UnsupportedRobotError: If the robot has no closed-form IK.
     """
-    fish = fish or SimulatedFish()
-    _, base = get_world_transforms(setup or FishCuttingSetup())
+    setup = setup or FishCuttingSetup().scaled(get_cell_scale(robot))
+    fish = fish or SimulatedFish().scaled(setup.scale)
+    _, base = get_world_transforms(robot, setup)
     world_to_base = base.inverse()
     vertices, triangles = build_fish_mesh(fish)
     vertices = vertices @ world_to_base.rotation.T + world_to_base.translation
     vertices.setflags(write=False)
     triangles.setflags(write=False)
+    margin = setup.scale * TABLE_MARGIN
     size = (
-        2 * (fish.half_width + TABLE_MARGIN),
-        fish.tail_y - fish.head_y + 2 * TABLE_MARGIN,
-        TABLE_THICKNESS,
+        2 * (fish.half_width + margin),
+        fish.tail_y - fish.head_y + 2 * margin,
+        setup.scale * TABLE_THICKNESS,
     )
     center_world = np.array(
         [fish.center_x, 0.5 * (fish.head_y + fish.tail_y), fish.table_z - size[2] / 2]
@@ -119,16 +148,23 @@ def get_fish_cutting_scene(
         "mesh",
         (1.0, 1.0, 1.0),
         pin.SE3.Identity(),
-        KNIFE_LINKS,
+        get_knife_links(robot),
         vertices=vertices,
         triangles=triangles,
         color=FISH_COLOR,
     )
+    pedestal = (get_pedestal(robot),) if robot.dh_table is not None else ()
+    scale = "" if setup.scale == 1.0 else f", scaled by {setup.scale:g}"
     return Scene(
         "kang-fish-cutting",
-        (get_pedestal(robot), table, body),
-        f"Kang 2007, Fig. 7; fish seed {fish.seed}",
+        (*pedestal, table, body),
+        f"Kang 2007, Fig. 7{scale}; fish seed {fish.seed}",
     )
 
 
-__all__ = ["KNIFE_LINKS", "build_fish_mesh", "get_fish_cutting_scene"]
+__all__ = [
+    "KNIFE_LINKS",
+    "build_fish_mesh",
+    "get_fish_cutting_scene",
+    "get_knife_links",
+]
