@@ -84,6 +84,44 @@ def test_singularities_text_output(capsys) -> None:
     assert "near wrist" in out and "singular         wrist" in out
 
 
+def test_singularities_json_ur5_wrist_direction(capsys) -> None:
+    """θ5 = 0: the direction of the wrist singularity, a left null vector of J."""
+    q = np.array([0.3, -1.1, 1.4, -0.6, 0.0, 0.8])
+    code, out, err = run(
+        capsys, "singularities", "--robot", "ur5", "--rad", *map(str, q), "--json"
+    )
+    assert (code, err) == (0, "")
+    result = json.loads(out)
+    assert result["singular"] == ["wrist"]
+    assert set(result["directions"]) == {"wrist"}
+    d = result["directions"]["wrist"]
+    assert d["reference"].startswith("wrist point")
+    robot = load_robot("ur5")
+    tool_jac = robot.jacobian(q)
+    jac = tool_jac.copy()
+    jac[:3] += np.cross(
+        jac[3:].T, np.array(d["reference_point"]) - robot.fk(q).translation
+    ).T
+    for key, matrix in (("u", jac), ("u_tool", tool_jac)):
+        u = np.array(d[key])
+        assert u.shape == (6,)
+        assert np.linalg.norm(u) == pytest.approx(1.0, abs=1e-12)
+        assert np.linalg.norm(u @ matrix) <= 1e-9
+    assert max(d["residual"], d["residual_tool"]) <= 1e-9
+    assert np.linalg.norm(tool_jac @ np.array(d["self_motion"])) <= 1e-9
+    code, out, _ = run(capsys, "singularities", "--robot", "ur5", "--rad", *map(str, q))
+    assert code == 0 and "u wrist" in out and "self-motion v" in out
+
+
+def test_singularities_no_directions_off_the_loci(capsys) -> None:
+    q_text = ["0.3", "-1.1", "1.4", "-0.6", "0.9", "0.8"]
+    code, out, _ = run(
+        capsys, "singularities", "--robot", "ur5", "--rad", *q_text, "--json"
+    )
+    assert code == 0
+    assert json.loads(out)["directions"] == {}
+
+
 def test_singularities_of_a_non_puma_robot(capsys) -> None:
     q_text = ["0", "-40", "70", "10", "60", "0"]
     code, out, _ = run(
@@ -92,6 +130,7 @@ def test_singularities_of_a_non_puma_robot(capsys) -> None:
     result = json.loads(out)
     assert code == 0
     assert result["near"] == {"shoulder": None, "elbow": None, "wrist": None}
+    assert result["directions"] is None
     assert result["sigma_min"] > 0.0 and result["det_j"] is not None
 
 

@@ -124,6 +124,14 @@ def test_report_of_any_closed_form_arm_classifies(name: str) -> None:
     assert sum(summary["classes"].values()) >= 300
     assert "recognised from the joint axes" in report.html
     assert "classes of those" in report.html
+    assert "Degenerate directions" in report.html and "arms" in report.figures
+    records = summary["degenerate_directions"]
+    assert len(records) == 5
+    for record in records:
+        assert max(record["residual"], record["tool_residual"]) <= 1e-9
+    assert len(summary["elbow_theta3_deg"]) == 2
+    if name == "ur5":
+        assert summary["elbow_theta3_deg"] == pytest.approx([0.0, 180.0], abs=1e-6)
 
 
 def test_core_modules_do_not_import_matplotlib() -> None:

@@ -130,6 +130,13 @@ def run_singularities(args: argparse.Namespace) -> int:
             f"analytic vs Pinocchio: max relative error {error:.2e}"
             f" over {check['samples']} configurations"
         )
+    records = summary.get("degenerate_directions", [])
+    if records:
+        worst = max(r["residual"] for r in records)
+        print(
+            f"degenerate directions: {len(records)} configurations, "
+            f"max |u^T J| {worst:.1e}"
+        )
     grid = summary["det_j_map"]
     print(f"det J map {grid['shape'][0]}×{grid['shape'][1]}: {grid['seconds']:.3f} s")
     return 0

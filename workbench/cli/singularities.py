@@ -16,6 +16,7 @@ from workbench.cli._common import (
     joint_values_rad,
     print_json,
 )
+from workbench.errors import InputError
 from workbench.model.loading import load_robot
 from workbench.model.robot import Robot
 from workbench.singularities.conditions import (
@@ -29,6 +30,7 @@ from workbench.singularities.conditions import (
     compute_conditions,
     get_factorisation,
 )
+from workbench.singularities.directions import compute_degenerate_direction
 from workbench.singularities.measures import compute_measures
 
 
@@ -40,7 +42,10 @@ def register(commands: argparse._SubParsersAction) -> None:
         description=(
             "det J, singular values, manipulability and condition number of the "
             "tool Jacobian (any robot), and for OPW and UR-type arms the signed "
-            "distances to the shoulder [m], elbow [sine] and wrist [sin θ5] loci. "
+            "distances to the shoulder [m], elbow [sine] and wrist [sin θ5] loci; "
+            "where a configuration is within tolerance of a locus, its degenerate "
+            "direction u (the twist the arm cannot make, at the wrist point and at "
+            "the tool) and the self-motion v. "
             "In JSON an infinite condition number is null."
         ),
     )
@@ -72,6 +77,7 @@ def analyse_configuration(robot: Robot, q: np.ndarray) -> dict[str, Any]:
             "wrist": WRIST_TOL,
         },
         "det_j_constant": None,
+        "directions": None,
     }
     try:
         conditions = compute_conditions(robot, q).as_dict()
@@ -82,7 +88,27 @@ def analyse_configuration(robot: Robot, q: np.ndarray) -> dict[str, Any]:
     factorisation = get_factorisation(robot)
     result["det_j_constant"] = factorisation.constant
     result["family"] = factorisation.family
+    result["directions"] = {
+        kind: _direction(robot, q, kind) for kind in result["singular"]
+    }
     return result
+
+
+def _direction(robot: Robot, q: np.ndarray, kind: str) -> dict[str, Any] | None:
+    """JSON of the degenerate direction of ``kind`` at ``q``; None if not unique."""
+    try:
+        d = compute_degenerate_direction(robot, q, kind)
+    except InputError:  # on two loci at once, in a way the formula cannot resolve
+        return None
+    return {
+        "reference": d.reference,
+        "reference_point": d.reference_point,
+        "u": d.direction,
+        "residual": d.residual,
+        "u_tool": d.tool_direction,
+        "residual_tool": d.tool_residual,
+        "self_motion": d.self_motion,
+    }
 
 
 def _finite_or_none(value: float) -> float | None:
@@ -114,4 +140,14 @@ def run(args: argparse.Namespace) -> int:
         print(f"near {kind:<11} {value:+.6f}  [{unit}]")
     print(f"family           {result['family'].upper()} (det J = K s e w)")
     print(f"singular         {', '.join(result['singular']) or 'none'}")
+    for kind, d in result["directions"].items():
+        if d is None:
+            print(f"u {kind:<15}not unique (on two loci at once)")
+            continue
+        print(f"u {kind:<15}{format_vector(d['u'], 4)}")
+        print(f"  reference      {d['reference']}")
+        print(f"  at [m]         {format_vector(d['reference_point'], 4)}")
+        print(f"  |u^T J|        {d['residual']:.1e}")
+        print(f"  u at the tool  {format_vector(d['u_tool'], 4)}")
+        print(f"  self-motion v  {format_vector(d['self_motion'], 4)}")
     return 0

@@ -230,14 +230,15 @@ def plot_singular_arms(
 ) -> Figure:
     """The arm in each shoulder and elbow singular configuration (Kang Figs. 2-3).
 
-    Each panel shows the stick figure through the DH frame origins
-    (:mod:`workbench.plots.arm`), the base axis z0, the degenerate direction u
-    at the wrist centre (red), Kang's stated axis (dashed) and, for the
-    shoulder, the singular plane x1 = 0; for the elbow, the shoulder-to-wrist
-    line along which u points.
+    Each panel shows the stick figure (:mod:`workbench.plots.arm`), the base
+    axis (axis 1), the degenerate direction u at the wrist point (red, its
+    linear part), Kang's stated axis for the PUMA tables (dashed) and, for the
+    shoulder, the singular plane through axis 1 parallel to axis 2; for the
+    elbow of an OPW arm, the line of u, which meets axes 1, 2 and 3.
 
     Args:
-        robot: A PUMA-type robot with DH frames ``frame0`` … ``frame6``.
+        robot: An OPW or UR-type robot (joint axes read with
+            :func:`workbench.singularities.directions.compute_joint_axes`).
         examples: Named singular configurations (nq,) [rad]; ``wrist*`` skipped.
         directions: Degenerate direction of each example, by name.
         path: PNG file to write; None writes nothing.
@@ -247,6 +248,7 @@ def plot_singular_arms(
         The Figure, one 3D panel per example.
     """
     from workbench.plots.arm import compute_arm_points, plot_arm, set_equal_axes
+    from workbench.singularities.directions import compute_joint_axes
 
     names = [n for n in examples if not n.startswith("wrist")]
     rows = (len(names) + 1) // 2
@@ -255,21 +257,26 @@ def plot_singular_arms(
     for k, name in enumerate(names):
         ax = fig.add_subplot(rows, 2, k + 1, projection="3d")
         q = examples[name]
-        plot_arm(robot, q, ax=ax, label="arm (DH frame origins)", axis_length=0.0)
+        plot_arm(robot, q, ax=ax, label="arm", axis_length=0.0)
         d = directions[name]
-        frame1 = robot.fk(q, "frame1")
-        centre = robot.fk(q, "frame4").translation
-        ax.plot([0, 0], [0, 0], [-0.25, 0.6], color="grey", lw=1, ls="-.", label="z0")
+        z, o = compute_joint_axes(robot, q)
+        scale = _arm_scale(robot)
+        centre = d.reference_point
+        base = np.stack([o[0] - 0.25 * scale * z[0], o[0] + 0.6 * scale * z[0]])
+        ax.plot(*base.T, color="grey", lw=1, ls="-.", label="axis 1")
         if d.kind == "shoulder":
-            _plane(ax, frame1.translation, np.array([0, 0, 1.0]), frame1.rotation[:, 2])
-        else:
-            line = np.stack([frame1.translation, centre]).T
-            ax.plot(*line, color="crimson", lw=1, ls=":", label="shoulder → wrist")
-        tips = [_arrow(ax, centre, d.direction[:3], "crimson", "u (degenerate)")]
+            _plane(ax, _foot(o[0], z[0], o[1], z[1]), z[0], z[1], scale)
+        elif d.family == "opw":
+            start = _foot(o[1], z[1], centre, d.direction[:3])
+            line = np.stack([start, centre]).T
+            ax.plot(*line, color="crimson", lw=1, ls=":", label="line of u")
+        tips = [_arrow(ax, centre, d.direction[:3], "crimson", "u (degenerate)", scale)]
         if d.paper_direction is not None:
             label = "Kang's axis (x1 or z1)"
-            tips.append(_arrow(ax, centre, d.paper_direction, "black", label, "--"))
-        points = np.vstack([compute_arm_points(robot, q), *tips, [[0, 0, -0.25]]])
+            tips.append(
+                _arrow(ax, centre, d.paper_direction, "black", label, scale, "--")
+            )
+        points = np.vstack([compute_arm_points(robot, q), *tips, base])
         set_equal_axes(ax, points)
         ax.view_init(elev=18.0, azim=-55.0)
         ax.tick_params(labelsize=7)
@@ -283,19 +290,47 @@ def plot_singular_arms(
     return _finish(fig, path, tight=False)
 
 
-def _plane(ax, origin: FloatArray, e1: FloatArray, e2: FloatArray) -> None:
+def _arm_scale(robot: Robot) -> float:
+    """Reach |a2| + forearm of the arm relative to the PUMA 560's 0.864 m."""
+    from workbench.singularities.conditions import get_factorisation
+
+    fac = get_factorisation(robot)
+    forearm = abs(fac.a3) if fac.family == "ur" else fac.forearm
+    return (abs(fac.a2) + forearm) / 0.864
+
+
+def _foot(o1: FloatArray, z1: FloatArray, o2: FloatArray, z2: FloatArray) -> FloatArray:
+    """The point of line (o1, z1) nearest line (o2, z2) [m]."""
+    c = np.cross(z1, z2)
+    if float(c @ c) <= 1e-24:
+        return o1.copy()
+    t = float(np.cross(o2 - o1, z2) @ c) / float(c @ c)
+    return o1 + t * z1
+
+
+def _plane(
+    ax, origin: FloatArray, e1: FloatArray, e2: FloatArray, scale: float = 1.0
+) -> None:
     """A translucent patch of the plane through ``origin`` spanned by e1, e2."""
-    a, b = np.meshgrid([-0.25, 0.6], [-0.3, 0.3])
+    a, b = np.meshgrid(
+        np.multiply([-0.25, 0.6], scale), np.multiply([-0.3, 0.3], scale)
+    )
     points = origin[:, None, None] + e1[:, None, None] * a + e2[:, None, None] * b
     ax.plot_surface(*points, color=_SHOULDER_COLOR, alpha=0.15, lw=0)
-    ax.plot([], [], color=_SHOULDER_COLOR, alpha=0.4, lw=6, label="plane x1 = 0")
+    ax.plot([], [], color=_SHOULDER_COLOR, alpha=0.4, lw=6, label="singular plane")
 
 
 def _arrow(
-    ax, start: FloatArray, direction: FloatArray, color: str, label: str, ls: str = "-"
+    ax,
+    start: FloatArray,
+    direction: FloatArray,
+    color: str,
+    label: str,
+    scale: float = 1.0,
+    ls: str = "-",
 ) -> FloatArray:
-    """A 0.25 m arrow from ``start``; returns its tip [m]."""
-    tip = start + 0.25 * direction / np.linalg.norm(direction)
+    """A 0.25 m arrow (times ``scale``) from ``start``; returns its tip [m]."""
+    tip = start + 0.25 * scale * direction / np.linalg.norm(direction)
     width = 3.5 if ls == "-" else 1.6  # u stays visible under a coinciding axis
     ax.plot(*np.stack([start, tip]).T, color=color, lw=width, ls=ls, label=label)
     ax.scatter(*tip, color=color, s=18)

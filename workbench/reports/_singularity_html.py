@@ -39,6 +39,8 @@ def render(data: dict[str, Any], summary: dict[str, Any], figures: dict) -> str:
     parts.append(_maps(data, uri))
     if fac is not None:
         parts += [_arms_and_directions(data, uri), _cross_check(data), _kang(data)]
+    elif data.get("directions"):
+        parts.append(_arms_and_directions(data, uri))
     if "approaches" in data:
         parts.append(_trajectory(data["approaches"], uri["trajectory"]))
     return "\n".join([*parts, "</body></html>"])
@@ -90,6 +92,10 @@ def _key_numbers(data: dict[str, Any], summary: dict[str, Any]) -> str:
         rows += [
             ("det J", f"K · shoulder · elbow · wrist, K = {family.constant:+.6f} m²"),
             *((kind, html.escape(described[kind])) for kind in SINGULARITY_KINDS),
+            (
+                "elbow-singular θ3",
+                ", ".join(f"{v:+.3f}°" for v in summary["elbow_theta3_deg"]),
+            ),
             (
                 "analytic vs Pinocchio",
                 f"max relative error {check['max_relative_error']:.2e} over "
@@ -175,30 +181,52 @@ def _deg(q: FloatArray) -> str:
 
 
 def _arms_and_directions(data: dict[str, Any], uri: dict[str, str]) -> str:
+    puma = data["fac"] is not None
     rows = []
     for k, (name, d) in enumerate(data["directions"].items()):
         angle = "—" if d.angle_to_paper_deg is None else f"{d.angle_to_paper_deg:.2f}°"
+        kang = f"<td>{d.paper_axis or '—'}</td><td class=n>{angle}</td>" if puma else ""
         rows.append(
             f"<tr><td>{k + 1}. {html.escape(name)}</td><td>{_deg(d.q)}</td>"
             f"<td class=n>{d.sigma_min:.1e}</td><td>{_vec(d.direction)}</td>"
-            f"<td class=n>{d.residual:.1e}</td><td>{d.paper_axis or '—'}</td>"
-            f"<td class=n>{angle}</td><td>{_vec(d.self_motion)}</td></tr>"
+            f"<td class=n>{d.residual:.1e}</td><td class=n>{d.tool_residual:.1e}</td>"
+            f"{kang}<td>{_vec(d.self_motion)}</td></tr>"
         )
-    return f"""<h2>The arm at each singularity (cf. Kang, Figs. 2 and 3)</h2>
-<img alt="arm in each singular configuration" src="{uri["arms"]}">
-<p class="cap">Stick figure through the DH frame origins; red: degenerate
+    first = next(iter(data["directions"].values()))
+    reference = html.escape(first.reference)
+    head = "<th>Kang</th><th>angle</th>" if puma else ""
+    image = ""
+    if "arms" in uri:
+        image = f'<img alt="arm in each singular configuration" src="{uri["arms"]}">'
+    if puma:
+        title = "The arm at each singularity (cf. Kang, Figs. 2 and 3)"
+        caption = """Stick figure through the DH frame origins; red: degenerate
 direction u at the wrist centre (★); dashed: the axis Kang names. Shoulder: the
 wrist centre lies in the plane x1 = 0 and cannot move along z1. Elbow: the wrist
 centre is at its largest (3) or smallest (4) distance from the shoulder and
 cannot move along the shoulder → wrist line. The retracted elbow singularity (4)
-lies outside the joint limits.</p>
+lies outside the joint limits."""
+        paper = " The angle compares u's linear part with Kang's axis."
+    else:
+        title = "The arm at each singularity"
+        caption = f"""Stick figure through the joint origins; red: the linear part
+of the degenerate direction u at the {reference}. Shoulder: that point lies in the
+plane through axis 1 parallel to axis 2 and cannot move along axis 2. Elbow: the
+arm is stretched (extended) or folded (retracted); for an OPW arm u is a force
+along the dotted line, which meets axes 1, 2 and 3; for a UR arm it has a moment
+part too."""
+        paper = ""
+    return f"""<h2>{title}</h2>
+{image}
+<p class="cap">{caption}</p>
 <h2>Degenerate directions</h2>
-<p>u: unit left null vector of J at the wrist centre, [linear; angular] in base
-axes — the tool motion the arm cannot make (‖uᵀJ‖ with Pinocchio's J).
-v: unit joint velocity [rad/s] with J v ≈ 0 — joint motion lost to
-self-motion. The angle compares u's linear part with Kang's axis.</p>
+<p>u: unit left null vector of J with its linear rows at the {reference},
+[linear; angular] in base axes — the tool motion the arm cannot make (‖uᵀJ‖ with
+Pinocchio's J moved to that point; ‖uᵀJ‖ tool: the same u moved to the tool frame
+origin, with Pinocchio's J as it is). v: unit joint velocity [rad/s] with
+J v ≈ 0 — joint motion lost to self-motion.{paper}</p>
 <table><tr><th>configuration</th><th>q [deg]</th><th>σmin</th><th>u</th>
-<th>‖uᵀJ‖</th><th>Kang</th><th>angle</th><th>self-motion v</th></tr>
+<th>‖uᵀJ‖</th><th>‖uᵀJ‖ tool</th>{head}<th>self-motion v</th></tr>
 {"".join(rows)}</table>"""
 
 

@@ -4,8 +4,10 @@ matplotlib is imported lazily (Agg canvas, no pyplot), only when a report is
 built. For a PUMA-type robot the report holds the det J map over (θ2, θ3) with
 the shoulder and elbow loci, the σmin map, the arm in each singular
 configuration, the analytic factorisation checked against Pinocchio, the
-degenerate directions and, given a trajectory, its closest approaches. Other
-robots get the numeric maps and measures only.
+degenerate directions and, given a trajectory, its closest approaches. Any
+other OPW or UR-type arm gets the maps, its factors of det J checked against
+Pinocchio, the classes of random configurations, the arm at each singularity
+and the degenerate directions; other robots the numeric maps and measures only.
 """
 
 from __future__ import annotations
@@ -81,7 +83,8 @@ def build_singularity_report(
     """Compute everything and render the HTML.
 
     Args:
-        robot: Any robot; PUMA-type ones get the analytic sections.
+        robot: Any robot; PUMA-type ones get the analytic sections, other OPW
+            and UR-type arms their factors, classes and degenerate directions.
         grid_size: Points per axis of the det J map.
         svd_grid_size: Points per axis of the σmin map.
         samples: Random configurations (within limits) of the det J check.
@@ -128,6 +131,8 @@ def build_singularity_report(
     data["family_fac"] = None
     if fac is None:  # another OPW or UR-type arm: factors, check and classes
         data["family_fac"] = _family_data(robot, samples, seed, summary)
+        if data["family_fac"] is not None:
+            data |= _direction_data(robot, summary)
     if fac is not None:
         data |= _analytic_data(robot, fac, det_grid, samples, seed, summary)
         sub = det_grid.configurations()[::2, ::2]
@@ -143,7 +148,7 @@ def build_singularity_report(
             figs.plot_sigma_map(robot, svd_grid, **overlay)
         ),
     }
-    if fac is not None:
+    if data.get("directions"):
         arms = figs.plot_singular_arms(robot, data["examples"], data["directions"])
         figures["arms"] = figs.png_bytes(arms, tight=False)
     if trajectory is not None:
@@ -189,7 +194,9 @@ def _family_data(
     check = cross_check_det_j(robot, q)
     classes = [classify_configuration(robot, qi) for qi in q]
     described = fac.describe()
+    elbow = get_elbow_singular_theta3(robot)
     summary |= {
+        "elbow_theta3_deg": [round(float(v), 6) for v in np.degrees(elbow)],
         "family": fac.family,
         "det_j_constant": fac.constant,
         "factors": {k: described[k] for k in ("shoulder", "elbow", "wrist")},
@@ -226,11 +233,6 @@ def _analytic_data(
     sub_err = float(np.max(np.abs(sub.analytic - sub.pinocchio)))
     elbow = get_elbow_singular_theta3(robot)
     inside = [bool(robot.lower[2] <= v <= robot.upper[2]) for v in elbow]
-    examples = compute_example_configurations(robot)
-    directions = {
-        name: compute_degenerate_direction(robot, q, name.split(",")[0])
-        for name, q in examples.items()
-    }
     described = fac.describe()
     summary |= {
         "elbow_theta3_deg": [round(float(v), 6) for v in np.degrees(elbow)],
@@ -244,19 +246,6 @@ def _analytic_data(
             "subgrid_points": int(sub.q.shape[0]),
             "subgrid_max_abs_error": sub_err,
         },
-        "degenerate_directions": [
-            {
-                "name": name,
-                "q_deg": np.degrees(d.q).round(6).tolist(),
-                "sigma_min": d.sigma_min,
-                "direction": d.direction.tolist(),
-                "residual": d.residual,
-                "paper_axis": d.paper_axis,
-                "angle_to_paper_deg": d.angle_to_paper_deg,
-                "self_motion": d.self_motion.tolist(),
-            }
-            for name, d in directions.items()
-        ],
     }
     return {
         "check": check,
@@ -264,9 +253,34 @@ def _analytic_data(
         "subgrid": (sub, sub_err),
         "elbow": elbow,
         "elbow_inside": inside,
-        "examples": examples,
-        "directions": directions,
+    } | _direction_data(robot, summary)
+
+
+def _direction_data(robot: Robot, summary: dict[str, Any]) -> dict[str, Any]:
+    """One configuration on each locus and its degenerate directions (any arm)."""
+    examples = compute_example_configurations(robot)
+    directions = {
+        name: compute_degenerate_direction(robot, q, name.split(",")[0])
+        for name, q in examples.items()
     }
+    summary["degenerate_directions"] = [
+        {
+            "name": name,
+            "q_deg": np.degrees(d.q).round(6).tolist(),
+            "sigma_min": d.sigma_min,
+            "reference": d.reference,
+            "reference_point": d.reference_point.tolist(),
+            "direction": d.direction.tolist(),
+            "residual": d.residual,
+            "tool_direction": d.tool_direction.tolist(),
+            "tool_residual": d.tool_residual,
+            "paper_axis": d.paper_axis,
+            "angle_to_paper_deg": d.angle_to_paper_deg,
+            "self_motion": d.self_motion.tolist(),
+        }
+        for name, d in directions.items()
+    ]
+    return {"examples": examples, "directions": directions}
 
 
 def _fixed_joints(robot: Robot, fac: PumaFactorisation | None, seed: int) -> FloatArray:

@@ -7,8 +7,10 @@ Modules, in the order they build on each other:
   from the robot's kinematic structure;
 - ``measures``: SVD measures of any Jacobian, joint-space grids, the cross-check of the
   analytic det J against Pinocchio;
-- ``loci``: the elbow-singular θ3 and the shoulder-singular θ2 in closed form;
-- ``directions``: the Cartesian direction a singular configuration cannot move in;
+- ``loci``: the elbow-singular θ3, the shoulder-singular θ2 and one configuration on
+  each locus, in closed form for any OPW or UR-type arm;
+- ``directions``: the Cartesian direction a singular configuration cannot move in (the
+  left null vector of J, derived from the joint axes of any OPW or UR-type arm);
 - ``along_path``: the closest approaches of a joint trajectory to each singularity.
 """
 
@@ -31,7 +33,9 @@ from workbench.singularities.conditions import (
 from workbench.singularities.directions import (
     DegenerateDirection,
     compute_degenerate_direction,
+    compute_joint_axes,
     compute_wrist_center_jacobian,
+    compute_wrist_point,
 )
 from workbench.singularities.loci import (
     compute_example_configurations,
@@ -69,10 +73,12 @@ __all__ = [
     "compute_det_j_analytic",
     "compute_dh_jacobians",
     "compute_example_configurations",
+    "compute_joint_axes",
     "compute_joint_grid",
     "compute_measures",
     "compute_measures_from_jacobians",
     "compute_wrist_center_jacobian",
+    "compute_wrist_point",
     "cross_check_det_j",
     "find_closest_approaches",
     "get_elbow_singular_theta3",

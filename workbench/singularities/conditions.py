@@ -39,10 +39,10 @@ change det J):
   axes 2, 3, 4).
 
 Tests check :math:`\det J = K s e w` against Pinocchio's Jacobian to 1e-9
-relative on every supported model. Loci in joint space and degenerate
-directions (below) are derived for the PUMA tables only.
-The derivation is in ``docs/errata-kang-singularities.md``; the loci in joint
-space are in :mod:`workbench.singularities.loci`, the degenerate directions in
+relative on every supported model. The derivation is in
+``docs/errata-kang-singularities.md``; the loci in joint space (any OPW or
+UR-type arm) are in :mod:`workbench.singularities.loci`, the degenerate
+directions (any such arm, derived from its joint axes) in
 :mod:`workbench.singularities.directions`, the numeric measures of any robot in
 :mod:`workbench.singularities.measures`.
 """
@@ -98,6 +98,12 @@ class PumaFactorisation:
         forearm: :math:`L_3 = \sqrt{a_3^2 + d_4^2}` [m].
         constant: :math:`K` [m²], so that det J [m³] = K · s [m] · e · w.
         theta_offset: Offsets of the six joint angles, shape (6,) [rad].
+        family: ``"opw"`` or ``"ur"``.
+        a1: Shoulder offset [m] (0 for the PUMA tables).
+        a4: UR: offset of axis 5 along the arm [m]; 0 for OPW.
+        d5: UR: distance from axis 4 to the wrist point along axis 5 [m].
+        sigma4: :math:`\sin\alpha_4` (±1).
+        joint_sign: (6,) ±1: DH angle θ_i = s_i q_i + θ_{0,i}.
     """
 
     robot: str
@@ -190,6 +196,7 @@ def get_puma_factorisation(robot: Robot | DHTable) -> PumaFactorisation:
         forearm=forearm,
         constant=-sigma1 * a2 * forearm * wrist_sign,
         theta_offset=tuple(joint.theta_offset for joint in j),
+        sigma4=float(round(math.sin(j[3].alpha))),
     )
 
 
@@ -327,7 +334,7 @@ def classify_configuration(
     """The singularity types ``q`` is within tolerance of; ``()`` means none.
 
     Args:
-        robot: A PUMA-type robot.
+        robot: An OPW or UR-type robot (or a PUMA-type DH table).
         q: One configuration, shape (6,) [rad].
         shoulder_tol: Tolerance on |shoulder distance| [m].
         elbow_tol: Tolerance on |elbow sine|.

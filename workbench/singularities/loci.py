@@ -1,12 +1,17 @@
-r"""Singular loci of PUMA-type arms in joint space, and a configuration on each.
+r"""Singular loci of OPW (PUMA-type) and UR-type arms in joint space.
 
-* elbow: :math:`\theta_3 = \operatorname{atan2}(\sigma_3 d_4, a_3) - \theta_{0,3}`
-  (extended, the largest distance of the wrist centre from the shoulder) and
-  that + π (retracted, the smallest) — 87.308° and −92.692° for Kang's table;
-* shoulder: for each θ3 two values of θ2 (:func:`solve_shoulder_theta2`);
-* wrist: θ5 = −θ0,5 (mod π).
+In DH angles :math:`\theta_i = s_i q_i + \theta_{0,i}` of the robot's table (its
+own PUMA table, or the one fitted to its joint axes, see
+:mod:`workbench.singularities.conditions`); every function here returns joint
+variables q [rad]:
 
-The factorisation behind them is in :mod:`workbench.singularities.conditions`.
+* elbow: OPW :math:`\theta_3 = \operatorname{atan2}(\sigma_3 d_4, a_3)`
+  (extended, the largest distance of the wrist centre from axis 2) and that + π
+  (retracted, the smallest) — 87.308° and −92.692° for Kang's table; UR θ3 = 0
+  (stretched) and π (folded);
+* shoulder: for each θ3 (UR: and θ4) up to two values of θ2
+  (:func:`solve_shoulder_theta2`);
+* wrist: θ5 = 0 (mod π).
 """
 
 from __future__ import annotations
@@ -18,9 +23,22 @@ import numpy.typing as npt
 
 from workbench.model.dh import DHTable
 from workbench.model.robot import Robot
-from workbench.singularities.conditions import PumaFactorisation, get_puma_factorisation
+from workbench.singularities.conditions import (
+    NotPumaTypeError,
+    PumaFactorisation,
+    get_factorisation,
+    get_puma_factorisation,
+)
 
 FloatArray = npt.NDArray[np.float64]
+
+#: Default height [m] of the wrist point above the shoulder in the shoulder
+#: examples of the PUMA tables (Kang's Fig. 2); other arms use
+#: :data:`HEIGHT_FRACTION` of their reach.
+PUMA_HEIGHT = 0.35
+#: Height of the wrist point above the shoulder in the shoulder examples, as a
+#: fraction of the reach |a2| + forearm (0.35 m is 0.405 of the PUMA's).
+HEIGHT_FRACTION = 0.4
 
 
 def _wrap(angle: FloatArray | float) -> FloatArray:
@@ -28,104 +46,186 @@ def _wrap(angle: FloatArray | float) -> FloatArray:
     return np.pi - np.mod(np.pi - np.asarray(angle, dtype=np.float64), 2.0 * np.pi)
 
 
+def _theta(fac: PumaFactorisation, joint: int, q: npt.ArrayLike) -> FloatArray:
+    """DH angle of ``joint`` (0-based) from its joint variable [rad]."""
+    q = np.asarray(q, dtype=np.float64)
+    return fac.joint_sign[joint] * q + fac.theta_offset[joint]
+
+
+def _q(fac: PumaFactorisation, joint: int, theta: npt.ArrayLike) -> FloatArray:
+    """Joint variable of ``joint`` (0-based) from its DH angle [rad]."""
+    theta = np.asarray(theta, dtype=np.float64)
+    return fac.joint_sign[joint] * (theta - fac.theta_offset[joint])
+
+
+def _elbow_angle(fac: PumaFactorisation) -> float:
+    """The angle β with elbow sine ∝ sin(θ3 − β) (OPW); 0 for UR."""
+    if fac.family == "ur":
+        return 0.0
+    return math.atan2(fac.sigma3 * fac.d4, fac.a3)
+
+
+def _forearm(fac: PumaFactorisation) -> float:
+    """Distance [m] from axis 3 to the wrist point in the arm plane (UR: to axis 4)."""
+    return abs(fac.a3) if fac.family == "ur" else fac.forearm
+
+
 def get_elbow_singular_theta3(robot: Robot | DHTable) -> FloatArray:
-    """The two elbow-singular values of θ3 [rad] in (−π, π]: extended, retracted.
+    """The two elbow-singular values of q3 [rad] in (−π, π]: extended, retracted.
 
     Extended and retracted are the largest and smallest distance of the wrist
-    centre from the shoulder, where the elbow sine vanishes.
+    centre from axis 2 (UR: of axis 4 from axis 2), where the elbow sine vanishes.
     """
-    fac = get_puma_factorisation(robot)
-    extended = math.atan2(fac.sigma3 * fac.d4, fac.a3) - fac.theta_offset[2]
-    return _wrap(np.array([extended, extended + math.pi]))
+    fac = get_factorisation(robot)
+    extended = _elbow_angle(fac)
+    return _wrap(_q(fac, 2, np.array([extended, extended + math.pi])))
 
 
-def solve_shoulder_theta2(robot: Robot | DHTable, theta3: npt.ArrayLike) -> FloatArray:
-    r"""θ2 on the shoulder locus for given θ3: shape ``theta3.shape + (2,)`` [rad].
+def _wrist_offset(fac: PumaFactorisation) -> complex:
+    """UR: the wrist point from axis 4 in the arm plane at θ2 + θ3 + θ4 = 0; OPW: 0."""
+    return fac.a4 - 1j * fac.sigma4 * fac.d5 if fac.family == "ur" else 0j
 
-    The shoulder distance is :math:`A c_2 - B s_2` with
-    :math:`A = a_2 + a_3 c_3 + \sigma_3 d_4 s_3` and :math:`B = L_3 e`; it
-    vanishes at :math:`\theta_2 = \operatorname{atan2}(A, B)` and that + π.
+
+def _wrist_plane_point(
+    fac: PumaFactorisation, t2: npt.ArrayLike, t3: npt.ArrayLike, t4: npt.ArrayLike
+) -> npt.NDArray[np.complex128]:
+    """The wrist point in the arm plane as x1 + i y1 (from DH frame 1) [m].
+
+    OPW: the wrist centre; UR: the point where axes 5 and 6 meet. DH angles.
     """
-    fac = get_puma_factorisation(robot)
-    t3 = np.asarray(theta3, dtype=np.float64) + fac.theta_offset[2]
-    big_a = fac.a2 + fac.a3 * np.cos(t3) + fac.sigma3 * fac.d4 * np.sin(t3)
-    big_b = fac.a3 * np.sin(t3) - fac.sigma3 * fac.d4 * np.cos(t3)
-    first = np.arctan2(big_a, big_b) - fac.theta_offset[1]
-    return _wrap(np.stack([first, first + np.pi], axis=-1))
+    t2, t3, t4 = (np.asarray(t, dtype=np.float64) for t in (t2, t3, t4))
+    if fac.family == "ur":
+        wrist = _wrist_offset(fac) * np.exp(1j * (t3 + t4))
+        arm = fac.a2 + fac.a3 * np.exp(1j * t3) + wrist
+    else:
+        arm = fac.a2 + (fac.a3 - 1j * fac.sigma3 * fac.d4) * np.exp(1j * t3)
+    return np.exp(1j * t2) * arm
+
+
+def solve_shoulder_theta2(
+    robot: Robot | DHTable, theta3: npt.ArrayLike, theta4: npt.ArrayLike = 0.0
+) -> FloatArray:
+    r"""q2 on the shoulder locus for given q3 (UR: and q4) [rad].
+
+    The shoulder distance is :math:`a_1 + \operatorname{Re}(e^{i\theta_2} Z)`
+    with :math:`Z = a_2 + (a_3 - i\sigma_3 d_4) e^{i\theta_3}` (OPW) or
+    :math:`Z = a_2 + a_3 e^{i\theta_3} + (a_4 - i\sigma_4 d_5)
+    e^{i(\theta_3 + \theta_4)}` (UR), so it vanishes at
+    :math:`\theta_2 = -\arg Z \pm \arccos(-a_1 / |Z|)`; NaN where
+    :math:`|Z| < |a_1|` (the wrist point cannot reach the singular plane).
+
+    Args:
+        robot: An OPW or UR-type robot (or a PUMA-type DH table).
+        theta3: Joint variable q3 [rad], any shape.
+        theta4: Joint variable q4 [rad] (UR arms only), broadcast with theta3.
+
+    Returns:
+        Shape ``broadcast(theta3, theta4).shape + (2,)`` [rad] in (−π, π].
+    """
+    fac = get_factorisation(robot)
+    big_z = _wrist_plane_point(fac, 0.0, _theta(fac, 2, theta3), _theta(fac, 3, theta4))
+    with np.errstate(invalid="ignore"):
+        spread = np.arccos(-fac.a1 / np.abs(big_z))
+    first = -np.angle(big_z) + spread
+    theta2 = np.stack([first, first - 2.0 * spread], axis=-1)
+    return _wrap(_q(fac, 1, theta2))
 
 
 def compute_example_configurations(
-    robot: Robot | DHTable, *, height: float = 0.35
+    robot: Robot | DHTable, *, height: float | None = None
 ) -> dict[str, FloatArray]:
     """One configuration on each locus, like Kang's Figs. 2 and 3.
 
     Returns ``"shoulder, elbow up"`` and ``"shoulder, elbow down"`` (wrist
-    centre ``height`` [m] above the shoulder, on the singular plane),
+    point ``height`` [m] above the shoulder, on the singular plane),
     ``"elbow, extended"`` and ``"elbow, retracted"`` (upper arm raised 30°),
-    and ``"wrist"`` (θ5 = 0). The other joints are 0, and θ5 = 90° outside the
-    wrist case, so that one factor only vanishes. Elbow up means, as in Kang's
-    inverse kinematics, that the elbow lies counterclockwise of the line from
-    the shoulder to the wrist centre, seen in the arm plane with x1 forward and
-    z0 up. Shapes (6,) [rad], each angle shifted by 2π into its joint limits
-    where possible (the retracted elbow lies outside the PUMA's limits).
+    and ``"wrist"`` (θ5 = 0). In DH angles the other joints are 0 (UR: θ2 + θ3
+    + θ4 = 0 in the shoulder examples), and θ5 = 90° outside the wrist case,
+    so that one factor only vanishes. Elbow up means, as in the inverse
+    kinematics, that the elbow lies counterclockwise of the line from the
+    shoulder to the wrist point (UR: to axis 4), seen in the arm plane with x1
+    forward and z0 up. Shapes (6,) [rad], each angle shifted by 2π into its
+    joint limits where possible (the retracted elbow lies outside the PUMA's
+    limits).
+
+    Args:
+        robot: An OPW or UR-type robot (or a PUMA-type DH table).
+        height: Height of the wrist point above the shoulder [m]; default
+            :data:`PUMA_HEIGHT` for the PUMA tables, else
+            :data:`HEIGHT_FRACTION` of the reach.
     """
-    fac = get_puma_factorisation(robot)
-    off = np.asarray(fac.theta_offset)
-    raised = math.radians(30.0) * fac.sigma1  # θ2' raising x2 above x1
-    base = np.array([0.0, raised - off[1], 0.0, 0.0, math.pi / 2 - off[4], -off[5]])
-    base[[0, 3]] = -off[[0, 3]]
-    # In the x1-y1 plane |p - o1|² = a2² + L3² + 2 a2 L3 cos(θ3' - φ); the
-    # base axis z0 is σ1·y1, so "height above the shoulder" is y1 = σ1·height.
-    phi = math.atan2(fac.sigma3 * fac.d4, fac.a3)
-    cos_rel = (height**2 - fac.a2**2 - fac.forearm**2) / (2 * fac.a2 * fac.forearm)
-    rel = math.acos(float(np.clip(cos_rel, -1.0, 1.0)))
+    fac = get_factorisation(robot)
+    if height is None:
+        try:
+            get_puma_factorisation(robot)
+            height = PUMA_HEIGHT
+        except NotPumaTypeError:
+            height = HEIGHT_FRACTION * (abs(fac.a2) + _forearm(fac))
+    raised = math.radians(30.0) * fac.sigma1  # θ2 raising x2 above x1
+    theta = np.array([0.0, raised, 0.0, 0.0, math.pi / 2, 0.0])
+
+    def joint_values(th: FloatArray) -> FloatArray:
+        return _wrap(np.array([_q(fac, i, th[i]) for i in range(6)]))
+
     out: dict[str, FloatArray] = {}
-    for t3 in (phi + rel, phi - rel):
-        for t2 in solve_shoulder_theta2(robot, t3 - off[2]) + off[1]:
-            wrist_x, wrist_y = _wrist_in_frame1(fac, t2, t3)
-            if wrist_y * fac.sigma1 <= 0.0:
+    beta, forearm, offset = _elbow_angle(fac), _forearm(fac), _wrist_offset(fac)
+    # The wrist point at (x1, y1) = (−a1, σ1·height) (y1 = σ1 z0); axis 4 (UR)
+    # is then at that point minus the wrist offset, with θ2 + θ3 + θ4 = 0.
+    axis4 = -fac.a1 + 1j * fac.sigma1 * height - offset
+    cos_rel = (abs(axis4) ** 2 - fac.a2**2 - forearm**2) / (2 * fac.a2 * forearm)
+    rel = math.acos(float(np.clip(cos_rel, -1.0, 1.0)))
+    for t3 in (beta + rel, beta - rel):
+        elbow_to_wrist = fac.a2 + forearm * np.exp(1j * (t3 - beta))
+        planar = float(np.angle(axis4) - np.angle(elbow_to_wrist))
+        th = theta.copy()
+        th[2] = t3
+        th[3] = -planar - t3 if fac.family == "ur" else 0.0
+        q = joint_values(th)
+        for q2 in solve_shoulder_theta2(robot, q[2], q[3]):
+            th[1] = float(_theta(fac, 1, q2))
+            wrist = complex(_wrist_plane_point(fac, th[1], th[2], th[3]))
+            if wrist.imag * fac.sigma1 <= 0.0:
                 continue
+            to = wrist - offset * np.exp(1j * (th[1] + th[2] + th[3]))  # UR: axis 4
             # 2D cross product (forward, up) of shoulder->wrist and shoulder->elbow.
-            cross = fac.sigma1 * (wrist_x * np.sin(t2) - wrist_y * np.cos(t2))
-            q = base.copy()
-            q[1], q[2] = _wrap(t2 - off[1]), _wrap(t3 - off[2])
-            out[f"shoulder, elbow {'up' if cross > 0 else 'down'}"] = q
+            cross = fac.sigma1 * (to.real * math.sin(th[1]) - to.imag * math.cos(th[1]))
+            q_on = q.copy()
+            q_on[1] = q2
+            out[f"shoulder, elbow {'up' if cross > 0 else 'down'}"] = q_on
     elbow_theta3 = get_elbow_singular_theta3(robot)
-    for label, t3 in zip(("extended", "retracted"), elbow_theta3, strict=True):
-        q = base.copy()
-        q[2] = t3
+    for label, q3 in zip(("extended", "retracted"), elbow_theta3, strict=True):
+        q = joint_values(theta)
+        q[2] = q3
         out[f"elbow, {label}"] = q
-    wrist = base.copy()
-    wrist[2], wrist[4] = math.radians(-30.0) * fac.sigma1 - off[2], -off[4]
-    out["wrist"] = wrist
-    table = robot if isinstance(robot, DHTable) else robot.dh_table
-    order: tuple[str, ...] = (
+    th = theta.copy()
+    th[2], th[4] = math.radians(-30.0) * fac.sigma1, 0.0
+    out["wrist"] = joint_values(th)
+    order = (
         "shoulder, elbow up",
         "shoulder, elbow down",
         "elbow, extended",
+        "elbow, retracted",
+        "wrist",
     )
-    order += ("elbow, retracted", "wrist")
-    return {key: _into_limits(table, out[key]) for key in order if key in out}
+    lower, upper = _limits(robot)
+    return {key: _into_limits(lower, upper, out[key]) for key in order if key in out}
 
 
-def _into_limits(table: DHTable | None, q: FloatArray) -> FloatArray:
+def _limits(robot: Robot | DHTable) -> tuple[FloatArray, FloatArray]:
+    if isinstance(robot, DHTable):
+        return (
+            np.array([j.lower for j in robot.joints]),
+            np.array([j.upper for j in robot.joints]),
+        )
+    return robot.lower, robot.upper
+
+
+def _into_limits(lower: FloatArray, upper: FloatArray, q: FloatArray) -> FloatArray:
     """``q`` with each angle shifted by ±2π where that brings it within limits."""
-    if table is None:
-        return q
     out = q.copy()
-    for i, joint in enumerate(table.joints):
+    for i in range(q.size):
         for shifted in (q[i], q[i] + 2 * np.pi, q[i] - 2 * np.pi):
-            if joint.lower <= shifted <= joint.upper:
+            if lower[i] <= shifted <= upper[i]:
                 out[i] = shifted
                 break
     return out
-
-
-def _wrist_in_frame1(
-    fac: PumaFactorisation, t2: FloatArray | float, t3: FloatArray | float
-) -> tuple[FloatArray, FloatArray]:
-    """(x1, y1) of the wrist centre for θ2', θ3' including offsets [m]."""
-    t23 = np.asarray(t2) + np.asarray(t3)
-    x1 = fac.a2 * np.cos(t2) + fac.a3 * np.cos(t23) + fac.sigma3 * fac.d4 * np.sin(t23)
-    y1 = fac.a2 * np.sin(t2) + fac.a3 * np.sin(t23) - fac.sigma3 * fac.d4 * np.cos(t23)
-    return x1, y1
