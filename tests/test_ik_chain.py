@@ -17,7 +17,7 @@ import pytest
 from workbench import InputError, Robot, load_robot
 from workbench.ik import _chain_kernel as kernel
 from workbench.ik import numeric
-from workbench.ik._chain import get_chain
+from workbench.ik._chain import compiled_entry, get_chain
 
 ATOL_EXACT = 1e-12
 """The same quantity computed twice, by Pinocchio and by the compiled chain."""
@@ -164,3 +164,35 @@ def test_joints_off_the_tool_path_keep_their_reference(tmp_path) -> None:
     off = np.setdiff1d(np.arange(robot.nq), chain.idx_q)
     assert off.size > 0
     np.testing.assert_array_equal(result.q[off], q0[off])
+
+
+def test_numeric_calls_the_kernels_compiled_code_with_its_types() -> None:
+    """Chain.run skips Numba's dispatcher only for arguments of its one signature."""
+    chain = get_chain(load_robot("ur5"))
+    if len(getattr(kernel.run, "signatures", ())) != 1:  # e.g. NUMBA_DISABLE_JIT
+        pytest.skip("kernel.run has not exactly one compiled signature")
+    assert chain.run is not kernel.run
+    packed, q_ref, features, starts = chain.run_inputs
+    state = chain.fresh_state.copy()
+    args = (packed, np.eye(4), q_ref, state, 0.0, 0, False, features, starts, True)
+    assert compiled_entry(kernel.run, args) is chain.run
+    wrong = (
+        (packed, np.eye(4, dtype=np.float32), *args[2:]),  # dtype
+        (packed, np.asfortranarray(np.eye(4)), *args[2:]),  # layout
+        (packed, np.eye(4)[None], *args[2:]),  # dimensions
+        args[:-1],  # count
+        (*args[:5], 0.5, *args[6:]),  # a float for an int
+    )
+    for bad in wrong:
+        assert compiled_entry(kernel.run, bad) is kernel.run
+
+
+def test_a_robot_keeps_its_chain_until_its_model_changes() -> None:
+    robot = load_robot("ur5")
+    chain = get_chain(robot)
+    assert get_chain(robot) is chain
+    assert chain.robot() is robot
+    robot.upper = robot.upper - 0.1  # replaced limits: a new chain
+    rebuilt = get_chain(robot)
+    assert rebuilt is not chain
+    assert get_chain(robot) is rebuilt

@@ -20,7 +20,10 @@ from __future__ import annotations
 
 import math
 import weakref
+from collections.abc import Callable
+from typing import Any
 
+import numba
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
@@ -33,6 +36,9 @@ FloatArray = npt.NDArray[np.float64]
 
 SEED_COUNT = 512
 """Candidate first guesses (mid-range included) when no ``q0`` is given."""
+
+SEED_POOL = 4096
+"""Configurations drawn to choose the candidates from (see Chain._build_seeds)."""
 
 SEED_SPREAD = 0.65
 """Candidates lie within this fraction of the half-range (<= pi) of mid-range."""
@@ -48,6 +54,7 @@ class Chain:
     """A robot's chain for the compiled kernels, with its coordinate maps.
 
     Attributes:
+        robot: Weak reference to the robot the chain was read from.
         packed: (n + 1, CHAIN_WIDTH) read-only chain array (``_chain_kernel``).
         n: Number of joints on the path to the tool frame.
         identity: True when chain coordinates are ``q`` itself (every joint
@@ -63,10 +70,16 @@ class Chain:
             to terms that do not depend on the candidate; and ``starts``
             (SEED_COUNT, n), their coordinates. Read-only.
         no_seeds: The same, empty (when a first guess is given).
+        run_inputs: Writable private copies of ``packed``, the mid-range
+            chain coordinates and ``seeds``, and ``run_no_seeds`` of
+            ``no_seeds``: the arguments :func:`numeric` passes to the kernel.
+        run: ``kernel.run`` as :func:`numeric` calls it (see
+            :func:`compiled_entry`).
     """
 
     def __init__(self, robot: Robot) -> None:
         model = robot.model
+        self.robot = weakref.ref(robot)
         self.model, self.frame_id = model, robot.tool_frame_id
         self.lower, self.upper = robot.lower, robot.upper
         frame = model.frames[self.frame_id]
@@ -99,14 +112,27 @@ class Chain:
         self.no_seeds = (np.empty((16, 0), np.float32), np.empty((0, n)))
         for array in self.no_seeds:
             array.setflags(write=False)
-        # Load (or compile) the kernel now, not under a solve's time budget.
-        # (Its arguments have the types of every later call: read-only chain,
-        # reference and candidates, writable target and state.)
-        warm_up = self.fresh_state.copy()
-        kernel.run(
-            packed, np.eye(4), self.mid_values, warm_up, 0.0, 0, False, *self.no_seeds,
-            True,
+        # The arrays numeric passes to kernel.run (chain, mid-range reference,
+        # candidates; no candidates), as private writable copies: should the
+        # call go through Numba's dispatcher (see compiled_entry), it types a
+        # writable array by a table lookup, a read-only one by a slower path.
+        # The kernel takes them as read-only either way and never writes them.
+        features, starts = self.seeds
+        self.run_inputs = (
+            packed.copy(),
+            self.mid_values.copy(),
+            features.copy(),
+            starts.copy(),
+        )
+        self.run_no_seeds = (np.empty((16, 0), np.float32), np.empty((0, n)))
+        # Load (or compile) the kernel now, not under a solve's time budget,
+        # with arguments of the types of numeric's calls.
+        warm_up = (
+            self.run_inputs[0], np.eye(4), self.run_inputs[1],
+            self.fresh_state.copy(), 0.0, 0, False, *self.run_no_seeds, True,
         )  # fmt: skip
+        kernel.run(*warm_up)
+        self.run = compiled_entry(kernel.run, warm_up)
 
     def matches(self, robot: Robot) -> bool:
         """Whether ``robot`` still has this chain's model, limits and tool frame."""
@@ -144,32 +170,99 @@ class Chain:
         return q
 
     def _build_seeds(self) -> tuple[npt.NDArray[np.float32], FloatArray]:
-        """The first-guess candidates (:attr:`seeds`), read-only."""
+        """The first-guess candidates (:attr:`seeds`), read-only.
+
+        SEED_POOL configurations are drawn (mid-range first, then within
+        SEED_SPREAD of the half-range around it); SEED_COUNT of them are kept,
+        chosen greedily, each the farthest (by the score's metric) from those
+        already kept: tool poses spread evenly over the reachable set, rather
+        than clustered where the draws happen to cluster, so that the nearest
+        candidate is nearer.
+        """
         half = np.minimum(0.5 * self.span, kernel.UNBOUNDED_SPAN)
         draws = np.random.default_rng(SEED_RNG).uniform(
-            -1.0, 1.0, (SEED_COUNT - 1, self.n)
+            -1.0, 1.0, (SEED_POOL - 1, self.n)
         )
         mid = self.to_chain(self.mid)
-        starts = np.vstack((mid, mid + SEED_SPREAD * half * draws))
-        np.clip(starts, self.packed[: self.n, 16], self.packed[: self.n, 17], starts)
-        features = np.zeros((SEED_COUNT, 4, 4))
-        # Pinocchio's FK (not the compiled chain's): no compilation for this.
+        pool = np.vstack((mid, mid + SEED_SPREAD * half * draws))
+        np.clip(pool, self.packed[: self.n, 16], self.packed[: self.n, 17], pool)
+        # Tool poses by Pinocchio's FK (not the compiled chain's: no compilation
+        # for this), as points whose squared distance is the score's metric.
+        points = np.empty((SEED_POOL, 12))
         model, data = self.model, self.model.createData()
-        for row, q in zip(
-            features, self.to_configuration(starts, self.mid), strict=True
-        ):
+        weight = math.sqrt(SEED_ROTATION_WEIGHT)
+        for point, q in zip(points, self.to_configuration(pool, self.mid), strict=True):
             pin.forwardKinematics(model, data, q)
             pose = pin.updateFramePlacement(model, data, self.frame_id)
-            position = pose.translation
-            row[:3, :3] = (-2.0 * SEED_ROTATION_WEIGHT) * pose.rotation
-            row[:3, 3] = -2.0 * position
-            row[3, 3] = position.dot(position)
+            point[:3] = pose.translation
+            point[3:] = weight * pose.rotation.ravel()
+        kept = _farthest_points(points, SEED_COUNT)
+        starts, points = pool[kept], points[kept]
+        # Score = |p - t|^2 + w |R - R_t|_F^2 - |t|^2 - 6 w, as dot products with
+        # the row-major target matrix (its bottom row: 0, 0, 0, 1).
+        features = np.zeros((SEED_COUNT, 4, 4))
+        features[:, :3, :3] = (-2.0 * weight) * points[:, 3:].reshape(-1, 3, 3)
+        features[:, :3, 3] = -2.0 * points[:, :3]
+        features[:, 3, 3] = np.einsum("ij,ij->i", points[:, :3], points[:, :3])
         columns = np.ascontiguousarray(
             features.reshape(SEED_COUNT, 16).T, dtype=np.float32
         )
         columns.setflags(write=False)
         starts.setflags(write=False)
         return columns, starts
+
+
+def _farthest_points(points: FloatArray, count: int) -> npt.NDArray[np.intp]:
+    """Indices of ``count`` rows of ``points`` chosen greedily, farthest first.
+
+    Row 0 first; then each time the row farthest (Euclidean) from those kept.
+    Squared distances as |a|^2 + |b|^2 - 2 a.b: one matrix-vector product per
+    row kept.
+    """
+    norm2 = np.einsum("ij,ij->i", points, points)
+    kept = np.empty(count, dtype=np.intp)
+    kept[0] = 0
+    gap2 = norm2 + norm2[0] - 2.0 * (points @ points[0])
+    for i in range(1, count):
+        kept[i] = j = int(np.argmax(gap2))
+        np.minimum(gap2, norm2 + norm2[j] - 2.0 * (points @ points[j]), out=gap2)
+    return kept
+
+
+def compiled_entry(dispatcher: Callable[..., Any], args: tuple[Any, ...]) -> Any:
+    """The compiled code of ``dispatcher`` for arguments of the types of ``args``.
+
+    Numba's dispatcher types every argument of every call to choose the
+    compiled code to run: for the ten of ``kernel.run``, about 0.6 µs of a
+    call from Python when caches are warm and 2.5 µs when they are not (e.g.
+    between calls of other code), a third of the cost of a call that takes no
+    step. The entry point it would choose can be called directly, with
+    arguments of exactly the dtypes, dimensions and layouts of its one
+    signature (it does not check them): ``numeric`` passes only such arrays
+    (float64, or the candidates' float32, all C-contiguous) and Python float,
+    int and bool scalars.
+
+    Returns:
+        That entry point, if the dispatcher has compiled exactly one signature
+        and ``args`` match it; else the dispatcher itself.
+    """
+    signatures = getattr(dispatcher, "signatures", None)  # none without JIT
+    if not signatures or len(signatures) != 1 or len(signatures[0]) != len(args):
+        return dispatcher
+    for expected, value in zip(signatures[0], args, strict=True):
+        actual = numba.typeof(value)
+        if isinstance(expected, numba.types.Array):
+            if not (
+                isinstance(actual, numba.types.Array)
+                and actual.dtype == expected.dtype
+                and actual.ndim == expected.ndim
+                and actual.layout == "C"
+                and expected.layout in ("C", "A")
+            ):
+                return dispatcher
+        elif numba.types.unliteral(actual) != expected:
+            return dispatcher
+    return dispatcher.get_overload(signatures[0])  # type: ignore[attr-defined]
 
 
 def _pack_placement(row: FloatArray, placement: pin.SE3) -> None:
@@ -228,7 +321,10 @@ def _mid_configuration(
     return mid
 
 
-_CHAINS: weakref.WeakKeyDictionary[Robot, Chain] = weakref.WeakKeyDictionary()
+#: Chains by ``id`` of their robot (a dict lookup costs less than a
+#: WeakKeyDictionary's); each chain holds a weak reference to its robot, and an
+#: entry leaves the dict when its robot is garbage-collected.
+_CHAINS: dict[int, Chain] = {}
 
 
 def get_chain(robot: Robot) -> Chain:
@@ -238,7 +334,20 @@ def get_chain(robot: Robot) -> Chain:
         InputError: If a joint on the path to the tool frame is neither
             revolute nor prismatic.
     """
-    chain = _CHAINS.get(robot)
-    if chain is None or not chain.matches(robot):
-        chain = _CHAINS[robot] = Chain(robot)
-    return chain
+    key = id(robot)
+    chain = _CHAINS.get(key)
+    if (
+        chain is not None
+        and chain.robot() is robot
+        # Chain.matches, inline: this runs on every numeric call.
+        and chain.model is robot.model
+        and chain.lower is robot.lower
+        and chain.upper is robot.upper
+        and chain.frame_id == robot.tool_frame_id
+    ):
+        return chain
+    fresh = Chain(robot)
+    if chain is None or chain.robot() is not robot:
+        weakref.finalize(robot, _CHAINS.pop, key, None)
+    _CHAINS[key] = fresh
+    return fresh

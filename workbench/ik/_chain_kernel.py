@@ -115,8 +115,14 @@ def _forward(chain: FloatArray, q: FloatArray, frames: FloatArray):
     ``frames`` (n + 1, 12) is filled: rotation (row-major) then position.
     """
     n = chain.shape[0] - 1
+    # Sines and cosines first, into the rows they belong to (read back before
+    # the row is filled): no library calls in the loop of matrix products.
+    for k in range(n):
+        if chain[k, 15] != PRISMATIC:
+            frames[k, 0], frames[k, 1] = math.sin(q[k]), math.cos(q[k])
     for k in range(n + 1):
         c, f = chain[k], frames[k]
+        s, co = f[0], f[1]  # (a revolute joint's)
         if k == 0:  # the placement itself
             for i in range(12):
                 f[i] = c[i]
@@ -134,7 +140,6 @@ def _forward(chain: FloatArray, q: FloatArray, frames: FloatArray):
             for i in range(3):
                 f[9 + i] += q[k] * (f[3 * i] * x + f[3 * i + 1] * y + f[3 * i + 2] * z)
             continue
-        s, co = math.sin(q[k]), math.cos(q[k])
         m = int(c[19])
         if m >= 0:  # about coordinate axis m: a plane rotation of columns u, v
             u, v = (m + 1) % 3, (m + 2) % 3
@@ -225,7 +230,13 @@ def _error(target: FloatArray, frames: FloatArray, e: FloatArray) -> float:
     if theta < 1e-2:
         alpha, beta = 1.0 - t2 / 12.0 - t2 * t2 / 720.0, 1.0 / 12.0 + t2 / 720.0
     else:
-        alpha = 0.5 * theta / math.tan(0.5 * theta)
+        # theta / (2 tan(theta / 2)) by the half-angle formulas (no tan call),
+        # each used where it is accurate; r = 1 for an exact rotation.
+        r = math.sqrt(si * si + co * co)
+        if co >= 0.0:
+            alpha = 0.5 * theta * (r + co) / si
+        else:
+            alpha = 0.5 * theta * si / (r - co)
         beta = (1.0 - alpha) / t2
     wp = beta * (wx * px + wy * py + wz * pz)
     e[0] = alpha * px - 0.5 * (wy * pz - wz * py) + wp * wx
@@ -239,29 +250,39 @@ def _error(target: FloatArray, frames: FloatArray, e: FloatArray) -> float:
 def _solve(a: FloatArray, b: FloatArray, m: int) -> bool:
     """Solve a x = b (first m rows/columns) in place, x in b; False if singular.
 
-    LU with partial pivoting.
+    LU with partial pivoting. The pivot is chosen and its row swapped in
+    without branches on the values (a swap with itself when it is in place),
+    and the diagonal keeps the pivots' reciprocals: mispredicted branches and
+    divisions were most of its time.
     """
     for k in range(m):
-        p = k
+        p, big = k, abs(a[k, k])
         for i in range(k + 1, m):
-            if abs(a[i, k]) > abs(a[p, k]):
-                p = i
-        if a[p, k] == 0.0:
+            v = abs(a[i, k])
+            larger = v > big  # False for NaN, as the pivot search always was
+            p = i if larger else p
+            big = v if larger else big
+        if big == 0.0:
             return False
-        if p != k:
-            for j in range(m):
-                a[k, j], a[p, j] = a[p, j], a[k, j]
-            b[k], b[p] = b[p], b[k]
+        for j in range(k, m):  # (columns < k are not read again)
+            x = a[k, j]
+            a[k, j] = a[p, j]
+            a[p, j] = x
+        x = b[k]
+        b[k] = b[p]
+        b[p] = x
+        bk, inverse = b[k], 1.0 / a[k, k]
+        a[k, k] = inverse
         for i in range(k + 1, m):
-            f = a[i, k] / a[k, k]
+            f = a[i, k] * inverse
             for j in range(k + 1, m):
                 a[i, j] -= f * a[k, j]
-            b[i] -= f * b[k]
+            b[i] -= f * bk
     for k in range(m - 1, -1, -1):
         s = b[k]
         for j in range(k + 1, m):
             s -= a[k, j] * b[j]
-        b[k] = s / a[k, k]
+        b[k] = s * a[k, k]
     return True
 
 
@@ -338,14 +359,26 @@ def _first_guess(features: np.ndarray, starts: FloatArray, target: FloatArray, q
     if count == 0:
         return
     score = np.empty(count, dtype=np.float32)
-    row = features[15]
-    for c in range(count):
-        score[c] = row[c]
-    for i in range(3):
-        for j in range(4):
-            t, row = np.float32(target[i, j]), features[4 * i + j]
-            for c in range(count):
-                score[c] += t * row[c]
+    f, t, f32 = features, target, np.float32
+    t0, t1, t2, t3 = f32(t[0, 0]), f32(t[0, 1]), f32(t[0, 2]), f32(t[0, 3])
+    t4, t5, t6, t7 = f32(t[1, 0]), f32(t[1, 1]), f32(t[1, 2]), f32(t[1, 3])
+    t8, t9, t10, t11 = f32(t[2, 0]), f32(t[2, 1]), f32(t[2, 2]), f32(t[2, 3])
+    for c in range(count):  # one pass: each score is stored once
+        score[c] = (
+            f[15, c]
+            + t0 * f[0, c]
+            + t1 * f[1, c]
+            + t2 * f[2, c]
+            + t3 * f[3, c]
+            + t4 * f[4, c]
+            + t5 * f[5, c]
+            + t6 * f[6, c]
+            + t7 * f[7, c]
+            + t8 * f[8, c]
+            + t9 * f[9, c]
+            + t10 * f[10, c]
+            + t11 * f[11, c]
+        )
     best, low = 0, score[0]
     for c in range(1, count):
         if score[c] < low:

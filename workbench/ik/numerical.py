@@ -41,6 +41,10 @@ from workbench.poses import as_se3
 
 FloatArray = npt.NDArray[np.float64]
 
+#: Whether ``pin.SE3.homogeneous`` is a C-contiguous array (eigenpy's copy of
+#: the matrix), the layout the kernel is called with (see Chain.run).
+_HOMOGENEOUS_IS_C: bool = pin.SE3.Identity().homogeneous.flags.c_contiguous
+
 
 @dataclass(frozen=True, slots=True)
 class IKResult:
@@ -114,7 +118,7 @@ def numeric(
             neither revolute nor prismatic.
     """
     # Fast paths for the usual types; anything else gets the full checks.
-    if target.__class__ is pin.SE3:
+    if target.__class__ is pin.SE3 and _HOMOGENEOUS_IS_C:
         matrix = target.homogeneous
     elif (
         target.__class__ is np.ndarray
@@ -125,7 +129,7 @@ def numeric(
     ):
         matrix = target  # finite and rigid: checked by the kernel
     else:
-        matrix = as_se3(target).homogeneous
+        matrix = np.ascontiguousarray(as_se3(target).homogeneous)
     if not (
         tol.__class__ is float
         and 0.0 < tol < math.inf
@@ -142,18 +146,17 @@ def numeric(
     chain = get_chain(robot)
     n = chain.n
     state = chain.fresh_state.copy()  # [q, best q, statistics], see kernel.run
+    packed, q_ref, features, starts = chain.run_inputs  # (writable: see Chain)
     if q0 is None:
-        q_ref, q_base = chain.mid_values, chain.mid
-        (features, starts), guess = chain.seeds, True
+        q_base, guess = chain.mid, True
     else:
         q_base = reference_configuration(robot, chain, q0)
         q_ref = chain.to_chain(q_base)
-        q_ref.setflags(write=False)  # as chain.mid_values: one compiled signature
         state[:n] = q_ref
-        (features, starts), guess = chain.no_seeds, False
+        (features, starts), guess = chain.run_no_seeds, False
     deadline = time.perf_counter() + time_budget
     tol2 = tol * tol
-    run, packed = kernel.run, chain.packed
+    run = chain.run  # kernel.run's compiled code: our arguments are typed
     status = run(
         packed, matrix, q_ref, state, tol2, max_iterations, guess, features, starts,
         True,
@@ -182,42 +185,33 @@ def numeric(
     if not chain.identity:
         best_q = chain.to_configuration(best_q, q_base)
     best_q.setflags(write=False)
-    err2, position, rotation, steps, _ = state[2 * n :].tolist()
-    return _result(
-        best_q, err2 <= tol2, int(steps), math.sqrt(err2), position, rotation, restarts
-    )
+    err2, position, rotation, steps, _ = state.tolist()[2 * n :]  # (one call)
+    # IKResult(...) at a third of the cost: see _Fields.
+    result = _Fields()
+    result.q, result.success, result.iterations = best_q, err2 <= tol2, int(steps)
+    result.error, result.position_error = math.sqrt(err2), position
+    result.rotation_error, result.restarts = rotation, restarts
+    result.__class__ = IKResult  # type: ignore[assignment]
+    return result  # type: ignore[return-value]
 
 
-_new_object = object.__new__
-_SETTERS = [getattr(IKResult, name).__set__ for name in IKResult.__slots__]
-(_set_q, _set_success, _set_iterations, _set_error) = _SETTERS[:4]
-(_set_position, _set_rotation, _set_restarts) = _SETTERS[4:]
+class _Fields:
+    """The slots of :class:`IKResult`, without its frozen ``__setattr__``.
 
-
-def _result(
-    q: FloatArray,
-    success: bool,
-    iterations: int,
-    error: float,
-    position_error: float,
-    rotation_error: float,
-    restarts: int,
-) -> IKResult:
-    """``IKResult(...)`` at half the cost: its slots filled directly.
-
-    A frozen dataclass's ``__init__`` sets each field through
-    ``object.__setattr__``; the slot descriptors do the same for less. The
-    instance is the same (equal, frozen).
+    :func:`numeric` fills one and then makes it an ``IKResult`` (assigning
+    ``__class__``, which Python allows between classes of the same slots):
+    the same frozen instance as ``IKResult(...)``, whose ``__init__`` sets
+    each field through ``object.__setattr__`` at several times the cost.
     """
-    result = _new_object(IKResult)
-    _set_q(result, q)
-    _set_success(result, success)
-    _set_iterations(result, iterations)
-    _set_error(result, error)
-    _set_position(result, position_error)
-    _set_rotation(result, rotation_error)
-    _set_restarts(result, restarts)
-    return result
+
+    __slots__ = IKResult.__slots__
+    q: FloatArray
+    success: bool
+    iterations: int
+    error: float
+    position_error: float
+    rotation_error: float
+    restarts: int
 
 
 def reference_configuration(
