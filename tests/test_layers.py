@@ -19,6 +19,7 @@ LAYERS: dict[str, int] = {
     "errors": 0,
     "validation": 0,
     "paper_data": 0,
+    "_compiled": 0,
     "model": 1,
     "poses": 2,
     "ik": 3,

@@ -43,9 +43,10 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 import numpy.typing as npt
+
+from workbench._compiled import entry_point, helper
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -105,10 +106,8 @@ _NULL_OFF_ERROR2, _ACTIVE_SET_ERROR2 = NULL_OFF_ERROR**2, ACTIVE_SET_ERROR**2
 _PI, _TAU = math.pi, 2.0 * math.pi
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 
-
-@_jit
+@helper()
 def _forward(chain: FloatArray, q: FloatArray, frames: FloatArray):
     """Poses of the joints (rows 0..n-1) and the tool (row n) in the base frame.
 
@@ -162,7 +161,7 @@ def _forward(chain: FloatArray, q: FloatArray, frames: FloatArray):
             f[3 * i + 2] = a0 * e02 + a1 * e12 + a2 * e22
 
 
-@_jit
+@helper()
 def _jacobian(chain: FloatArray, frames: FloatArray, jac: FloatArray):
     """LOCAL Jacobian of the tool into ``jac[:, :n]``, from :func:`_forward`."""
     n = chain.shape[0] - 1
@@ -185,7 +184,7 @@ def _jacobian(chain: FloatArray, frames: FloatArray, jac: FloatArray):
             jac[3 + i, k] = turn * (f[i] * wx + f[3 + i] * wy + f[6 + i] * wz)
 
 
-@_jit
+@helper()
 def _error(target: FloatArray, frames: FloatArray, e: FloatArray) -> float:
     r"""``e = log6(T^-1 oMf)`` (6,) of the tool (last row of ``frames``); |p_err|."""
     f, t = frames[frames.shape[0] - 1], target
@@ -246,7 +245,7 @@ def _error(target: FloatArray, frames: FloatArray, e: FloatArray) -> float:
     return math.sqrt(px * px + py * py + pz * pz)
 
 
-@_jit
+@helper()
 def _solve(a: FloatArray, b: FloatArray, m: int) -> bool:
     """Solve a x = b (first m rows/columns) in place, x in b; False if singular.
 
@@ -286,7 +285,7 @@ def _solve(a: FloatArray, b: FloatArray, m: int) -> bool:
     return True
 
 
-@_jit
+@helper()
 def _damped_step(jac, n, e, pull, use_pull, damping, normal, y, dq):
     r"""Damped least-squares step (to subtract from q) into ``dq[:n]``.
 
@@ -327,7 +326,7 @@ def _damped_step(jac, n, e, pull, use_pull, damping, normal, y, dq):
         dq[k] = s - pull[k] if use_pull else s
 
 
-@_jit
+@helper()
 def _roughly_rigid(pose: FloatArray) -> bool:
     """The fast acceptance test of a target (finite, rigid to RIGIDITY_TOL / 5)."""
     r00, r01, r02 = pose[0, 0], pose[0, 1], pose[0, 2]
@@ -346,7 +345,7 @@ def _roughly_rigid(pose: FloatArray) -> bool:
     return err2 <= FAST_TOL2 and (pose[0, 3] + pose[1, 3] + pose[2, 3]) * 0.0 == 0.0
 
 
-@_jit
+@helper()
 def _first_guess(features: np.ndarray, starts: FloatArray, target: FloatArray, q):
     """Copy into ``q`` the candidate start whose tool pose is nearest ``target``.
 
@@ -387,8 +386,22 @@ def _first_guess(features: np.ndarray, starts: FloatArray, target: FloatArray, q
         q[k] = starts[best, k]
 
 
-@_jit
-def run(chain, target, q_ref, state, tol2, max_steps, guess, features, starts, check):
+@entry_point(
+    outputs=("state",),
+    contiguous=("chain", "target", "q_ref", "features", "starts"),
+)
+def run(
+    chain: FloatArray,
+    target: FloatArray,
+    q_ref: FloatArray,
+    state: FloatArray,
+    tol2: float,
+    max_steps: int,
+    guess: bool,
+    features: npt.NDArray[np.float32],
+    starts: FloatArray,
+    check: bool,
+) -> int:
     """One run of damped Newton steps from ``q``, until it converges or stalls.
 
     Args:
@@ -505,7 +518,7 @@ def run(chain, target, q_ref, state, tol2, max_steps, guess, features, starts, c
             q[k] = min(max(q_next[k], chain[k, 16]), chain[k, 17])
 
 
-@_jit
+@helper()
 def _splitmix(state: np.ndarray) -> float:
     """Next uniform draw in [0, 1) of the SplitMix64 generator ``state`` (1,) uint64."""
     state[0] += _GOLDEN
@@ -516,11 +529,23 @@ def _splitmix(state: np.ndarray) -> float:
     return float(z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
 
 
-@_jit
+@entry_point(
+    outputs=("out_q", "out_stats"),
+    contiguous=("chain", "targets", "q_ref", "q_start", "features", "starts"),
+)
 def solve_batch(
-    chain, targets, q_ref, q_start, features, starts, tol2, max_steps, seed, out_q,
-    out_stats,
-):  # fmt: skip
+    chain: FloatArray,
+    targets: FloatArray,
+    q_ref: FloatArray,
+    q_start: FloatArray,
+    features: npt.NDArray[np.float32],
+    starts: FloatArray,
+    tol2: float,
+    max_steps: int,
+    seed: int,
+    out_q: FloatArray,
+    out_stats: FloatArray,
+) -> None:
     """Solve every target of ``targets`` (N, 4, 4), restarts drawn in compiled code.
 
     Args:
@@ -576,8 +601,8 @@ def solve_batch(
             out_stats[i, j] = stats[j]
 
 
-@_jit
-def chain_kinematics(chain, q, jac):
+@entry_point(outputs=("jac",), contiguous=("chain", "q"))
+def chain_kinematics(chain: FloatArray, q: FloatArray, jac: FloatArray) -> FloatArray:
     """Tool pose (4, 4) in the base frame at ``q`` (n,); LOCAL Jacobian into ``jac``."""
     n = chain.shape[0] - 1
     frames = np.empty((n + 1, 12))

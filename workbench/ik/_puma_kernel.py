@@ -31,10 +31,10 @@ from __future__ import annotations
 import math
 from functools import lru_cache
 
-import numba
 import numpy as np
 import numpy.typing as npt
 
+from workbench._compiled import entry_point, helper
 from workbench.ik._puma import WRIST_SINGULAR_TOL, PumaGeometry, get_geometry
 from workbench.model.robot import Robot
 from workbench.poses import RIGIDITY_TOL
@@ -116,16 +116,15 @@ def pack_geometry(geo: PumaGeometry) -> np.ndarray:
     return packed
 
 
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 #: For the helpers called per angle or per pose inside the batch loops: inlined
 #: into their callers by LLVM (measured: the batch's joint-value stage 3x faster
 #: than calls). ``forceinline`` (LLVM's alwaysinline) rather than Numba's
 #: ``inline="always"`` (inlining in Numba's IR, before type inference): same
 #: machine code speed, a third of the compile time on the first run.
-_jit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", forceinline=True)
+_inline = helper(forceinline=True)
 
 
-@_jit_inline
+@_inline
 def _remainder(x: float) -> float:
     """IEEE remainder of ``x`` by 2π, in [−π, π] (exact; ties may keep ±π)."""
     if -_PI <= x <= _PI:
@@ -140,7 +139,7 @@ def _remainder(x: float) -> float:
     return r
 
 
-@_jit_inline
+@_inline
 def _joint_value(geo, j: int, theta: float, prev: FloatArray, has_prev: bool) -> float:
     """Joint value of DH angle ``theta``: near ``prev[j]`` if given, else wrapped."""
     sign = geo.joint_sign[j]
@@ -161,7 +160,7 @@ def _joint_value(geo, j: int, theta: float, prev: FloatArray, has_prev: bool) ->
     return y
 
 
-@_jit_inline
+@_inline
 def frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
     """Rows 0..2 of ``base_inv · pose · tool_inv``: the target of the DH chain.
 
@@ -189,7 +188,7 @@ def frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
         out[i, 3] += b[i, 3]
 
 
-@_jit
+@entry_point()
 def wrist_centre(geo, pose: FloatArray) -> tuple[float, float, float]:
     """Wrist centre (x, y, z − d1) [m] in DH frame 0, z relative to the shoulder."""
     framed = np.empty((4, 4))
@@ -197,7 +196,7 @@ def wrist_centre(geo, pose: FloatArray) -> tuple[float, float, float]:
     return _centre(geo, framed)
 
 
-@_jit_inline
+@_inline
 def _centre(geo, pose: FloatArray) -> tuple[float, float, float]:
     """Wrist centre of a pose of the last DH frame, as :func:`wrist_centre`."""
     ax, ay, az = pose[0, 2], pose[1, 2], pose[2, 2]
@@ -213,7 +212,7 @@ def _centre(geo, pose: FloatArray) -> tuple[float, float, float]:
     )
 
 
-@_jit_inline
+@_inline
 def _roughly_rigid(pose: FloatArray) -> bool:
     """The fast acceptance test (finite, rigid to RIGIDITY_TOL / 5)."""
     r00, r01, r02 = pose[0, 0], pose[0, 1], pose[0, 2]
@@ -249,7 +248,7 @@ SHOULDER = 24
 SHOULDER_SINGULAR_TOL = 1e-10
 
 
-@_jit_inline
+@_inline
 def angle_arguments(
     geo,
     target: FloatArray,
@@ -401,7 +400,7 @@ def angle_arguments(
     return OK, exact
 
 
-@_jit_inline
+@_inline
 def assemble(
     geo,
     angles: FloatArray,
@@ -454,14 +453,14 @@ def assemble(
                     within[b] = ok
 
 
-@_jit
+@entry_point(outputs=("q", "flags"))
 def solve_pose(
     geometry: np.ndarray,
     pose: FloatArray,
     prev: FloatArray,
     q: FloatArray,
     flags: npt.NDArray[np.bool_],
-    check: bool = True,
+    check: bool,
 ) -> int:
     """All eight branches of one pose.
 
@@ -503,7 +502,7 @@ def solve_pose(
     return OK
 
 
-@_jit
+@entry_point(outputs=("y", "x", "status", "exact"))
 def batch_arguments(
     geometry: np.ndarray,
     poses: FloatArray,
@@ -511,7 +510,7 @@ def batch_arguments(
     x: FloatArray,
     status: npt.NDArray[np.int8],
     exact: npt.NDArray[np.int32],
-    check: bool = True,
+    check: bool,
 ) -> int:
     """Stage 1 of a batch: :func:`angle_arguments` of N poses, checked.
 
@@ -537,7 +536,7 @@ def batch_arguments(
     return -1
 
 
-@_jit
+@entry_point(outputs=("angles", "q", "valid"), contiguous=("y", "status", "exact"))
 def batch_assemble(
     geometry: np.ndarray,
     angles: FloatArray,
@@ -577,7 +576,7 @@ def batch_assemble(
                 valid[i, b] = alive
 
 
-@_jit
+@helper()
 def _distance2(a: FloatArray, b: FloatArray) -> float:
     d2 = 0.0
     for j in range(a.shape[0]):
@@ -586,7 +585,7 @@ def _distance2(a: FloatArray, b: FloatArray) -> float:
     return d2
 
 
-@_jit
+@entry_point()
 def continuing_branch(
     q: FloatArray, q_reference: FloatArray, pair: int, max_step2: float
 ) -> int:

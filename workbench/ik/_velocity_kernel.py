@@ -30,9 +30,10 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-import numba
 import numpy as np
 import numpy.typing as npt
+
+from workbench._compiled import entry_point, helper
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -44,10 +45,8 @@ JACOBI_TOL = 1e-15
 #: Sweeps of the Jacobi SVD at most (6 × 6 Jacobians converge in 5 to 8).
 JACOBI_MAX_SWEEPS = 60
 
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 
-
-@_jit
+@entry_point()
 def dls_damping(sigma_min2: float, epsilon: float, lambda_max: float) -> float:
     r"""The damping :math:`\lambda^2` (module docstring) given :math:`\sigma_\min^2`.
 
@@ -59,7 +58,7 @@ def dls_damping(sigma_min2: float, epsilon: float, lambda_max: float) -> float:
     return 0.0
 
 
-@_jit
+@entry_point()
 def dls_gains(sigma: FloatArray, epsilon: float, lambda_max: float) -> FloatArray:
     r"""The factors :math:`\sigma_i / (\sigma_i^2 + \lambda^2)` of :math:`J^\#`.
 
@@ -73,7 +72,7 @@ def dls_gains(sigma: FloatArray, epsilon: float, lambda_max: float) -> FloatArra
     """
     sigma_min = sigma[-1] if sigma.size else 0.0
     lambda2 = dls_damping(sigma_min * sigma_min, epsilon, lambda_max)
-    gains = np.zeros_like(sigma)
+    gains = np.zeros(sigma.size)
     for k in range(sigma.size):
         denominator = sigma[k] * sigma[k] + lambda2
         if denominator > 0.0:
@@ -81,7 +80,7 @@ def dls_gains(sigma: FloatArray, epsilon: float, lambda_max: float) -> FloatArra
     return gains
 
 
-@_jit
+@helper()
 def _inverse3(m: FloatArray, row: int, col: int) -> tuple[float, ...]:
     """Inverse of the 3 × 3 block of ``m`` at (``row``, ``col``), by cofactors.
 
@@ -101,7 +100,7 @@ def _inverse3(m: FloatArray, row: int, col: int) -> tuple[float, ...]:
     )  # fmt: skip
 
 
-@_jit
+@entry_point(outputs=("qd",))
 def block_solve(
     jacobian: FloatArray, twist: FloatArray, epsilon: float, qd: FloatArray
 ) -> bool:
@@ -155,7 +154,7 @@ def block_solve(
     return frob2 * epsilon * epsilon <= 1.0
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy", forceinline=True)
+@helper(forceinline=True)
 def _dot(a: FloatArray, b: FloatArray) -> float:
     """Dot product of two short vectors (no BLAS call)."""
     acc = 0.0
@@ -164,7 +163,7 @@ def _dot(a: FloatArray, b: FloatArray) -> float:
     return acc
 
 
-@_jit
+@helper()
 def _orthogonalise_rows(x: FloatArray, y: FloatArray) -> FloatArray:
     r"""One-sided Jacobi (Hestenes) SVD in place: ``x ← Qᵀx``, ``y ← Qᵀy``.
 
@@ -213,7 +212,7 @@ def _orthogonalise_rows(x: FloatArray, y: FloatArray) -> FloatArray:
     return norms2
 
 
-@_jit
+@entry_point(outputs=("qd",))
 def damped_solve(
     jacobian: FloatArray,
     twist: FloatArray,
@@ -240,23 +239,47 @@ def damped_solve(
         qd_reference: (nv,) [rad/s], the velocity damped towards.
         qd: (nv,) output [rad/s].
     """
+    # Loops rather than array expressions (``@``, ``.copy()``, ``np.eye``,
+    # ``qd[:] = ...``): each of those compiles as a function of its own, seconds
+    # on the first run; and the residual's sum no longer depends on the layout
+    # of J (BLAS summed a C and an F-ordered J in different orders).
     rows, cols = jacobian.shape
-    residual = twist - jacobian @ qd_reference
+    residual = np.empty(rows)
+    for i in range(rows):
+        acc = 0.0
+        for j in range(cols):
+            acc += jacobian[i, j] * qd_reference[j]
+        residual[i] = twist[i] - acc
     wide = cols > rows
     # rows of x: w_k (the columns of J V), or of J^T V for a wide J
-    x = jacobian.copy() if wide else jacobian.T.copy()
-    y = np.eye(x.shape[0])
+    count, length = (rows, cols) if wide else (cols, rows)
+    x = np.empty((count, length))
+    for k in range(count):
+        for i in range(length):
+            x[k, i] = jacobian[k, i] if wide else jacobian[i, k]
+    y = np.zeros((count, count))
+    for k in range(count):
+        y[k, k] = 1.0
     norms2 = _orthogonalise_rows(x, y)
-    lambda2 = dls_damping(norms2.min(), epsilon, lambda_max)
-    qd[:] = qd_reference
-    for k in range(x.shape[0]):
+    smallest = math.inf  # norms2.min(), NaN if one is
+    for k in range(count):
+        if norms2[k] < smallest or norms2[k] != norms2[k]:
+            smallest = norms2[k]
+    lambda2 = dls_damping(smallest, epsilon, lambda_max)
+    for i in range(cols):
+        qd[i] = qd_reference[i]
+    for k in range(count):
         denominator = norms2[k] + lambda2
         if denominator <= 0.0:
             continue
         if wide:  # J = sum_k y_k x_k^T
-            qd += x[k] * (_dot(y[k], residual) / denominator)
+            gain = _dot(y[k], residual) / denominator
+            for i in range(cols):
+                qd[i] += x[k, i] * gain
         else:  # J = sum_k x_k y_k^T
-            qd += y[k] * (_dot(x[k], residual) / denominator)
+            gain = _dot(x[k], residual) / denominator
+            for i in range(cols):
+                qd[i] += y[k, i] * gain
 
 
 def solve_velocity(

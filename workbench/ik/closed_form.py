@@ -301,7 +301,7 @@ def solve_one(
         UnreachableError, NonFiniteError, InputError: As :func:`analytic`.
     """
     q, flags = np.empty((8, 6)), np.empty(14, dtype=bool)
-    status = solver.solve_pose(geometry, pose, prev, q, flags)
+    status = solver.solve_pose(geometry, pose, prev, q, flags, True)
     if status == kernel.NOT_RIGID:  # the exact checks raise, or accept it
         pose_rows(pose)
         status = solver.solve_pose(geometry, pose, prev, q, flags, False)
@@ -365,7 +365,7 @@ def analytic_batch(
         chunk = poses[start : start + _CHUNK]
         n = len(chunk)
         arguments = y[:n], x[:n], status[:n], exact[:n]
-        if solver.batch_arguments(geometry, chunk, *arguments) >= 0:
+        if solver.batch_arguments(geometry, chunk, *arguments, True) >= 0:
             check_poses(chunk, start)  # the exact checks raise, or accept all
             solver.batch_arguments(geometry, chunk, *arguments, False)
         np.arctan2(y[:n], x[:n], out=angles[:n])

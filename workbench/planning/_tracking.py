@@ -9,18 +9,16 @@ and called together (:func:`command_joints`, one call per cycle).
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 import numpy.typing as npt
 
+from workbench._compiled import entry_point
 from workbench.ik import _puma_kernel as kernel
 
 FloatArray = npt.NDArray[np.float64]
 
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 
-
-@_jit
+@entry_point(outputs=("pose", "twist"))
 def wrist_command(
     rotation: FloatArray,
     position: FloatArray,
@@ -96,7 +94,7 @@ def wrist_command(
     pose[3, 3] = 1.0
 
 
-@_jit
+@entry_point()
 def track(
     geometry: np.ndarray,
     pose: FloatArray,
@@ -104,7 +102,7 @@ def track(
     q_before: FloatArray,
     pair: int,
     max_step2: float,
-    check: bool = True,
+    check: bool,
 ) -> tuple[int, FloatArray, int, bool]:
     """The IK solution that continues a motion (Kang's θ4 flip rule, generalised).
 
@@ -137,7 +135,7 @@ def track(
     return status, q_all[index].copy(), index, flags[index]
 
 
-@_jit
+@entry_point(outputs=("pose", "twist"))
 def command_joints(
     rotation: FloatArray,
     position: FloatArray,

@@ -1,0 +1,159 @@
+"""``workbench._compiled``: one signature per kernel, whoever calls it with what."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numba.core import types
+
+from workbench._compiled import entry_point, helper
+
+
+@helper(forceinline=True)
+def _scaled(x, k):
+    return x * k
+
+
+@entry_point(outputs=("out",))
+def _fill(values, scale: float, out):
+    for i in range(values.shape[0]):
+        out[i] = _scaled(values[i], scale)
+    return out.shape[0]
+
+
+@helper()
+def _entry(values, i):
+    return values[i]
+
+
+@entry_point()
+def _total(values, twice: bool) -> float:
+    acc = _entry(values, 0) + _entry(values, 1)  # literal indices: one compile
+    for i in range(2, values.shape[0]):
+        acc += values[i]
+    return 2.0 * acc if twice else acc
+
+
+@entry_point(outputs=("out",))
+def _fill_twice(values, out):
+    # a nested call with a writable array, a literal int and a literal bool
+    _fill(values, 2, out)
+    return _total(out, True)
+
+
+def test_one_signature_whatever_the_arrays_and_scalars() -> None:
+    out = np.empty(3)
+    readonly = np.arange(3.0)
+    readonly.setflags(write=False)
+    strided = np.repeat(np.arange(3.0), 2)[::2]
+    fortran_row = np.asfortranarray(np.tile(np.arange(3.0), (2, 1)))[0]
+    for values in (np.arange(3.0), readonly, strided, fortran_row):
+        for scale in (2, 2.0, np.float32(2.0)):  # an int first: still float64
+            assert _fill(values, scale, out) == 3
+            np.testing.assert_array_equal(out, [0.0, 2.0, 4.0])
+    assert _fill_twice(np.arange(3.0), out) == 12.0
+    assert _total(readonly, False) == 3.0
+    for kernel in (_fill, _total):
+        (signature,) = kernel.signatures
+        assert signature[0] == types.Array(types.float64, 1, "A", readonly=True)
+    writable = types.Array(types.float64, 1, "C")
+    assert _fill.signatures[0][1:] == (types.float64, writable)
+    assert _total.signatures[0][1] == types.boolean
+
+
+@helper()
+def _pick(values, i):
+    return values[i]
+
+
+def test_helpers_compile_constant_arguments_as_plain_types() -> None:
+    array = types.Array(types.float64, 1, "C")
+    for index in (types.literal(0), types.literal(1), types.int64):
+        _pick.compile((array, index))  # (or loads it from the cache)
+    assert _pick.signatures == [(array, types.int64)]
+
+
+def test_outputs_refuse_readonly_arrays() -> None:
+    out = np.empty(3)
+    out.setflags(write=False)
+    with pytest.raises(TypeError):
+        _fill(np.arange(3.0), 1.0, out)
+
+
+def test_entry_points_take_no_defaults() -> None:
+    def with_default(values, check=True):  # pragma: no cover - never compiled
+        return check
+
+    with pytest.raises(TypeError, match="no defaults"):
+        entry_point()(with_default)
+    with pytest.raises(TypeError, match="no parameters"):
+        entry_point(outputs=("missing",))(lambda values: values)
+
+
+def test_workbench_kernels_are_entry_points_or_helpers() -> None:
+    from workbench._compiled import _EntryPoint, _Helper
+    from workbench.ik import _chain_kernel, _puma_kernel, _ur_kernel, _velocity_kernel
+    from workbench.planning import _tracking
+
+    modules = (_chain_kernel, _puma_kernel, _ur_kernel, _velocity_kernel, _tracking)
+    for module in modules:
+        compiled = [
+            value
+            for value in vars(module).values()
+            if hasattr(value, "py_func") and value.py_func.__module__ == module.__name__
+        ]
+        assert compiled
+        assert all(isinstance(value, _EntryPoint | _Helper) for value in compiled)
+
+
+_MODULE = """
+from workbench._compiled import entry_point
+
+@entry_point()
+def kernel(x: float) -> float:
+    return x * 3.0
+"""
+
+_SCRIPT = """
+import sys
+from numba.core import event
+compiles = []
+
+class Listener(event.Listener):
+    def on_start(self, ev):
+        compiles.append(ev.data["dispatcher"].py_func.__name__)
+
+    def on_end(self, ev):
+        pass
+
+event.register("numba:compile", Listener())
+sys.path.insert(0, sys.argv[1])
+import lockmodule
+assert lockmodule.kernel(2.0) == 6.0
+print(len(compiles))
+"""
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="no file locks on Windows")
+def test_processes_sharing_a_cache_compile_an_entry_point_once(tmp_path: Path) -> None:
+    (tmp_path / "lockmodule.py").write_text(textwrap.dedent(_MODULE))
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    runs = [
+        subprocess.Popen(
+            [sys.executable, "-c", _SCRIPT, str(tmp_path)],
+            env=env,
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        for _ in range(2)
+    ]
+    compiles = [int(run.communicate(timeout=120)[0]) for run in runs]
+    assert all(run.returncode == 0 for run in runs)
+    assert sorted(compiles) == [0, 1]  # the other process loaded it from the cache
+    assert list((tmp_path / "cache").rglob("lockmodule.kernel.lock"))

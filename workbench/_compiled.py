@@ -1,0 +1,198 @@
+"""Numba compilation with one signature per kernel: the decorators of the kernels.
+
+Numba compiles a function once per distinct tuple of argument types, and
+array types differ in mutability and layout as well as in dtype and
+dimension; a constant argument (``f(x, 3)``, ``g(..., True)``) even has a type
+of its own per value. Each such compile of a kernel costs seconds on a first
+run (empty cache), and the kernels used to collect several: one with a
+read-only array and one with a writable one, one called from Python and one
+called from another kernel, one per constant joint index. Hence
+:func:`entry_point`, for the kernels that Python calls, and :func:`helper`,
+for those only other kernels call.
+
+An entry point has exactly one signature, built from the argument types of its
+first use, whether a call from Python or from another kernel:
+
+* arrays named in ``outputs`` (written to) keep their type;
+* the other arrays become read-only, with layout ``"A"`` (any strides) unless
+  named in ``contiguous`` (layout ``"C"``, for the hot arrays of a loop whose
+  callers always pass C-contiguous arrays);
+* scalars lose their constant types (``Literal[int](3)`` is int64), and one
+  annotated ``float``, ``int`` or ``bool`` gets that type (float64, int64,
+  boolean) whatever the value of the first call (an int for a float
+  parameter would otherwise fix an integer type).
+
+Compilation is then disabled, so Numba converts the arguments of every later
+call to that signature: a writable array passes as read-only, a C or
+F-contiguous one as layout "A", an int as a float, at no cost per call (no
+copy, no new compile). Arguments it cannot convert (another dtype or number
+of dimensions, a read-only array for an output) raise ``TypeError``. Entry
+points take no default arguments: an omitted argument has a type of its own
+(``omitted(default=...)``) that no signature accepts once compilation is
+disabled, so callers pass every argument.
+
+The signature is built lazily, on first use, so that a command compiles (or
+loads from Numba's disk cache, ``cache=True``) only the kernels it runs, not
+every kernel of the modules it imports. The decorated function is a Numba
+dispatcher like ``numba.njit``'s: calling it from Python or from compiled code
+costs nothing more, and ``signatures`` lists its one signature.
+
+Processes that share the disk cache compile an entry point once: the compile
+holds a file lock next to the cache entries (``<module>.<name>.lock``, left in
+place), and a process that waited for it loads the result from the cache.
+That is what lets ``workbench demo`` run the fish cutting in a second process
+while the first compiles the closed form both need (Linux and macOS; elsewhere
+each process compiles its own).
+
+A helper keeps the array types of its callers (it is usually inlined into
+them, and a contiguous array compiles to faster code) and only drops the
+constant types of scalars.
+
+Both compile with the options of every kernel of the project: ``cache=True``,
+``nogil=True``, ``error_model="numpy"`` (a division by zero gives inf or nan,
+as in numpy, rather than raising).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import inspect
+from collections.abc import Callable, Iterable, Iterator
+from pathlib import Path
+from typing import IO, Any, TypeVar, cast
+
+from numba.core import config, registry, sigutils, types
+from numba.core.compiler_lock import global_compiler_lock
+
+try:
+    import fcntl
+except ImportError:  # Windows: no file locks, each process compiles its own
+    fcntl = None  # type: ignore[assignment]
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+# Numba sets the attributes of its dispatchers and of its config at run time.
+_CPUDispatcher: Any = registry.CPUDispatcher
+_config: Any = config
+
+#: Options of every kernel (``njit`` implies ``nopython=True``).
+_OPTIONS = {"nopython": True, "nogil": True, "error_model": "numpy"}
+
+#: Scalar types fixed by a parameter's annotation.
+_ANNOTATED = {"float": types.float64, "int": types.int64, "bool": types.boolean}
+
+
+class _Helper(_CPUDispatcher):
+    """A dispatcher that compiles constant scalar arguments as their plain types."""
+
+    def compile(self, sig: Any) -> Any:
+        args, return_type = sigutils.normalize_signature(sig)
+        args = tuple(types.unliteral(a) for a in args)
+        return super().compile(args if return_type is None else return_type(*args))
+
+
+class _EntryPoint(_CPUDispatcher):
+    """A dispatcher with one signature, built on first use (module docstring)."""
+
+    _outputs: frozenset[str] = frozenset()
+    _contiguous: frozenset[str] = frozenset()
+
+    def compile(self, sig: Any) -> Any:
+        args, _ = sigutils.normalize_signature(sig)
+        with global_compiler_lock:  # one thread builds the signature
+            if not self._can_compile:  # another thread built it meanwhile
+                return next(iter(self.overloads.values())).entry_point
+            with self._one_process_at_a_time():
+                entry = super().compile(self._signature(args))  # or load it
+            self.disable_compile()
+            return entry
+
+    def _signature(self, args: Iterable[Any]) -> tuple[Any, ...]:
+        """The one signature, from the argument types of the first use."""
+        parameters = inspect.signature(self.py_func).parameters.values()
+        result = []
+        for parameter, arg in zip(parameters, args, strict=True):
+            name = parameter.name
+            if isinstance(arg, types.Array) and name not in self._outputs:
+                contiguous = name in self._contiguous
+                arg = arg.copy(layout="C" if contiguous else "A", readonly=True)
+            elif isinstance(arg, types.Number | types.Boolean | types.Literal):
+                annotation = getattr(parameter.annotation, "__name__", None)
+                annotation = annotation or parameter.annotation  # a string
+                arg = _ANNOTATED.get(annotation, types.unliteral(arg))
+            result.append(arg)
+        return tuple(result)
+
+    @contextlib.contextmanager
+    def _one_process_at_a_time(self) -> Iterator[None]:
+        """Hold this kernel's file lock in the cache folder (module docstring)."""
+        func = self.py_func
+        folder = Path(self._cache.cache_path)
+        lock: IO[str] | None = None
+        if fcntl is not None:
+            try:
+                folder.mkdir(parents=True, exist_ok=True)
+                name = f"{func.__module__}.{func.__qualname__}.lock"
+                lock = (folder / name).open("a")
+            except OSError:  # a read-only cache: Numba compiles without saving
+                pass
+        if lock is None:
+            yield
+            return
+        with lock:  # closing the file releases the lock (so does an exit)
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            yield
+
+
+def entry_point(
+    *, outputs: Iterable[str] = (), contiguous: Iterable[str] = ()
+) -> Callable[[F], F]:
+    """Compile a kernel that Python calls, with one signature (module docstring).
+
+    Args:
+        outputs: Names of the array parameters the kernel writes to.
+        contiguous: Names of input arrays compiled as C-contiguous (faster
+            loops); every caller must pass C-contiguous arrays there.
+
+    Raises:
+        TypeError: If the function has default arguments, or ``outputs`` or
+            ``contiguous`` names no parameter of it.
+    """
+    outputs, contiguous = frozenset(outputs), frozenset(contiguous)
+
+    def decorate(func: F) -> F:
+        names = set(inspect.signature(func).parameters)
+        if func.__defaults__ or func.__kwdefaults__:
+            raise TypeError(f"{func.__qualname__}: an entry point takes no defaults")
+        if not (outputs | contiguous) <= names:
+            unknown = sorted((outputs | contiguous) - names)
+            raise TypeError(f"{func.__qualname__}: no parameters {unknown}")
+        if _config.DISABLE_JIT:  # NUMBA_DISABLE_JIT=1: plain Python, as njit
+            return func
+        dispatcher = _EntryPoint(func, targetoptions=dict(_OPTIONS))
+        dispatcher._outputs, dispatcher._contiguous = outputs, contiguous
+        dispatcher.enable_caching()
+        return cast(F, dispatcher)
+
+    return decorate
+
+
+def helper(*, forceinline: bool = False) -> Callable[[F], F]:
+    """Compile a kernel that only other kernels call (module docstring).
+
+    Args:
+        forceinline: Have LLVM inline it into every caller (its
+            ``alwaysinline`` attribute): for the small functions called per
+            angle or per pose in the loops. Numba's own ``inline="always"``
+            (inlining before type inference) compiles several times slower.
+    """
+
+    def decorate(func: F) -> F:
+        if _config.DISABLE_JIT:
+            return func
+        options = dict(_OPTIONS, forceinline=True) if forceinline else dict(_OPTIONS)
+        dispatcher = _Helper(func, targetoptions=options)
+        dispatcher.enable_caching()
+        return cast(F, dispatcher)
+
+    return decorate
