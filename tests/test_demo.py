@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import os
+import sys
+import time
+
 import numpy as np
 import pytest
 
@@ -9,7 +13,13 @@ from workbench.demo.pick_and_place import (
     format_pick_and_place,
     run_pick_and_place_demo,
 )
-from workbench.demo.run import compare_table2, format_table2, round_for_json
+from workbench.demo.run import (
+    _InSecondProcess,
+    compare_table2,
+    format_table2,
+    round_for_json,
+)
+from workbench.errors import InputError
 
 ATOL_PRINTED = 1e-9
 
@@ -65,3 +75,29 @@ def test_round_for_json_keeps_nine_significant_digits() -> None:
         "b": [6.66666667e-13, True, "text", None, 7],
         "c": [float("inf")],
     }
+
+
+def _fail_in_child(parent: int) -> int:
+    if os.getpid() != parent:
+        raise RuntimeError("only in the second process")
+    return os.getpid()
+
+
+def test_second_process_returns_the_result() -> None:
+    section = _InSecondProcess(os.getpid)
+    with section:
+        pid = section.result()
+    if sys.platform == "linux" and len(os.sched_getaffinity(0)) > 1:
+        assert pid != os.getpid()  # it ran there
+    else:
+        assert pid == os.getpid()
+
+
+def test_second_process_failure_makes_the_call_here() -> None:
+    # here the call succeeds (and would raise its own error if it failed)
+    with _InSecondProcess(_fail_in_child, os.getpid()) as section:
+        assert section.result() == os.getpid()
+    start = time.perf_counter()
+    with pytest.raises(InputError), _InSecondProcess(time.sleep, 60.0):
+        raise InputError("raised here: the second process is stopped")
+    assert time.perf_counter() - start < 30.0

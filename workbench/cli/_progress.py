@@ -4,13 +4,17 @@ A command that is still running after :data:`PROGRESS_DELAY` seconds prints
 one line saying what it is doing; the first Numba compilation of the process
 (a cold cache: the first run after an install or an upgrade) prints one line
 saying so as soon as it starts. ``-q`` silences both. Nothing is printed for a
-command that finishes quickly, so scripted output stays clean.
+command that finishes quickly, so scripted output stays clean. A process forked
+by the command (``workbench demo`` runs a section in one) prints nothing: the
+command's own process speaks for it.
 """
 
 from __future__ import annotations
 
+import os
 import sys
 import threading
+import weakref
 from types import TracebackType
 from typing import TextIO
 
@@ -46,6 +50,7 @@ class Progress:
         self._finished = False
         self._said_compiling = False
         self._listener: object | None = None
+        _LIVE.add(self)
 
     def __enter__(self) -> Progress:
         if not self.enabled:
@@ -94,6 +99,22 @@ class Progress:
                 stream.flush()
             except (OSError, ValueError):  # stderr closed: progress is optional
                 pass
+
+
+#: Every Progress of the process, silenced in a forked child.
+_LIVE: weakref.WeakSet[Progress] = weakref.WeakSet()
+
+
+def _silence_in_child() -> None:
+    """After a fork, in the child: no lines; fresh locks (a thread's is copied)."""
+    for progress in _LIVE:
+        progress._lock = threading.Lock()
+        progress._finished = True
+        progress._timer = None  # its thread did not come along
+
+
+if hasattr(os, "register_at_fork"):  # not on Windows (no fork)
+    os.register_at_fork(after_in_child=_silence_in_child)
 
 
 def _listen_to_numba(progress: Progress) -> object | None:

@@ -18,14 +18,13 @@ of the tool origin (m/s); angular velocity (rad/s)], both in base axes.
 
 from __future__ import annotations
 
+import functools
 import importlib.metadata
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
-import scipy.sparse
-from qpsolvers import solve_qp
 
 from workbench.errors import InfeasibleError
 from workbench.ik.damped import _check_positive, _twist_command
@@ -36,16 +35,18 @@ FloatArray = npt.NDArray[np.float64]
 QP_DAMPING = 1e-6
 """Default damping weight rho of :func:`qp_step`."""
 
-_OSQP_SETTINGS: dict[str, Any] = {
-    "eps_abs": 1e-10,
-    "eps_rel": 1e-10,
-    "verbose": False,
-}
-"""OSQP tolerances; the solution is then polished to its exact active set."""
-if int(importlib.metadata.version("osqp").split(".")[0]) >= 1:
-    _OSQP_SETTINGS |= {"polishing": True, "raise_error": False}
-else:  # OSQP 0.6 names
-    _OSQP_SETTINGS |= {"polish": True}
+
+@functools.cache
+def _osqp_settings() -> dict[str, Any]:
+    """OSQP tolerances; the solution is then polished to its exact active set.
+
+    Read on the first QP (as ``qpsolvers`` and ``scipy.sparse`` are imported):
+    a quarter of a second that commands without a QP step do not pay.
+    """
+    settings: dict[str, Any] = {"eps_abs": 1e-10, "eps_rel": 1e-10, "verbose": False}
+    if int(importlib.metadata.version("osqp").split(".")[0]) >= 1:
+        return settings | {"polishing": True, "raise_error": False}
+    return settings | {"polish": True}  # OSQP 0.6 names
 
 
 class DifferentialIKError(InfeasibleError):
@@ -101,13 +102,16 @@ def qp_step(
             v = None
     if v is not None and np.all(v >= lower) and np.all(v <= upper):
         return v
+    import scipy.sparse  # here, not at import: see _osqp_settings
+    from qpsolvers import solve_qp
+
     v = solve_qp(
         scipy.sparse.csc_matrix(hessian),
         gradient,
         lb=lower,
         ub=upper,
         solver="osqp",
-        **_OSQP_SETTINGS,
+        **_osqp_settings(),
     )
     if v is None or not np.all(np.isfinite(v)):
         raise DifferentialIKError(

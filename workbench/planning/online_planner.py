@@ -47,7 +47,7 @@ from workbench.ik.closed_form import (
     nearest,
     solve_one,
 )
-from workbench.ik.damped import DLS_EPSILON, DLS_LAMBDA_MAX, dls_inverse
+from workbench.ik.damped import DLS_EPSILON, DLS_LAMBDA_MAX, _check_positive
 from workbench.model.robot import Robot
 from workbench.planning._tracking import command_joints, track, wrist_command
 from workbench.planning.cartesian_paths import (
@@ -108,6 +108,25 @@ def _rigid(value: pin.SE3 | None) -> tuple[FloatArray, FloatArray]:
     if not isinstance(value, pin.SE3):
         raise InputError(f"expected a pinocchio.SE3, got {type(value).__name__}")
     return value.rotation.copy(), value.translation.copy()
+
+
+def load_kernels() -> None:
+    """Load the planner's kernels that do not call the closed-form IK.
+
+    That is (on a first run: compiles) the joint-velocity solves, the wrist
+    command and the branch choice. :class:`OnlinePlanner` calls it on
+    construction, so that no planning cycle waits seconds for a compile (the
+    damped solve is otherwise first needed in a singular region, possibly deep
+    into a run). Apart from the closed form, so that a process can do this
+    while another compiles that one (see ``workbench.demo.run``).
+    """
+    zero, eye = np.zeros(6), np.eye(3)
+    solve_velocity(np.eye(6), zero, DLS_EPSILON, DLS_LAMBDA_MAX)  # the exact one
+    solve_velocity(np.zeros((6, 6)), zero, DLS_EPSILON, DLS_LAMBDA_MAX)  # damped
+    frames = np.vstack([eye, zero[:3], eye, zero[:3]])
+    pose, twist = np.empty((4, 4)), np.empty(6)
+    wrist_command(eye, zero[:3], zero[:3], zero[:3], frames, pose, twist)
+    kernel.continuing_branch(np.zeros((8, 6)), zero, 0, 0.0)
 
 
 class OnlinePlanner:
@@ -172,7 +191,12 @@ class OnlinePlanner:
         self.dls_epsilon = dls_epsilon
         self.dls_lambda_max = dls_lambda_max
         self.check_speed = check_speed
-        dls_inverse(np.eye(6), epsilon=dls_epsilon, lambda_max=dls_lambda_max)
+        _check_positive(dls_epsilon, "epsilon", strict=True)  # as dls_inverse
+        _check_positive(dls_lambda_max, "lambda_max", strict=False)
+        # No cycle waits for a compile: the kernels are loaded here (or, on a
+        # first run, compiled), the closed form by analytic below and the
+        # tracking kernel that calls it at the end.
+        load_kernels()
         tip = _rigid(transform_tip_to_tool)  # (rotation, translation)
         base = _rigid(transform_base_to_world)
         q0 = robot.check_configuration(q_start)
@@ -202,6 +226,7 @@ class OnlinePlanner:
         self._queue: deque[MotionPrimitive] = deque()
         self._active: MotionPrimitive = Hold()
         self._active.begin(self._state, 0.0, limits)
+        self._command_joints(p, zero, rotation, zero)  # loads the tracking kernel
 
     # -- state ---------------------------------------------------------------
     @property
