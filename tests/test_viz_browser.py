@@ -9,9 +9,11 @@ deadline on every step and no retry (see its docstring for why).
 
 from __future__ import annotations
 
+import fcntl
 import os
 import shutil
 import subprocess
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -38,7 +40,18 @@ def _apt_get(*args: str) -> subprocess.CompletedProcess[str]:
 
 @pytest.fixture(scope="session")
 def chromium() -> str:
-    """Path of the chromium binary, installed with apt-get when missing (root)."""
+    """Path of the chromium binary, installed with apt-get when missing (root).
+
+    Test workers (pytest -n) each run this fixture: a file lock lets one of them
+    install while the others wait, instead of racing for dpkg's own lock.
+    """
+    lock = Path(tempfile.gettempdir()) / "workbench-chromium-install.lock"
+    with lock.open("w") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        return _find_or_install_chromium()
+
+
+def _find_or_install_chromium() -> str:
     found = shutil.which("chromium")
     if found:
         return found
