@@ -23,6 +23,7 @@ from workbench.errors import (
     NonFiniteError,
 )
 from workbench.ik import _puma_kernel as kernel
+from workbench.ik._atan2_kernel import atan2_into
 from workbench.ik._puma import LIMIT_TOL, geometry_from_dh
 from workbench.ik.closed_form import (
     BRANCHES,
@@ -701,3 +702,61 @@ def test_batch_result_layout(puma, rng) -> None:
         np.testing.assert_allclose(q_batch[i], single, rtol=0, atol=ATOL_BATCH)
     q_batch[3] = 0.0  # writable, like any result array
     assert not q_batch[3].any()
+
+
+def _ulps(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance in units in the last place (doubles ordered as integers)."""
+    ia, ib = a.view(np.int64), b.view(np.int64)
+    magnitude = np.int64(0x7FFFFFFFFFFFFFFF)
+    ia = np.where(ia < 0, -(ia & magnitude), ia)
+    ib = np.where(ib < 0, -(ib & magnitude), ib)
+    return np.abs(ia - ib)
+
+
+#: Special values of the atan2 test: zeros, infinities, NaN, extremes, subnormals.
+_ATAN2_SPECIALS = np.array(
+    [0.0, -0.0, math.inf, -math.inf, math.nan, 1.0, -1.0, 0.66, 5e-324, -5e-324, 1e-307]
+)
+_ATAN2_SPECIALS = np.concatenate([_ATAN2_SPECIALS, [np.finfo(float).max, -1e308]])
+
+
+def test_atan2_into_special_values_as_numpy() -> None:
+    y, x = (a.ravel() for a in np.meshgrid(_ATAN2_SPECIALS, _ATAN2_SPECIALS))
+    out = np.empty_like(y)
+    atan2_into(y, x, out)
+    expected = np.arctan2(y, x)
+    np.testing.assert_array_equal(np.isnan(out), np.isnan(expected))
+    finite = ~np.isnan(expected)
+    assert _ulps(out[finite], expected[finite]).max() <= 2
+    np.testing.assert_array_equal(np.signbit(out[finite]), np.signbit(expected[finite]))
+
+
+def test_atan2_into_within_two_ulp_of_numpy() -> None:
+    rng = np.random.default_rng(7)
+    n = 200_000
+    exponents = rng.uniform(-1074, 1023, (2, n))
+    signs = rng.choice([-1.0, 1.0], (2, n))
+    y = np.concatenate([rng.standard_normal(n), signs[0] * 2.0 ** exponents[0]])
+    x = np.concatenate([rng.standard_normal(n), signs[1] * 2.0 ** exponents[1]])
+    near = rng.uniform(-1.0, 1.0, n)  # |y| ≈ |x|: both reductions and the octants
+    y = np.concatenate([y, near * rng.uniform(0.5, 1.5, n)])
+    x = np.concatenate([x, near * signs[0]])
+    out = np.empty_like(y)
+    atan2_into(y, x, out)
+    assert _ulps(out, np.arctan2(y, x)).max() <= 2
+
+
+@given(
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.floats(allow_nan=True, allow_infinity=True),
+)
+@settings(max_examples=300, deadline=None)
+def test_atan2_into_any_pair(y: float, x: float) -> None:
+    out = np.empty(1)
+    atan2_into(np.array([y]), np.array([x]), out)
+    expected = np.arctan2(y, x)
+    if math.isnan(expected):
+        assert math.isnan(out[0])
+    else:
+        assert _ulps(out, np.array([expected]))[0] <= 2
+        assert math.copysign(1.0, out[0]) == math.copysign(1.0, expected)

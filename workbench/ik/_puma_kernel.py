@@ -21,9 +21,9 @@ Conventions of every function here:
 The status codes tell the Python side which error to raise; it then runs the
 slow, exact checks that word the message.
 
-A batch (:func:`batch_arguments`, ``numpy.arctan2``, :func:`batch_assemble`)
-leaves the atan2 calls to numpy, whose SIMD version is several times faster
-than libm's; :func:`solve_pose` does all of it for one pose.
+A batch (:func:`batch_arguments`, ``_atan2_kernel.atan2_into``,
+:func:`batch_assemble`) makes the atan2 calls in one vectorised loop, several
+times faster than libm's; :func:`solve_pose` does all of it for one pose.
 """
 
 from __future__ import annotations

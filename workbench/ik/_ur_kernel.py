@@ -21,7 +21,7 @@ wrist up / down (σ5 sin θ5 > 0 / < 0: z5 along +x4 / −x4). Branch ``b`` =
 4·left + 2·down + wrist-down.
 
 Like ``_puma_kernel``, every angle is an atan2 of arguments computed first, so
-that a batch makes all atan2 calls in one vectorised numpy call. The helpers
+that a batch makes all atan2 calls in one vectorised loop. The helpers
 that ``_puma_kernel`` also has are repeated here: Numba's cache is not
 invalidated across files, so a kernel calls only functions of its own file.
 """

@@ -42,6 +42,7 @@ import pinocchio as pin
 from workbench.errors import InputError
 from workbench.ik import _puma_kernel as kernel
 from workbench.ik import _ur_kernel as ur_kernel
+from workbench.ik._atan2_kernel import atan2_into
 from workbench.ik._puma import (
     TAU,
     WRIST_SINGULAR_TOL,
@@ -329,9 +330,9 @@ def analytic_batch(
     """Every closed-form IK branch of N poses, vectorised.
 
     The kernel of :func:`analytic` in three stages per chunk of poses: the
-    arguments of every atan2 (compiled loop), all the atan2 in one numpy call
-    (vectorised with SIMD, several times faster than one libm call each), the
-    joint values (compiled loop).
+    arguments of every atan2 (compiled loop), all the atan2 in one compiled
+    loop that LLVM vectorises (:mod:`workbench.ik._atan2_kernel`, several
+    times faster than one libm call each), the joint values (compiled loop).
 
     Args:
         robot: A 6R arm of either family (as :func:`analytic`).
@@ -368,7 +369,7 @@ def analytic_batch(
         if solver.batch_arguments(geometry, chunk, *arguments, True) >= 0:
             check_poses(chunk, start)  # the exact checks raise, or accept all
             solver.batch_arguments(geometry, chunk, *arguments, False)
-        np.arctan2(y[:n], x[:n], out=angles[:n])
+        atan2_into(y[:n].reshape(-1), x[:n].reshape(-1), angles[:n].reshape(-1))
         solver.batch_assemble(
             geometry,
             angles[:n],
