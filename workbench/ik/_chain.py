@@ -336,15 +336,7 @@ def get_chain(robot: Robot) -> Chain:
     """
     key = id(robot)
     chain = _CHAINS.get(key)
-    if (
-        chain is not None
-        and chain.robot() is robot
-        # Chain.matches, inline: this runs on every numeric call.
-        and chain.model is robot.model
-        and chain.lower is robot.lower
-        and chain.upper is robot.upper
-        and chain.frame_id == robot.tool_frame_id
-    ):
+    if chain is not None and chain.robot() is robot and chain.matches(robot):
         return chain
     fresh = Chain(robot)
     if chain is None or chain.robot() is not robot:
