@@ -34,6 +34,17 @@ BONE = "bone"
 _HARMONICS = 3
 
 
+def check_scale_factor(value: float, what: str) -> float:
+    """``value`` as a float if it is a positive finite number (a scale factor).
+
+    Raises:
+        InputError: Otherwise, naming ``what``.
+    """
+    if not isinstance(value, float | int) or not math.isfinite(value) or value <= 0:
+        raise InputError(f"{what} must be a positive finite number, got {value!r}")
+    return float(value)
+
+
 class SimulatedFish:
     """A fish with a flesh surface and a backbone of seeded random heights.
 
@@ -120,11 +131,7 @@ class SimulatedFish:
         Raises:
             InputError: If ``factor`` is not a positive finite number.
         """
-        if not isinstance(factor, float | int) or not math.isfinite(factor):
-            raise InputError(f"fish scale must be a finite number, got {factor!r}")
-        if factor <= 0.0:
-            raise InputError(f"fish scale must be > 0, got {factor:g}")
-        f = float(factor)
+        f = check_scale_factor(factor, "fish scale")
         return SimulatedFish(
             self.seed,
             head_y=f * self.head_y,

@@ -25,7 +25,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from workbench.errors import InfeasibleError, InputError
+from workbench.errors import InfeasibleError
 from workbench.ik.closed_form import analytic, nearest
 from workbench.ik.structure import KinematicStructure, get_structure
 from workbench.model.robot import Robot
@@ -37,7 +37,7 @@ from workbench.planning.motion_primitives import (
     StraightLine,
 )
 from workbench.tasks.cuts import HorizontalCut, VerticalDownCut
-from workbench.tasks.fish import SimulatedFish
+from workbench.tasks.fish import SimulatedFish, check_scale_factor
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -106,7 +106,7 @@ class FishCuttingSetup:
     scale: float = 1.0  # cell size over Kang's PUMA cell (get_cell_scale)
 
     def __post_init__(self) -> None:
-        _check_scale(self.scale, "setup scale")
+        check_scale_factor(self.scale, "setup scale")
 
     def scaled(self, factor: float) -> FishCuttingSetup:
         """The setup of a cell ``factor`` times as large (``scale`` multiplied).
@@ -119,7 +119,7 @@ class FishCuttingSetup:
         Raises:
             InputError: If ``factor`` is not a positive finite number.
         """
-        f = _check_scale(factor, "cell scale")
+        f = check_scale_factor(factor, "cell scale")
         return dataclasses.replace(
             self,
             tool_length=f * self.tool_length,
@@ -144,12 +144,6 @@ class FishCuttingSetup:
     def cutting_speed(self) -> float:
         """Speed in the flesh [m/s]."""
         return self.cutting_speed_ratio * self.max_velocity
-
-
-def _check_scale(value: float, what: str) -> float:
-    if not isinstance(value, float | int) or not math.isfinite(value) or value <= 0:
-        raise InputError(f"{what} must be a positive finite number, got {value!r}")
-    return float(value)
 
 
 def get_arm_reach(structure: KinematicStructure) -> float:
