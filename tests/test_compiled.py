@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from numba.core import types
 
-from workbench._compiled import entry_point, helper
+from workbench._compiled import entry_point, helper, interpreted
 
 
 @helper(forceinline=True)
@@ -77,6 +77,38 @@ def test_helpers_compile_constant_arguments_as_plain_types() -> None:
     for index in (types.literal(0), types.literal(1), types.int64):
         _pick.compile((array, index))  # (or loads it from the cache)
     assert _pick.signatures == [(array, types.int64)]
+
+
+_RECORD = np.dtype([("scale", "f8"), ("shift", "f8", 2)], align=True)
+
+
+@helper()
+def _ratio(record, x):
+    return x / record.scale + record.shift[1]  # x / 0.0 is inf, as in numpy
+
+
+@entry_point(outputs=("out",))
+def _ratios(records, values, out):
+    record = records[0]
+    for i in range(values.shape[0]):
+        out[i] = _ratio(record, values[i])
+    return record.shift[0]
+
+
+def test_interpreted_runs_the_python_source_with_the_compiled_semantics() -> None:
+    """Record fields as attributes, a division by zero gives inf; nothing compiled."""
+    records = np.zeros(1, dtype=_RECORD)
+    records["scale"], records["shift"] = 0.0, (3.0, 1.0)
+    values, out = np.array([1.0, -2.0]), np.empty(2)
+    with interpreted():
+        assert _ratios(records, values, out) == 3.0
+        assert _ratio(records[0], 4.0) == np.inf  # a record from Python
+    assert _ratios.signatures == [] and _ratio.signatures == []
+    np.testing.assert_array_equal(out, [np.inf, -np.inf])
+    compiled = np.empty(2)
+    assert _ratios(records, values, compiled) == 3.0  # compiles now
+    np.testing.assert_array_equal(compiled, out)
+    assert len(_ratios.signatures) == 1
 
 
 def test_outputs_refuse_readonly_arrays() -> None:

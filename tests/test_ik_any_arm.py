@@ -5,6 +5,9 @@ from __future__ import annotations
 import json
 import math
 import re
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -14,7 +17,12 @@ from scipy.optimize import brentq
 from tests.conftest import run_cli as run
 from workbench import Robot, load_robot
 from workbench.cli import EXIT_BAD_INPUT, EXIT_INFEASIBLE
-from workbench.errors import FrameNotFoundError, InputError, NonFiniteError
+from workbench.errors import (
+    FrameNotFoundError,
+    InputError,
+    NonFiniteError,
+    WorkbenchError,
+)
 from workbench.ik import (
     BRANCHES,
     STRUCTURE_TOL,
@@ -34,6 +42,7 @@ ATOL_SAME_Q = 1e-6  # [rad] the generating q is among the branches
 # the null direction of J by ~sqrt(eps) (observed up to 5e-6 rad), more where a
 # second singularity is near (observed 3.3e-4 rad at elbow and wrist both near).
 ATOL_SAME_Q_SINGULAR = 1e-3
+ATOL_INTERPRETED = 1e-12  # [rad] interpreted against compiled kernels (libm, FMA)
 DISTINCT = 1e-6  # [rad] branches of a generic pose differ by more than this
 N_RANDOM = 10_000
 N_SINGULAR = 200
@@ -429,3 +438,88 @@ def test_round_trip_property(name: str) -> None:
         )
 
     round_trip()
+
+
+# -- the interpreted kernels (one-shot commands) ---------------------------------------
+
+
+def solution_rows(robot: Robot, targets: np.ndarray) -> np.ndarray:
+    """One row per branch found: target, branch index, q, and the three flags."""
+    return np.array(
+        [
+            [i, s.index, *s.q, s.within_limits, s.wrist_singular, s.shoulder_singular]
+            for i, target in enumerate(targets)
+            for s in analytic(robot, target)
+        ]
+    )
+
+
+_INTERPRETED_SCRIPT = """
+import sys
+import numpy as np
+from workbench import _compiled, load_robot
+from workbench.ik import _puma_kernel, _ur_kernel, analytic
+from tests.test_ik_any_arm import plain, solution_rows
+
+data = np.load(sys.argv[1])
+results = {}
+with _compiled.interpreted():
+    for name in data.files:
+        base = name.removesuffix("-axes")
+        robot = load_robot(base) if base == name else plain(load_robot(base))
+        results[name] = solution_rows(robot, data[name])
+    for kind, pose in (("reach", np.eye(4)), ("rigid", 2.0 * np.eye(4))):
+        pose[0, 3] = 3.0 if kind == "reach" else 0.0
+        try:
+            analytic(robot, pose)
+        except Exception as error:
+            print(type(error).__name__, error)
+compiled = _puma_kernel.solve_pose.signatures + _ur_kernel.solve_pose.signatures
+assert not compiled, compiled  # nothing was compiled: the Python source ran
+np.savez(sys.argv[2], **results)
+"""
+
+
+def test_interpreted_kernels_equal_the_compiled_ones(tmp_path) -> None:
+    """``_compiled.interpreted`` (``workbench ik``) gives the compiled answers.
+
+    Random and singular configurations of each family, with and without a DH
+    table, in a fresh process where nothing is compiled; the errors are the same.
+    """
+    rng = np.random.default_rng(11)
+    targets, robots = {}, {}
+    for name in ("puma560", "puma560-kang", "kuka-kr6-r700-axes", "ur5"):
+        base = name.removesuffix("-axes")
+        robot = load_robot(base) if base == name else plain(load_robot(base))
+        qs = [rng.uniform(robot.lower, robot.upper) for _ in range(12)]
+        qs += [_dh_angle_config(robot, rng, 4, 0.0) for _ in range(4)]  # wrist
+        qs += [_dh_angle_config(robot, rng, 2, t) for t in _elbow_theta3(robot)]
+        qs += [q for q in (_shoulder_config(robot, rng),) if q is not None]
+        targets[name] = np.array([robot.fk(q).homogeneous for q in qs])
+        robots[name] = robot
+    np.savez(tmp_path / "targets.npz", **targets)
+    script = tmp_path / "interpreted.py"
+    script.write_text(_INTERPRETED_SCRIPT)
+    arguments = [str(script), str(tmp_path / "targets.npz"), str(tmp_path / "q")]
+    done = subprocess.run(
+        [sys.executable, *arguments],
+        capture_output=True,
+        text=True,
+        check=False,
+        cwd=Path(__file__).parents[1],
+    )
+    assert done.returncode == 0, done.stderr
+    results = np.load(tmp_path / "q.npz")
+    for name, robot in robots.items():
+        rows = solution_rows(robot, targets[name])
+        assert results[name].shape == rows.shape
+        np.testing.assert_array_equal(results[name][:, :2], rows[:, :2])  # labels
+        np.testing.assert_array_equal(results[name][:, -3:], rows[:, -3:])  # flags
+        np.testing.assert_allclose(results[name], rows, rtol=0, atol=ATOL_INTERPRETED)
+    messages = []
+    for kind, pose in (("reach", np.eye(4)), ("rigid", 2.0 * np.eye(4))):
+        pose[0, 3] = 3.0 if kind == "reach" else 0.0
+        with pytest.raises(WorkbenchError) as error:
+            analytic(robots["ur5"], pose)
+        messages.append(f"{type(error.value).__name__} {error.value}")
+    assert done.stdout.splitlines() == messages

@@ -51,6 +51,14 @@ constant types of scalars.
 Both compile with the options of every kernel of the project: ``cache=True``,
 ``nogil=True``, ``error_model="numpy"`` (a division by zero gives inf or nan,
 as in numpy, rather than raising).
+
+Within :func:`interpreted`, a kernel that this process has not compiled yet
+runs its Python source instead: a command that solves one pose (``workbench
+ik``) answers in milliseconds where compiling, on a first run, takes seconds,
+and loading the compiled code from the cache takes longer than interpreting one
+call. The source is the same, so are the results (tested); record fields are
+read as attributes (``geo.d1``) through :class:`numpy.recarray` views, and
+numpy's floating-point errors are silenced as in the compiled code.
 """
 
 from __future__ import annotations
@@ -61,6 +69,7 @@ from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import IO, Any, TypeVar, cast
 
+import numpy as np
 from numba.core import config, registry, sigutils, types
 from numba.core.compiler_lock import global_compiler_lock
 
@@ -70,6 +79,9 @@ except ImportError:  # Windows: no file locks, each process compiles its own
     fcntl = None  # type: ignore[assignment]
 
 F = TypeVar("F", bound=Callable[..., Any])
+
+#: True within :func:`interpreted`.
+_interpreting = False
 
 # Numba sets the attributes of its dispatchers and of its config at run time.
 _CPUDispatcher: Any = registry.CPUDispatcher
@@ -82,7 +94,45 @@ _OPTIONS = {"nopython": True, "nogil": True, "error_model": "numpy"}
 _ANNOTATED = {"float": types.float64, "int": types.int64, "bool": types.boolean}
 
 
-class _Helper(_CPUDispatcher):
+@contextlib.contextmanager
+def interpreted() -> Iterator[None]:
+    """Run the kernels not compiled yet in this process as Python (module docstring).
+
+    For commands that call the kernels a few times: no compile, no cache load.
+    """
+    global _interpreting
+    before, _interpreting = _interpreting, True
+    try:
+        yield
+    finally:
+        _interpreting = before
+
+
+def _as_attributes(arg: Any) -> Any:
+    """A record or record array whose fields read as attributes, else ``arg``."""
+    if isinstance(arg, np.void):
+        return np.asarray(arg).view(np.recarray)[()]
+    if isinstance(arg, np.ndarray) and arg.dtype.names is not None:
+        return arg.view(np.recarray)
+    return arg
+
+
+class _Interpretable(_CPUDispatcher):
+    """A dispatcher that runs its Python function within :func:`interpreted`."""
+
+    def _compile_for_args(self, *args: Any, **kws: Any) -> Any:
+        # Numba's C dispatcher calls this on a call no compiled code matches,
+        # then calls what it returns with the arguments.
+        if _interpreting:
+            return self._interpret
+        return super()._compile_for_args(*args, **kws)
+
+    def _interpret(self, *args: Any) -> Any:
+        with np.errstate(all="ignore"):
+            return self.py_func(*(_as_attributes(arg) for arg in args))
+
+
+class _Helper(_Interpretable):
     """A dispatcher that compiles constant scalar arguments as their plain types."""
 
     def compile(self, sig: Any) -> Any:
@@ -91,7 +141,7 @@ class _Helper(_CPUDispatcher):
         return super().compile(args if return_type is None else return_type(*args))
 
 
-class _EntryPoint(_CPUDispatcher):
+class _EntryPoint(_Interpretable):
     """A dispatcher with one signature, built on first use (module docstring)."""
 
     _outputs: frozenset[str] = frozenset()

@@ -14,6 +14,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from workbench._compiled import interpreted
 from workbench.cli._common import (
     add_json_flag,
     add_robot_argument,
@@ -154,9 +155,18 @@ def _numeric_row(robot: Robot, target: pin.SE3) -> dict[str, object]:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Print the solution(s); returns the exit code."""
+    """Print the solution(s); returns the exit code.
+
+    One pose: the kernels run interpreted (``_compiled.interpreted``), which
+    takes milliseconds where compiling them on a first run takes seconds.
+    """
     robot = load_robot(args.robot, tool_frame=args.tool_frame)
     target = target_from_args(args)
+    with interpreted():
+        return _solve_and_print(args, robot, target)
+
+
+def _solve_and_print(args: argparse.Namespace, robot: Robot, target: pin.SE3) -> int:
     rows: list[dict[str, Any]]
     try:
         family = get_solver(robot)[0]
