@@ -1,4 +1,9 @@
-"""The documentation site builds in strict mode, with executed notebooks."""
+"""The documentation site builds in strict mode, with executed notebooks.
+
+The build executes every notebook (``mkdocs-jupyter``, ``allow_errors: false``): it
+is how the test suite runs them, once. Its tests run in one pytest-xdist worker
+(``xdist_group``), so the site is built once.
+"""
 
 from __future__ import annotations
 
@@ -13,6 +18,9 @@ import pytest
 from workbench.cli import build_parser
 
 ROOT = Path(__file__).resolve().parents[1]
+NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
+
+pytestmark = pytest.mark.xdist_group("docs")
 
 
 @pytest.fixture(scope="module")
@@ -46,14 +54,12 @@ def test_every_page_is_built(site) -> None:
         assert (site / page).is_file(), page
 
 
-def test_every_notebook_is_executed_with_its_figures(site) -> None:
-    notebooks = sorted((ROOT / "notebooks").glob("*.ipynb"))
-    assert notebooks
-    for notebook in notebooks:
-        page = (site / "notebooks" / notebook.stem / "index.html").read_text("utf-8")
-        assert "jp-OutputArea-output" in page, f"no output in {notebook.name}"
-        if notebook.stem.startswith(("03", "04", "05", "06")):
-            assert "data:image/png;base64" in page, f"no figure in {notebook.name}"
+@pytest.mark.parametrize("notebook", NOTEBOOKS, ids=lambda path: path.stem)
+def test_notebook_is_executed_with_its_figures(site, notebook: Path) -> None:
+    page = (site / "notebooks" / notebook.stem / "index.html").read_text("utf-8")
+    assert "jp-OutputArea-output" in page, f"no output in {notebook.name}"
+    if notebook.stem.startswith(("03", "04", "05", "06")):
+        assert "data:image/png;base64" in page, f"no figure in {notebook.name}"
 
 
 def test_cli_page_has_every_command(site) -> None:
