@@ -1,8 +1,8 @@
 """The documentation site builds in strict mode, with executed notebooks.
 
 The build executes every notebook (``mkdocs-jupyter``, ``allow_errors: false``): it
-is how the test suite runs them, once. Its tests run in one pytest-xdist worker
-(``xdist_group``), so the site is built once.
+is how the test suite runs them, once. pytest-xdist runs the tests of a file in one
+worker (``--dist loadfile``, pyproject.toml), so the site is built once.
 """
 
 from __future__ import annotations
@@ -19,8 +19,6 @@ from workbench.cli import build_parser
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
-
-pytestmark = pytest.mark.xdist_group("docs")
 
 
 @pytest.fixture(scope="module")
