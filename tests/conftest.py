@@ -20,6 +20,15 @@ PUMA_NAMES = ("puma560", "puma560-kang")
 # machine or a cold Numba cache would add one). test_cli_habits turns them on.
 os.environ["WORKBENCH_PROGRESS"] = "0"
 
+#: Files run first: the documentation build executes every notebook (about a
+#: minute in one worker), so it starts at once and overlaps everything else.
+_FIRST = ("test_docs.py",)
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """The slowest file first (pytest-xdist then keeps this order, pyproject.toml)."""
+    items.sort(key=lambda item: item.path.name not in _FIRST)  # stable sort
+
 
 @pytest.fixture(scope="session")
 def puma() -> Robot:
