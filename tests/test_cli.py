@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import re
 from pathlib import Path
@@ -11,7 +13,8 @@ import pytest
 
 from tests.conftest import run_cli as run
 from workbench import paper_data
-from workbench.cli import EXIT_BAD_INPUT
+from workbench.cli import EXIT_BAD_INPUT, main
+from workbench.cli import demo as demo_command
 from workbench.model.catalog import get_own_urdf_dir
 
 # Table II is printed to two decimals: a computed value matches when it rounds to it.
@@ -114,41 +117,66 @@ def test_urdf_from_dh_regenerates_the_committed_file(capsys, tmp_path: Path) -> 
     assert out_file.read_text() == (get_own_urdf_dir() / "puma560.urdf").read_text()
 
 
-def test_demo_reproduces_table2(capsys, tmp_path: Path) -> None:
-    code, out, _ = run(capsys, "demo", "--out", str(tmp_path / "demo"))
-    assert code == 0
-    assert "match Table II" in out and "DO NOT" not in out
-    assert "Pick and place (Sec. V), T = 10 s" in out and "minimum duration" in out
-    text = (tmp_path / "demo" / "summary.json").read_text()
-    summary = json.loads(text)
+@pytest.fixture(scope="module")
+def demo_run(tmp_path_factory) -> tuple[Path, dict, str]:
+    """``workbench demo --json`` run once: (output folder, printed summary, stderr).
+
+    The text mode prints the same summary formatted (``format_summary``), so the
+    other demo tests check that wiring with this summary instead of a second run.
+    """
+    out = tmp_path_factory.mktemp("demo")
+    printed, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(printed), contextlib.redirect_stderr(err):
+        code = main(["demo", "--out", str(out), "--json"])
+    assert code == 0, err.getvalue()
+    return out, json.loads(printed.getvalue()), err.getvalue()
+
+
+def test_demo_reproduces_table2(demo_run) -> None:
+    folder, summary, _ = demo_run
+    text = (folder / "summary.json").read_text()
+    assert json.loads(text).keys() == summary.keys()  # (the file rounds floats)
     assert summary["table2_matches"] is True
     # Floats are stored with at most 9 significant digits, paper values as printed.
     for number in re.findall(r"-?\d+\.\d+(?:e[-+]?\d+)?", text):
         mantissa = number.lstrip("-").split("e")[0].replace(".", "").lstrip("0")
         assert len(mantissa) <= 9, number
     assert summary["table2"]["pick"]["printed"][4:] == [-94.07, 125.4, -470.55]
-    assert (tmp_path / "demo" / "table2.md").is_file()
+    assert (folder / "table2.md").is_file()
     figures = summary["pick_and_place"]["figures"]
     assert len(figures) == 7
     for path in figures.values():
         assert Path(path).read_bytes()[:4] == b"\x89PNG"
-    assert (tmp_path / "demo" / "pick_and_place.csv").is_file()
+    assert (folder / "pick_and_place.csv").is_file()
     preview = Path(summary["pages"]["preview"]).read_text(encoding="utf-8")
     assert "<html" in preview.lower() and len(preview) > 100_000  # scene embedded
     report = Path(summary["pages"]["singularity_report"]).read_text(encoding="utf-8")
     assert report.count("data:image/png;base64,") >= 3
-    assert "3D preview (open in a browser)" in out
     fish = summary["fish_cutting"]
     assert fish["robot"] == "puma560-kang" and fish["wrist_flips"] == 0
     assert {e["kind"] for e in fish["events"]} == {"flesh", "bone"}
-    assert (tmp_path / "demo" / "fishcut.csv").is_file()
-    assert (tmp_path / "demo" / "fishcut.html").stat().st_size > 100_000
+    assert (folder / "fishcut.csv").is_file()
+    assert (folder / "fishcut.html").stat().st_size > 100_000
 
 
-def test_demo_json(capsys, tmp_path: Path) -> None:
+def test_demo_text_and_flags(capsys, monkeypatch, demo_run, tmp_path: Path) -> None:
+    """Text mode prints the summary formatted; --no-plots reaches the demo."""
+    _, summary, _ = demo_run
+    calls = []
+
+    def recorded_demo(robot, out, *, plots):
+        calls.append((robot.name, out, plots))
+        return summary
+
+    monkeypatch.setattr(demo_command, "run_demo", recorded_demo)
+    code, out, _ = run(capsys, "demo", "--out", str(tmp_path))
+    assert code == 0 and out == demo_command.format_summary(summary, tmp_path) + "\n"
+    assert "match Table II" in out and "DO NOT" not in out
+    assert "Pick and place (Sec. V), T = 10 s" in out and "minimum duration" in out
+    assert "3D preview (open in a browser)" in out
     code, out, _ = run(capsys, "demo", "--out", str(tmp_path), "--json", "--no-plots")
-    assert code == 0 and json.loads(out)["table2_matches"] is True
-    assert json.loads(out)["pick_and_place"]["figures"] == {}
+    assert code == 0 and json.loads(out) == summary
+    assert calls == [("puma560", tmp_path, True), ("puma560", tmp_path, False)]
 
 
 def test_ik_falls_back_to_numerical_ik_for_other_arms(capsys) -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Any
 
 from workbench.cli._common import add_json_flag, print_json
 from workbench.demo.pick_and_place import format_pick_and_place
@@ -41,21 +42,27 @@ def run(args: argparse.Namespace) -> int:
     summary = run_demo(robot, args.out, plots=not args.no_plots)
     if args.json:
         print_json(summary)
-        return 0
-    print(
-        "Angeles et al. (1988), Table II reproduced by FK of Table III "
-        "on the puma560 model (Table I):\n"
-    )
-    print(summary["table2_markdown"])
+    else:
+        print(format_summary(summary, args.out))
+    return 0
+
+
+def format_summary(summary: dict[str, Any], out: Path) -> str:
+    """The text ``workbench demo`` prints: its ``summary.json``, for a person."""
     verdict = "match" if summary["table2_matches"] else "DO NOT match"
-    print(f"\nAll values rounded to the paper's two decimals {verdict} Table II.\n")
-    print(format_pick_and_place(summary["pick_and_place"]))
-    print()
-    print(format_fish_cutting(summary["fish_cutting"]))
+    lines = [
+        "Angeles et al. (1988), Table II reproduced by FK of Table III "
+        "on the puma560 model (Table I):\n",
+        summary["table2_markdown"],
+        f"\nAll values rounded to the paper's two decimals {verdict} Table II.\n",
+        format_pick_and_place(summary["pick_and_place"]),
+        "",
+        format_fish_cutting(summary["fish_cutting"]),
+    ]
     pages = summary.get("pages", {})
     if pages:
-        print(f"\n3D preview (open in a browser): {pages['preview']}")
-        print(f"Singularity report: {pages['singularity_report']}")
-        print(f"Fish cutting preview: {args.out / 'fishcut.html'}")
-    print(f"\nResults written to {args.out}/")
-    return 0
+        lines.append(f"\n3D preview (open in a browser): {pages['preview']}")
+        lines.append(f"Singularity report: {pages['singularity_report']}")
+        lines.append(f"Fish cutting preview: {out / 'fishcut.html'}")
+    lines.append(f"\nResults written to {out}/")
+    return "\n".join(lines)
