@@ -485,7 +485,10 @@ def solve_pose(
     if check and not _roughly_rigid(pose):
         return NOT_RIGID
     y, x = np.empty(N_ANGLES), np.empty(N_ANGLES)
-    status, exact = angle_arguments(geo, pose, prev, y, x, np.empty((4, 4)))
+    # prev as the batch passes it (writable, C): the helpers compile once
+    previous = np.empty(prev.shape[0])
+    previous[:] = prev
+    status, exact = angle_arguments(geo, pose, previous, y, x, np.empty((4, 4)))
     if status != OK:
         return status
     angles = np.empty(N_ANGLES)
@@ -494,7 +497,7 @@ def solve_pose(
             angles[slot] = y[slot]
         else:
             angles[slot] = math.atan2(y[slot], x[slot])
-    assemble(geo, angles, prev, q, flags[:8], exact)
+    assemble(geo, angles, previous, q, flags[:8], exact)
     for pair in range(4):
         flags[8 + pair] = exact >> (T4 + pair) & 1
     flags[12] = exact >> SHOULDER & 1
