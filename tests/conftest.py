@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import sys
 
 import numpy as np
 import pytest
@@ -15,6 +16,13 @@ settings.register_profile("workbench", derandomize=True, deadline=None)
 settings.load_profile("workbench")
 
 PUMA_NAMES = ("puma560", "puma560-kang")
+
+# Bytecode is cached even where PYTHONDONTWRITEBYTECODE is set (as in many container
+# images): each of the suite's Python processes (pytest-xdist workers, command-line
+# runs, notebook kernels) would otherwise compile every module it imports from
+# source again, a few seconds each. Set here, before the workers start.
+os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
+sys.dont_write_bytecode = False
 
 # No progress lines from the command line (tests compare stderr exactly; a loaded
 # machine or a cold Numba cache would add one). test_cli_habits turns them on.
