@@ -487,7 +487,8 @@ def solve_pose(
     y, x = np.empty(N_ANGLES), np.empty(N_ANGLES)
     # prev as the batch passes it (writable, C): the helpers compile once
     previous = np.empty(prev.shape[0])
-    previous[:] = prev
+    for j in range(prev.shape[0]):  # (a slice assignment compiles an overload)
+        previous[j] = prev[j]
     status, exact = angle_arguments(geo, pose, previous, y, x, np.empty((4, 4)))
     if status != OK:
         return status
