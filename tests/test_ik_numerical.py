@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
+import threading
 
 import numpy as np
 import pinocchio as pin
@@ -11,6 +12,7 @@ import pytest
 
 from workbench import DimensionError, InputError, NonFiniteError, Robot, load_robot
 from workbench.ik import IKResult, numeric
+from workbench.ik._chain import StateBlocks
 
 ATOL_IK = 1e-9
 """Pose error accepted from the solver [m] and [rad]."""
@@ -191,6 +193,44 @@ def test_result_is_frozen_and_read_only(puma: Robot) -> None:
         result.success = False  # type: ignore[misc]
     with pytest.raises(ValueError, match="read-only"):
         result.q[0] = 1.0
+
+
+def test_results_keep_their_own_values_across_state_blocks(
+    ur5: Robot, rng: np.random.Generator
+) -> None:
+    """Results share blocks of states (StateBlocks): none overwrites another."""
+    solves = 2 * StateBlocks.BLOCK + 5  # into a third block
+    targets = [ur5.fk(random_configuration(ur5, rng)) for _ in range(solves)]
+    results = [numeric(ur5, target) for target in targets]
+    kept = [result.q.copy() for result in results]
+    numeric(ur5, targets[0], q0=np.zeros(6))  # and one more with a first guess
+    for result, q, target in zip(results, kept, targets, strict=True):
+        np.testing.assert_array_equal(result.q, q)
+        assert not result.q.flags.writeable and result.success
+        assert max(pose_errors(ur5, result.q, target)) <= ATOL_IK
+
+
+def test_state_blocks_hand_out_each_state_once_across_threads() -> None:
+    fresh = np.array([0.0, 0.0, np.inf])
+    blocks = StateBlocks(fresh)
+    taken: list[list[tuple[np.ndarray, np.ndarray]]] = [[] for _ in range(4)]
+
+    def take(into: list) -> None:
+        for _ in range(3 * StateBlocks.BLOCK):
+            into.append(blocks.take())
+
+    threads = [threading.Thread(target=take, args=(t,)) for t in taken]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    states = [pair for into in taken for pair in into]
+    addresses = {state.__array_interface__["data"][0] for state, _ in states}
+    assert len(addresses) == len(states) == 12 * StateBlocks.BLOCK
+    for state, read_only in states:
+        np.testing.assert_array_equal(state, fresh)  # fresh when handed out
+        assert state.flags.writeable and state.flags.c_contiguous
+        assert not read_only.flags.writeable and np.shares_memory(state, read_only)
 
 
 def test_continuous_joint_robot(tmp_path, rng: np.random.Generator) -> None:

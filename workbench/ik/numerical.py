@@ -99,9 +99,10 @@ def numeric(
             towards the middle of the limits (0 where a joint is unlimited).
         tol: Convergence threshold on ``error``, > 0.
         max_iterations: Maximum number of steps over all restarts, >= 1.
-        time_budget: No restart begins after this many seconds [s], > 0
-            (inf allowed); the run under way always continues (at most 40
-            steps), up to ``max_iterations`` steps in total.
+        time_budget: No restart begins more than this many seconds [s]
+            after the first run stalled, > 0 (inf allowed); the run under way
+            always continues (at most 40 steps), up to ``max_iterations``
+            steps in total.
         rng: Generator, or int seed >= 0, of the restart configurations;
             default seed 0, so that results are reproducible. Drawn from only
             when a restart is due.
@@ -145,7 +146,7 @@ def numeric(
         tol, max_iterations = float(tol), int(max_iterations)
     chain = get_chain(robot)
     n = chain.n
-    state = chain.fresh_state.copy()  # [q, best q, statistics], see kernel.run
+    state, state_read_only = chain.states.take()  # [q, best q, stats], kernel.run
     packed, q_ref, features, starts = chain.run_inputs  # (writable: see Chain)
     if q0 is None:
         q_base, guess = chain.mid, True
@@ -154,7 +155,6 @@ def numeric(
         q_ref = chain.to_chain(q_base)
         state[:n] = q_ref
         (features, starts), guess = chain.run_no_seeds, False
-    deadline = time.perf_counter() + time_budget
     tol2 = tol * tol
     run = chain.run  # kernel.run's compiled code: our arguments are typed
     status = run(
@@ -169,22 +169,26 @@ def numeric(
             starts, False,
         )  # fmt: skip
     restarts = 0
-    generator = None
-    while status == kernel.STALLED and time.perf_counter() <= deadline:
+    if status == kernel.STALLED:
         # The clock only stops restarts: a run that converges is never cut
-        # short, e.g. by the process being descheduled.
-        if generator is None:
-            generator = _generator(rng)
+        # short, e.g. by the process being descheduled. It starts here, so
+        # that a solve needing no restart does not read it.
+        deadline = time.perf_counter() + time_budget
+        generator = _generator(rng)
+    while status == kernel.STALLED and (
+        restarts == 0 or time.perf_counter() <= deadline
+    ):
         state[:n] = chain.low + chain.span * generator.random(n)
         restarts += 1
         status = run(
             packed, matrix, q_ref, state, tol2, max_iterations, False, features,
             starts, False,
         )  # fmt: skip
-    best_q = state[n : 2 * n]
-    if not chain.identity:
-        best_q = chain.to_configuration(best_q, q_base)
-    best_q.setflags(write=False)
+    if chain.identity:
+        best_q = state_read_only[n : 2 * n]
+    else:
+        best_q = chain.to_configuration(state[n : 2 * n], q_base)
+        best_q.setflags(write=False)
     err2, position, rotation, steps, _ = state.tolist()[2 * n :]  # (one call)
     # IKResult(...) at a third of the cost: see _Fields.
     result = _Fields()
