@@ -454,26 +454,34 @@ def solution_rows(robot: Robot, targets: np.ndarray) -> np.ndarray:
     )
 
 
+def model_named(name: str) -> Robot:
+    """A catalog model; with the suffix ``-axes``, without its DH table."""
+    base = name.removesuffix("-axes")
+    return load_robot(base) if base == name else plain(load_robot(base))
+
+
+def error_lines(robot: Robot) -> list[str]:
+    """``"<error class> <message>"`` of a pose out of reach and of a non-rigid one."""
+    lines = []
+    for kind, pose in (("reach", np.eye(4)), ("rigid", 2.0 * np.eye(4))):
+        pose[0, 3] = 3.0 if kind == "reach" else 0.0
+        with pytest.raises(WorkbenchError) as error:
+            analytic(robot, pose)
+        lines.append(f"{type(error.value).__name__} {error.value}")
+    return lines
+
+
 _INTERPRETED_SCRIPT = """
 import sys
 import numpy as np
-from workbench import _compiled, load_robot
-from workbench.ik import _puma_kernel, _ur_kernel, analytic
-from tests.test_ik_any_arm import plain, solution_rows
+from workbench import _compiled
+from workbench.ik import _puma_kernel, _ur_kernel
+from tests.test_ik_any_arm import error_lines, model_named, solution_rows
 
 data = np.load(sys.argv[1])
-results = {}
 with _compiled.interpreted():
-    for name in data.files:
-        base = name.removesuffix("-axes")
-        robot = load_robot(base) if base == name else plain(load_robot(base))
-        results[name] = solution_rows(robot, data[name])
-    for kind, pose in (("reach", np.eye(4)), ("rigid", 2.0 * np.eye(4))):
-        pose[0, 3] = 3.0 if kind == "reach" else 0.0
-        try:
-            analytic(robot, pose)
-        except Exception as error:
-            print(type(error).__name__, error)
+    results = {name: solution_rows(model_named(name), data[name]) for name in data}
+    print("\\n".join(error_lines(model_named("ur5"))))
 compiled = _puma_kernel.solve_pose.signatures + _ur_kernel.solve_pose.signatures
 assert not compiled, compiled  # nothing was compiled: the Python source ran
 np.savez(sys.argv[2], **results)
@@ -489,8 +497,7 @@ def test_interpreted_kernels_equal_the_compiled_ones(tmp_path) -> None:
     rng = np.random.default_rng(11)
     targets, robots = {}, {}
     for name in ("puma560", "puma560-kang", "kuka-kr6-r700-axes", "ur5"):
-        base = name.removesuffix("-axes")
-        robot = load_robot(base) if base == name else plain(load_robot(base))
+        robot = model_named(name)
         qs = [rng.uniform(robot.lower, robot.upper) for _ in range(12)]
         qs += [_dh_angle_config(robot, rng, 4, 0.0) for _ in range(4)]  # wrist
         qs += [_dh_angle_config(robot, rng, 2, t) for t in _elbow_theta3(robot)]
@@ -516,10 +523,4 @@ def test_interpreted_kernels_equal_the_compiled_ones(tmp_path) -> None:
         np.testing.assert_array_equal(results[name][:, :2], rows[:, :2])  # labels
         np.testing.assert_array_equal(results[name][:, -3:], rows[:, -3:])  # flags
         np.testing.assert_allclose(results[name], rows, rtol=0, atol=ATOL_INTERPRETED)
-    messages = []
-    for kind, pose in (("reach", np.eye(4)), ("rigid", 2.0 * np.eye(4))):
-        pose[0, 3] = 3.0 if kind == "reach" else 0.0
-        with pytest.raises(WorkbenchError) as error:
-            analytic(robots["ur5"], pose)
-        messages.append(f"{type(error.value).__name__} {error.value}")
-    assert done.stdout.splitlines() == messages
+    assert done.stdout.splitlines() == error_lines(robots["ur5"])
