@@ -118,8 +118,8 @@ def test_urdf_from_dh_regenerates_the_committed_file(capsys, tmp_path: Path) -> 
 
 
 @pytest.fixture(scope="module")
-def demo_run(tmp_path_factory) -> tuple[Path, dict, str]:
-    """``workbench demo --json`` run once: (output folder, printed summary, stderr).
+def demo_run(tmp_path_factory) -> tuple[Path, dict]:
+    """``workbench demo --json`` run once: (output folder, printed summary).
 
     The text mode prints the same summary formatted (``format_summary``), so the
     other demo tests check that wiring with this summary instead of a second run.
@@ -129,11 +129,11 @@ def demo_run(tmp_path_factory) -> tuple[Path, dict, str]:
     with contextlib.redirect_stdout(printed), contextlib.redirect_stderr(err):
         code = main(["demo", "--out", str(out), "--json"])
     assert code == 0, err.getvalue()
-    return out, json.loads(printed.getvalue()), err.getvalue()
+    return out, json.loads(printed.getvalue())
 
 
 def test_demo_reproduces_table2(demo_run) -> None:
-    folder, summary, _ = demo_run
+    folder, summary = demo_run
     text = (folder / "summary.json").read_text()
     assert json.loads(text).keys() == summary.keys()  # (the file rounds floats)
     assert summary["table2_matches"] is True
@@ -161,7 +161,7 @@ def test_demo_reproduces_table2(demo_run) -> None:
 
 def test_demo_text_and_flags(capsys, monkeypatch, demo_run, tmp_path: Path) -> None:
     """Text mode prints the summary formatted; --no-plots reaches the demo."""
-    _, summary, _ = demo_run
+    _, summary = demo_run
     calls = []
 
     def recorded_demo(robot, out, *, plots):
