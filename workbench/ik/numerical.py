@@ -175,15 +175,15 @@ def numeric(
         # that a solve needing no restart does not read it.
         deadline = time.perf_counter() + time_budget
         generator = _generator(rng)
-    while status == kernel.STALLED and (
-        restarts == 0 or time.perf_counter() <= deadline
-    ):
-        state[:n] = chain.low + chain.span * generator.random(n)
-        restarts += 1
-        status = run(
-            packed, matrix, q_ref, state, tol2, max_iterations, False, features,
-            starts, False,
-        )  # fmt: skip
+        while True:
+            state[:n] = chain.low + chain.span * generator.random(n)
+            restarts += 1
+            status = run(
+                packed, matrix, q_ref, state, tol2, max_iterations, False,
+                features, starts, False,
+            )  # fmt: skip
+            if status != kernel.STALLED or time.perf_counter() > deadline:
+                break
     if chain.identity:
         best_q = state_read_only[n : 2 * n]
     else:
