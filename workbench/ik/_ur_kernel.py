@@ -55,6 +55,7 @@ GEOMETRY_DTYPE = np.dtype(
         ("a3", "f8"),
         ("a4", "f8"),
         ("d5", "f8"),
+        ("based", "f8"),  # 1.0 when base_inv is not the identity
         ("reach_low", "f8"),
         ("reach_high", "f8"),
         ("cylinder2", "f8"),
@@ -69,10 +70,11 @@ GEOMETRY_DTYPE = np.dtype(
     align=True,
 )
 
-#: Angle slots: θ1 per shoulder; θ5 of wrist-up per shoulder; θ6 and θ3 of
-#: elbow-up per (shoulder, wrist) pair; θ2 and θ4 per branch.
-U1, U5, U6, U3, U2, U4 = 0, 2, 4, 8, 12, 20
-N_ANGLES = 28
+#: Angle slots: θ1 per shoulder; θ5 of wrist-up per shoulder; θ6, θ3 of
+#: elbow-up and θ234 = θ2 + θ3 + θ4 per (shoulder, wrist) pair; θ2 per branch
+#: (θ4 is θ234 − θ2 − θ3: four atan2 per pose fewer than one per branch).
+U1, U5, U6, U3, U2, U234 = 0, 2, 4, 8, 12, 20
+N_ANGLES = 24
 #: Bit ``DEAD + 2·shoulder + wrist`` of the mask: that pair cannot reach.
 DEAD = 28
 #: Bit ``SINGULAR + shoulder`` of the mask: the wrist is singular (s5 = 0).
@@ -121,6 +123,7 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     ]
     g["lower"], g["upper"] = lower - LIMIT_TOL, upper + LIMIT_TOL
     g["base_inv"] = np.linalg.inv(structure.base)
+    g["based"] = not np.array_equal(g["base_inv"][0], np.eye(4))
     g["tool_inv"] = np.linalg.inv(structure.tool)
     g.setflags(write=False)
     return g
@@ -195,6 +198,8 @@ def _frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
         for j in range(4):
             out[i, j] = p0 * e[0, j] + p1 * e[1, j] + p2 * e[2, j]
         out[i, 3] += pose[i, 3]
+    if geo.based == 0.0:
+        return
     for j in range(4):  # base_inv · that, column by column, in place
         c0, c1, c2 = out[0, j], out[1, j], out[2, j]
         for i in range(3):
@@ -361,12 +366,13 @@ def angle_arguments(
             else:
                 y[U6 + pair], x[U6 + pair] = ss6, cs6
                 c234_up, s234_up, big_x_up, big_y_up = c234, s234, big_x, big_y
+            y[U234 + pair], x[U234 + pair] = s234, c234
             if not (geo.reach_low <= dist <= geo.reach_high):
                 mask |= 1 << (DEAD + pair)
                 y[U3 + pair], x[U3 + pair] = 0.0, dist
                 for elbow in range(2):
                     b = 4 * arm + 2 * elbow + wrist
-                    y[U2 + b], x[U2 + b], y[U4 + b], x[U4 + b] = 0.0, 1.0, 0.0, 1.0
+                    y[U2 + b], x[U2 + b] = 0.0, 1.0
                 continue
             c3 = (dist2 - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)
             c3 = min(max(c3, -1.0), 1.0)
@@ -378,13 +384,8 @@ def angle_arguments(
                 s3 = s3_up if elbow == 0 else -s3_up
                 k1, k2 = a2 + a3 * c3, a3 * s3
                 c2, s2 = big_x * k1 + big_y * k2, big_y * k1 - big_x * k2
+                # (0, 0), frame 3 on axis 2 (theta2 free): atan2 gives 0
                 y[U2 + b], x[U2 + b] = s2, c2
-                if c2 == 0.0 and s2 == 0.0:  # frame 3 on axis 2: theta2 free
-                    c2 = 1.0
-                # unnormalised (c2, s2): theta4's atan2 arguments scale alike
-                c23, s23 = c2 * c3 - s2 * s3, s2 * c3 + c2 * s3
-                y[U4 + b] = s234 * c23 - c234 * s23
-                x[U4 + b] = c234 * c23 + s234 * s23
     if mask >> DEAD & 15 == 15:
         return OUT_OF_REACH, int(mask)
     return OK, int(mask)
@@ -426,11 +427,13 @@ def assemble(
                     if within.shape[0]:
                         within[b] = False
                     continue
-                t3 = angles[U3 + pair]
+                t2, t3 = angles[U2 + b], angles[U3 + pair]
+                t3 = -t3 if elbow else t3
+                t4 = _remainder(angles[U234 + pair] - t2 - t3)
                 q[b, 0] = q1
-                q[b, 1] = _joint_value(geo, 1, angles[U2 + b], prev, has_prev)
-                q[b, 2] = _joint_value(geo, 2, -t3 if elbow else t3, prev, has_prev)
-                q[b, 3] = _joint_value(geo, 3, angles[U4 + b], prev, has_prev)
+                q[b, 1] = _joint_value(geo, 1, t2, prev, has_prev)
+                q[b, 2] = _joint_value(geo, 2, t3, prev, has_prev)
+                q[b, 3] = _joint_value(geo, 3, t4, prev, has_prev)
                 q[b, 4], q[b, 5] = q5, q6
                 if within.shape[0]:
                     ok = True
