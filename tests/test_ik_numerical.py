@@ -213,7 +213,7 @@ def test_results_keep_their_own_values_across_state_blocks(
 def test_state_blocks_hand_out_each_state_once_across_threads() -> None:
     fresh = np.array([0.0, 0.0, np.inf])
     blocks = StateBlocks(fresh)
-    taken: list[list[tuple[np.ndarray, np.ndarray]]] = [[] for _ in range(4)]
+    taken: list[list[tuple[np.ndarray, np.ndarray, int]]] = [[] for _ in range(4)]
 
     def take(into: list) -> None:
         for _ in range(3 * StateBlocks.BLOCK):
@@ -224,7 +224,9 @@ def test_state_blocks_hand_out_each_state_once_across_threads() -> None:
         thread.start()
     for thread in threads:
         thread.join()
-    states = [pair for into in taken for pair in into]
+    states = [
+        (block[row], read_only[row]) for into in taken for block, read_only, row in into
+    ]
     addresses = {state.__array_interface__["data"][0] for state, _ in states}
     assert len(addresses) == len(states) == 12 * StateBlocks.BLOCK
     for state, read_only in states:

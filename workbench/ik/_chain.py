@@ -134,7 +134,8 @@ class Chain:
         # with arguments of the types of numeric's calls.
         warm_up = (
             self.run_inputs[0], np.eye(4), self.run_inputs[1],
-            self.fresh_state.copy(), 0.0, 0, False, *self.run_no_seeds, True,
+            self.fresh_state.reshape(1, -1).copy(), 0, 0.0, 0, False,
+            *self.run_no_seeds, True,
         )  # fmt: skip
         kernel.run(*warm_up)
         self.run = compiled_entry(kernel.run, warm_up)
@@ -235,13 +236,15 @@ def _farthest_points(points: FloatArray, count: int) -> npt.NDArray[np.intp]:
 
 
 class StateBlocks:
-    """Fresh solve states, each handed out once, with a read-only view of it.
+    """Fresh solve states, each handed out once, in blocks with a read-only view.
 
     ``numeric`` returns its best configuration as a read-only view of the state
     the kernel wrote. Marking each new state read-only costs a ``setflags`` call
     per solve, about 0.3 µs with warm caches and 3 µs with cold ones, as between
     the solves of a program that does other work, a tenth of a solve; here
-    ``BLOCK`` states are allocated, initialised and viewed read-only at once.
+    ``BLOCK`` states are allocated, initialised and viewed read-only at once,
+    and a state is a row of the block, which the kernel takes with the row's
+    index: the one array view a solve makes is its result's.
     Thread-safe: ``next`` on the block's counter is atomic, and a new block is
     made under a lock. A result keeps its block alive (``BLOCK`` states, about
     9 KB for six joints).
@@ -264,13 +267,18 @@ class StateBlocks:
         read_only.setflags(write=False)
         return writable, read_only, itertools.count()
 
-    def take(self) -> tuple[FloatArray, FloatArray]:
-        """A fresh state (writable, C-contiguous) and a read-only view of it."""
+    def take(self) -> tuple[FloatArray, FloatArray, int]:
+        """A fresh state: ``(block, read-only view of it, row)``.
+
+        Row ``row`` of the (BLOCK, width) C-contiguous ``block`` is the state,
+        handed out to this caller only; the caller indexes it (an array view
+        per solve would cost what the blocks save).
+        """
         while True:
             block = self._block
             i = next(block[2])
             if i < self.BLOCK:
-                return block[0][i], block[1][i]
+                return block[0], block[1], i
             with self._lock:  # used up: one thread makes the next block
                 if self._block is block:
                     self._block = self._new_block()

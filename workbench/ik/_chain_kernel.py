@@ -247,12 +247,24 @@ def _error(target: FloatArray, frames: FloatArray, e: FloatArray) -> float:
 
 @helper()
 def _solve(a: FloatArray, b: FloatArray, m: int) -> bool:
-    """Solve a x = b (first m rows/columns) in place, x in b; False if singular.
+    """Solve a x = b (first m rows/columns) in place, x in b; False if singular."""
+    return _lu_solve(a, b, m)
 
-    LU with partial pivoting. The pivot is chosen and its row swapped in
-    without branches on the values (a swap with itself when it is in place),
-    and the diagonal keeps the pivots' reciprocals: mispredicted branches and
-    divisions were most of its time.
+
+@helper()
+def _solve6(a: FloatArray, b: FloatArray) -> bool:
+    """:func:`_solve` of six equations: loops of known length, unrolled (faster)."""
+    return _lu_solve(a, b, 6)
+
+
+@helper(forceinline=True)
+def _lu_solve(a: FloatArray, b: FloatArray, m: int) -> bool:
+    """The body of :func:`_solve`: LU with partial pivoting.
+
+    The pivot is chosen and its row swapped in without branches on the values
+    (a swap with itself when it is in place), and the diagonal keeps the
+    pivots' reciprocals: mispredicted branches and divisions were most of its
+    time.
     """
     for k in range(m):
         p, big = k, abs(a[k, k])
@@ -315,7 +327,10 @@ def _damped_step(jac, n, e, pull, use_pull, damping, normal, y, dq):
                 for k in range(n):
                     s += jac[i, k] * pull[k]
         y[i] = s
-    _solve(normal, y, m)  # positive definite: never singular
+    if m == 6:  # positive definite: never singular
+        _solve6(normal, y)
+    else:
+        _solve(normal, y, m)
     for k in range(n):
         if n < 6:
             dq[k] = y[k]
@@ -387,14 +402,15 @@ def _first_guess(features: np.ndarray, starts: FloatArray, target: FloatArray, q
 
 
 @entry_point(
-    outputs=("state",),
+    outputs=("states",),
     contiguous=("chain", "target", "q_ref", "features", "starts"),
 )
 def run(
     chain: FloatArray,
     target: FloatArray,
     q_ref: FloatArray,
-    state: FloatArray,
+    states: FloatArray,
+    row: int,
     tol2: float,
     max_steps: int,
     guess: bool,
@@ -408,10 +424,12 @@ def run(
         chain: (n + 1, CHAIN_WIDTH) chain (module docstring).
         target: (4, 4) homogeneous target of the tool in the base frame [m].
         q_ref: (n,) configuration redundant arms are pulled towards.
-        state: (2 n + N_STATS,) the start ``q`` (overwritten by the last
-            iterate), the best configuration so far and the running
-            statistics (ERR2 inf and STEPS 0 at first), all updated in place:
-            one array, so that a call from Python passes (and allocates) one.
+        states: (m, 2 n + N_STATS) states; row ``row`` is this solve's: the
+            start ``q`` (overwritten by the last iterate), the best
+            configuration so far and the running statistics (ERR2 inf and
+            STEPS 0 at first), all updated in place. A block of states and a
+            row index, so that a call from Python makes no array view.
+        row: The row of ``states``.
         tol2: Squared convergence threshold on |e|.
         max_steps: Step budget over all runs.
         guess: Start from the candidate nearest the target
@@ -421,13 +439,27 @@ def run(
         check: Apply the fast rigidity test to ``target`` first.
 
     Returns:
-        CONVERGED, STALLED (a restart is due), EXHAUSTED (no steps left) or
-        NOT_RIGID (``target`` failed the fast rigidity test; nothing done).
+        ``(status, err2, position, rotation, steps)``: CONVERGED, STALLED (a
+        restart is due), EXHAUSTED (no steps left) or NOT_RIGID (``target``
+        failed the fast rigidity test; nothing done), then the statistics
+        ERR2, POSITION, ROTATION and STEPS of the best configuration so far
+        (a tuple: Python reads them without converting the state).
     """
-    if check and not _roughly_rigid(target):
-        return NOT_RIGID
     n = chain.shape[0] - 1
+    state = states[row]
     q, best_q, stats = state[:n], state[n : 2 * n], state[2 * n :]
+    status = NOT_RIGID
+    if not (check and not _roughly_rigid(target)):
+        status = _iterate(chain, target, q_ref, q, best_q, stats, tol2, max_steps,
+                          guess, features, starts)  # fmt: skip
+    return status, stats[ERR2], stats[POSITION], stats[ROTATION], int(stats[STEPS])
+
+
+@helper()
+def _iterate(chain, target, q_ref, q, best_q, stats, tol2, max_steps, guess,
+             features, starts) -> int:  # fmt: skip
+    """The steps of :func:`run` on its state, split into ``q``, ``best_q``, ``stats``."""
+    n = chain.shape[0] - 1
     if guess:
         _first_guess(features, starts, target, q)
     # Scratch space: frames of the joints and tool, matrices and vectors.
@@ -469,7 +501,7 @@ def run(
                 for j in range(6):
                     normal[i, j] = jac[i, j]
                 dq[i] = e[i]
-            if _solve(normal, dq, n):  # n == 6
+            if _solve6(normal, dq):
                 step2 = 0.0
                 for k in range(6):
                     step2 += dq[k] * dq[k]
@@ -568,7 +600,8 @@ def solve_batch(
         lo, hi = chain[k, 16], chain[k, 17]
         low[k] = lo if math.isfinite(lo) else -UNBOUNDED_SPAN
         span[k] = (hi if math.isfinite(hi) else UNBOUNDED_SPAN) - low[k]
-    state = np.empty(2 * n + N_STATS)
+    states = np.empty((1, 2 * n + N_STATS))
+    state = states[0]
     q, best_q, stats = state[:n], state[n : 2 * n], state[2 * n :]
     draws = np.empty(1, dtype=np.uint64)
     for i in range(targets.shape[0]):
@@ -587,8 +620,8 @@ def solve_batch(
         # (a literal argument would compile another specialisation of run).
         check = i < 0
         while (
-            run(chain, target, ref, state, tol2, max_steps, guess, features, starts,
-                check)
+            run(chain, target, ref, states, 0, tol2, max_steps, guess, features,
+                starts, check)[0]
             == STALLED
         ):  # fmt: skip
             guess = check  # False (see above)

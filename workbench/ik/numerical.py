@@ -146,27 +146,28 @@ def numeric(
         tol, max_iterations = float(tol), int(max_iterations)
     chain = get_chain(robot)
     n = chain.n
-    state, state_read_only = chain.states.take()  # [q, best q, stats], kernel.run
+    # This solve's state: row `row` of a block, [q, best q, stats] (kernel.run)
+    states, states_read_only, row = chain.states.take()
     packed, q_ref, features, starts = chain.run_inputs  # (writable: see Chain)
     if q0 is None:
         q_base, guess = chain.mid, True
     else:
         q_base = reference_configuration(robot, chain, q0)
         q_ref = chain.to_chain(q_base)
-        state[:n] = q_ref
+        states[row, :n] = q_ref
         (features, starts), guess = chain.run_no_seeds, False
     tol2 = tol * tol
     run = chain.run  # kernel.run's compiled code: our arguments are typed
-    status = run(
-        packed, matrix, q_ref, state, tol2, max_iterations, guess, features, starts,
-        True,
+    status, err2, position, rotation, steps = run(
+        packed, matrix, q_ref, states, row, tol2, max_iterations, guess, features,
+        starts, True,
     )  # fmt: skip
     if status == kernel.NOT_RIGID:
         # The exact checks: raise, or accept a pose rigid within the tolerance.
         matrix = np.ascontiguousarray(as_se3(target).homogeneous)
-        status = run(
-            packed, matrix, q_ref, state, tol2, max_iterations, guess, features,
-            starts, False,
+        status, err2, position, rotation, steps = run(
+            packed, matrix, q_ref, states, row, tol2, max_iterations, guess,
+            features, starts, False,
         )  # fmt: skip
     restarts = 0
     if status == kernel.STALLED:
@@ -176,23 +177,22 @@ def numeric(
         deadline = time.perf_counter() + time_budget
         generator = _generator(rng)
         while True:
-            state[:n] = chain.low + chain.span * generator.random(n)
+            states[row, :n] = chain.low + chain.span * generator.random(n)
             restarts += 1
-            status = run(
-                packed, matrix, q_ref, state, tol2, max_iterations, False,
+            status, err2, position, rotation, steps = run(
+                packed, matrix, q_ref, states, row, tol2, max_iterations, False,
                 features, starts, False,
             )  # fmt: skip
             if status != kernel.STALLED or time.perf_counter() > deadline:
                 break
     if chain.identity:
-        best_q = state_read_only[n : 2 * n]
+        best_q = states_read_only[row, n : 2 * n]
     else:
-        best_q = chain.to_configuration(state[n : 2 * n], q_base)
+        best_q = chain.to_configuration(states[row, n : 2 * n], q_base)
         best_q.setflags(write=False)
-    err2, position, rotation, steps, _ = state.tolist()[2 * n :]  # (one call)
     # IKResult(...) at a third of the cost: see _Fields.
     result = _Fields()
-    result.q, result.success, result.iterations = best_q, err2 <= tol2, int(steps)
+    result.q, result.success, result.iterations = best_q, err2 <= tol2, steps
     result.error, result.position_error = math.sqrt(err2), position
     result.rotation_error, result.restarts = rotation, restarts
     result.__class__ = IKResult  # type: ignore[assignment]
