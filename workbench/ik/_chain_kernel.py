@@ -458,7 +458,7 @@ def run(
 @helper()
 def _iterate(chain, target, q_ref, q, best_q, stats, tol2, max_steps, guess,
              features, starts) -> int:  # fmt: skip
-    """The steps of :func:`run` on its state, split into ``q``, ``best_q``, ``stats``."""
+    """The steps of :func:`run`, its state split into ``q``, ``best_q``, ``stats``."""
     n = chain.shape[0] - 1
     if guess:
         _first_guess(features, starts, target, q)
