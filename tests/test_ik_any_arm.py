@@ -35,6 +35,7 @@ from workbench.ik import (
     get_structure,
     nearest,
 )
+from workbench.ik.closed_form import get_solver
 
 ATOL_FK = 1e-9  # every branch reproduces the tool pose [m, and rotation entries]
 ATOL_SAME_Q = 1e-6  # [rad] the generating q is among the branches
@@ -159,6 +160,61 @@ def test_batch_equals_single(arm) -> None:
         assert [s.index for s in solutions] == list(np.nonzero(ok)[0])
         single = np.array([s.q for s in solutions])
         np.testing.assert_allclose(batch[ok], single, rtol=0, atol=1e-9)
+
+
+def test_vectorised_batch_stage_equals_angle_arguments(arm) -> None:
+    """The batch's vectorised first stage gives angle_arguments' values, bitwise.
+
+    On random poses, wrist-singular ones (exactly and 1e-12 off: the scalar
+    fallback), shoulder-singular ones, and unreachable ones (out of reach, in
+    the cylinder of the shoulder offset); angle_arguments runs as Python, whose
+    float arithmetic is the compiled code's (no library call on these paths).
+    """
+    rng = np.random.default_rng(7)
+    qs = list(rng.uniform(arm.lower, arm.upper, size=(200, 6)))
+    qs += [_dh_angle_config(arm, rng, 4, theta) for theta in (0.0, 1e-12, -1e-12)]
+    qs += [q for q in (_shoulder_config(arm, rng) for _ in range(3)) if q is not None]
+    targets = np.array([arm.fk(q).homogeneous for q in qs])
+    targets = np.concatenate([targets, targets[:2], targets[:2]])
+    targets[-4:-2, :3, 3] *= 10.0  # out of reach
+    targets[-2:, :2, 3] *= 1e-3  # near the base axis
+    _, solver, geometry = get_solver(arm)
+    n, slots = len(targets), solver.N_ANGLES
+    y, x = np.full((n, slots), np.nan), np.full((n, slots), np.nan)
+    status, exact = np.empty(n, np.int8), np.empty(n, np.int64)
+    odd = np.empty(n, np.uint8)
+    assert solver.batch_arguments(geometry, targets, y, x, status, exact, odd, True) < 0
+    geo = np.asarray(geometry).view(np.recarray)[0]
+    scalar = solver.angle_arguments.py_func
+    for i, target in enumerate(targets):
+        ys, xs = np.full(slots, np.nan), np.full(slots, np.nan)
+        code, mask = scalar(geo, target, np.empty(0), ys, xs, np.empty((4, 4)))
+        assert status[i] == code, i
+        if code != solver.OK:
+            continue
+        assert exact[i] == mask, i
+        used = [slot for slot in range(slots) if not mask >> slot & 1]
+        np.testing.assert_array_equal(y[i], ys, err_msg=f"pose {i}")
+        np.testing.assert_array_equal(x[i, used], xs[used], err_msg=f"pose {i}")
+    assert (status == solver.OK).sum() >= 200
+    assert (status[-4:-2] == solver.OUT_OF_REACH).all()
+    if get_structure(arm).family == "ur":  # offset D: a cylinder of no reach
+        assert (status[-2:] == solver.IN_CYLINDER).all()
+    # and the batch assembly then gives assemble's joint values
+    angles = np.arctan2(y, np.where(np.isnan(x), 1.0, x))
+    q, valid = np.empty((n, 8, 6)), np.empty((n, 8), bool)
+    solver.batch_assemble(geometry, angles, y, status, exact, q, valid)
+    for i in np.flatnonzero(status == solver.OK):
+        mask = int(exact[i])
+        exact_slots = [bool(mask >> slot & 1) for slot in range(slots)]
+        single, none = np.empty((8, 6)), np.empty(0, bool)
+        theta = np.where(exact_slots, y[i], angles[i])
+        solver.assemble.py_func(geo, theta, np.empty(0), single, none, mask)
+        np.testing.assert_array_equal(q[i], single, err_msg=f"pose {i}")
+        np.testing.assert_array_equal(valid[i], ~np.isnan(single[:, 0]))
+    assert (
+        np.isnan(q[status != solver.OK]).all() and not valid[status != solver.OK].any()
+    )
 
 
 def _dh_angle_config(arm: Robot, rng, joint: int, theta: float) -> np.ndarray:

@@ -52,6 +52,20 @@ Both compile with the options of every kernel of the project: ``cache=True``,
 ``nogil=True``, ``error_model="numpy"`` (a division by zero gives inf or nan,
 as in numpy, rather than raising).
 
+An entry point declared with ``vectorize=True`` holds a loop written for
+LLVM's loop vectoriser (no branches but selects, no library calls, flat
+arrays indexed by unsigned integers: a signed index carries Python's
+negative-index test, which hides the address pattern). While it compiles,
+two of LLVM's options are set, and restored after: such a loop has one
+address per slot it writes, and proving that they do not overlap takes LLVM
+one assumption each, more than its default budget
+(``-vectorize-scev-check-threshold``, 16, raised to
+:data:`VECTORIZE_ASSUMPTIONS`); and its cost model, which counts each
+strided store as a scalar one, declines loops that run twice as fast
+vectorised (measured on the UR closed form), so the width is set
+(``-force-vector-width``, :data:`VECTOR_WIDTH` doubles: AVX2's; other
+machines split or join registers).
+
 Within :func:`interpreted`, a kernel that this process has not compiled yet
 runs its Python source instead: a command that solves one pose (``workbench
 ik``) answers in milliseconds where compiling, on a first run, takes seconds,
@@ -70,6 +84,7 @@ from pathlib import Path
 from typing import IO, Any, TypeVar, cast
 
 import numpy as np
+from llvmlite import binding as llvm
 from numba.core import config, registry, sigutils, types
 from numba.core.compiler_lock import global_compiler_lock
 
@@ -89,6 +104,13 @@ _config: Any = config
 
 #: Options of every kernel (``njit`` implies ``nopython=True``).
 _OPTIONS = {"nopython": True, "nogil": True, "error_model": "numpy"}
+
+#: LLVM's options while a ``vectorize=True`` entry point compiles (module
+#: docstring): the budget of runtime assumptions and the vector width.
+VECTORIZE_ASSUMPTIONS = 1000
+VECTOR_WIDTH = 4
+#: Their LLVM defaults, restored after (0: the cost model chooses the width).
+_LLVM_DEFAULTS = {"vectorize-scev-check-threshold": 16, "force-vector-width": 0}
 
 #: Scalar types fixed by a parameter's annotation.
 _ANNOTATED = {"float": types.float64, "int": types.int64, "bool": types.boolean}
@@ -146,13 +168,14 @@ class _EntryPoint(_Interpretable):
 
     _outputs: frozenset[str] = frozenset()
     _contiguous: frozenset[str] = frozenset()
+    _vectorize = False
 
     def compile(self, sig: Any) -> Any:
         args, _ = sigutils.normalize_signature(sig)
         with global_compiler_lock:  # one thread builds the signature
             if not self._can_compile:  # another thread built it meanwhile
                 return next(iter(self.overloads.values())).entry_point
-            with self._one_process_at_a_time():
+            with self._one_process_at_a_time(), self._vectorizer_options():
                 entry = super().compile(self._signature(args))  # or load it
             self.disable_compile()
             return entry
@@ -172,6 +195,21 @@ class _EntryPoint(_Interpretable):
                 arg = _ANNOTATED.get(annotation, types.unliteral(arg))
             result.append(arg)
         return tuple(result)
+
+    @contextlib.contextmanager
+    def _vectorizer_options(self) -> Iterator[None]:
+        """LLVM's options set while a ``vectorize`` kernel compiles (module doc)."""
+        if not self._vectorize:
+            yield
+            return
+        llvm.set_option("", f"-vectorize-scev-check-threshold={VECTORIZE_ASSUMPTIONS}")
+        if self._vectorize == "force":
+            llvm.set_option("", f"-force-vector-width={VECTOR_WIDTH}")
+        try:
+            yield
+        finally:
+            for name, value in _LLVM_DEFAULTS.items():
+                llvm.set_option("", f"-{name}={value}")
 
     @contextlib.contextmanager
     def _one_process_at_a_time(self) -> Iterator[None]:
@@ -195,7 +233,10 @@ class _EntryPoint(_Interpretable):
 
 
 def entry_point(
-    *, outputs: Iterable[str] = (), contiguous: Iterable[str] = ()
+    *,
+    outputs: Iterable[str] = (),
+    contiguous: Iterable[str] = (),
+    vectorize: bool = False,
 ) -> Callable[[F], F]:
     """Compile a kernel that Python calls, with one signature (module docstring).
 
@@ -203,6 +244,8 @@ def entry_point(
         outputs: Names of the array parameters the kernel writes to.
         contiguous: Names of input arrays compiled as C-contiguous (faster
             loops); every caller must pass C-contiguous arrays there.
+        vectorize: The kernel's loop is written for LLVM's loop vectoriser,
+            which gets the assumption budget it needs (module docstring).
 
     Raises:
         TypeError: If the function has default arguments, or ``outputs`` or
@@ -221,6 +264,7 @@ def entry_point(
             return func
         dispatcher = _EntryPoint(func, targetoptions=dict(_OPTIONS))
         dispatcher._outputs, dispatcher._contiguous = outputs, contiguous
+        dispatcher._vectorize = vectorize
         dispatcher.enable_caching()
         return cast(F, dispatcher)
 

@@ -288,7 +288,7 @@ def compiled_entry(dispatcher: Callable[..., Any], args: tuple[Any, ...]) -> Any
     """The compiled code of ``dispatcher`` for arguments of the types of ``args``.
 
     Numba's dispatcher types every argument of every call to choose the
-    compiled code to run: for the ten of ``kernel.run``, about 0.6 µs of a
+    compiled code to run: for the eleven of ``kernel.run``, about 0.6 µs of a
     call from Python when caches are warm and 2.5 µs when they are not (e.g.
     between calls of other code), a third of the cost of a call that takes no
     step. The entry point it would choose can be called directly, with

@@ -55,9 +55,9 @@ def pose_rows(target: pin.SE3 | npt.ArrayLike) -> list[list[float]]:
 
 
 def as_targets(targets: npt.ArrayLike) -> FloatArray:
-    """``targets`` as a float array of shape (N, 4, 4), not yet checked."""
+    """``targets`` as a C-contiguous float array (N, 4, 4), not yet checked."""
     try:
-        t = np.asarray(targets, dtype=np.float64)
+        t = np.ascontiguousarray(targets, dtype=np.float64)
     except (TypeError, ValueError) as err:
         raise NonFiniteError("targets must be numbers") from err
     if t.ndim != 3 or t.shape[1:] != (4, 4):

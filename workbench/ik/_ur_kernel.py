@@ -21,7 +21,10 @@ wrist up / down (σ5 sin θ5 > 0 / < 0: z5 along +x4 / −x4). Branch ``b`` =
 4·left + 2·down + wrist-down.
 
 Like ``_puma_kernel``, every angle is an atan2 of arguments computed first, so
-that a batch makes all atan2 calls in one vectorised loop. The helpers
+that a batch makes all atan2 calls in one vectorised loop, and the batch's
+first stage (:func:`batch_arguments`) is :func:`angle_arguments` rewritten for
+LLVM's loop vectoriser, bitwise equal (poses with a singular wrist or the
+wrist point on the base axis go to :func:`angle_arguments`). The helpers
 that ``_puma_kernel`` also has are repeated here: Numba's cache is not
 invalidated across files, so a kernel calls only functions of its own file.
 """
@@ -82,6 +85,8 @@ SINGULAR = 32
 #: Bit of the mask: shoulder singular (as ``_puma_kernel.SHOULDER``).
 SHOULDER = 34
 SHOULDER_SINGULAR_TOL = 1e-10
+#: The bits of the mask that mark slots.
+_SLOT_BITS = (1 << N_ANGLES) - 1
 
 _FAST_TOL2 = (RIGIDITY_TOL / 5.0) ** 2
 _PI = math.pi
@@ -174,19 +179,48 @@ def _joint_value(geo, j: int, theta: float, prev: FloatArray, has_prev: bool) ->
 @_inline
 def _roughly_rigid(pose: FloatArray) -> bool:
     """Fast acceptance test of a pose (as ``_puma_kernel._roughly_rigid``)."""
-    r00, r01, r02 = pose[0, 0], pose[0, 1], pose[0, 2]
-    r10, r11, r12 = pose[1, 0], pose[1, 1], pose[1, 2]
-    r20, r21, r22 = pose[2, 0], pose[2, 1], pose[2, 2]
+    return _rigid_entries(
+        pose[0, 0], pose[0, 1], pose[0, 2], pose[0, 3],
+        pose[1, 0], pose[1, 1], pose[1, 2], pose[1, 3],
+        pose[2, 0], pose[2, 1], pose[2, 2], pose[2, 3],
+        pose[3, 0], pose[3, 1], pose[3, 2], pose[3, 3],
+    )  # fmt: skip
+
+
+@_inline
+def _rigid_entries(
+    r00, r01, r02, r03, r10, r11, r12, r13, r20, r21, r22, r23, b0, b1, b2, b3
+) -> bool:
+    """:func:`_roughly_rigid` of the 16 entries of a pose, row by row."""
     e0 = r00 * r00 + r10 * r10 + r20 * r20 - 1.0
     e1 = r01 * r01 + r11 * r11 + r21 * r21 - 1.0
     e2 = r00 * r01 + r10 * r11 + r20 * r21
     ex = r10 * r21 - r20 * r11 - r02
     ey = r20 * r01 - r00 * r21 - r12
     ez = r00 * r11 - r10 * r01 - r22
-    b0, b1, b2, b3 = pose[3, 0], pose[3, 1], pose[3, 2], pose[3, 3] - 1.0
+    b3 = b3 - 1.0
     err2 = e0 * e0 + e1 * e1 + e2 * e2 + ex * ex + ey * ey + ez * ez
     err2 += b0 * b0 + b1 * b1 + b2 * b2 + b3 * b3
-    return err2 <= _FAST_TOL2 and (pose[0, 3] + pose[1, 3] + pose[2, 3]) * 0.0 == 0.0
+    return (err2 <= _FAST_TOL2) & ((r03 + r13 + r23) * 0.0 == 0.0)
+
+
+@_inline
+def _clip_unit(k: float) -> float:
+    """``k`` clipped to [−1, 1] (as ``_puma_kernel._clip_unit``)."""
+    k = k if k > -1.0 else -1.0
+    return k if k < 1.0 else 1.0
+
+
+@_inline
+def _clamped_root(v: float) -> float:
+    """√max(v, 0), as ``_puma_kernel._clamped_root`` (vectorisable)."""
+    return math.sqrt(abs(v if v > 0.0 else 0.0))
+
+
+@_inline
+def _at(i: int, width: int, slot: int) -> np.uint64:
+    """Flat index ``i * width + slot``, unsigned (as ``_puma_kernel._at``)."""
+    return np.uint64(i) * np.uint64(width) + np.uint64(slot)
 
 
 @_inline
@@ -209,20 +243,22 @@ def _frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
 
 
 @_inline
-def _planar(geo, c1, s1, c5, c6, s6, s5, m, big_px, big_py):
+def _planar(geo, c1, s1, c5, c6, s6, s5, rot, big_px, big_py):
     """x4 = (c234, s234) and the origin of frame 3 (X, Y) in the arm plane.
 
     For one (θ1, θ5, θ6): x4 = R14 e_x, and frame 3's origin = wrist point −
     d5 z4 − a4 x4, z4 = σ5 (s6 n + c6 o), seen from the shoulder in frame 1.
+    ``rot``: the target's rotation (nx, ox, ax, ny, oy, ay, nz, oz, az).
     """
     s1g, s5g = geo.sigma1, geo.sigma5
-    wx = c6 * c5 * m[0, 0] - s6 * c5 * m[0, 1] + s5g * s5 * m[0, 2]
-    wy = c6 * c5 * m[1, 0] - s6 * c5 * m[1, 1] + s5g * s5 * m[1, 2]
-    wz = c6 * c5 * m[2, 0] - s6 * c5 * m[2, 1] + s5g * s5 * m[2, 2]
+    nx, ox, ax, ny, oy, ay, nz, oz, az = rot
+    wx = c6 * c5 * nx - s6 * c5 * ox + s5g * s5 * ax
+    wy = c6 * c5 * ny - s6 * c5 * oy + s5g * s5 * ay
+    wz = c6 * c5 * nz - s6 * c5 * oz + s5g * s5 * az
     c234, s234 = c1 * wx + s1 * wy, s1g * wz
-    zx = s5g * (s6 * m[0, 0] + c6 * m[0, 1])
-    zy = s5g * (s6 * m[1, 0] + c6 * m[1, 1])
-    zz = s5g * (s6 * m[2, 0] + c6 * m[2, 1])
+    zx = s5g * (s6 * nx + c6 * ox)
+    zy = s5g * (s6 * ny + c6 * oy)
+    zz = s5g * (s6 * nz + c6 * oz)
     big_x = big_px - geo.d5 * (c1 * zx + s1 * zy) - geo.a4 * c234
     big_y = big_py - geo.d5 * s1g * zz - geo.a4 * s234
     return c234, s234, big_x, big_y
@@ -292,6 +328,7 @@ def angle_arguments(
     ox, oy = m[0, 1], m[1, 1]
     ax, ay = m[0, 2], m[1, 2]
     px, py, pz = m[0, 3], m[1, 3], m[2, 3]
+    rot = (nx, ox, ax, ny, oy, ay, m[2, 0], m[2, 1], m[2, 2])
     r2 = px * px + py * py
     if r2 < geo.cylinder2:
         x[U3] = math.sqrt(r2)
@@ -299,7 +336,7 @@ def angle_arguments(
     s1g, s4g, s5g = geo.sigma1, geo.sigma4, geo.sigma5
     sd = s1g * geo.offset
     right = 1.0 if sd >= 0.0 else -1.0
-    rho = math.sqrt(max(r2 - geo.offset * geo.offset, 0.0))
+    rho = _clamped_root(r2 - geo.offset * geo.offset)
     a2, a3 = geo.a2, geo.a3
     mask = np.int64(0)
     if rho <= SHOULDER_SINGULAR_TOL:
@@ -340,7 +377,7 @@ def angle_arguments(
             cs6, ss6, ss5 = sw * c6, sw * s6, sw * s5
             if wrist == 0 or singular:
                 c234, s234, big_x, big_y = _planar(
-                    geo, c1, s1, c5, cs6, ss6, ss5, m, big_px, big_py
+                    geo, c1, s1, c5, cs6, ss6, ss5, rot, big_px, big_py
                 )
             else:  # x4 and z4 turn over: frame 3 mirrored about the wrist point
                 c234, s234 = -c234_up, -s234_up
@@ -357,7 +394,7 @@ def angle_arguments(
                     )
                     cs6, ss6 = math.cos(t6p), math.sin(t6p)
                     c234, s234, big_x, big_y = _planar(
-                        geo, c1, s1, c5, cs6, ss6, ss5, m, big_px, big_py
+                        geo, c1, s1, c5, cs6, ss6, ss5, rot, big_px, big_py
                     )
                     dist2 = big_x * big_x + big_y * big_y
                     dist = math.sqrt(dist2)
@@ -375,9 +412,9 @@ def angle_arguments(
                     y[U2 + b], x[U2 + b] = 0.0, 1.0
                 continue
             c3 = (dist2 - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)
-            c3 = min(max(c3, -1.0), 1.0)
+            c3 = _clip_unit(c3)
             up = -1.0 if s1g * a2 * a3 * big_x > 0.0 else 1.0
-            s3_up = up * math.sqrt(1.0 - c3 * c3)
+            s3_up = up * _clamped_root(1.0 - c3 * c3)
             y[U3 + pair], x[U3 + pair] = s3_up, c3
             for elbow in range(2):
                 b = 4 * arm + 2 * elbow + wrist
@@ -518,23 +555,201 @@ def diagnose(geometry: np.ndarray, pose: FloatArray) -> tuple[int, float]:
     return OK, 0.0
 
 
-@entry_point(outputs=("y", "x", "status", "exact"))
+@_inline
+def _pair_arguments(y, x, i, arm, wrist, planar, geo) -> bool:
+    """θ3 and θ2 slots of one (shoulder, wrist) pair of pose ``i``; dead?
+
+    ``planar``: (c234, s234, X, Y) of the pair. As :func:`angle_arguments`
+    for a pair whose wrist is not singular.
+    """
+    c234, s234, big_x, big_y = planar
+    pair = 2 * arm + wrist
+    a2, a3 = geo.a2, geo.a3
+    dist2 = big_x * big_x + big_y * big_y
+    dist = math.sqrt(dist2)
+    dead = (dist < geo.reach_low) | (dist > geo.reach_high)
+    y[_at(i, N_ANGLES, U234 + pair)] = s234
+    x[_at(i, N_ANGLES, U234 + pair)] = c234
+    c3 = _clip_unit((dist2 - a2 * a2 - a3 * a3) / (2.0 * a2 * a3))
+    up = -1.0 if geo.sigma1 * a2 * a3 * big_x > 0.0 else 1.0
+    s3_up = up * _clamped_root(1.0 - c3 * c3)
+    y[_at(i, N_ANGLES, U3 + pair)] = 0.0 if dead else s3_up
+    x[_at(i, N_ANGLES, U3 + pair)] = dist if dead else c3
+    for elbow in range(2):
+        b = 4 * arm + 2 * elbow + wrist
+        s3 = s3_up if elbow == 0 else -s3_up
+        k1, k2 = a2 + a3 * c3, a3 * s3
+        c2, s2 = big_x * k1 + big_y * k2, big_y * k1 - big_x * k2
+        y[_at(i, N_ANGLES, U2 + b)] = 0.0 if dead else s2
+        x[_at(i, N_ANGLES, U2 + b)] = 1.0 if dead else c2
+    return dead
+
+
+@_inline
+def _arm_arguments(y, x, i, arm, x1, point, rot, geo):
+    """Slots of one shoulder of pose ``i``: (dead up, dead down, singular).
+
+    ``point``: the wrist point (px, py, pz, r2); ``rot`` as :func:`_planar`.
+    As :func:`angle_arguments` for a shoulder whose wrist is not singular.
+    """
+    px, py, pz, r2 = point
+    nx, ox, ax, ny, oy, ay = rot[0], rot[1], rot[2], rot[3], rot[4], rot[5]
+    s1g, s4g, s5g = geo.sigma1, geo.sigma4, geo.sigma5
+    sd = s1g * geo.offset
+    c1, s1 = (px * x1 - py * sd) / r2, (py * x1 + px * sd) / r2
+    y[_at(i, N_ANGLES, U1 + arm)] = s1
+    x[_at(i, N_ANGLES, U1 + arm)] = c1
+    c5 = -s4g * s5g * s1g * (s1 * ax - c1 * ay)
+    vx, vy = s1g * (s1 * nx - c1 * ny), s1g * (s1 * ox - c1 * oy)
+    s5 = s5g * math.sqrt(vx * vx + vy * vy)
+    y[_at(i, N_ANGLES, U5 + arm)] = s5
+    x[_at(i, N_ANGLES, U5 + arm)] = c5
+    singular = abs(s5) <= WRIST_SINGULAR_TOL
+    inv = s4g / s5
+    c6, s6 = vx * inv, -vy * inv
+    big_px, big_py = c1 * px + s1 * py - geo.a1, s1g * (pz - geo.d1)
+    y[_at(i, N_ANGLES, U6 + 2 * arm)] = s6
+    x[_at(i, N_ANGLES, U6 + 2 * arm)] = c6
+    y[_at(i, N_ANGLES, U6 + 2 * arm + 1)] = -s6
+    x[_at(i, N_ANGLES, U6 + 2 * arm + 1)] = -c6
+    c234, s234, big_x, big_y = _planar(geo, c1, s1, c5, c6, s6, s5, rot, big_px, big_py)
+    up = _pair_arguments(y, x, i, arm, 0, (c234, s234, big_x, big_y), geo)
+    # the other wrist: frame 3 mirrored about the wrist point
+    mirrored = (-c234, -s234, 2.0 * big_px - big_x, 2.0 * big_py - big_y)
+    down = _pair_arguments(y, x, i, arm, 1, mirrored, geo)
+    return up, down, singular
+
+
+@entry_point(
+    outputs=("y", "x", "status", "exact", "odd"),
+    contiguous=("poses",),
+    vectorize="force",
+)
 def batch_arguments(
     geometry: np.ndarray,
     poses: FloatArray,
     y: FloatArray,
     x: FloatArray,
     status: npt.NDArray[np.int8],
-    exact: npt.NDArray[np.int32],
+    exact: npt.NDArray[np.int64],
+    odd: npt.NDArray[np.uint8],
     check: bool,
 ) -> int:
-    """Stage 1 of a batch (as ``_puma_kernel.batch_arguments``)."""
+    """Stage 1 of a batch, vectorised (as ``_puma_kernel.batch_arguments``).
+
+    Poses with a singular wrist or the wrist point on the base axis are
+    recomputed by :func:`angle_arguments`; the others get its values, bitwise.
+    """
     geo = geometry[0]
+    flat, y_flat, x_flat = poses.reshape(-1), y.reshape(-1), x.reshape(-1)
+    b, e = geo.base_inv, geo.tool_inv
+    b00, b01, b02, b03 = b[0, 0], b[0, 1], b[0, 2], b[0, 3]
+    b10, b11, b12, b13 = b[1, 0], b[1, 1], b[1, 2], b[1, 3]
+    b20, b21, b22, b23 = b[2, 0], b[2, 1], b[2, 2], b[2, 3]
+    e00, e01, e02, e03 = e[0, 0], e[0, 1], e[0, 2], e[0, 3]
+    e10, e11, e12, e13 = e[1, 0], e[1, 1], e[1, 2], e[1, 3]
+    e20, e21, e22, e23 = e[2, 0], e[2, 1], e[2, 2], e[2, 3]
+    based = geo.based != 0.0
+    right = 1.0 if geo.sigma1 * geo.offset >= 0.0 else -1.0
+    for i in range(poses.shape[0]):
+        r00, r01, r02, r03 = (
+            flat[_at(i, 16, 0)],
+            flat[_at(i, 16, 1)],
+            flat[_at(i, 16, 2)],
+            flat[_at(i, 16, 3)],
+        )
+        r10, r11, r12, r13 = (
+            flat[_at(i, 16, 4)],
+            flat[_at(i, 16, 5)],
+            flat[_at(i, 16, 6)],
+            flat[_at(i, 16, 7)],
+        )
+        r20, r21, r22, r23 = (
+            flat[_at(i, 16, 8)],
+            flat[_at(i, 16, 9)],
+            flat[_at(i, 16, 10)],
+            flat[_at(i, 16, 11)],
+        )
+        r30, r31, r32, r33 = (
+            flat[_at(i, 16, 12)],
+            flat[_at(i, 16, 13)],
+            flat[_at(i, 16, 14)],
+            flat[_at(i, 16, 15)],
+        )
+        rigid = _rigid_entries(
+            r00,
+            r01,
+            r02,
+            r03,
+            r10,
+            r11,
+            r12,
+            r13,
+            r20,
+            r21,
+            r22,
+            r23,
+            r30,
+            r31,
+            r32,
+            r33,
+        )
+        # _frame_pose: rows of pose · tool_inv, then base_inv · that
+        t00 = r00 * e00 + r01 * e10 + r02 * e20
+        t01 = r00 * e01 + r01 * e11 + r02 * e21
+        t02 = r00 * e02 + r01 * e12 + r02 * e22
+        t03 = r00 * e03 + r01 * e13 + r02 * e23 + r03
+        t10 = r10 * e00 + r11 * e10 + r12 * e20
+        t11 = r10 * e01 + r11 * e11 + r12 * e21
+        t12 = r10 * e02 + r11 * e12 + r12 * e22
+        t13 = r10 * e03 + r11 * e13 + r12 * e23 + r13
+        t20 = r20 * e00 + r21 * e10 + r22 * e20
+        t21 = r20 * e01 + r21 * e11 + r22 * e21
+        t22 = r20 * e02 + r21 * e12 + r22 * e22
+        t23 = r20 * e03 + r21 * e13 + r22 * e23 + r23
+        nx = b00 * t00 + b01 * t10 + b02 * t20 if based else t00
+        ny = b10 * t00 + b11 * t10 + b12 * t20 if based else t10
+        nz = b20 * t00 + b21 * t10 + b22 * t20 if based else t20
+        ox = b00 * t01 + b01 * t11 + b02 * t21 if based else t01
+        oy = b10 * t01 + b11 * t11 + b12 * t21 if based else t11
+        oz = b20 * t01 + b21 * t11 + b22 * t21 if based else t21
+        ax = b00 * t02 + b01 * t12 + b02 * t22 if based else t02
+        ay = b10 * t02 + b11 * t12 + b12 * t22 if based else t12
+        az = b20 * t02 + b21 * t12 + b22 * t22 if based else t22
+        px = b00 * t03 + b01 * t13 + b02 * t23 + b03 if based else t03
+        py = b10 * t03 + b11 * t13 + b12 * t23 + b13 if based else t13
+        pz = b20 * t03 + b21 * t13 + b22 * t23 + b23 if based else t23
+        r2 = px * px + py * py
+        rho = _clamped_root(r2 - geo.offset * geo.offset)
+        rot = (nx, ox, ax, ny, oy, ay, nz, oz, az)
+        point = (px, py, pz, r2)
+        x1 = right * rho
+        dead0, dead1, singular_r = _arm_arguments(
+            y_flat, x_flat, i, 0, x1, point, rot, geo
+        )
+        dead2, dead3, singular_l = _arm_arguments(
+            y_flat, x_flat, i, 1, -x1, point, rot, geo
+        )
+        mask = (1 << SHOULDER) if rho <= SHOULDER_SINGULAR_TOL else 0
+        mask |= (1 << DEAD) if dead0 else 0
+        mask |= (1 << (DEAD + 1)) if dead1 else 0
+        mask |= (1 << (DEAD + 2)) if dead2 else 0
+        mask |= (1 << (DEAD + 3)) if dead3 else 0
+        code = OUT_OF_REACH if dead0 & dead1 & dead2 & dead3 else OK
+        code = IN_CYLINDER if r2 < geo.cylinder2 else code
+        status[i] = code
+        exact[i] = mask if code == OK else 0
+        # (a singular wrist's pairs may reach after all: angle_arguments says)
+        special = (code != IN_CYLINDER) & ((r2 <= 0.0) | singular_r | singular_l)
+        odd[i] = (1 if special else 0) | (2 if check & (not rigid) else 0)
     none, scratch = np.empty(0), np.empty((4, 4))
     for i in range(poses.shape[0]):
-        if check and not _roughly_rigid(poses[i]):
-            return i
-        status[i], exact[i] = angle_arguments(geo, poses[i], none, y[i], x[i], scratch)
+        if odd[i]:
+            if odd[i] & 2:
+                return i
+            status[i], exact[i] = angle_arguments(
+                geo, poses[i], none, y[i], x[i], scratch
+            )
     return -1
 
 
@@ -544,7 +759,7 @@ def batch_assemble(
     angles: FloatArray,
     y: FloatArray,
     status: npt.NDArray[np.int8],
-    exact: npt.NDArray[np.int32],
+    exact: npt.NDArray[np.int64],
     q: FloatArray,
     valid: npt.NDArray[np.bool_],
 ) -> None:
@@ -557,9 +772,10 @@ def batch_assemble(
             valid[i] = False
             continue
         mask = exact[i]
-        for slot in range(N_ANGLES):
-            if mask >> slot & 1:
-                angles[i, slot] = y[i, slot]
+        if mask & _SLOT_BITS:  # (rare: a free theta1 or theta6)
+            for slot in range(N_ANGLES):
+                if mask >> slot & 1:
+                    angles[i, slot] = y[i, slot]
         assemble(geo, angles[i], none, q[i], no_within, mask)
         for b in range(8):
             valid[i, b] = not (mask >> (DEAD + 2 * (b >> 2) + (b & 1)) & 1)

@@ -362,10 +362,11 @@ def analytic_batch(
     y, x, angles = np.empty((3, size, solver.N_ANGLES))
     status = np.empty(size, dtype=np.int8)
     exact = np.empty(size, dtype=np.int64)
+    odd = np.empty(size, dtype=np.uint8)
     for start in range(0, count, _CHUNK):
         chunk = poses[start : start + _CHUNK]
         n = len(chunk)
-        arguments = y[:n], x[:n], status[:n], exact[:n]
+        arguments = y[:n], x[:n], status[:n], exact[:n], odd[:n]
         if solver.batch_arguments(geometry, chunk, *arguments, True) >= 0:
             check_poses(chunk, start)  # the exact checks raise, or accept all
             solver.batch_arguments(geometry, chunk, *arguments, False)
