@@ -203,8 +203,7 @@ class _EntryPoint(_Interpretable):
             yield
             return
         llvm.set_option("", f"-vectorize-scev-check-threshold={VECTORIZE_ASSUMPTIONS}")
-        if self._vectorize == "force":
-            llvm.set_option("", f"-force-vector-width={VECTOR_WIDTH}")
+        llvm.set_option("", f"-force-vector-width={VECTOR_WIDTH}")
         try:
             yield
         finally:
@@ -245,7 +244,8 @@ def entry_point(
         contiguous: Names of input arrays compiled as C-contiguous (faster
             loops); every caller must pass C-contiguous arrays there.
         vectorize: The kernel's loop is written for LLVM's loop vectoriser,
-            which gets the assumption budget it needs (module docstring).
+            which gets the assumption budget and vector width it needs
+            (module docstring).
 
     Raises:
         TypeError: If the function has default arguments, or ``outputs`` or

@@ -417,7 +417,7 @@ def run(
     features: npt.NDArray[np.float32],
     starts: FloatArray,
     check: bool,
-) -> int:
+) -> tuple[int, float, float, float, int]:
     """One run of damped Newton steps from ``q``, until it converges or stalls.
 
     Args:

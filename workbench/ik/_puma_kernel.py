@@ -618,7 +618,7 @@ def _arm_arguments(y, x, i, arm, x1, xp, distance, pz, px, py, r2, pose, geo):
 @entry_point(
     outputs=("y", "x", "status", "exact", "odd"),
     contiguous=("poses",),
-    vectorize="force",
+    vectorize=True,
 )
 def batch_arguments(
     geometry: np.ndarray,
