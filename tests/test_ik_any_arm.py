@@ -183,7 +183,10 @@ def test_vectorised_batch_stage_equals_angle_arguments(arm) -> None:
     y, x = np.full((n, slots), np.nan), np.full((n, slots), np.nan)
     status, exact = np.empty(n, np.int8), np.empty(n, np.int64)
     odd = np.empty(n, np.uint8)
-    assert solver.batch_arguments(geometry, targets, y, x, status, exact, odd, True) < 0
+    flat = (targets.reshape(-1), y.reshape(-1), x.reshape(-1))
+    flagged = solver.batch_arguments(geometry, *flat, status, exact, odd, True)
+    assert flagged == np.count_nonzero(odd) >= 3
+    assert solver.batch_fallback(geometry, targets, y, x, status, exact, odd) < 0
     geo = np.asarray(geometry).view(np.recarray)[0]
     scalar = solver.angle_arguments.py_func
     for i, target in enumerate(targets):

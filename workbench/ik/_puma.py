@@ -84,6 +84,12 @@ class UnreachableError(InfeasibleError):
         super().__init__(message)
 
 
+def _one_turn(lower: float, upper: float) -> bool:
+    """Whether a joint's value is its angle in (−π, π]: limits inside or around it."""
+    inside = lower >= -math.pi and upper <= math.pi
+    return inside or (lower <= -math.pi and upper >= math.pi)
+
+
 @dataclass(frozen=True, slots=True)
 class PumaGeometry:
     r"""What the closed form needs of one robot, computed once.
@@ -106,8 +112,9 @@ class PumaGeometry:
         cos_alpha6, sin_alpha6: Twist of the last row.
         theta_offset: Theta offsets, (6,) [rad].
         lower, upper: Joint limits of the robot, (6,) [rad].
-        plain: Per joint, True when a value in (−π, π] needs no wrapping:
-            zero offset and limits inside [−π, π].
+        plain: Per joint, True when the DH angle in (−π, π] is the joint
+            value: zero offset, unit sign, and limits inside [−π, π] (no other
+            turn is within them) or containing it (it always is).
         bounds: ``(lower - LIMIT_TOL, upper + LIMIT_TOL)``, the tests of
             "within limits".
         joint_sign: DH angle θ = s q + θ0 per joint, (6,) of ±1.0.
@@ -216,7 +223,7 @@ def geometry_from_dh(
     offsets = tuple(j.theta_offset for j in table.joints)
     signs = tuple(float(x) for x in joint_sign)
     plain = tuple(
-        o == 0.0 and s == 1.0 and lo >= -math.pi and hi <= math.pi
+        o == 0.0 and s == 1.0 and _one_turn(lo, hi)
         for o, s, lo, hi in zip(offsets, signs, lower_t, upper_t, strict=True)
     )
     if j1.a == 0.0:  # distance in 3-D from the shoulder, the offset included

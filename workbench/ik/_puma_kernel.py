@@ -636,26 +636,24 @@ def batch_arguments(
     at a time with AVX2): the same arithmetic as :func:`angle_arguments`, in
     the same order (the results are bitwise equal, tested), with selects for
     branches. The poses it cannot handle that way (wrist centre on the base
-    axis, a singular wrist) are marked ``odd`` and then recomputed by
-    :func:`angle_arguments`.
+    axis, a singular wrist) are marked ``odd``, for :func:`batch_fallback`.
 
     Args:
         geometry: (1,) record array of :data:`GEOMETRY_DTYPE`.
-        poses: (N, 4, 4) target poses, C-contiguous.
-        y: (N, N_ANGLES) output, first arguments of the atan2.
-        x: (N, N_ANGLES) output, second arguments.
+        poses: (N · 16,) target poses, the (N, 4, 4) array flattened.
+        y: (N · N_ANGLES,) output, first arguments of the atan2, the
+            (N, N_ANGLES) array flattened.
+        x: (N · N_ANGLES,) output, second arguments, likewise.
         status: (N,) output status per pose.
         exact: (N,) output bit masks.
-        odd: (N,) scratch: bit 0 the pose needs angle_arguments, bit 1 it
+        odd: (N,) output: bit 0 the pose needs angle_arguments, bit 1 it
             failed the fast rigidity test.
         check: Run the fast rigidity test on each pose.
 
     Returns:
-        −1, or the index of the first pose that fails the fast rigidity test
-        (with ``check``; the outputs are then undefined).
+        The number of poses flagged in ``odd`` (0: nothing left to do).
     """
     geo = geometry[0]
-    flat, y_flat, x_flat = poses.reshape(-1), y.reshape(-1), x.reshape(-1)
     b, e = geo.base_inv, geo.tool_inv
     b00, b01, b02, b03 = b[0, 0], b[0, 1], b[0, 2], b[0, 3]
     b10, b11, b12, b13 = b[1, 0], b[1, 1], b[1, 2], b[1, 3]
@@ -667,30 +665,31 @@ def batch_arguments(
     ca, sa, d6, a1g = geo.cos_alpha6, geo.sin_alpha6, geo.d6, geo.a1
     s1g, off = geo.sigma1, geo.offset
     right = 1.0 if s1g * off >= 0.0 else -1.0
-    for i in range(poses.shape[0]):
+    flagged = 0
+    for i in range(status.shape[0]):
         r00, r01, r02, r03 = (
-            flat[_at(i, 16, 0)],
-            flat[_at(i, 16, 1)],
-            flat[_at(i, 16, 2)],
-            flat[_at(i, 16, 3)],
+            poses[_at(i, 16, 0)],
+            poses[_at(i, 16, 1)],
+            poses[_at(i, 16, 2)],
+            poses[_at(i, 16, 3)],
         )
         r10, r11, r12, r13 = (
-            flat[_at(i, 16, 4)],
-            flat[_at(i, 16, 5)],
-            flat[_at(i, 16, 6)],
-            flat[_at(i, 16, 7)],
+            poses[_at(i, 16, 4)],
+            poses[_at(i, 16, 5)],
+            poses[_at(i, 16, 6)],
+            poses[_at(i, 16, 7)],
         )
         r20, r21, r22, r23 = (
-            flat[_at(i, 16, 8)],
-            flat[_at(i, 16, 9)],
-            flat[_at(i, 16, 10)],
-            flat[_at(i, 16, 11)],
+            poses[_at(i, 16, 8)],
+            poses[_at(i, 16, 9)],
+            poses[_at(i, 16, 10)],
+            poses[_at(i, 16, 11)],
         )
         r30, r31, r32, r33 = (
-            flat[_at(i, 16, 12)],
-            flat[_at(i, 16, 13)],
-            flat[_at(i, 16, 14)],
-            flat[_at(i, 16, 15)],
+            poses[_at(i, 16, 12)],
+            poses[_at(i, 16, 13)],
+            poses[_at(i, 16, 14)],
+            poses[_at(i, 16, 15)],
         )
         rigid = _rigid_entries(
             r00,
@@ -748,12 +747,12 @@ def batch_arguments(
         xp = x1 - a1g
         distance = total if a1g == 0.0 else math.sqrt(xp * xp + pz * pz)
         dead_r, odd_r = _arm_arguments(
-            y_flat, x_flat, i, 0, x1, xp, distance, pz, px, py, r2, pose, geo
+            y, x, i, 0, x1, xp, distance, pz, px, py, r2, pose, geo
         )
         xp = -x1 - a1g
         distance = total if a1g == 0.0 else math.sqrt(xp * xp + pz * pz)
         dead_l, odd_l = _arm_arguments(
-            y_flat, x_flat, i, 1, -x1, xp, distance, pz, px, py, r2, pose, geo
+            y, x, i, 1, -x1, xp, distance, pz, px, py, r2, pose, geo
         )
         mask = (1 << SHOULDER) if rho <= SHOULDER_SINGULAR_TOL else 0
         mask |= (1 << DEAD) if dead_r else 0
@@ -766,7 +765,36 @@ def batch_arguments(
         status[i] = code
         exact[i] = mask if code == OK else 0
         special = (code == OK) & ((r2 <= 0.0) | odd_r | odd_l)
-        odd[i] = (1 if special else 0) | (2 if check & (not rigid) else 0)
+        flag = (1 if special else 0) | (2 if check & (not rigid) else 0)
+        odd[i] = flag
+        flagged += flag != 0
+    return flagged
+
+
+@entry_point(outputs=("y", "x", "status", "exact"), contiguous=("odd",))
+def batch_fallback(
+    geometry: np.ndarray,
+    poses: FloatArray,
+    y: FloatArray,
+    x: FloatArray,
+    status: npt.NDArray[np.int8],
+    exact: npt.NDArray[np.int64],
+    odd: npt.NDArray[np.uint8],
+) -> int:
+    """Stage 1 of a batch, the poses :func:`batch_arguments` flagged ``odd``.
+
+    Arguments as :func:`batch_arguments`'s, with ``poses`` (N, 4, 4), ``y`` and
+    ``x`` (N, N_ANGLES).
+
+    Its own kernel, compiled without the vectoriser options of
+    :func:`batch_arguments` (which would have LLVM warn about each loop here
+    it cannot vectorise).
+
+    Returns:
+        −1, or the index of the first pose that failed the fast rigidity test
+        (the outputs of it and later poses then undefined).
+    """
+    geo = geometry[0]
     none, scratch = np.empty(0), np.empty((4, 4))
     for i in range(poses.shape[0]):
         if odd[i]:

@@ -120,8 +120,8 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     offsets = [x.theta_offset for x in j]
     g["theta_offset"], g["joint_sign"] = offsets, structure.joint_sign
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
-    g["plain"] = [
-        o == 0.0 and s == 1.0 and lo >= -_PI and hi <= _PI
+    g["plain"] = [  # as PumaGeometry.plain
+        o == 0.0 and s == 1.0 and ((-_PI <= lo and hi <= _PI) or lo <= -_PI < _PI <= hi)
         for o, s, lo, hi in zip(
             offsets, structure.joint_sign, lower, upper, strict=True
         )
@@ -637,11 +637,13 @@ def batch_arguments(
 ) -> int:
     """Stage 1 of a batch, vectorised (as ``_puma_kernel.batch_arguments``).
 
+    ``poses``, ``y`` and ``x`` flattened, as there.
+
     Poses with a singular wrist or the wrist point on the base axis are
-    recomputed by :func:`angle_arguments`; the others get its values, bitwise.
+    flagged in ``odd`` for :func:`batch_fallback`; the others get the values
+    of :func:`angle_arguments`, bitwise. Returns the number of poses flagged.
     """
     geo = geometry[0]
-    flat, y_flat, x_flat = poses.reshape(-1), y.reshape(-1), x.reshape(-1)
     b, e = geo.base_inv, geo.tool_inv
     b00, b01, b02, b03 = b[0, 0], b[0, 1], b[0, 2], b[0, 3]
     b10, b11, b12, b13 = b[1, 0], b[1, 1], b[1, 2], b[1, 3]
@@ -651,30 +653,31 @@ def batch_arguments(
     e20, e21, e22, e23 = e[2, 0], e[2, 1], e[2, 2], e[2, 3]
     based = geo.based != 0.0
     right = 1.0 if geo.sigma1 * geo.offset >= 0.0 else -1.0
-    for i in range(poses.shape[0]):
+    flagged = 0
+    for i in range(status.shape[0]):
         r00, r01, r02, r03 = (
-            flat[_at(i, 16, 0)],
-            flat[_at(i, 16, 1)],
-            flat[_at(i, 16, 2)],
-            flat[_at(i, 16, 3)],
+            poses[_at(i, 16, 0)],
+            poses[_at(i, 16, 1)],
+            poses[_at(i, 16, 2)],
+            poses[_at(i, 16, 3)],
         )
         r10, r11, r12, r13 = (
-            flat[_at(i, 16, 4)],
-            flat[_at(i, 16, 5)],
-            flat[_at(i, 16, 6)],
-            flat[_at(i, 16, 7)],
+            poses[_at(i, 16, 4)],
+            poses[_at(i, 16, 5)],
+            poses[_at(i, 16, 6)],
+            poses[_at(i, 16, 7)],
         )
         r20, r21, r22, r23 = (
-            flat[_at(i, 16, 8)],
-            flat[_at(i, 16, 9)],
-            flat[_at(i, 16, 10)],
-            flat[_at(i, 16, 11)],
+            poses[_at(i, 16, 8)],
+            poses[_at(i, 16, 9)],
+            poses[_at(i, 16, 10)],
+            poses[_at(i, 16, 11)],
         )
         r30, r31, r32, r33 = (
-            flat[_at(i, 16, 12)],
-            flat[_at(i, 16, 13)],
-            flat[_at(i, 16, 14)],
-            flat[_at(i, 16, 15)],
+            poses[_at(i, 16, 12)],
+            poses[_at(i, 16, 13)],
+            poses[_at(i, 16, 14)],
+            poses[_at(i, 16, 15)],
         )
         rigid = _rigid_entries(
             r00,
@@ -724,12 +727,8 @@ def batch_arguments(
         rot = (nx, ox, ax, ny, oy, ay, nz, oz, az)
         point = (px, py, pz, r2)
         x1 = right * rho
-        dead0, dead1, singular_r = _arm_arguments(
-            y_flat, x_flat, i, 0, x1, point, rot, geo
-        )
-        dead2, dead3, singular_l = _arm_arguments(
-            y_flat, x_flat, i, 1, -x1, point, rot, geo
-        )
+        dead0, dead1, singular_r = _arm_arguments(y, x, i, 0, x1, point, rot, geo)
+        dead2, dead3, singular_l = _arm_arguments(y, x, i, 1, -x1, point, rot, geo)
         mask = (1 << SHOULDER) if rho <= SHOULDER_SINGULAR_TOL else 0
         mask |= (1 << DEAD) if dead0 else 0
         mask |= (1 << (DEAD + 1)) if dead1 else 0
@@ -741,7 +740,33 @@ def batch_arguments(
         exact[i] = mask if code == OK else 0
         # (a singular wrist's pairs may reach after all: angle_arguments says)
         special = (code != IN_CYLINDER) & ((r2 <= 0.0) | singular_r | singular_l)
-        odd[i] = (1 if special else 0) | (2 if check & (not rigid) else 0)
+        flag = (1 if special else 0) | (2 if check & (not rigid) else 0)
+        odd[i] = flag
+        flagged += flag != 0
+    return flagged
+
+
+@entry_point(outputs=("y", "x", "status", "exact"), contiguous=("odd",))
+def batch_fallback(
+    geometry: np.ndarray,
+    poses: FloatArray,
+    y: FloatArray,
+    x: FloatArray,
+    status: npt.NDArray[np.int8],
+    exact: npt.NDArray[np.int64],
+    odd: npt.NDArray[np.uint8],
+) -> int:
+    """Stage 1 of a batch, the poses :func:`batch_arguments` flagged ``odd``.
+
+    Its own kernel, compiled without the vectoriser options of
+    :func:`batch_arguments` (which would have LLVM warn about each loop here
+    it cannot vectorise).
+
+    Returns:
+        −1, or the index of the first pose that failed the fast rigidity test
+        (the outputs of it and later poses then undefined).
+    """
+    geo = geometry[0]
     none, scratch = np.empty(0), np.empty((4, 4))
     for i in range(poses.shape[0]):
         if odd[i]:

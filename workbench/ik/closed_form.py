@@ -330,9 +330,11 @@ def analytic_batch(
     """Every closed-form IK branch of N poses, vectorised.
 
     The kernel of :func:`analytic` in three stages per chunk of poses: the
-    arguments of every atan2 (compiled loop), all the atan2 in one compiled
-    loop that LLVM vectorises (:mod:`workbench.ik._atan2_kernel`, several
-    times faster than one libm call each), the joint values (compiled loop).
+    arguments of every atan2 (a compiled loop that LLVM vectorises, four poses
+    at a time; the rare singular poses after it, one by one), all the atan2 in
+    one compiled loop that LLVM vectorises (:mod:`workbench.ik._atan2_kernel`,
+    several times faster than one libm call each), the joint values (compiled
+    loop).
 
     Args:
         robot: A 6R arm of either family (as :func:`analytic`).
@@ -367,9 +369,13 @@ def analytic_batch(
         chunk = poses[start : start + _CHUNK]
         n = len(chunk)
         arguments = y[:n], x[:n], status[:n], exact[:n], odd[:n]
-        if solver.batch_arguments(geometry, chunk, *arguments, True) >= 0:
+        flat = chunk.reshape(-1), y[:n].reshape(-1), x[:n].reshape(-1)
+        codes = status[:n], exact[:n], odd[:n]
+        flagged = solver.batch_arguments(geometry, *flat, *codes, True)
+        if flagged and solver.batch_fallback(geometry, chunk, *arguments) >= 0:
             check_poses(chunk, start)  # the exact checks raise, or accept all
-            solver.batch_arguments(geometry, chunk, *arguments, False)
+            if solver.batch_arguments(geometry, *flat, *codes, False):
+                solver.batch_fallback(geometry, chunk, *arguments)
         atan2_into(y[:n].reshape(-1), x[:n].reshape(-1), angles[:n].reshape(-1))
         solver.batch_assemble(
             geometry,
