@@ -247,24 +247,14 @@ def _error(target: FloatArray, frames: FloatArray, e: FloatArray) -> float:
 
 @helper()
 def _solve(a: FloatArray, b: FloatArray, m: int) -> bool:
-    """Solve a x = b (first m rows/columns) in place, x in b; False if singular."""
-    return _lu_solve(a, b, m)
+    """Solve a x = b (first m rows/columns) in place, x in b; False if singular.
 
-
-@helper()
-def _solve6(a: FloatArray, b: FloatArray) -> bool:
-    """:func:`_solve` of six equations: loops of known length, unrolled (faster)."""
-    return _lu_solve(a, b, 6)
-
-
-@helper(forceinline=True)
-def _lu_solve(a: FloatArray, b: FloatArray, m: int) -> bool:
-    """The body of :func:`_solve`: LU with partial pivoting.
-
-    The pivot is chosen and its row swapped in without branches on the values
-    (a swap with itself when it is in place), and the diagonal keeps the
-    pivots' reciprocals: mispredicted branches and divisions were most of its
-    time.
+    LU with partial pivoting. The pivot is chosen and its row swapped in
+    without branches on the values (a swap with itself when it is in place),
+    and the diagonal keeps the pivots' reciprocals: mispredicted branches and
+    divisions were most of its time. (A copy for exactly six equations, whose
+    loops LLVM unrolls, took 175 ns against 215, but a second of compiling on
+    a first run: not kept.)
     """
     for k in range(m):
         p, big = k, abs(a[k, k])
@@ -327,10 +317,7 @@ def _damped_step(jac, n, e, pull, use_pull, damping, normal, y, dq):
                 for k in range(n):
                     s += jac[i, k] * pull[k]
         y[i] = s
-    if m == 6:  # positive definite: never singular
-        _solve6(normal, y)
-    else:
-        _solve(normal, y, m)
+    _solve(normal, y, m)  # positive definite: never singular
     for k in range(n):
         if n < 6:
             dq[k] = y[k]
@@ -449,17 +436,8 @@ def run(
     state = states[row]
     q, best_q, stats = state[:n], state[n : 2 * n], state[2 * n :]
     status = NOT_RIGID
-    if not (check and not _roughly_rigid(target)):
-        status = _iterate(chain, target, q_ref, q, best_q, stats, tol2, max_steps,
-                          guess, features, starts)  # fmt: skip
-    return status, stats[ERR2], stats[POSITION], stats[ROTATION], int(stats[STEPS])
-
-
-@helper()
-def _iterate(chain, target, q_ref, q, best_q, stats, tol2, max_steps, guess,
-             features, starts) -> int:  # fmt: skip
-    """The steps of :func:`run`, its state split into ``q``, ``best_q``, ``stats``."""
-    n = chain.shape[0] - 1
+    if check and not _roughly_rigid(target):
+        return status, stats[ERR2], stats[POSITION], stats[ROTATION], int(stats[STEPS])
     if guess:
         _first_guess(features, starts, target, q)
     # Scratch space: frames of the joints and tool, matrices and vectors.
@@ -483,15 +461,18 @@ def _iterate(chain, target, q_ref, q, best_q, stats, tol2, max_steps, guess,
                 best_q[k] = q[k]
             if err2 <= tol2:
                 stats[STEPS] = steps
-                return CONVERGED
+                status = CONVERGED
+                break
         if err2 < stall_level:
             stall_level, stall_at = STALL_RATIO * err2, steps
         if steps >= max_steps:
             stats[STEPS] = steps
-            return EXHAUSTED
+            status = EXHAUSTED
+            break
         if steps - stall_at >= STALL_STEPS or steps - run_start >= RUN_STEPS:
             stats[STEPS] = steps
-            return STALLED
+            status = STALLED
+            break
         steps += 1
 
         _jacobian(chain, frames, jac)
@@ -501,7 +482,7 @@ def _iterate(chain, target, q_ref, q, best_q, stats, tol2, max_steps, guess,
                 for j in range(6):
                     normal[i, j] = jac[i, j]
                 dq[i] = e[i]
-            if _solve6(normal, dq):
+            if _solve(normal, dq, n):  # n == 6
                 step2 = 0.0
                 for k in range(6):
                     step2 += dq[k] * dq[k]
@@ -548,6 +529,7 @@ def _iterate(chain, target, q_ref, q, best_q, stats, tol2, max_steps, guess,
                 q_next[k] = q[k] - dq[k]
         for k in range(n):
             q[k] = min(max(q_next[k], chain[k, 16]), chain[k, 17])
+    return status, stats[ERR2], stats[POSITION], stats[ROTATION], int(stats[STEPS])
 
 
 @helper()
