@@ -173,15 +173,15 @@ def test_numeric_calls_the_kernels_compiled_code_with_its_types() -> None:
         pytest.skip("kernel.run has not exactly one compiled signature")
     assert chain.run is not kernel.run
     packed, q_ref, features, starts = chain.run_inputs
-    state = chain.fresh_state.copy()
-    args = (packed, np.eye(4), q_ref, state, 0.0, 0, False, features, starts, True)
+    states = chain.fresh_state.reshape(1, -1).copy()
+    args = (packed, np.eye(4), q_ref, states, 0, 0.0, 0, False, features, starts, True)
     assert compiled_entry(kernel.run, args) is chain.run
     wrong = (
         (packed, np.eye(4, dtype=np.float32), *args[2:]),  # dtype
         (packed, np.asfortranarray(np.eye(4)), *args[2:]),  # layout
         (packed, np.eye(4)[None], *args[2:]),  # dimensions
         args[:-1],  # count
-        (*args[:5], 0.5, *args[6:]),  # a float for an int
+        (*args[:6], 0.5, *args[7:]),  # a float for an int
     )
     for bad in wrong:
         assert compiled_entry(kernel.run, bad) is kernel.run

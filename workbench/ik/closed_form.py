@@ -376,7 +376,7 @@ def analytic_batch(
             check_poses(chunk, start)  # the exact checks raise, or accept all
             if solver.batch_arguments(geometry, *flat, *codes, False):
                 solver.batch_fallback(geometry, chunk, *arguments)
-        atan2_into(y[:n].reshape(-1), x[:n].reshape(-1), angles[:n].reshape(-1))
+        atan2_into(flat[1], flat[2], angles[:n].reshape(-1))
         solver.batch_assemble(
             geometry,
             angles[:n],
