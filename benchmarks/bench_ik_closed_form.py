@@ -295,7 +295,7 @@ def main() -> None:
         help="comma-separated models for the peers EAIK, ik-geo, ik.numeric",
     )
     args = parser.parse_args()
-    reference = _median_us(lambda: sum(range(1000)), repeat=15, number=2000)
+    reference = _reference_us()
     print(f"machine reference: sum(range(1000)) = {reference:.1f} µs (CPU time)")
     print("ratio: time relative to the workbench (single), workbench speed-up "
           "(batch); ik.numeric gives one branch, batch = 1 / single")  # fmt: skip
@@ -317,7 +317,8 @@ def main() -> None:
             else:
                 rows.append((label, result))
         _print_table(
-            f"\n{name}: closed-form IK, all branches per pose, one core, CPU time",
+            f"\n{name}: closed-form IK, all branches per pose, one core, CPU time "
+            f"(machine reference now {_reference_us():.1f} µs)",
             rows,
             ours,
         )
@@ -325,6 +326,14 @@ def main() -> None:
               f"{ours['fk_max_error']:.1e}")  # fmt: skip
     for line in missing:
         print(f"skipped {line}")
+
+
+def _reference_us() -> float:
+    """The reference loop's median [µs]: the machine's speed at this moment.
+
+    Printed with each robot too, as shared machines change speed within a run.
+    """
+    return _median_us(lambda: sum(range(1000)), repeat=15, number=2000)
 
 
 def _bench_rtb_any(name: str, poses: int, quick: bool) -> dict[str, float] | str:
