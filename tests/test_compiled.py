@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from numba.core import types
 
+from workbench import _compiled
 from workbench._compiled import entry_point, helper, interpreted
 
 
@@ -45,6 +46,12 @@ def _fill_twice(values, out):
     # a nested call with a writable array, a literal int and a literal bool
     _fill(values, 2, out)
     return _total(out, True)
+
+
+@entry_point(outputs=("out",), vectorize=True)
+def _halves(values, out):
+    for i in range(out.shape[0]):  # unsigned indices, as the vectorised kernels
+        out[np.uint64(i)] = 0.5 * values[np.uint64(i)]
 
 
 def test_one_signature_whatever_the_arrays_and_scalars() -> None:
@@ -189,3 +196,22 @@ def test_processes_sharing_a_cache_compile_an_entry_point_once(tmp_path: Path) -
     assert all(run.returncode == 0 for run in runs)
     assert sorted(compiles) == [0, 1]  # the other process loaded it from the cache
     assert list((tmp_path / "cache").rglob("lockmodule.kernel.lock"))
+
+
+def test_vectorize_sets_llvm_options_only_while_the_kernel_compiles(
+    monkeypatch,
+) -> None:
+    """The assumption budget and the width are set for the compile, then restored."""
+    calls: list[str] = []
+    monkeypatch.setattr(_compiled.llvm, "set_option", lambda _, o: calls.append(o))
+    out = np.empty(9)
+    _halves(np.arange(9.0), out)
+    np.testing.assert_array_equal(out, np.arange(9.0) / 2)
+    assert calls == [
+        f"-vectorize-scev-check-threshold={_compiled.VECTORIZE_ASSUMPTIONS}",
+        f"-force-vector-width={_compiled.VECTOR_WIDTH}",
+        "-vectorize-scev-check-threshold=16",  # LLVM's defaults
+        "-force-vector-width=0",
+    ]
+    _halves(np.arange(9.0), out)  # compiled: nothing set again
+    assert len(calls) == 4
