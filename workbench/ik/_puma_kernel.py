@@ -186,6 +186,77 @@ def _clamped_root(v: float) -> float:
 
 
 @_inline
+def _matrix_row(m: FloatArray, i: int) -> tuple[float, float, float, float]:
+    """Row ``i`` of a (4, 4) matrix."""
+    return m[i, 0], m[i, 1], m[i, 2], m[i, 3]
+
+
+@_inline
+def _pose_row(poses: FloatArray, i: int, row: int) -> tuple[float, float, float, float]:
+    """Row ``row`` of pose ``i`` of the flat (N · 16,) array of N poses."""
+    k = 4 * row
+    return (
+        poses[_at(i, 16, k)],
+        poses[_at(i, 16, k + 1)],
+        poses[_at(i, 16, k + 2)],
+        poses[_at(i, 16, k + 3)],
+    )
+
+
+@_inline
+def _at(i: int, width: int, slot: int) -> np.uint64:
+    """Flat index ``i * width + slot``, unsigned: no negative-index test."""
+    return np.uint64(i) * np.uint64(width) + np.uint64(slot)
+
+
+@_inline
+def _frame_rows(r0, r1, r2, tool, base):
+    """Rows 0..2 of ``base_inv · pose · tool_inv`` from rows 0..2 of the pose.
+
+    ``tool``, ``base``: rows 0..2 of ``tool_inv`` and ``base_inv`` (their row
+    3 is 0 0 0 1). Rows as 4-tuples, so that the batch's vectorised loop and
+    :func:`frame_pose` share the arithmetic.
+    """
+    t0, t1, t2 = _times_tool(r0, tool), _times_tool(r1, tool), _times_tool(r2, tool)
+    return (
+        _base_row(base[0], t0, t1, t2),
+        _base_row(base[1], t0, t1, t2),
+        _base_row(base[2], t0, t1, t2),
+    )
+
+
+@_inline
+def _times_tool(r, tool) -> tuple[float, float, float, float]:
+    """A pose row times ``tool_inv`` (rows ``tool``)."""
+    (p0, p1, p2, p3), (e0, e1, e2) = r, tool
+    return (
+        p0 * e0[0] + p1 * e1[0] + p2 * e2[0],
+        p0 * e0[1] + p1 * e1[1] + p2 * e2[1],
+        p0 * e0[2] + p1 * e1[2] + p2 * e2[2],
+        p0 * e0[3] + p1 * e1[3] + p2 * e2[3] + p3,
+    )
+
+
+@_inline
+def _base_row(b, t0, t1, t2) -> tuple[float, float, float, float]:
+    """Row ``b`` of ``base_inv`` times the rows t0, t1, t2 (and 0 0 0 1)."""
+    return (
+        b[0] * t0[0] + b[1] * t1[0] + b[2] * t2[0],
+        b[0] * t0[1] + b[1] * t1[1] + b[2] * t2[1],
+        b[0] * t0[2] + b[1] * t1[2] + b[2] * t2[2],
+        b[0] * t0[3] + b[1] * t1[3] + b[2] * t2[3] + b[3],
+    )
+
+
+@_inline
+def _frames(geo):
+    """Rows 0..2 of ``tool_inv`` and of ``base_inv``, for :func:`_frame_rows`."""
+    e, b = geo.tool_inv, geo.base_inv
+    tool = (_matrix_row(e, 0), _matrix_row(e, 1), _matrix_row(e, 2))
+    return tool, (_matrix_row(b, 0), _matrix_row(b, 1), _matrix_row(b, 2))
+
+
+@_inline
 def frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
     """Rows 0..2 of ``base_inv · pose · tool_inv``: the target of the DH chain.
 
@@ -194,23 +265,13 @@ def frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
         pose: (4, 4) pose of the tool frame in the base frame.
         out: (4, 4) scratch; rows 0..2 are written.
     """
-    if geo.framed == 0.0:
-        for i in range(3):
-            for j in range(4):
-                out[i, j] = pose[i, j]
-        return
-    b, e = geo.base_inv, geo.tool_inv
-    for i in range(3):  # pose · tool_inv
-        p0, p1, p2 = pose[i, 0], pose[i, 1], pose[i, 2]
-        for j in range(4):
-            out[i, j] = p0 * e[0, j] + p1 * e[1, j] + p2 * e[2, j]
-        out[i, 3] += pose[i, 3]
-    for j in range(4):  # base_inv · that, column by column, in place
-        c0, c1, c2 = out[0, j], out[1, j], out[2, j]
-        for i in range(3):
-            out[i, j] = b[i, 0] * c0 + b[i, 1] * c1 + b[i, 2] * c2
-    for i in range(3):
-        out[i, 3] += b[i, 3]
+    r0, r1, r2 = _matrix_row(pose, 0), _matrix_row(pose, 1), _matrix_row(pose, 2)
+    if geo.framed != 0.0:
+        tool, base = _frames(geo)
+        r0, r1, r2 = _frame_rows(r0, r1, r2, tool, base)
+    out[0, 0], out[0, 1], out[0, 2], out[0, 3] = r0
+    out[1, 0], out[1, 1], out[1, 2], out[1, 3] = r1
+    out[2, 0], out[2, 1], out[2, 2], out[2, 3] = r2
 
 
 @entry_point()
@@ -240,19 +301,19 @@ def _centre(geo, pose: FloatArray) -> tuple[float, float, float]:
 @_inline
 def _roughly_rigid(pose: FloatArray) -> bool:
     """The fast acceptance test (finite, rigid to RIGIDITY_TOL / 5)."""
-    return _rigid_entries(
-        pose[0, 0], pose[0, 1], pose[0, 2], pose[0, 3],
-        pose[1, 0], pose[1, 1], pose[1, 2], pose[1, 3],
-        pose[2, 0], pose[2, 1], pose[2, 2], pose[2, 3],
-        pose[3, 0], pose[3, 1], pose[3, 2], pose[3, 3],
-    )  # fmt: skip
+    return _rigid_rows(
+        _matrix_row(pose, 0),
+        _matrix_row(pose, 1),
+        _matrix_row(pose, 2),
+        _matrix_row(pose, 3),
+    )
 
 
 @_inline
-def _rigid_entries(
-    r00, r01, r02, r03, r10, r11, r12, r13, r20, r21, r22, r23, b0, b1, b2, b3
-) -> bool:
-    """:func:`_roughly_rigid` of the 16 entries of a pose, row by row."""
+def _rigid_rows(row0, row1, row2, row3) -> bool:
+    """:func:`_roughly_rigid` of the four rows of a pose."""
+    (r00, r01, r02, r03), (r10, r11, r12, r13) = row0, row1
+    (r20, r21, r22, r23), (b0, b1, b2, b3) = row2, row3
     e0 = r00 * r00 + r10 * r10 + r20 * r20 - 1.0
     e1 = r01 * r01 + r11 * r11 + r21 * r21 - 1.0
     e2 = r00 * r01 + r10 * r11 + r20 * r21
@@ -541,12 +602,6 @@ def solve_pose(
 
 
 @_inline
-def _at(i: int, width: int, slot: int) -> np.uint64:
-    """Flat index ``i * width + slot``, unsigned: no negative-index test."""
-    return np.uint64(i) * np.uint64(width) + np.uint64(slot)
-
-
-@_inline
 def _pair_arguments(y, x, i, pair, dead, sgb, k, xp, big_a, y1, a0, a1, m1, geo):
     """The slots of one (arm, elbow) pair of pose ``i``, as angle_arguments.
 
@@ -654,86 +709,20 @@ def batch_arguments(
         The number of poses flagged in ``odd`` (0: nothing left to do).
     """
     geo = geometry[0]
-    b, e = geo.base_inv, geo.tool_inv
-    b00, b01, b02, b03 = b[0, 0], b[0, 1], b[0, 2], b[0, 3]
-    b10, b11, b12, b13 = b[1, 0], b[1, 1], b[1, 2], b[1, 3]
-    b20, b21, b22, b23 = b[2, 0], b[2, 1], b[2, 2], b[2, 3]
-    e00, e01, e02, e03 = e[0, 0], e[0, 1], e[0, 2], e[0, 3]
-    e10, e11, e12, e13 = e[1, 0], e[1, 1], e[1, 2], e[1, 3]
-    e20, e21, e22, e23 = e[2, 0], e[2, 1], e[2, 2], e[2, 3]
+    tool, base = _frames(geo)
     framed, rotated = geo.framed != 0.0, geo.sin_alpha6 != 0.0
     ca, sa, d6, a1g = geo.cos_alpha6, geo.sin_alpha6, geo.d6, geo.a1
     s1g, off = geo.sigma1, geo.offset
     right = 1.0 if s1g * off >= 0.0 else -1.0
     flagged = 0
     for i in range(status.shape[0]):
-        r00, r01, r02, r03 = (
-            poses[_at(i, 16, 0)],
-            poses[_at(i, 16, 1)],
-            poses[_at(i, 16, 2)],
-            poses[_at(i, 16, 3)],
-        )
-        r10, r11, r12, r13 = (
-            poses[_at(i, 16, 4)],
-            poses[_at(i, 16, 5)],
-            poses[_at(i, 16, 6)],
-            poses[_at(i, 16, 7)],
-        )
-        r20, r21, r22, r23 = (
-            poses[_at(i, 16, 8)],
-            poses[_at(i, 16, 9)],
-            poses[_at(i, 16, 10)],
-            poses[_at(i, 16, 11)],
-        )
-        r30, r31, r32, r33 = (
-            poses[_at(i, 16, 12)],
-            poses[_at(i, 16, 13)],
-            poses[_at(i, 16, 14)],
-            poses[_at(i, 16, 15)],
-        )
-        rigid = _rigid_entries(
-            r00,
-            r01,
-            r02,
-            r03,
-            r10,
-            r11,
-            r12,
-            r13,
-            r20,
-            r21,
-            r22,
-            r23,
-            r30,
-            r31,
-            r32,
-            r33,
-        )
-        # frame_pose: rows of pose · tool_inv, then base_inv · that
-        t00 = r00 * e00 + r01 * e10 + r02 * e20
-        t01 = r00 * e01 + r01 * e11 + r02 * e21
-        t02 = r00 * e02 + r01 * e12 + r02 * e22
-        t03 = r00 * e03 + r01 * e13 + r02 * e23 + r03
-        t10 = r10 * e00 + r11 * e10 + r12 * e20
-        t11 = r10 * e01 + r11 * e11 + r12 * e21
-        t12 = r10 * e02 + r11 * e12 + r12 * e22
-        t13 = r10 * e03 + r11 * e13 + r12 * e23 + r13
-        t20 = r20 * e00 + r21 * e10 + r22 * e20
-        t21 = r20 * e01 + r21 * e11 + r22 * e21
-        t22 = r20 * e02 + r21 * e12 + r22 * e22
-        t23 = r20 * e03 + r21 * e13 + r22 * e23 + r23
-        nx = b00 * t00 + b01 * t10 + b02 * t20 if framed else r00
-        ny = b10 * t00 + b11 * t10 + b12 * t20 if framed else r10
-        nz = b20 * t00 + b21 * t10 + b22 * t20 if framed else r20
-        ox = b00 * t01 + b01 * t11 + b02 * t21 if framed else r01
-        oy = b10 * t01 + b11 * t11 + b12 * t21 if framed else r11
-        oz = b20 * t01 + b21 * t11 + b22 * t21 if framed else r21
-        ax = b00 * t02 + b01 * t12 + b02 * t22 if framed else r02
-        ay = b10 * t02 + b11 * t12 + b12 * t22 if framed else r12
-        az = b20 * t02 + b21 * t12 + b22 * t22 if framed else r22
-        qx = b00 * t03 + b01 * t13 + b02 * t23 + b03 if framed else r03
-        qy = b10 * t03 + b11 * t13 + b12 * t23 + b13 if framed else r13
-        qz = b20 * t03 + b21 * t13 + b22 * t23 + b23 if framed else r23
+        row0, row1 = _pose_row(poses, i, 0), _pose_row(poses, i, 1)
+        row2, row3 = _pose_row(poses, i, 2), _pose_row(poses, i, 3)
+        rigid = _rigid_rows(row0, row1, row2, row3)
+        f0, f1, f2 = _frame_rows(row0, row1, row2, tool, base)  # as frame_pose
+        nx, ox, ax, qx = f0 if framed else row0
+        ny, oy, ay, qy = f1 if framed else row1
+        nz, oz, az, qz = f2 if framed else row2
         # R Rx(-alpha6), as selects
         ox, ax = (ca * ox - sa * ax, sa * ox + ca * ax) if rotated else (ox, ax)
         oy, ay = (ca * oy - sa * ay, sa * oy + ca * ay) if rotated else (oy, ay)
