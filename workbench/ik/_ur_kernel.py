@@ -85,6 +85,15 @@ SINGULAR = 32
 #: Bit of the mask: shoulder singular (as ``_puma_kernel.SHOULDER``).
 SHOULDER = 34
 SHOULDER_SINGULAR_TOL = 1e-10
+#: Orientation error [rad] a turn of θ6 may cost (about |s5| times the turn)
+#: to bring frame 3 within reach near a wrist singularity. There θ6 comes
+#: from a vector of length |s5| known to ~1e-16, so it is known to ~1e-16 /
+#: |s5| only, and frame 3 (√(d5² + a4²) from the wrist point) moves with it:
+#: a pose at the stretched or folded elbow may land outside the reach by far
+#: more than its rounding, and is turned back into it, not refused.
+NEAR_SINGULAR_TOL = 1e-13
+#: A turned frame 3 lands this fraction of a2 + a3 inside the arm's reach.
+REACH_MARGIN = 1e-12
 #: The bits of the mask that mark slots.
 _SLOT_BITS = (1 << N_ANGLES) - 1
 
@@ -326,6 +335,23 @@ def _planar(geo, c1, s1, c5, c6, s6, s5, rot, big_px, big_py):
 
 
 @_inline
+def _turn_may_reach(geo, s5: float, dist: float) -> bool:
+    """Whether a turn of θ6 within NEAR_SINGULAR_TOL may bring frame 3 in reach.
+
+    ``dist``: frame 3's distance from the shoulder [m]. A turn δ moves it by at
+    most √(d5² + a4²) |δ| and costs about |s5| |δ| of orientation; a pair
+    outside the reach by ``miss`` needs δ >= miss / √(d5² + a4²). The reach
+    is the arm's own, |a2| ± |a3|, not the tests' (a pair within their slack
+    but outside it would be clamped, at the cost of its miss in position).
+    Selects only (the vectorised batch evaluates it too).
+    """
+    a2, a3 = abs(geo.a2), abs(geo.a3)
+    miss = max(abs(a2 - a3) - dist, dist - (a2 + a3))
+    arm = math.sqrt(geo.d5 * geo.d5 + geo.a4 * geo.a4)
+    return (miss > 0.0) & (abs(s5) * miss <= NEAR_SINGULAR_TOL * arm)
+
+
+@_inline
 def _reach_turn(geo, c1, s1, m, big_px, big_py, big_x, big_y, dist):
     """Turn of θ6 [rad] at a wrist singularity that brings frame 3 within reach.
 
@@ -335,13 +361,19 @@ def _reach_turn(geo, c1, s1, m, big_px, big_py, big_x, big_y, dist):
     """
     vx, vy = big_px - big_x, big_py - big_y
     pn, rm = math.sqrt(big_px * big_px + big_py * big_py), math.sqrt(vx * vx + vy * vy)
-    low = max(geo.reach_low, abs(pn - rm))
-    high = min(geo.reach_high, pn + rm)
-    if low > high or pn * rm == 0.0:
+    if pn * rm == 0.0:
         return 0.0
-    margin = 1e-9 * geo.reach_high  # strictly inside, against rounding
-    if high - low > 2.0 * margin:
-        low, high = low + margin, high - margin
+    # the arm's own reach, strictly inside by REACH_MARGIN (the reach tests'
+    # slack is wider: rounding never takes the turned frame 3 out of them) ...
+    a2, a3 = abs(geo.a2), abs(geo.a3)
+    margin = REACH_MARGIN * (a2 + a3)
+    low = max(abs(a2 - a3) + margin, abs(pn - rm))
+    high = min(a2 + a3 - margin, pn + rm)
+    if low > high:  # ... or, if the circle does not get there, within the slack
+        low = max(geo.reach_low, abs(pn - rm))
+        high = min(geo.reach_high, pn + rm)
+        if low > high:
+            return 0.0
     t = min(max(dist, low), high)
     cos_angle = (pn * pn + rm * rm - t * t) / (2.0 * pn * rm)
     angle = math.acos(min(max(cos_angle, -1.0), 1.0))
@@ -464,6 +496,20 @@ def angle_arguments(
             else:
                 y[U6 + pair], x[U6 + pair] = ss6, cs6
                 c234_up, s234_up, big_x_up, big_y_up = c234, s234, big_x, big_y
+                if _turn_may_reach(geo, ss5, dist):  # θ6 ill-conditioned
+                    turn = _reach_turn(
+                        geo, c1, s1, m, big_px, big_py, big_x, big_y, dist
+                    )
+                    if abs(ss5 * turn) <= NEAR_SINGULAR_TOL:
+                        t6p = math.atan2(ss6, cs6) + turn
+                        c234, s234, big_x, big_y = _planar(
+                            geo, c1, s1, c5, math.cos(t6p), math.sin(t6p), ss5,
+                            rot, big_px, big_py,
+                        )  # fmt: skip
+                        dist2 = big_x * big_x + big_y * big_y
+                        dist = math.sqrt(dist2)
+                        y[U6 + pair] = t6p
+                        mask |= 1 << (U6 + pair)
             y[U234 + pair], x[U234 + pair] = s234, c234
             if not (geo.reach_low <= dist <= geo.reach_high):
                 mask |= 1 << (DEAD + pair)
@@ -617,11 +663,13 @@ def diagnose(geometry: np.ndarray, pose: FloatArray) -> tuple[int, float]:
 
 
 @_inline
-def _pair_arguments(y, x, i, arm, wrist, planar, geo) -> bool:
-    """θ3 and θ2 slots of one (shoulder, wrist) pair of pose ``i``; dead?
+def _pair_arguments(y, x, i, arm, wrist, planar, s5, geo) -> tuple[bool, bool]:
+    """θ3 and θ2 slots of one (shoulder, wrist) pair of pose ``i``.
 
-    ``planar``: (c234, s234, X, Y) of the pair. As :func:`angle_arguments`
-    for a pair whose wrist is not singular.
+    ``planar``: (c234, s234, X, Y) of the pair; ``s5`` its sin θ5. As
+    :func:`angle_arguments` for a pair whose wrist is not singular, unless it
+    is out of reach and a turn of θ6 may bring it in (:func:`_turn_may_reach`,
+    which angle_arguments then tries). Returns (dead, may turn).
     """
     c234, s234, big_x, big_y = planar
     pair = 2 * arm + wrist
@@ -629,6 +677,7 @@ def _pair_arguments(y, x, i, arm, wrist, planar, geo) -> bool:
     dist2 = big_x * big_x + big_y * big_y
     dist = math.sqrt(dist2)
     dead = (dist < geo.reach_low) | (dist > geo.reach_high)
+    turn = _turn_may_reach(geo, s5, dist)
     y[_at(i, N_ANGLES, U234 + pair)] = s234
     x[_at(i, N_ANGLES, U234 + pair)] = c234
     c3 = _clip_unit((dist2 - a2 * a2 - a3 * a3) / (2.0 * a2 * a3))
@@ -643,15 +692,16 @@ def _pair_arguments(y, x, i, arm, wrist, planar, geo) -> bool:
         c2, s2 = big_x * k1 + big_y * k2, big_y * k1 - big_x * k2
         y[_at(i, N_ANGLES, U2 + b)] = 0.0 if dead else s2
         x[_at(i, N_ANGLES, U2 + b)] = 1.0 if dead else c2
-    return dead
+    return dead, turn
 
 
 @_inline
 def _arm_arguments(y, x, i, arm, x1, point, rot, geo):
-    """Slots of one shoulder of pose ``i``: (dead up, dead down, singular).
+    """Slots of one shoulder of pose ``i``: (dead up, dead down, special).
 
     ``point``: the wrist point (px, py, pz, r2); ``rot`` as :func:`_planar`.
-    As :func:`angle_arguments` for a shoulder whose wrist is not singular.
+    As :func:`angle_arguments` for a shoulder whose wrist is not singular;
+    ``special``: the wrist is singular or a pair may need a turn of θ6.
     """
     px, py, pz, r2 = point
     nx, ox, ax, ny, oy, ay = rot[0], rot[1], rot[2], rot[3], rot[4], rot[5]
@@ -674,11 +724,11 @@ def _arm_arguments(y, x, i, arm, x1, point, rot, geo):
     y[_at(i, N_ANGLES, U6 + 2 * arm + 1)] = -s6
     x[_at(i, N_ANGLES, U6 + 2 * arm + 1)] = -c6
     c234, s234, big_x, big_y = _planar(geo, c1, s1, c5, c6, s6, s5, rot, big_px, big_py)
-    up = _pair_arguments(y, x, i, arm, 0, (c234, s234, big_x, big_y), geo)
+    up, turn_up = _pair_arguments(y, x, i, arm, 0, (c234, s234, big_x, big_y), s5, geo)
     # the other wrist: frame 3 mirrored about the wrist point
     mirrored = (-c234, -s234, 2.0 * big_px - big_x, 2.0 * big_py - big_y)
-    down = _pair_arguments(y, x, i, arm, 1, mirrored, geo)
-    return up, down, singular
+    down, turn_down = _pair_arguments(y, x, i, arm, 1, mirrored, -s5, geo)
+    return up, down, singular | turn_up | turn_down
 
 
 @entry_point(
@@ -700,7 +750,8 @@ def batch_arguments(
 
     ``poses``, ``y`` and ``x`` flattened, as there.
 
-    Poses with a singular wrist or the wrist point on the base axis are
+    Poses with a singular wrist, the wrist point on the base axis or a pair
+    that a turn of θ6 may bring within reach (:func:`_turn_may_reach`) are
     flagged in ``odd`` for :func:`batch_fallback`; the others get the values
     of :func:`angle_arguments`, bitwise. Returns the number of poses flagged.
     """
