@@ -29,13 +29,15 @@ from workbench.ik import (
     UR_BRANCHES,
     UnreachableError,
     UnsupportedRobotError,
+    _puma_kernel,
+    _ur_kernel,
     analytic,
     analytic_batch,
     get_branches,
+    get_closed_form,
     get_structure,
     nearest,
 )
-from workbench.ik.closed_form import get_solver
 
 ATOL_FK = 1e-9  # every branch reproduces the tool pose [m, and rotation entries]
 ATOL_SAME_Q = 1e-6  # [rad] the generating q is among the branches
@@ -178,7 +180,9 @@ def test_vectorised_batch_stage_equals_angle_arguments(arm) -> None:
     targets = np.concatenate([targets, targets[:2], targets[:2]])
     targets[-4:-2, :3, 3] *= 10.0  # out of reach
     targets[-2:, :2, 3] *= 1e-3  # near the base axis
-    _, solver, geometry = get_solver(arm)
+    closed_form = get_closed_form(arm)
+    solver = _ur_kernel if closed_form.family == "ur" else _puma_kernel
+    geometry = closed_form.geometry
     n, slots = len(targets), solver.N_ANGLES
     y, x = np.full((n, slots), np.nan), np.full((n, slots), np.nan)
     status, exact = np.empty(n, np.int8), np.empty(n, np.int64)

@@ -46,20 +46,47 @@ def _module_name(path: Path) -> str:
     return ".".join(parts)
 
 
-def _imports(path: Path) -> set[str]:
-    """Every ``workbench...`` module a file imports, at any depth of its code."""
-    found: set[str] = set()
-    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
-        if isinstance(node, ast.ImportFrom) and node.module:
-            if node.level == 0 and node.module.startswith("workbench"):
-                found.add(node.module)
-                for alias in node.names:  # ``from workbench import ik`` names a module
-                    candidate = f"{node.module}.{alias.name}"
-                    if candidate in MODULES:
-                        found.add(candidate)
+def _absolute(module: str, node: ast.ImportFrom) -> str:
+    """The absolute module a ``from ... import`` in ``module`` names (PEP 328)."""
+    if node.level == 0:
+        return node.module or ""
+    package = module.split(".")
+    if not MODULES[module].name == "__init__.py":
+        package = package[:-1]  # a plain module's package is its folder
+    base = package[: len(package) - (node.level - 1)]
+    return ".".join([*base, node.module] if node.module else base)
+
+
+def _imported_names(module: str) -> set[tuple[str, str | None]]:
+    """Every ``(workbench module, name)`` a module imports, at any depth of its code.
+
+    Relative imports are resolved against the module's package. ``name`` is the
+    name taken from the module (``from m import name``), None for ``import m``;
+    ``from package import submodule`` yields the submodule with name None.
+    """
+    found: set[tuple[str, str | None]] = set()
+    tree = ast.parse(MODULES[module].read_text(), filename=str(MODULES[module]))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            source = _absolute(module, node)
+            if not source.startswith("workbench"):
+                continue
+            for alias in node.names:
+                candidate = f"{source}.{alias.name}"
+                if candidate in MODULES:  # ``from workbench import ik`` names a module
+                    found.add((candidate, None))
+                else:
+                    found.add((source, alias.name))
         elif isinstance(node, ast.Import):
-            found.update(a.name for a in node.names if a.name.startswith("workbench"))
+            found.update(
+                (a.name, None) for a in node.names if a.name.startswith("workbench")
+            )
     return found
+
+
+def _imports(module: str) -> set[str]:
+    """Every ``workbench...`` module a module imports, at any depth of its code."""
+    return {source for source, _ in _imported_names(module)}
 
 
 MODULES: dict[str, Path] = {
@@ -79,7 +106,7 @@ def test_module_imports_only_its_layer_or_lower(module: str) -> None:
     own = _layer(module)
     upward = sorted(
         f"{dep} (layer {_layer(dep)})"
-        for dep in _imports(MODULES[module])
+        for dep in _imports(module)
         if dep not in FRONT_DOORS and _layer(dep) > own
     )
     assert not upward, f"{module} (layer {own}) imports a higher layer: {upward}"
@@ -87,8 +114,8 @@ def test_module_imports_only_its_layer_or_lower(module: str) -> None:
 
 def test_no_import_cycle() -> None:
     graph = {
-        m: {d for d in _imports(p) if d in MODULES and d != m}
-        for m, p in MODULES.items()
+        m: {d for d in _imports(m) if d in MODULES and d != m}
+        for m in MODULES
         if m not in FRONT_DOORS
     }
     # A package imports its own submodules to re-export them; that edge is no cycle.
@@ -116,3 +143,61 @@ def test_every_folder_has_a_layer() -> None:
     }
     modules = {p.stem for p in PACKAGE.glob("*.py")} - {"__init__", "__main__"}
     assert (folders | modules) - {"_urdf"} <= set(LAYERS)
+
+
+def _package(module: str) -> str:
+    """The folder below ``workbench`` a module is in (``ik`` for ``workbench.ik.numerical``).
+
+    A top-level module (``workbench.errors``) is a package of its own.
+    """
+    return module.split(".")[1]
+
+
+def _crosses_privately(module: str, source: str, name: str | None) -> bool:
+    """Whether ``module`` takes a private module or name of another package.
+
+    The package root's own modules (``workbench._compiled``, the compiled-code
+    layer) are shared internals that any folder may import; their private
+    names are not.
+    """
+    if source == "workbench" or _package(source) == _package(module):
+        return False
+    below = source.split(".")[2:]  # the path inside the other package
+    return any(part.startswith("_") for part in below) or (name or "").startswith("_")
+
+
+@pytest.mark.parametrize("module", sorted(set(MODULES) - FRONT_DOORS))
+def test_no_private_name_crosses_packages(module: str) -> None:
+    """Packages meet through public names: private modules and names stay inside."""
+    crossing = sorted(
+        source if name is None else f"{source}:{name}"
+        for source, name in _imported_names(module)
+        if _crosses_privately(module, source, name)
+    )
+    assert not crossing, f"{module} imports private names of other packages: {crossing}"
+
+
+@pytest.mark.parametrize(
+    ("module", "statement", "expected"),
+    [
+        ("workbench.poses.rigid", "from ..cli import main", "workbench.cli"),
+        ("workbench.poses.rigid", "from . import rotations", "workbench.poses"),
+        ("workbench.poses", "from .rigid import x", "workbench.poses.rigid"),
+        (
+            "workbench.ik.closed_form",
+            "from ..model.robot import R",
+            "workbench.model.robot",
+        ),
+        (
+            "workbench.ik.numerical",
+            "from workbench.model import Robot",
+            "workbench.model",
+        ),
+    ],
+)
+def test_relative_imports_are_resolved(
+    module: str, statement: str, expected: str
+) -> None:
+    node = ast.parse(statement).body[0]
+    assert isinstance(node, ast.ImportFrom)
+    assert _absolute(module, node) == expected

@@ -1,11 +1,13 @@
-"""Input checks shared by every layer: shapes and finiteness."""
+"""Input checks shared by every layer: shapes, finiteness, signs."""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import numpy.typing as npt
 
-from workbench.errors import DimensionError, NonFiniteError
+from workbench.errors import DimensionError, InputError, NonFiniteError
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -38,3 +40,16 @@ def as_vector(value: npt.ArrayLike, size: int, name: str) -> FloatArray:
         NonFiniteError: If an entry is not a number, NaN or infinite.
     """
     return as_finite_array(value, (size,), name)
+
+
+def check_positive(value: float, name: str, *, strict: bool) -> None:
+    """Raise unless ``value`` is a finite real number > 0 (``strict``) or >= 0.
+
+    Raises:
+        InputError: If it is not (a bool is not a number here).
+    """
+    ok = isinstance(value, int | float) and not isinstance(value, bool)
+    ok = ok and math.isfinite(value) and (value > 0.0 if strict else value >= 0.0)
+    if not ok:
+        bound = "> 0" if strict else ">= 0"
+        raise InputError(f"{name} must be a finite number {bound}, got {value!r}")

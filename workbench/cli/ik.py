@@ -27,7 +27,7 @@ from workbench.ik.closed_form import (
     IKSolution,
     UnsupportedRobotError,
     analytic,
-    get_solver,
+    get_closed_form,
     nearest,
 )
 from workbench.ik.numerical import numeric
@@ -169,7 +169,7 @@ def run(args: argparse.Namespace) -> int:
 def _solve_and_print(args: argparse.Namespace, robot: Robot, target: pin.SE3) -> int:
     rows: list[dict[str, Any]]
     try:
-        family = get_solver(robot)[0]
+        family = get_closed_form(robot).family
     except UnsupportedRobotError as err:
         solver, reason = "numeric", str(err)
         if args.all and not args.json:

@@ -1,7 +1,8 @@
 """Inverse kinematics: closed form for OPW and UR-type arms, numerical for any arm.
 
 Public entry points (see docs/interface.md): ``analytic``, ``analytic_batch``,
-``numeric``, ``numeric_batch``, plus the damped-least-squares tools.
+``numeric``, ``numeric_batch``, each robot's ``ClosedFormSolver``
+(``get_closed_form``), plus the damped-least-squares tools.
 """
 
 from workbench.ik.closed_form import (
@@ -16,10 +17,17 @@ from workbench.ik.closed_form import (
     get_branches,
     nearest,
 )
-from workbench.ik.damped import DLS_EPSILON, DLS_LAMBDA_MAX, dls_inverse, dls_step
+from workbench.ik.damped import (
+    DLS_EPSILON,
+    DLS_LAMBDA_MAX,
+    dls_inverse,
+    dls_step,
+    solve_velocity,
+)
 from workbench.ik.numerical import IKResult, numeric
 from workbench.ik.numerical_batch import IKBatchResult, numeric_batch
 from workbench.ik.qp import QP_DAMPING, DifferentialIKError, qp_step
+from workbench.ik.solver import ClosedFormSolver, get_closed_form
 from workbench.ik.structure import (
     STRUCTURE_TOL,
     KinematicStructure,
@@ -34,6 +42,7 @@ __all__ = [
     "STRUCTURE_TOL",
     "UR_BRANCHES",
     "WRIST_SINGULAR_TOL",
+    "ClosedFormSolver",
     "DifferentialIKError",
     "IKBatchResult",
     "IKResult",
@@ -46,9 +55,11 @@ __all__ = [
     "dls_inverse",
     "dls_step",
     "get_branches",
+    "get_closed_form",
     "get_structure",
     "nearest",
     "numeric",
     "numeric_batch",
     "qp_step",
+    "solve_velocity",
 ]

@@ -32,6 +32,7 @@ import pinocchio as pin
 
 from workbench.errors import InputError
 from workbench.ik import _chain_kernel as kernel
+from workbench.model.per_robot import per_robot
 from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
@@ -139,15 +140,6 @@ class Chain:
         )  # fmt: skip
         kernel.run(*warm_up)
         self.run = compiled_entry(kernel.run, warm_up)
-
-    def matches(self, robot: Robot) -> bool:
-        """Whether ``robot`` still has this chain's model, limits and tool frame."""
-        return (
-            self.model is robot.model
-            and self.lower is robot.lower
-            and self.upper is robot.upper
-            and self.frame_id == robot.tool_frame_id
-        )
 
     def to_chain(self, q: FloatArray) -> FloatArray:
         """Chain coordinates (..., n) of configurations ``q`` (..., nq); new array."""
@@ -340,6 +332,14 @@ def _pack_joint(
     if motion is not None:
         linear = float(np.linalg.norm(motion[:3]))
         angular = float(np.linalg.norm(motion[3:]))
+    if "Mimic" in kind:
+        leader = next(
+            i for i, k in enumerate(model.joints) if k.nv and k.idx_q == joint.idx_q
+        )
+        raise InputError(
+            f"numerical IK does not support mimic joints: joint {model.names[j]!r} "
+            f"follows {model.names[leader]!r}"
+        )
     if motion is None or (linear > 0.0) == (angular > 0.0):
         raise InputError(
             f"numerical IK supports revolute, continuous and prismatic joints; "
@@ -376,25 +376,14 @@ def _mid_configuration(
     return mid
 
 
-#: Chains by ``id`` of their robot (a dict lookup costs less than a
-#: WeakKeyDictionary's); each chain holds a weak reference to its robot, and an
-#: entry leaves the dict when its robot is garbage-collected.
-_CHAINS: dict[int, Chain] = {}
-
-
+@per_robot
 def get_chain(robot: Robot) -> Chain:
-    """The cached :class:`Chain` of ``robot``, (re)built when stale.
+    """The :class:`Chain` of ``robot``, cached per robot object (weakly).
+
+    Rebuilt when the robot's model, limits or tool frame were replaced.
 
     Raises:
         InputError: If a joint on the path to the tool frame is neither
             revolute nor prismatic.
     """
-    key = id(robot)
-    chain = _CHAINS.get(key)
-    if chain is not None and chain.robot() is robot and chain.matches(robot):
-        return chain
-    fresh = Chain(robot)
-    if chain is None or chain.robot() is not robot:
-        weakref.finalize(robot, _CHAINS.pop, key, None)
-    _CHAINS[key] = fresh
-    return fresh
+    return Chain(robot)

@@ -26,7 +26,6 @@ from __future__ import annotations
 import contextlib
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
@@ -34,6 +33,7 @@ import numpy.typing as npt
 from workbench.errors import InfeasibleError
 from workbench.ik.structure import UnsupportedRobotError, get_structure
 from workbench.model.dh import DHTable
+from workbench.model.per_robot import per_robot
 from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
@@ -52,6 +52,14 @@ LIMIT_TOL = 1e-9
 #: are then split by continuity; the split costs at most this times π of
 #: orientation error, so the tolerance is kept below the 1e-9 accuracy goal.
 WRIST_SINGULAR_TOL = 1e-10
+
+#: The reach tests of a fitted structure are widened by this many times its
+#: residual (``KinematicStructure.residual``, the FK difference of the model
+#: and the idealised chain on a few configurations): a pose the model reaches
+#: may lie that far outside the idealised arm's reach. It is then clamped onto
+#: the idealised boundary and refined on the model (``_refine_kernel``), which
+#: reports it as not reached if it truly is not.
+MODEL_ERROR_SLACK = 10.0
 
 
 class UnreachableError(InfeasibleError):
@@ -183,6 +191,7 @@ def geometry_from_dh(
     joint_sign: tuple[float, ...] = (1.0,) * 6,
     base: npt.ArrayLike | None = None,
     tool: npt.ArrayLike | None = None,
+    model_error: float = 0.0,
 ) -> PumaGeometry:
     """Check that ``table`` is PUMA-type and compute its constants.
 
@@ -193,6 +202,9 @@ def geometry_from_dh(
         joint_sign: DH angle θ = s q + θ0 per joint, (6,) of ±1.
         base: (4, 4) pose of DH frame 0 in the base frame; None for identity.
         tool: (4, 4) pose of the tool in the last DH frame; None for identity.
+        model_error: FK difference [m] of the robot's model and this table
+            (0 for the table of the model itself); the reach tests are widened
+            by :data:`MODEL_ERROR_SLACK` times it.
 
     Raises:
         UnsupportedRobotError: If the table is not PUMA-type (the message names
@@ -233,7 +245,8 @@ def geometry_from_dh(
         )
     else:  # distance in the arm's plane, per arm
         reach = (abs(abs(j2.a) - forearm), abs(j2.a) + forearm)
-    slack = 1e-12 * reach[1]
+    slack = 1e-12 * reach[1] + MODEL_ERROR_SLACK * model_error
+    radius = max(abs(offset) - MODEL_ERROR_SLACK * model_error, 0.0)
     return PumaGeometry(
         sigma1=sigma1,
         sigma3=sigma3,
@@ -265,12 +278,12 @@ def geometry_from_dh(
         reach_test=(
             reach[0] - slack,
             reach[1] + slack,
-            abs(offset) * abs(offset) * (1.0 - 1e-12),
+            radius * radius * (1.0 - 1e-12),
         ),
     )
 
 
-@lru_cache(maxsize=16)
+@per_robot
 def get_geometry(robot: Robot) -> PumaGeometry:
     """The :class:`PumaGeometry` of a robot, built on first use and cached.
 
@@ -279,9 +292,9 @@ def get_geometry(robot: Robot) -> PumaGeometry:
     joint axes (:func:`~workbench.ik.structure.get_structure`), base and tool
     transforms included.
 
-    The cache is keyed by the robot object itself (identity), so a lookup costs
-    no hashing of the DH table; a robot with other limits
-    (:meth:`Robot.with_limits`) is another key. At most 16 robots are kept.
+    Cached per robot object, weakly (:func:`~workbench.model.per_robot.per_robot`):
+    a lookup costs no hashing of the DH table, and a robot with other limits
+    (:meth:`Robot.with_limits`) is another key.
 
     Raises:
         UnsupportedRobotError: If the robot is not of the OPW/PUMA family.
@@ -303,6 +316,7 @@ def get_geometry(robot: Robot) -> PumaGeometry:
         joint_sign=structure.joint_sign,
         base=structure.base,
         tool=structure.tool,
+        model_error=structure.residual,
     )
 
 

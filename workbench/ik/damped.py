@@ -27,17 +27,15 @@ of the tool origin (m/s); angular velocity (rad/s)], both in base axes.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import DimensionError, InputError
-from workbench.ik._velocity_kernel import dls_damping, dls_gains
+from workbench.ik._velocity_kernel import dls_damping, dls_gains, solve_velocity
 from workbench.model.robot import Robot
 from workbench.poses import as_se3
-from workbench.validation import as_finite_array, as_vector
+from workbench.validation import as_finite_array, as_vector, check_positive
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -75,8 +73,8 @@ def dls_inverse(
     if jac.ndim != 2:
         raise InputError(f"jacobian must be a 2-D array (m, n), got shape {jac.shape}")
     jac = as_finite_array(jac, jac.shape, "jacobian")
-    _check_positive(epsilon, "epsilon", strict=True)
-    _check_positive(lambda_max, "lambda_max", strict=False)
+    check_positive(epsilon, "epsilon", strict=True)
+    check_positive(lambda_max, "lambda_max", strict=False)
     u, sigma, vt = np.linalg.svd(jac, full_matrices=False)
     return (vt.T * dls_gains(sigma, float(epsilon), float(lambda_max))) @ u.T
 
@@ -116,18 +114,10 @@ def dls_step(
             ``lambda_max`` are invalid.
     """
     q = robot.check_configuration(q)
-    _check_positive(dt, "dt", strict=True)
+    check_positive(dt, "dt", strict=True)
     twist = _twist_command(robot, q, command, dt)
     jac = robot.jacobian(q)
     return dls_inverse(jac, epsilon=epsilon, lambda_max=lambda_max) @ twist
-
-
-def _check_positive(value: float, name: str, *, strict: bool) -> None:
-    ok = isinstance(value, int | float) and not isinstance(value, bool)
-    ok = ok and math.isfinite(value) and (value > 0.0 if strict else value >= 0.0)
-    if not ok:
-        bound = "> 0" if strict else ">= 0"
-        raise InputError(f"{name} must be a finite number {bound}, got {value!r}")
 
 
 def _twist_command(
@@ -154,4 +144,5 @@ __all__ = [
     "dls_gains",
     "dls_inverse",
     "dls_step",
+    "solve_velocity",
 ]

@@ -27,8 +27,9 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InfeasibleError
-from workbench.ik.damped import _check_positive, _twist_command
+from workbench.ik.damped import _twist_command
 from workbench.model.robot import Robot
+from workbench.validation import check_positive
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -86,8 +87,8 @@ def qp_step(
         DifferentialIKError: If OSQP fails to solve the QP.
     """
     q = robot.check_configuration(q)
-    _check_positive(dt, "dt", strict=True)
-    _check_positive(damping, "damping", strict=False)
+    check_positive(dt, "dt", strict=True)
+    check_positive(damping, "damping", strict=False)
     twist = _twist_command(robot, q, desired_twist, dt)
     jac = robot.jacobian(q)
     lower, upper = _velocity_bounds(robot, q, dt)

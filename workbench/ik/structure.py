@@ -36,7 +36,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
@@ -44,6 +43,7 @@ import pinocchio as pin
 
 from workbench.errors import InputError
 from workbench.model.dh import DHJoint, DHTable
+from workbench.model.per_robot import per_robot
 from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
@@ -312,9 +312,18 @@ def _residual(robot: Robot, structure_rows: list, signs, base, tool) -> float:
     return worst
 
 
-@lru_cache(maxsize=32)
-def get_structure(robot: Robot, tol: float = STRUCTURE_TOL) -> KinematicStructure:
-    """Recognise the family of a 6R arm and fit its DH chain (cached per robot).
+@per_robot
+def get_structure(robot: Robot) -> KinematicStructure:
+    """The :func:`compute_structure` of a robot, cached per robot object (weakly).
+
+    Raises:
+        UnsupportedRobotError: As :func:`compute_structure`.
+    """
+    return compute_structure(robot)
+
+
+def compute_structure(robot: Robot, tol: float = STRUCTURE_TOL) -> KinematicStructure:
+    """Recognise the family of a 6R arm and fit its DH chain.
 
     Args:
         robot: Any robot; its tool frame is folded into ``tool``.

@@ -1,10 +1,10 @@
-"""Compiled steps 2 and 3 of the online planner's cycle (Kang 2007, §5).
+"""Compiled step 2 of the online planner's cycle (Kang 2007, §5).
 
 Step 2 turns the tool-tip command into the wrist-centre command in the base
-frame; step 3 solves the closed-form IK and keeps the branch that continues
-the motion. Both run once per planning cycle, so they are compiled with Numba
-(the same arithmetic in Python costs several times more than the IK itself)
-and called together (:func:`command_joints`, one call per cycle).
+frame; step 3, the closed-form IK that continues the motion, is
+:meth:`workbench.ik.ClosedFormSolver.track`. Step 2 runs once per planning
+cycle, so it is compiled with Numba (the same arithmetic in Python costs
+several times more than the IK itself).
 """
 
 from __future__ import annotations
@@ -13,7 +13,6 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench._compiled import entry_point
-from workbench.ik import _puma_kernel as kernel
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -92,82 +91,3 @@ def wrist_command(
         )
         pose[3, i] = 0.0
     pose[3, 3] = 1.0
-
-
-@entry_point()
-def track(
-    geometry: np.ndarray,
-    pose: FloatArray,
-    q: FloatArray,
-    q_before: FloatArray,
-    pair: int,
-    max_step2: float,
-    check: bool,
-) -> tuple[int, FloatArray, int, bool]:
-    """The IK solution that continues a motion (Kang's θ4 flip rule, generalised).
-
-    The configuration is predicted from the last two commands,
-    ``2 q - q_before``, so that at a wrist singularity (θ4, θ6 free) the wrist
-    keeps moving as it was; every angle is taken as the representative nearest
-    the prediction, and the branch by ``_puma_kernel.continuing_branch``.
-
-    Args:
-        geometry: ``_puma_kernel.packed_geometry(robot)``.
-        pose: (4, 4) wrist-centre target in the base frame.
-        q: (6,) last joint command [rad].
-        q_before: (6,) the one before it [rad] (``q`` on the first cycle).
-        pair: (Arm, elbow) pair of the last command's branch, ``index >> 1``.
-        max_step2: Largest squared joint step [rad²] that keeps the pair.
-        check: Run the kernel's quick rigidity test on ``pose``.
-
-    Returns:
-        ``(status, q_new, index, within)``: ``_puma_kernel`` status (the rest
-        is meaningful if OK), the joint command (6,) [rad], its branch index
-        and whether it is within the joint limits.
-    """
-    q_pred = 2.0 * q - q_before
-    q_all = np.empty((8, 6))
-    flags = np.empty(14, dtype=np.bool_)
-    status = kernel.solve_pose(geometry, pose, q_pred, q_all, flags, check)
-    if status != kernel.OK:
-        return status, q_pred, -1, False
-    index = kernel.continuing_branch(q_all, q_pred, pair, max_step2)
-    return status, q_all[index].copy(), index, flags[index]
-
-
-@entry_point(outputs=("pose", "twist"))
-def command_joints(
-    rotation: FloatArray,
-    position: FloatArray,
-    velocity: FloatArray,
-    angular_velocity: FloatArray,
-    frames: FloatArray,
-    geometry: np.ndarray,
-    q: FloatArray,
-    q_before: FloatArray,
-    pair: int,
-    max_step2: float,
-    pose: FloatArray,
-    twist: FloatArray,
-) -> tuple[int, FloatArray, int, bool]:
-    """:func:`wrist_command` then :func:`track`, in one call.
-
-    Args:
-        rotation: (3, 3) tool-tip orientation, world frame.
-        position: (3,) tool-tip position [m], world frame.
-        velocity: (3,) [m/s], world axes.
-        angular_velocity: (3,) [rad/s], world axes.
-        frames: (8, 3), the tip and base frames of :func:`wrist_command`.
-        geometry: ``_puma_kernel.packed_geometry(robot)``.
-        q: (6,) last joint command [rad].
-        q_before: (6,) the one before it [rad].
-        pair: (Arm, elbow) pair of the last command's branch.
-        max_step2: Largest squared joint step [rad²] that keeps the pair.
-        pose: (4, 4) output, wrist-centre pose in the base frame.
-        twist: (6,) output [m/s, rad/s], linear first, base axes.
-
-    Returns:
-        As :func:`track` (with its quick rigidity test).
-    """
-    wrist_command(rotation, position, velocity, angular_velocity, frames, pose, twist)
-    return track(geometry, pose, q, q_before, pair, max_step2, True)

@@ -38,18 +38,15 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InputError, JointLimitError
-from workbench.ik import _puma_kernel as kernel
-from workbench.ik._velocity_kernel import solve_velocity
-from workbench.ik.closed_form import (
-    analytic,
-    get_branches,
-    get_solver,
+from workbench.ik import (
+    DLS_EPSILON,
+    DLS_LAMBDA_MAX,
+    get_closed_form,
     nearest,
-    solve_one,
+    solve_velocity,
 )
-from workbench.ik.damped import DLS_EPSILON, DLS_LAMBDA_MAX, _check_positive
 from workbench.model.robot import Robot
-from workbench.planning._tracking import command_joints, track, wrist_command
+from workbench.planning._tracking import wrist_command
 from workbench.planning.cartesian_paths import (
     ZERO_TOL,
     CartesianLimits,
@@ -61,6 +58,7 @@ from workbench.planning.motion_primitives import (
     PointToPoint,
     Stop,
 )
+from workbench.validation import check_positive
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -113,8 +111,8 @@ def _rigid(value: pin.SE3 | None) -> tuple[FloatArray, FloatArray]:
 def load_kernels() -> None:
     """Load the planner's kernels that do not call the closed-form IK.
 
-    That is (on a first run: compiles) the joint-velocity solves, the wrist
-    command and the branch choice. :class:`OnlinePlanner` calls it on
+    That is (on a first run: compiles) the joint-velocity solves and the wrist
+    command. :class:`OnlinePlanner` calls it on
     construction, so that no planning cycle waits seconds for a compile (the
     damped solve is otherwise first needed in a singular region, possibly deep
     into a run). Apart from the closed form, so that a process can do this
@@ -126,7 +124,6 @@ def load_kernels() -> None:
     frames = np.vstack([eye, zero[:3], eye, zero[:3]])
     pose, twist = np.empty((4, 4)), np.empty(6)
     wrist_command(eye, zero[:3], zero[:3], zero[:3], frames, pose, twist)
-    kernel.continuing_branch(np.zeros((8, 6)), zero, 0, 0.0)
 
 
 class OnlinePlanner:
@@ -191,11 +188,11 @@ class OnlinePlanner:
         self.dls_epsilon = dls_epsilon
         self.dls_lambda_max = dls_lambda_max
         self.check_speed = check_speed
-        _check_positive(dls_epsilon, "epsilon", strict=True)  # as dls_inverse
-        _check_positive(dls_lambda_max, "lambda_max", strict=False)
+        check_positive(dls_epsilon, "epsilon", strict=True)  # as dls_inverse
+        check_positive(dls_lambda_max, "lambda_max", strict=False)
         # No cycle waits for a compile: the kernels are loaded here (or, on a
-        # first run, compiled), the closed form by analytic below and the
-        # tracking kernel that calls it at the end.
+        # first run, compiled), the closed form by the solve below and the
+        # branch choice by the first command at the end.
         load_kernels()
         tip = _rigid(transform_tip_to_tool)  # (rotation, translation)
         base = _rigid(transform_base_to_world)
@@ -210,23 +207,23 @@ class OnlinePlanner:
         self._min_speed_limit = float(self._speed_limit.min())
         # squared joint step of two cycles at the speed limits (branch selection)
         self._max_step2 = float(np.sum((2.0 * self.period * robot.velocity_limit) ** 2))
-        # the frames of _tracking.command_joints
+        # the frames of _tracking.wrist_command
         self._frames = np.vstack([tip[0].T, -tip[1], base[0], base[1]])
-        _, self._solver, self._geometry = get_solver(robot)
-        self._labels = get_branches(robot)
+        self._closed_form = get_closed_form(robot)  # fails early without one
+        self._labels = self._closed_form.branches
         oMf = robot.fk(q0)
         p = oMf.translation + oMf.rotation @ tip[1]
         rotation = oMf.rotation @ tip[0]
         p, rotation = base[0] @ p + base[1], base[0] @ rotation
         zero = np.zeros(3)
         self._state = CartesianState(p, zero, rotation, zero)
-        start = analytic(robot, oMf, q_previous=q0)  # fails early for a non-PUMA arm
+        start = self._closed_form.solve(oMf, q_previous=q0)
         self._branch = nearest(start, q0).index
         self._replanned = False  # by notify, stop or set_goal since the last step
         self._queue: deque[MotionPrimitive] = deque()
         self._active: MotionPrimitive = Hold()
         self._active.begin(self._state, 0.0, limits)
-        self._command_joints(p, zero, rotation, zero)  # loads the tracking kernel
+        self._command_joints(p, zero, rotation, zero)  # loads the branch choice
 
     # -- state ---------------------------------------------------------------
     @property
@@ -350,57 +347,25 @@ class OnlinePlanner:
     ) -> tuple[FloatArray, FloatArray, int, bool]:
         """Tip command (world) -> wrist twist (base axes) and joint command.
 
-        Steps 2 and 3 of the cycle (``_tracking.command_joints``): the
-        wrist-centre command in the base frame, then the IK solution that
-        continues the motion.
+        Steps 2 and 3 of the cycle: the wrist-centre command in the base frame
+        (``_tracking.wrist_command``), then the IK solution that continues the
+        motion (:meth:`~workbench.ik.ClosedFormSolver.track`, from the
+        configuration predicted from the last two commands, so that at a wrist
+        singularity, θ4 and θ6 free, the wrist keeps moving as it was).
 
         Returns:
             ``(twist, q, branch index, within limits)``: the wrist-centre twist
             (6,) [m/s, rad/s], linear first, base axes; ``q`` read-only.
         """
         q_before = self._q if self._q_before is None else self._q_before
-        pair = self._branch >> 1
         pose, twist = np.empty((4, 4)), np.empty(6)
-        if self._solver is not kernel:  # UR-type: the same steps, from Python
-            wrist_command(rotation, p, v, omega, self._frames, pose, twist)
-            q, index, within = self._track(pose, q_before, pair)
-            q.setflags(write=False)
-            return twist, q, index, within
-        status, q, index, within = command_joints(
-            rotation,
-            p,
-            v,
-            omega,
-            self._frames,
-            self._geometry,
-            self._q,
-            q_before,
-            pair,
-            self._max_step2,
-            pose,
-            twist,
+        wrist_command(rotation, p, v, omega, self._frames, pose, twist)
+        q_predicted = 2.0 * self._q - q_before  # the wrist keeps moving as it was
+        q, index, within = self._closed_form.track(
+            pose, q_predicted, self._branch >> 1, self._max_step2
         )
-        if status != kernel.OK:  # solve_one raises the error, or accepts a pose
-            # that only the exact rigidity checks pass: solve it unchecked
-            solve_one(self.robot, self._geometry, pose, self._q)
-            status, q, index, within = track(
-                self._geometry, pose, self._q, q_before, pair, self._max_step2, False
-            )
         q.setflags(write=False)
         return twist, q, index, within
-
-    def _track(
-        self, pose: FloatArray, q_before: FloatArray, pair: int
-    ) -> tuple[FloatArray, int, bool]:
-        """``_tracking.track`` for a kernel other than the PUMA one.
-
-        Raises:
-            UnreachableError, InputError: As :func:`~workbench.ik.analytic`.
-        """
-        q_pred = 2.0 * self._q - q_before
-        q_all, flags = solve_one(self.robot, self._geometry, pose, q_pred, self._solver)
-        index = kernel.continuing_branch(q_all, q_pred, pair, self._max_step2)
-        return q_all[index].copy(), index, bool(flags[index])
 
     def _position_rate(self, q: FloatArray, twist: FloatArray) -> FloatArray:
         """Rate of the joint position commands ending at ``q``: the DLS reference.

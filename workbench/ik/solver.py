@@ -1,0 +1,424 @@
+r"""The closed-form solver of one robot: the one door into the compiled kernels.
+
+:func:`get_closed_form` gives the :class:`ClosedFormSolver` of a robot, built on
+first use and cached per robot object through a weak reference
+(:func:`~workbench.model.per_robot.per_robot`). It holds what every solve of
+that robot needs: the family (``"opw"``, PUMA-type, kernel
+``_puma_kernel``; ``"ur"``, kernel ``_ur_kernel``), the arm's constants packed
+into the kernel's record, the branch labels, and the named slots of the
+kernel's flags. :func:`~workbench.ik.analytic`,
+:func:`~workbench.ik.analytic_batch` and the online planner all solve through
+it, so the pose checks, the wording of errors and the choice of kernel live
+here once.
+
+OPW branch labels (UR labels: :data:`UR_BRANCHES`) are physical, so that one
+posture of the PUMA carries the same label in both DH models of the workbench
+(and agrees with the ``l/r``, ``u/d``, ``n/f`` letters of Robotics Toolbox's
+``Puma560.ikine_a``):
+
+* ``right`` / ``left``: the shoulder offset :math:`D = d_2 + d_3` lies to the
+  right / left of the horizontal direction from the base axis to the wrist
+  centre, seen from above (z0 up), like a human right / left arm. In DH terms
+  right means :math:`\sigma_1 D x > 0`, x the wrist centre's coordinate along
+  x1; with D = 0, right means x > 0.
+* ``elbow-up`` / ``elbow-down``: the elbow (origin of frame 2) lies above /
+  below the line from the shoulder to the wrist centre, heights along z0.
+* ``no-flip`` / ``flip``: the wrist axis z5 has a positive / negative component
+  along x4, i.e. :math:`\sigma_5 \sin\theta_5 > 0` (σ5 the sign of α5). The flip
+  twin of a solution is :math:`(\theta_4 + \pi, -\theta_5, \theta_6 + \pi)`.
+
+Branch ``i`` of :data:`BRANCHES` (also the second axis of
+:func:`ClosedFormSolver.solve_batch`) has bits ``4·left + 2·down + flip``; UR
+branches ``4·left + 2·down + wrist-down``.
+"""
+
+from __future__ import annotations
+
+import types
+import weakref
+from dataclasses import FrozenInstanceError
+
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+
+from workbench.errors import InputError
+from workbench.ik import _puma_kernel as opw_kernel
+from workbench.ik import _ur_kernel as ur_kernel
+from workbench.ik._atan2_kernel import atan2_into
+from workbench.ik._puma import (
+    UnreachableError,
+    UnsupportedRobotError,
+    check_reach,
+    get_geometry,
+)
+from workbench.ik._targets import as_targets, check_poses, pose_rows
+from workbench.ik.structure import get_structure
+from workbench.model.per_robot import per_robot
+from workbench.model.robot import Robot
+
+FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
+
+#: Branch names; index = 4·left + 2·down + flip.
+BRANCHES: tuple[str, ...] = tuple(
+    f"{arm}/elbow-{elbow}/{wrist}"
+    for arm in ("right", "left")
+    for elbow in ("up", "down")
+    for wrist in ("no-flip", "flip")
+)
+
+#: Branch names of UR-type arms; index = 4·left + 2·down + wrist-down.
+UR_BRANCHES: tuple[str, ...] = tuple(
+    f"shoulder-{arm}/elbow-{elbow}/wrist-{wrist}"
+    for arm in ("right", "left")
+    for elbow in ("up", "down")
+    for wrist in ("up", "down")
+)
+
+#: Slots of the kernels' flags array: within limits per branch (8), wrist
+#: singular per (arm, elbow) pair of branches 2·pair, 2·pair + 1 (4), shoulder
+#: singular, and "some branches do not reach" (their rows are NaN).
+FLAG_WITHIN_LIMITS = 0
+FLAG_WRIST_SINGULAR = 8
+FLAG_SHOULDER_SINGULAR = 12
+FLAG_SOME_UNREACHED = 13
+FLAG_COUNT = 14
+
+#: Poses per chunk of :meth:`ClosedFormSolver.solve_batch` (its three
+#: (N, N_ANGLES) buffers take 1.1–1.2 MB; chunks of 256 to 4096 poses were no
+#: faster on 1M poses).
+BATCH_CHUNK = 2048
+
+_NO_PREVIOUS = np.empty(0)
+
+
+class ClosedFormSolver:
+    """The closed form of one robot; get it from :func:`get_closed_form`.
+
+    Attributes:
+        family: ``"opw"`` (PUMA-type) or ``"ur"``.
+        branches: Branch labels, :data:`BRANCHES` or :data:`UR_BRANCHES`.
+        geometry: The arm's constants, the kernel's (1,) record, read-only.
+    """
+
+    __slots__ = ("__weakref__", "_kernel", "_robot", "branches", "family", "geometry")
+
+    def __init__(self, robot: Robot):
+        """Recognise the family of ``robot`` and pack its constants.
+
+        Raises:
+            UnsupportedRobotError: If the robot has no closed form (the message
+                says which axes fail which test).
+        """
+        family, kernel, geometry = _family(robot)
+        geometry.setflags(write=False)
+        self.family: str = family
+        self.branches = UR_BRANCHES if family == "ur" else BRANCHES
+        self.geometry: np.ndarray = geometry
+        self._kernel: types.ModuleType = kernel
+        self._robot = weakref.ref(robot)
+
+    @property
+    def robot(self) -> Robot:
+        """The robot this solver was built for."""
+        robot = self._robot()
+        if robot is None:
+            raise InputError("the robot of this closed-form solver no longer exists")
+        return robot
+
+    def __repr__(self) -> str:
+        robot = self._robot()
+        name = "<gone>" if robot is None else robot.name
+        return f"ClosedFormSolver({name!r}, family={self.family!r})"
+
+    # -- one pose -------------------------------------------------------------
+    def solve(
+        self,
+        target: pin.SE3 | npt.ArrayLike,
+        *,
+        q_previous: npt.ArrayLike | None = None,
+    ) -> list[IKSolution]:
+        """Every branch that reaches ``target``: see :func:`workbench.ik.analytic`."""
+        if type(target) is pin.SE3:
+            pose = target.homogeneous
+        elif (
+            type(target) is np.ndarray
+            and target.shape == (4, 4)
+            and target.dtype == float
+        ):
+            pose = target
+        else:
+            pose = np.array(pose_rows(target))  # every check, with its error
+        prev = _NO_PREVIOUS if q_previous is None else self._previous(q_previous)
+        q, flags = self.solve_arrays(pose, prev)
+        q.setflags(write=False)
+        flag_list = flags.tolist()
+        shared = (q, flag_list, self.branches)
+        if not flag_list[FLAG_SOME_UNREACHED]:
+            return [IKSolution(shared, index) for index in _INDICES]
+        reached = q[:, 0] == q[:, 0]  # False on the NaN rows of an arm out of reach
+        return [IKSolution(shared, index) for index in _INDICES if reached[index]]
+
+    def solve_arrays(
+        self, pose: FloatArray, q_previous: FloatArray
+    ) -> tuple[FloatArray, BoolArray]:
+        """The kernel's solve of one pose, as arrays, its failures as errors.
+
+        Args:
+            pose: (4, 4) float array, the target pose of the tool frame in the
+                base frame [m].
+            q_previous: (6,) previous configuration [rad] (each angle is then
+                the representative nearest it), or (0,) for none.
+
+        Returns:
+            ``q`` (8, 6) [rad], NaN rows for branches that do not reach, and
+            ``flags`` (:data:`FLAG_COUNT`,), slots ``FLAG_*``.
+
+        Raises:
+            UnreachableError, NonFiniteError, InputError: As
+                :func:`workbench.ik.analytic`.
+        """
+        q, flags = np.empty((8, 6)), np.empty(FLAG_COUNT, dtype=bool)
+        kernel = self._kernel
+        status = kernel.solve_pose(self.geometry, pose, q_previous, q, flags, True)
+        if status == kernel.NOT_RIGID:  # the exact checks raise, or accept it
+            pose_rows(pose)
+            status = kernel.solve_pose(self.geometry, pose, q_previous, q, flags, False)
+        if status != kernel.OK:
+            self._explain(pose)
+        return q, flags
+
+    def track(
+        self,
+        pose: FloatArray,
+        q_predicted: FloatArray,
+        pair: int,
+        max_step2: float,
+    ) -> tuple[FloatArray, int, bool]:
+        """The branch that continues a motion (Kang's θ4 flip rule, generalised).
+
+        Every angle is taken as the representative nearest the prediction;
+        the branch is the nearer wrist twin of the last (arm, elbow) pair if
+        within ``max_step2``, else (after a shoulder or elbow singularity) the
+        nearest of all.
+
+        Args:
+            pose: (4, 4) target pose of the tool frame in the base frame [m].
+            q_predicted: (6,) predicted configuration [rad], e.g. the linear
+                extrapolation of the last two commands.
+            pair: (Arm, elbow) pair of the last command's branch, ``index >> 1``.
+            max_step2: Largest squared joint step [rad²] that keeps the pair.
+
+        Returns:
+            ``(q, index, within)``: the configuration (6,) [rad], its branch
+            index and whether it is within the joint limits.
+
+        Raises:
+            UnreachableError, InputError: As :func:`workbench.ik.analytic`.
+        """
+        q_all, flags = self.solve_arrays(pose, q_predicted)
+        index = opw_kernel.continuing_branch(q_all, q_predicted, pair, max_step2)
+        return q_all[index].copy(), index, bool(flags[FLAG_WITHIN_LIMITS + index])
+
+    def _previous(self, q_previous: npt.ArrayLike) -> FloatArray:
+        """``q_previous`` checked (``Robot.check_configuration``), as floats."""
+        if (
+            type(q_previous) is np.ndarray
+            and q_previous.shape == (6,)
+            and q_previous.dtype == float
+            and np.isfinite(q_previous).all()
+        ):
+            return q_previous
+        return self.robot.check_configuration(q_previous)
+
+    def _explain(self, pose: FloatArray) -> None:
+        """Raise the :class:`UnreachableError` of a pose the arm cannot reach."""
+        if self.family == "ur":
+            status, distance = ur_kernel.diagnose(self.geometry, pose)
+            geo = self.geometry[0]
+            if status == ur_kernel.IN_CYLINDER:
+                radius = abs(float(geo["offset"]))
+                raise UnreachableError(distance, (radius, radius), "cylinder")
+            a2, a3 = abs(float(geo["a2"])), abs(float(geo["a3"]))
+            raise UnreachableError(distance, (abs(a2 - a3), a2 + a3), "reach")
+        centre = opw_kernel.wrist_centre(self.geometry[0], pose)
+        check_reach(get_geometry(self.robot), *centre)
+
+    # -- many poses -----------------------------------------------------------
+    def solve_batch(self, targets: npt.ArrayLike) -> tuple[FloatArray, BoolArray]:
+        """Every branch of N poses: see :func:`workbench.ik.analytic_batch`."""
+        kernel, geometry = self._kernel, self.geometry
+        poses = as_targets(targets)
+        count = len(poses)
+        q, valid = np.empty((count, 8, 6)), np.empty((count, 8), dtype=bool)
+        size = min(count, BATCH_CHUNK)
+        y, x, angles = np.empty((3, size, kernel.N_ANGLES))
+        status = np.empty(size, dtype=np.int8)
+        exact = np.empty(size, dtype=np.int64)
+        odd = np.empty(size, dtype=np.uint8)
+        for start in range(0, count, BATCH_CHUNK):
+            chunk = poses[start : start + BATCH_CHUNK]
+            n = len(chunk)
+            codes = status[:n], exact[:n], odd[:n]
+            # the vectorised stage takes flat arrays, its fallback (N, 4, 4) and (N, S)
+            flat = chunk.reshape(-1), y[:n].reshape(-1), x[:n].reshape(-1)
+            shaped = chunk, y[:n], x[:n]
+            flagged = kernel.batch_arguments(geometry, *flat, *codes, True)
+            if flagged and kernel.batch_fallback(geometry, *shaped, *codes) >= 0:
+                check_poses(chunk, start)  # the exact checks raise, or accept all
+                if kernel.batch_arguments(geometry, *flat, *codes, False):
+                    kernel.batch_fallback(geometry, *shaped, *codes)
+            atan2_into(flat[1], flat[2], angles[:n].reshape(-1))
+            kernel.batch_assemble(
+                geometry, angles[:n], y[:n], status[:n], exact[:n],
+                q[start : start + n], valid[start : start + n],
+            )  # fmt: skip
+        return q, valid
+
+
+def _family(robot: Robot) -> tuple[str, types.ModuleType, np.ndarray]:
+    """Family, kernel module and packed constants of a robot's closed form.
+
+    From the robot's DH table when it has one and the tool frame is the
+    table's last frame (the PUMA models), else from the DH chain fitted to its
+    joint axes (:func:`~workbench.ik.structure.get_structure`).
+    """
+    table = robot.dh_table
+    if table is not None and robot.tool_frame == table.tool_frame:
+        try:
+            return "opw", opw_kernel, opw_kernel.pack_geometry(get_geometry(robot))
+        except UnsupportedRobotError:  # the table is not PUMA-type: the axes
+            pass
+    structure = get_structure(robot)
+    if structure.family == "ur":
+        packed = ur_kernel.pack_geometry(structure, robot.lower, robot.upper)
+        return "ur", ur_kernel, packed
+    return "opw", opw_kernel, opw_kernel.pack_geometry(get_geometry(robot))
+
+
+@per_robot
+def get_closed_form(robot: Robot) -> ClosedFormSolver:
+    """The :class:`ClosedFormSolver` of ``robot``, cached per robot object (weakly).
+
+    Raises:
+        UnsupportedRobotError: If the robot has no closed form.
+    """
+    return ClosedFormSolver(robot)
+
+
+class IKSolution:
+    """One closed-form branch (immutable).
+
+    Attributes:
+        q: Configuration, shape (6,) [rad], read-only; each angle is the
+            representative (mod 2π) within the joint limits when one is, else
+            in (−π, π] — or, when ``q_previous`` was given, the one nearest it.
+        branch: Label, e.g. ``"right/elbow-up/no-flip"`` (see module docs) or
+            ``"shoulder-left/elbow-up/wrist-down"`` (UR-type arms).
+        index: Position of ``branch`` in :data:`BRANCHES` (UR:
+            :data:`UR_BRANCHES`).
+        within_limits: True if every joint of ``q`` is within its limits.
+        wrist_singular: True if |sin θ5| <= ``WRIST_SINGULAR_TOL``; θ4 and θ6
+            (UR: θ6 and θ2 + θ3 + θ4) are then one member of a one-parameter
+            family.
+        shoulder_singular: True if the two shoulder (arm) solutions meet.
+
+    The eight solutions of one solve share its result arrays (each ``q`` is a
+    row of one read-only (8, 6) array). Equality is identity; the fields are
+    read-only properties (assigning one raises
+    ``dataclasses.FrozenInstanceError``).
+    """
+
+    __slots__ = ("_index", "_shared")
+
+    def __init__(
+        self, shared: tuple[FloatArray, list[bool], tuple[str, ...]], index: int
+    ) -> None:
+        # private: built by ClosedFormSolver.solve; shared = (q, flags, labels)
+        self._shared = shared
+        self._index = index
+
+    @property
+    def q(self) -> FloatArray:
+        """Configuration (6,) [rad], read-only."""
+        return self._shared[0][self._index]
+
+    @property
+    def branch(self) -> str:
+        """Label, e.g. ``"right/elbow-up/no-flip"``."""
+        return self._shared[2][self._index]
+
+    @property
+    def index(self) -> int:
+        """Position of ``branch`` in :data:`BRANCHES`."""
+        return self._index
+
+    @property
+    def within_limits(self) -> bool:
+        """True if every joint of ``q`` is within its limits."""
+        return self._shared[1][FLAG_WITHIN_LIMITS + self._index]
+
+    @property
+    def wrist_singular(self) -> bool:
+        """True if |sin θ5| <= ``WRIST_SINGULAR_TOL``."""
+        return self._shared[1][FLAG_WRIST_SINGULAR + (self._index >> 1)]
+
+    @property
+    def shoulder_singular(self) -> bool:
+        """True if the right and left arms meet (shoulder singularity).
+
+        The wrist centre is then on the cylinder |D| around the base axis (to
+        1e-10 m); on the base axis itself θ1 is free and this solution is one
+        member of a one-parameter family.
+        """
+        return self._shared[1][FLAG_SHOULDER_SINGULAR]
+
+    def __repr__(self) -> str:
+        return (
+            f"IKSolution(q={self.q!r}, branch={self.branch!r}, index={self.index}, "
+            f"within_limits={self.within_limits}, "
+            f"wrist_singular={self.wrist_singular}, "
+            f"shoulder_singular={self.shoulder_singular})"
+        )
+
+    def __reduce__(self) -> tuple[object, tuple[object, ...]]:
+        return (IKSolution, (self._shared, self._index))
+
+
+def _frozen_field(name: str) -> property:
+    """``IKSolution.<name>`` with a setter and deleter that raise, as frozen."""
+    getter = IKSolution.__dict__[name].fget
+
+    def refuse(self: IKSolution, *value: object) -> None:
+        raise FrozenInstanceError(f"cannot assign to field {name!r}")
+
+    return property(getter, refuse, refuse, getter.__doc__)
+
+
+for _name in (
+    "q",
+    "branch",
+    "index",
+    "within_limits",
+    "wrist_singular",
+    "shoulder_singular",
+):
+    setattr(IKSolution, _name, _frozen_field(_name))
+del _name
+
+_INDICES = tuple(range(len(BRANCHES)))
+
+__all__ = [
+    "BATCH_CHUNK",
+    "BRANCHES",
+    "FLAG_COUNT",
+    "FLAG_SHOULDER_SINGULAR",
+    "FLAG_SOME_UNREACHED",
+    "FLAG_WITHIN_LIMITS",
+    "FLAG_WRIST_SINGULAR",
+    "UR_BRANCHES",
+    "ClosedFormSolver",
+    "IKSolution",
+    "get_closed_form",
+]

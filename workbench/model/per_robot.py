@@ -1,0 +1,66 @@
+"""Values derived from a robot, cached per robot object and held weakly.
+
+Several layers derive costly values from a :class:`~workbench.model.robot.Robot`:
+its kinematic structure, the closed-form solver, the compiled chain. Each is
+computed once per robot object with :func:`per_robot` and forgotten with the
+robot: the cache holds no strong reference to it (an entry leaves when the
+robot is garbage-collected), and an entry is rebuilt when the robot's model,
+limits or tool frame have been replaced since (its *stamp*).
+"""
+
+from __future__ import annotations
+
+import functools
+import weakref
+from collections.abc import Callable
+from typing import Any, TypeVar
+
+from workbench.model.robot import Robot
+
+T = TypeVar("T")
+
+
+def _stamp(robot: Robot) -> tuple[Any, ...]:
+    """What a derived value depends on: the objects, compared by identity."""
+    return (
+        robot.model,
+        robot.lower,
+        robot.upper,
+        robot.velocity_limit,
+        robot.acceleration_limit,
+        robot.tool_frame_id,
+        robot.dh_table,
+    )
+
+
+def _same(a: tuple[Any, ...], b: tuple[Any, ...]) -> bool:
+    """Whether two stamps hold the same objects (and the same frame index)."""
+    return all(x is y or (type(x) is int and x == y) for x, y in zip(a, b, strict=True))
+
+
+def per_robot(build: Callable[[Robot], T]) -> Callable[[Robot], T]:
+    """Cache ``build(robot)`` per robot object, weakly (module docstring).
+
+    The decorated function takes the robot only. A lookup costs a dict access
+    and an identity comparison of the stamp; ``cache_clear()`` empties it.
+    """
+    entries: dict[int, tuple[weakref.ref[Robot], tuple[Any, ...], T]] = {}
+
+    @functools.wraps(build)
+    def cached(robot: Robot) -> T:
+        key = id(robot)
+        entry = entries.get(key)
+        stamp = _stamp(robot)
+        if entry is not None and entry[0]() is robot and _same(entry[1], stamp):
+            return entry[2]
+        value = build(robot)
+        if entry is None or entry[0]() is not robot:
+            weakref.finalize(robot, entries.pop, key, None)
+        entries[key] = (weakref.ref(robot), stamp, value)
+        return value
+
+    cached.cache_clear = entries.clear  # type: ignore[attr-defined]
+    return cached
+
+
+__all__ = ["per_robot"]
