@@ -1,0 +1,115 @@
+"""The one door into the closed form: ClosedFormSolver, cached per robot, weakly."""
+
+from __future__ import annotations
+
+import gc
+import weakref
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from workbench import load_robot
+from workbench.ik import (
+    BRANCHES,
+    UR_BRANCHES,
+    ClosedFormSolver,
+    UnsupportedRobotError,
+    analytic,
+    analytic_batch,
+    get_closed_form,
+    get_structure,
+    nearest,
+)
+from workbench.ik.solver import FLAG_COUNT
+from workbench.model.per_robot import per_robot
+
+
+@pytest.fixture(scope="module")
+def puma():
+    return load_robot("puma560")
+
+
+def test_one_solver_per_robot_object(puma) -> None:
+    solver = get_closed_form(puma)
+    assert isinstance(solver, ClosedFormSolver)
+    assert get_closed_form(puma) is solver
+    assert solver.family == "opw" and solver.branches == BRANCHES
+    assert solver.robot is puma
+    assert not solver.geometry.flags.writeable
+    slower = puma.with_limits(velocity_limit=puma.velocity_limit / 2)
+    assert get_closed_form(slower) is not solver
+
+
+def test_ur_solver_has_ur_labels() -> None:
+    solver = get_closed_form(load_robot("ur5"))
+    assert solver.family == "ur" and solver.branches == UR_BRANCHES
+
+
+def test_no_closed_form_is_refused() -> None:
+    with pytest.raises(UnsupportedRobotError):
+        get_closed_form(load_robot("panda"))
+
+
+def test_cache_holds_no_robot_alive() -> None:
+    robot = load_robot("ur5")
+    solver = weakref.ref(get_closed_form(robot))
+    get_structure(robot)
+    gone = weakref.ref(robot)
+    del robot
+    gc.collect()
+    assert gone() is None
+    assert solver() is None
+
+
+def test_value_rebuilt_when_the_model_is_replaced(puma) -> None:
+    calls = []
+
+    @per_robot
+    def count(robot):
+        calls.append(robot)
+        return len(calls)
+
+    robot = load_robot("puma560")
+    assert count(robot) == count(robot) == 1
+    robot.model = pin.Model(robot.model)
+    assert count(robot) == 2
+    robot.tool_frame_id = robot.model.getFrameId("frame6")
+    assert count(robot) == 3 == count(robot)
+
+
+def test_solve_and_front_door_agree(puma) -> None:
+    rng = np.random.default_rng(3)
+    qs = rng.uniform(puma.lower, puma.upper, size=(20, 6))
+    targets = np.array([puma.fk(q).homogeneous for q in qs])
+    solver = get_closed_form(puma)
+    q_batch, valid = solver.solve_batch(targets)
+    q_front, valid_front = analytic_batch(puma, targets)
+    np.testing.assert_array_equal(q_batch, q_front)
+    np.testing.assert_array_equal(valid, valid_front)
+    for target, q in zip(targets, qs, strict=True):
+        mine = solver.solve(target, q_previous=q)
+        front = analytic(puma, target, q_previous=q)
+        assert [s.branch for s in mine] == [s.branch for s in front]
+        np.testing.assert_array_equal([s.q for s in mine], [s.q for s in front])
+
+
+def test_solve_arrays_names_its_flags(puma) -> None:
+    q0 = np.array([0.1, -0.4, 0.3, 0.2, 0.5, -0.1])
+    q, flags = get_closed_form(puma).solve_arrays(puma.fk(q0).homogeneous, q0)
+    assert q.shape == (8, 6) and flags.shape == (FLAG_COUNT,)
+
+
+def test_track_continues_the_branch_of_the_motion(puma) -> None:
+    solver = get_closed_form(puma)
+    q0 = np.array([0.1, -0.4, 0.3, 0.2, 0.5, -0.1])
+    start = nearest(analytic(puma, puma.fk(q0)), q0)
+    q1 = q0 + 1e-3
+    q, index, within = solver.track(puma.fk(q1).homogeneous, q1, start.index >> 1, 1e-2)
+    assert index == start.index and within
+    np.testing.assert_allclose(q, q1, atol=1e-12)
+    # after a jump larger than max_step2 the nearest of all eight is taken
+    other = analytic(puma, puma.fk(q1))[7]
+    q, index, _ = solver.track(puma.fk(q1).homogeneous, other.q, 0, 0.0)
+    assert index == 7
+    np.testing.assert_allclose(q, other.q, atol=1e-12)
