@@ -6,25 +6,102 @@ import argparse
 import json
 import math
 import sys
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-from workbench.errors import NonFiniteError
+from workbench.errors import InputError, NonFiniteError
+from workbench.model.loading import load_robot
+from workbench.model.robot import Robot
 
 
 def add_robot_argument(
-    parser: argparse.ArgumentParser, default: str | None = None
+    parser: argparse.ArgumentParser,
+    default: str | None = None,
+    *,
+    help_text: str | None = None,
 ) -> None:
-    """``--robot NAME|PATH`` (required unless a default is given)."""
+    """``--robot NAME|PATH`` (required unless a default is given), ``--package-dir``.
+
+    Load the robot they name with :func:`load_robot_from_args`.
+    """
     parser.add_argument(
         "--robot",
-        required=default is None,
+        required=default is None and help_text is None,
         default=default,
-        help="robot name (puma560, puma560-kang, ur5, panda, ...) or path to a .urdf"
+        help=help_text
+        or "robot name (puma560, puma560-kang, ur5, panda, ...) or path to a .urdf"
         + (f" (default: {default})" if default else ""),
     )
+    parser.add_argument(
+        "--package-dir",
+        action="append",
+        default=[],
+        type=Path,
+        metavar="DIR",
+        help="folder holding the ROS packages of the URDF's package:// mesh URIs "
+        "(repeatable; searched before ROS_PACKAGE_PATH and the URDF's folders)",
+    )
+
+
+def add_limit_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--velocity-limit`` and ``--acceleration-limit``: one value or one per joint."""
+    parser.add_argument(
+        "--velocity-limit",
+        nargs="+",
+        type=positive_float,
+        metavar="V",
+        help="joint speed limits [rad/s], > 0: one for every joint or one per "
+        "joint (default: the URDF's; velocity=0 there means none)",
+    )
+    parser.add_argument(
+        "--acceleration-limit",
+        nargs="+",
+        type=positive_float,
+        metavar="A",
+        help="joint acceleration limits [rad/s²], > 0: one for every joint or one "
+        "per joint (default: none)",
+    )
+
+
+def load_robot_from_args(
+    args: argparse.Namespace, name: str | None = None, *, tool_frame: str | None = None
+) -> Robot:
+    """The robot of ``--robot`` (or ``name``), with ``--package-dir`` and limits.
+
+    Raises:
+        InputError: If a limit option has neither 1 nor nv values.
+    """
+    robot = load_robot(
+        args.robot if name is None else name,
+        tool_frame=tool_frame,
+        package_dirs=getattr(args, "package_dir", ()),
+    )
+    limits = {
+        key: _per_joint(robot, getattr(args, key, None), option)
+        for key, option in (
+            ("velocity_limit", "--velocity-limit"),
+            ("acceleration_limit", "--acceleration-limit"),
+        )
+    }
+    if any(value is not None for value in limits.values()):
+        robot = robot.with_limits(**limits)
+    return robot
+
+
+def _per_joint(
+    robot: Robot, values: list[float] | None, option: str
+) -> npt.NDArray[np.float64] | None:
+    if values is None:
+        return None
+    if len(values) not in (1, robot.nv):
+        raise InputError(
+            f"{option} takes 1 value (every joint) or {robot.nv} (one per joint of "
+            f"{robot.name}: {', '.join(robot.joint_names)}), got {len(values)}"
+        )
+    return np.broadcast_to(np.asarray(values, dtype=np.float64), (robot.nv,))
 
 
 def add_json_flag(parser: argparse.ArgumentParser) -> None:
@@ -53,6 +130,14 @@ def finite_float(text: str) -> float:
     return value
 
 
+def positive_float(text: str) -> float:
+    """Argparse type: a finite float > 0."""
+    value = finite_float(text)
+    if not value > 0.0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text!r}")
+    return value
+
+
 def joint_values_rad(
     args: argparse.Namespace, values: list[float]
 ) -> npt.NDArray[np.float64]:
@@ -61,6 +146,34 @@ def joint_values_rad(
     if not np.all(np.isfinite(q)):
         raise NonFiniteError("joint values must be finite")
     return np.deg2rad(q) if args.deg else q
+
+
+def configuration_from_args(
+    robot: Robot, args: argparse.Namespace, values: list[float]
+) -> npt.NDArray[np.float64]:
+    """``q`` (nq,) from typed joint values: one angle per joint (``--deg``/``--rad``).
+
+    With ``--rad``, Pinocchio's q (nq values, (cos, sin) per continuous joint)
+    is accepted too (see :meth:`Robot.as_configuration`).
+
+    Raises:
+        DimensionError: If the count is wrong.
+        InputError: If ``--deg`` is given nq values of a robot with continuous
+            joints (degrees make no (cos, sin) pair).
+    """
+    angles = joint_values_rad(args, values)
+    if args.deg and angles.size == robot.nq != robot.n_joints:
+        raise InputError(
+            f"--deg takes one angle per joint ({robot.n_joints} for {robot.name}); "
+            f"the {robot.nq} values of Pinocchio's q, with (cos, sin) per "
+            "continuous joint, go with --rad"
+        )
+    return robot.as_configuration(angles)
+
+
+def q_from_degrees(robot: Robot, values: list[float]) -> npt.NDArray[np.float64]:
+    """``q`` (nq,) from one angle per joint in degrees (``--pick-deg`` etc.)."""
+    return robot.q_from_joint_values(np.deg2rad(np.asarray(values, dtype=np.float64)))
 
 
 def print_json(payload: dict[str, Any]) -> None:

@@ -7,13 +7,19 @@ from pathlib import Path
 
 import numpy as np
 
-from workbench.cli._common import add_json_flag, finite_float, print_json
+from workbench.cli._common import (
+    add_json_flag,
+    add_limit_arguments,
+    add_robot_argument,
+    finite_float,
+    load_robot_from_args,
+    print_json,
+)
 from workbench.errors import InputError
 from workbench.export import write_named_csv, write_ros2_bag, write_urscript
 from workbench.export.atomic_files import check_output
 from workbench.export.ros2_bag import DEFAULT_TOPIC
 from workbench.export.urscript import DEFAULT_SERVO_RATE, check_ur_joints
-from workbench.model.loading import load_robot
 from workbench.model.robot import Robot
 from workbench.trajectory.csv_io import JointTrajectorySamples, read_trajectory_csv
 
@@ -53,10 +59,11 @@ def register(commands: argparse._SubParsersAction) -> None:
     source.add_argument(
         "--fishcut", action="store_true", help="Kang's fish-cutting run (servo rate)"
     )
-    parser.add_argument(
-        "--robot",
-        help="robot name or URDF (default: puma560, puma560-kang for --fishcut)",
+    add_robot_argument(
+        parser,
+        help_text="robot name or URDF (default: puma560, puma560-kang for --fishcut)",
     )
+    add_limit_arguments(parser)
     parser.add_argument(
         "--servo-rate",
         type=finite_float,
@@ -101,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
     if args.format == "urscript" and not (args.servo_rate > 0.0):
         raise InputError(f"--servo-rate must be > 0 [Hz], got {args.servo_rate:g}")
     name = args.robot or ("puma560-kang" if args.fishcut else "puma560")
-    robot = load_robot(name)
+    robot = load_robot_from_args(args, name)
     names = robot.joint_names
     if args.format == "urscript":  # refuse before any work
         check_ur_joints(names, robot.name)

@@ -14,10 +14,15 @@ from workbench.cli._collision import (
     print_collision_summary,
     report_collision_error,
 )
-from workbench.cli._common import add_json_flag, add_robot_argument, print_json
+from workbench.cli._common import (
+    add_json_flag,
+    add_limit_arguments,
+    add_robot_argument,
+    load_robot_from_args,
+    print_json,
+)
 from workbench.collision import check_path
 from workbench.export.atomic_files import atomic_file, check_output
-from workbench.model.loading import load_robot
 from workbench.tasks import FishCuttingSetup, SimulatedFish, run_fish_cutting
 from workbench.tasks.fish_cutting import summarize_fish_cutting
 from workbench.tasks.fish_program import get_cell_scale
@@ -48,6 +53,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         ),
     )
     add_robot_argument(parser, default=DEFAULT_ROBOT)
+    add_limit_arguments(parser)
     parser.add_argument(
         "--csv", type=Path, metavar="FILE", help="write the servo-rate joint commands"
     )
@@ -93,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
     for path in (args.csv, args.html):
         if path is not None:
             check_output(path)
-    robot = load_robot(args.robot)
+    robot = load_robot_from_args(args)
     scene = load_scene(args, lambda: None)  # a --scene file is checked first
     scale = get_cell_scale(robot)  # (an arm without a closed form fails here)
     setup = FishCuttingSetup(

@@ -10,11 +10,11 @@ from workbench.cli._common import (
     add_angle_arguments,
     add_json_flag,
     add_robot_argument,
+    configuration_from_args,
     format_vector,
-    joint_values_rad,
+    load_robot_from_args,
     print_json,
 )
-from workbench.model.loading import load_robot
 from workbench.poses import angeles7_from_se3, quat_wxyz_from_rotation
 
 
@@ -36,14 +36,15 @@ def register(commands: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Print the pose; returns the exit code."""
-    robot = load_robot(args.robot)
-    q = robot.check_configuration(joint_values_rad(args, args.q))
+    robot = load_robot_from_args(args)
+    q = configuration_from_args(robot, args, args.q)
     frame = args.frame or robot.tool_frame
     pose = robot.fk(q, frame)
     result = {
         "robot": robot.name,
         "frame": frame,
         "q": q,
+        "joint_values": robot.joint_values_from_q(q),
         "position": pose.translation,
         "rotation": pose.rotation,
         "quat_wxyz": quat_wxyz_from_rotation(pose.rotation),
@@ -54,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
     a7 = result["angeles7"]
     print(f"robot     {robot.name}   frame {frame}")
-    print(f"q [deg]   {format_vector(np.rad2deg(q), 4)}")
+    print(f"q [deg]   {format_vector(np.rad2deg(result['joint_values']), 4)}")
     print(f"position  {format_vector(pose.translation * 1e3, 3)}  [mm]")
     print(
         "rotation  " + "\n          ".join(format_vector(row) for row in pose.rotation)

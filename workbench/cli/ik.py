@@ -20,6 +20,7 @@ from workbench.cli._common import (
     add_robot_argument,
     finite_float,
     format_vector,
+    load_robot_from_args,
     print_json,
 )
 from workbench.errors import InfeasibleError
@@ -31,7 +32,6 @@ from workbench.ik.closed_form import (
     nearest,
 )
 from workbench.ik.numerical import numeric
-from workbench.model.loading import load_robot
 from workbench.model.robot import Robot
 from workbench.poses import (
     ANGELES7_PRINTED_TOL,
@@ -160,7 +160,7 @@ def run(args: argparse.Namespace) -> int:
     One pose: the kernels run interpreted (``_compiled.interpreted``), which
     takes milliseconds where compiling them on a first run takes seconds.
     """
-    robot = load_robot(args.robot, tool_frame=args.tool_frame)
+    robot = load_robot_from_args(args, tool_frame=args.tool_frame)
     target = target_from_args(args)
     with interpreted():
         return _solve_and_print(args, robot, target)

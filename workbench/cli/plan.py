@@ -18,13 +18,15 @@ from workbench.cli._collision import (
 )
 from workbench.cli._common import (
     add_json_flag,
+    add_limit_arguments,
     add_robot_argument,
     finite_float,
+    load_robot_from_args,
     print_json,
+    q_from_degrees,
 )
 from workbench.collision import Scene, get_angeles_scene, get_pedestal
 from workbench.errors import InputError
-from workbench.model.loading import load_robot
 from workbench.trajectory import minimum_duration, pick_and_place
 from workbench.trajectory.csv_io import write_trajectory_csv
 from workbench.trajectory.normal_spline import DEFAULT_N_POINTS
@@ -52,6 +54,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         "bodies touch.",
     )
     add_robot_argument(pick)
+    add_limit_arguments(pick)
     pick.add_argument(
         "--pick-deg",
         nargs="+",
@@ -107,9 +110,9 @@ def run_pick_place(args: argparse.Namespace) -> int:
     """Plan, check, write; returns the exit code (3 on a limit violation)."""
     if args.rate <= 0.0:
         raise InputError(f"--rate must be > 0 [Hz], got {args.rate:g}")
-    robot = load_robot(args.robot)
-    q_pick = np.deg2rad(np.asarray(args.pick_deg, dtype=np.float64))
-    q_place = np.deg2rad(np.asarray(args.place_deg, dtype=np.float64))
+    robot = load_robot_from_args(args)
+    q_pick = q_from_degrees(robot, args.pick_deg)
+    q_place = q_from_degrees(robot, args.place_deg)
     traj = pick_and_place(robot, q_pick, q_place, args.duration, n_points=args.n_points)
     t_min = minimum_duration(robot, q_pick, q_place, n_points=args.n_points)
     violations = traj.check_limits()

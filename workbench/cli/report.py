@@ -7,9 +7,13 @@ import sys
 from pathlib import Path
 from typing import TextIO
 
-from workbench.cli._common import add_json_flag, add_robot_argument, print_json
+from workbench.cli._common import (
+    add_json_flag,
+    add_robot_argument,
+    load_robot_from_args,
+    print_json,
+)
 from workbench.errors import InputError
-from workbench.model.loading import load_robot
 from workbench.trajectory.csv_io import read_trajectory_csv
 
 #: Width of the progress bar [characters].
@@ -99,7 +103,7 @@ def run_singularities(args: argparse.Namespace) -> int:
     )
 
     args.progress.finish()  # the command draws its own progress bar (or none)
-    robot = load_robot(args.robot)
+    robot = load_robot_from_args(args)
     trajectory = None
     if args.trajectory is not None:
         samples = read_trajectory_csv(args.trajectory, robot.nq)

@@ -12,12 +12,12 @@ from workbench.cli._common import (
     add_angle_arguments,
     add_json_flag,
     add_robot_argument,
+    configuration_from_args,
     format_vector,
-    joint_values_rad,
+    load_robot_from_args,
     print_json,
 )
 from workbench.errors import InputError
-from workbench.model.loading import load_robot
 from workbench.model.robot import Robot
 from workbench.singularities.conditions import (
     CONDITION_UNITS,
@@ -117,8 +117,8 @@ def _finite_or_none(value: float) -> float | None:
 
 def run(args: argparse.Namespace) -> int:
     """Print the analysis; returns the exit code."""
-    robot = load_robot(args.robot)
-    q = robot.check_configuration(joint_values_rad(args, args.q))
+    robot = load_robot_from_args(args)
+    q = configuration_from_args(robot, args, args.q)
     result = analyse_configuration(robot, q)
     if args.json:
         print_json(result)

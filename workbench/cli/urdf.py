@@ -5,7 +5,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from workbench.cli._common import add_json_flag, add_robot_argument, print_json
+from workbench.cli._common import (
+    add_json_flag,
+    add_robot_argument,
+    load_robot_from_args,
+    print_json,
+)
 from workbench.errors import InputError
 from workbench.model.dh import DHTable
 from workbench.model.urdf_generator import generate_urdf
@@ -69,9 +74,8 @@ def run_from_dh(args: argparse.Namespace) -> int:
 def run_srdf(args: argparse.Namespace) -> int:
     """Print or write the self-collision filter; returns the exit code."""
     from workbench.collision import compute_self_collision_filter
-    from workbench.model.loading import load_robot
 
-    robot = load_robot(args.robot)
+    robot = load_robot_from_args(args)
     if robot.collision_model.ngeoms == 0:
         raise InputError(f"robot {robot.name!r} has no collision geometry")
     text = compute_self_collision_filter(robot).to_srdf()

@@ -8,9 +8,13 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from workbench.cli._common import add_robot_argument, finite_float, joint_values_rad
+from workbench.cli._common import (
+    add_robot_argument,
+    configuration_from_args,
+    finite_float,
+    load_robot_from_args,
+)
 from workbench.errors import InputError
-from workbench.model.loading import load_robot
 from workbench.model.robot import Robot
 from workbench.trajectory.csv_io import (
     JointTrajectorySamples,
@@ -128,9 +132,9 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("give joint values or --trajectory, not both")
     if args.ik_branches and not args.q:
         raise InputError("--ik-branches needs joint values (the pose is their FK)")
-    robot = load_robot(args.robot)
+    robot = load_robot_from_args(args)
     samples = read_samples(args.trajectory, robot) if args.trajectory else None
-    q = robot.check_configuration(joint_values_rad(args, args.q)) if args.q else None
+    q = configuration_from_args(robot, args, args.q) if args.q else None
     viewer = Viewer(robot, q, color_by_singularity=args.singularity_color)
     if args.scene is not None:
         from workbench.collision import CollisionChecker, read_scene

@@ -44,6 +44,39 @@ class CatalogEntry:
 
 _PANDA_FINGERS = ("panda_finger_joint1", "panda_finger_joint2")
 
+# Hands whose <mimic> joints Pinocchio cannot represent (a finger comes before
+# the joint it follows, or follows a joint the URDF does not have): the whole
+# hand is locked, leader and followers alike, as the panda's fingers are.
+_ROMEO_HANDS = tuple(
+    f"{side}{joint}"
+    for side in "LR"
+    for joint in (
+        "Hand",
+        *(f"Finger{i}{k}" for i in (1, 2, 3) for k in (1, 2, 3) if (i, k) != (1, 1)),
+        "Thumb1",
+        "Thumb2",
+        "Thumb3",
+    )
+)
+_TALOS_GRIPPERS = tuple(
+    f"gripper_{side}_{joint}"
+    for side in ("left", "right")
+    for joint in (
+        "joint",
+        "inner_double_joint",
+        "fingertip_1_joint",
+        "fingertip_2_joint",
+        "motor_single_joint",
+        "inner_single_joint",
+        "fingertip_3_joint",
+    )
+)
+_PSYONIC_FINGER_TIPS = tuple(
+    f"{side}_{finger}_q2"
+    for side in ("Left", "Right")
+    for finger in ("index", "middle", "ring", "pinky")
+)
+
 CATALOG: dict[str, CatalogEntry] = {
     "puma560": CatalogEntry("puma560.urdf", "wrist_center", own=True),
     "puma560-kang": CatalogEntry("puma560-kang.urdf", "wrist_center", own=True),
@@ -52,7 +85,10 @@ CATALOG: dict[str, CatalogEntry] = {
     "generic6r": CatalogEntry("generic6r.urdf", "flange", own=True),
     "a1": CatalogEntry("a1_description/urdf/a1.urdf"),
     "alex_nub_hands": CatalogEntry("alex_description/urdf/alex_nub_hands.urdf"),
-    "alex_psyonic_hands": CatalogEntry("alex_description/urdf/alex_psyonic_hands.urdf"),
+    "alex_psyonic_hands": CatalogEntry(
+        "alex_description/urdf/alex_psyonic_hands.urdf",
+        locked_joints=_PSYONIC_FINGER_TIPS,
+    ),
     "alex_sake_hands": CatalogEntry("alex_description/urdf/alex_sake_hands.urdf"),
     "alexander": CatalogEntry(
         "alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf"
@@ -106,7 +142,9 @@ CATALOG: dict[str, CatalogEntry] = {
     ),
     "pr2": CatalogEntry("pr2_description/urdf/pr2.urdf"),
     "quadruped": CatalogEntry("quadruped_description/urdf/quadruped.urdf"),
-    "romeo": CatalogEntry("romeo_description/urdf/romeo.urdf"),
+    "romeo": CatalogEntry(
+        "romeo_description/urdf/romeo.urdf", locked_joints=_ROMEO_HANDS
+    ),
     "simple_humanoid": CatalogEntry(
         "simple_humanoid_description/urdf/simple_humanoid.urdf"
     ),
@@ -120,8 +158,12 @@ CATALOG: dict[str, CatalogEntry] = {
     "talos": CatalogEntry("talos_data/robots/talos_reduced.urdf"),
     "talos_arm": CatalogEntry("talos_data/robots/talos_left_arm.urdf"),
     "talos_box": CatalogEntry("talos_data/robots/talos_reduced_box.urdf"),
-    "talos_full": CatalogEntry("talos_data/robots/talos_full_v2.urdf"),
-    "talos_full_box": CatalogEntry("talos_data/robots/talos_full_v2_box.urdf"),
+    "talos_full": CatalogEntry(
+        "talos_data/robots/talos_full_v2.urdf", locked_joints=_TALOS_GRIPPERS
+    ),
+    "talos_full_box": CatalogEntry(
+        "talos_data/robots/talos_full_v2_box.urdf", locked_joints=_TALOS_GRIPPERS
+    ),
     "tiago": CatalogEntry("tiago_description/robots/tiago.urdf"),
     "tiago_dual": CatalogEntry("tiago_description/robots/tiago_dual.urdf"),
     "tiago_no_hand": CatalogEntry("tiago_description/robots/tiago_no_hand.urdf"),

@@ -5,7 +5,7 @@ from __future__ import annotations
 import contextlib
 import os
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import pinocchio as pin
@@ -14,6 +14,14 @@ from workbench.errors import JointNotFoundError, RobotNotFoundError, URDFLoadErr
 from workbench.model.catalog import CATALOG, get_catalog_urdf
 from workbench.model.dh import DHTable
 from workbench.model.robot import Robot
+from workbench.model.urdf_joints import (
+    MimicJoint,
+    apply_mimic_joints,
+    parse_urdf_joints,
+)
+
+ROS_PACKAGE_PATH = "ROS_PACKAGE_PATH"
+"""Environment variable: folders (``os.pathsep``-separated) holding ROS packages."""
 
 
 def get_robot_names() -> list[str]:
@@ -21,16 +29,30 @@ def get_robot_names() -> list[str]:
     return sorted(CATALOG)
 
 
-def load_robot(name: str | Path, *, tool_frame: str | None = None) -> Robot:
+def load_robot(
+    name: str | Path,
+    *,
+    tool_frame: str | None = None,
+    package_dirs: Sequence[str | Path] = (),
+) -> Robot:
     """Load a robot by catalog name or from a URDF file.
+
+    The URDF's joints are checked (zero-length axis, lower limit above the
+    upper one: refused) and its ``<mimic>`` joints honoured: a mimicking joint
+    has no coordinate of its own and follows its leader in FK and Jacobians
+    (:attr:`Robot.mimic_joints`).
 
     Args:
         name: ``"puma560"``, ``"puma560-kang"``, an example-robot-data name
             (``"ur5"``, ``"panda"``, …; see :func:`get_robot_names`), or a path
-            to a ``.urdf`` file. ``package://`` mesh URIs are resolved against
-            the URDF's folder and each of its parents.
+            to a ``.urdf`` file.
         tool_frame: Tool frame name. Default: the catalog's tool frame, else
             the last frame of the model.
+        package_dirs: Folders that hold ROS packages, searched first for a
+            ``package://PKG/...`` mesh URI (as ``DIR/PKG/...``); a package's
+            own folder may be given too. Then come the folders of the
+            ``ROS_PACKAGE_PATH`` environment variable, then the URDF's folder
+            and each of its parents.
 
     Returns:
         The robot, base fixed (no free flyer).
@@ -38,7 +60,9 @@ def load_robot(name: str | Path, *, tool_frame: str | None = None) -> Robot:
     Raises:
         RobotNotFoundError: If ``name`` is neither a catalog name nor a path
             to an existing file; the message lists the valid names.
-        URDFLoadError: If the URDF is unreadable or malformed.
+        URDFLoadError: If the URDF is unreadable or malformed, has a joint
+            with a zero axis or inverted limits, or a mimic joint Pinocchio
+            cannot represent (the message names the joints and values).
         FrameNotFoundError: If ``tool_frame`` is not in the model.
     """
     key = str(name)
@@ -57,18 +81,46 @@ def load_robot(name: str | Path, *, tool_frame: str | None = None) -> Robot:
         if not path.is_file():
             raise URDFLoadError(f"URDF file not found: {path}")
         locked = ()
-    model = _build_model(path)
+    model, mimics = _build_model(path)
     if locked:
         model = _lock_joints(model, locked)
+    model = apply_mimic_joints(model, mimics, path)
     if tool_frame is None:
         tool_frame = model.frames[len(model.frames) - 1].name
-    package_dirs = [str(p) for p in (path.resolve().parent, *path.resolve().parents)]
     return Robot(
-        key, model, path, tool_frame, package_dirs=package_dirs, dh_table=dh_table
+        key,
+        model,
+        path,
+        tool_frame,
+        package_dirs=get_package_dirs(path, package_dirs),
+        dh_table=dh_table,
     )
 
 
-def _build_model(path: Path) -> pin.Model:
+def get_package_dirs(urdf: Path, given: Sequence[str | Path] = ()) -> list[str]:
+    """Folders searched for ``package://`` URIs, in order, without repeats.
+
+    Each folder of ``given`` (and its parent, so that a package's own folder
+    works too), then each of ``ROS_PACKAGE_PATH`` (likewise), then the URDF's
+    folder and its parents.
+
+    Raises:
+        URDFLoadError: If a folder of ``given`` does not exist.
+    """
+    found: list[Path] = []
+    for folder in given:
+        folder = Path(folder).expanduser()
+        if not folder.is_dir():
+            raise URDFLoadError(f"package folder not found: {folder}")
+        found += [folder.resolve(), folder.resolve().parent]
+    for entry in os.environ.get(ROS_PACKAGE_PATH, "").split(os.pathsep):
+        if entry and Path(entry).is_dir():
+            found += [Path(entry).resolve(), Path(entry).resolve().parent]
+    found += [urdf.resolve().parent, *urdf.resolve().parents]
+    return [str(p) for p in dict.fromkeys(found)]
+
+
+def _build_model(path: Path) -> tuple[pin.Model, list[MimicJoint]]:
     try:
         text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as err:
@@ -86,7 +138,7 @@ def _build_model(path: Path) -> pin.Model:
         raise URDFLoadError(f"{path}: malformed URDF: {reason}") from err
     if model.nq == 0:
         raise URDFLoadError(f"{path}: the URDF has no moving joint")
-    return model
+    return model, parse_urdf_joints(text, path)
 
 
 @contextlib.contextmanager
@@ -118,4 +170,4 @@ def _lock_joints(model: pin.Model, names: tuple[str, ...]) -> pin.Model:
     return pin.buildReducedModel(model, ids, pin.neutral(model))
 
 
-__all__ = ["get_robot_names", "load_robot"]
+__all__ = ["ROS_PACKAGE_PATH", "get_package_dirs", "get_robot_names", "load_robot"]

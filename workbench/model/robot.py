@@ -17,9 +17,11 @@ from workbench.errors import (
     URDFLoadError,
 )
 from workbench.model.dh import DHTable
+from workbench.model.urdf_joints import MimicJoint
 from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]
+IndexArray = npt.NDArray[np.intp]
 
 _LOCAL = pin.ReferenceFrame.LOCAL
 _WORLD = pin.ReferenceFrame.WORLD
@@ -35,13 +37,27 @@ _compute_frame_jacobian = pin.computeFrameJacobian
 
 
 def _positive_limits(values: npt.ArrayLike, size: int, name: str) -> FloatArray:
-    """Limits of shape (size,), each > 0 (inf allowed, NaN not)."""
-    arr = np.asarray(values, dtype=np.float64)
+    """Limits of shape (size,) (a scalar holds for every joint), each > 0.
+
+    inf means "no limit"; NaN, 0 and negative values are refused.
+    """
+    try:
+        arr = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise InputError(f"{name} must be numbers, got {values!r}") from err
+    if arr.shape == ():
+        arr = np.full(size, float(arr))
     if arr.shape != (size,):
         raise DimensionError(name, (size,), arr.shape)
     if np.any(np.isnan(arr)) or np.any(arr <= 0.0):
-        raise InputError(f"{name} must be > 0 (inf allowed), got {arr.tolist()}")
+        raise InputError(f"{name} must be > 0 (inf for no limit), got {arr.tolist()}")
     return arr
+
+
+def _given_limits(values: npt.ArrayLike) -> FloatArray:
+    """A URDF's rate limits, 0 (how a URDF says "not given") as inf."""
+    arr = np.asarray(values, dtype=np.float64)
+    return np.where(arr > 0.0, arr, np.inf)
 
 
 def _read_only(values: npt.ArrayLike) -> FloatArray:
@@ -67,9 +83,11 @@ class Robot:
         dh_table: The DH table the URDF was generated from (the PUMA models),
             else None.
         lower, upper: Position limits, shape (nq,) [rad].
-        velocity_limit: Speed limits, shape (nv,) [rad/s].
-        acceleration_limit: Acceleration limits, shape (nv,) [rad/s²], inf
-            where unknown.
+        velocity_limit: Speed limits, shape (nv,) [rad/s], > 0; inf where
+            not given (a URDF's ``velocity="0"`` or a missing ``<limit>``).
+            Every speed check and duration reads this attribute.
+        acceleration_limit: Acceleration limits, shape (nv,) [rad/s²], > 0;
+            inf where not given (a URDF has none).
     """
 
     def __init__(
@@ -94,7 +112,7 @@ class Robot:
         self.tool_frame_id = self.get_frame_id(tool_frame)
         self.lower = _read_only(model.lowerPositionLimit)
         self.upper = _read_only(model.upperPositionLimit)
-        self.velocity_limit = _read_only(model.velocityLimit)
+        self.velocity_limit = _read_only(_given_limits(model.velocityLimit))
         if acceleration_limit is None:
             acceleration_limit = np.full(model.nv, np.inf)
         self.acceleration_limit = _read_only(
@@ -110,8 +128,10 @@ class Robot:
         """A copy of this robot with other speed and/or acceleration limits.
 
         Args:
-            velocity_limit: Shape (nv,) [rad/s], > 0; None keeps the current one.
-            acceleration_limit: Shape (nv,) [rad/s²], > 0 or inf; None keeps it.
+            velocity_limit: Shape (nv,) [rad/s], > 0 or inf (no limit); a
+                scalar holds for every joint. None keeps the current one.
+            acceleration_limit: Shape (nv,) [rad/s²], > 0 or inf; a scalar
+                holds for every joint. None keeps the current one.
 
         Raises:
             DimensionError: If a shape is wrong.
@@ -151,8 +171,169 @@ class Robot:
 
     @property
     def joint_names(self) -> list[str]:
-        """Names of the moving joints, base to tip (Pinocchio's "universe" left out)."""
-        return list(self.model.names)[1:]
+        """Names of the joints with a coordinate of their own, base to tip.
+
+        Pinocchio's "universe" and the mimicking joints (which follow their
+        leader, see :attr:`mimic_joints`) are left out: one name per joint
+        value, ``n_joints`` names.
+        """
+        model = self.model
+        return [model.names[j] for j in range(1, model.njoints) if model.joints[j].nv]
+
+    @property
+    def n_joints(self) -> int:
+        """Number of joints with a coordinate of their own (see :attr:`joint_names`).
+
+        The length of a vector of joint values (one angle per revolute or
+        continuous joint, one length per prismatic joint); it differs from
+        ``nq`` when a continuous joint stores its angle as (cos, sin).
+        """
+        return len(self.joint_names)
+
+    @property
+    def mimic_joints(self) -> tuple[MimicJoint, ...]:
+        """Joints that follow another (URDF ``<mimic>``), without a coordinate.
+
+        ``q_joint = multiplier * q_leader + offset``; FK and Jacobians apply it.
+        """
+        model = self.model
+        leaders = {
+            model.joints[j].idx_q: model.names[j]
+            for j in range(1, model.njoints)
+            if model.joints[j].nv
+        }
+        found = []
+        for j in range(1, model.njoints):
+            joint = model.joints[j]
+            if joint.shortname() == "JointModelMimic":
+                mimic = joint.extract()
+                found.append(
+                    MimicJoint(
+                        model.names[j],
+                        leaders[joint.idx_q],
+                        float(mimic.scaling),
+                        float(mimic.offset),
+                    )
+                )
+        return tuple(found)
+
+    def _value_slots(self) -> tuple[IndexArray, IndexArray, IndexArray]:
+        """Where each joint value goes in q: plain slots and (cos, sin) pairs.
+
+        Returns ``(plain_q, continuous_q, continuous_value)``: q indices of the
+        one-coordinate joints (in joint order, so their value index is their
+        rank), the q index of the cosine of each continuous joint, and the
+        joint-value index of each continuous joint.
+
+        Raises:
+            InputError: If a joint has several degrees of freedom (planar,
+                spherical, floating): it has no single joint value.
+        """
+        model = self.model
+        plain, pairs, pair_values = [], [], []
+        moving = [j for j in range(1, model.njoints) if model.joints[j].nv]
+        for rank, j in enumerate(moving):
+            joint = model.joints[j]
+            if joint.nv == 1 and joint.nq == 1:
+                plain.append(joint.idx_q)
+            elif joint.nv == 1 and joint.nq == 2:
+                pairs.append(joint.idx_q)
+                pair_values.append(rank)
+            else:
+                raise InputError(
+                    f"joint {model.names[j]!r} ({joint.shortname()}) has "
+                    f"{joint.nv} degrees of freedom and no single joint value; "
+                    f"give q with nq = {model.nq} values"
+                )
+        return (
+            np.array(plain, dtype=np.intp),
+            np.array(pairs, dtype=np.intp),
+            np.array(pair_values, dtype=np.intp),
+        )
+
+    def q_from_joint_values(self, values: npt.ArrayLike) -> FloatArray:
+        r"""Configuration ``q`` from one value per joint.
+
+        A continuous joint's angle :math:`\theta` becomes Pinocchio's pair
+        :math:`(\cos\theta, \sin\theta)`; every other value is copied.
+
+        Args:
+            values: Shape (n_joints,) [rad for revolute and continuous joints,
+                m for prismatic ones], in :attr:`joint_names` order.
+
+        Returns:
+            ``q``, shape (nq,).
+
+        Raises:
+            DimensionError: If ``values`` does not have n_joints entries.
+            NonFiniteError: If an entry is NaN or infinite.
+            InputError: If a joint has several degrees of freedom.
+        """
+        plain, pairs, pair_values = self._value_slots()
+        values = as_vector(values, len(plain) + len(pairs), "joint values")
+        q = np.empty(self.nq)
+        plain_values = np.ones(values.size, dtype=bool)
+        plain_values[pair_values] = False
+        q[plain] = values[plain_values]
+        angles = values[pair_values]
+        q[pairs] = np.cos(angles)
+        q[pairs + 1] = np.sin(angles)
+        return q
+
+    def joint_values_from_q(self, q: npt.ArrayLike) -> FloatArray:
+        """One value per joint from ``q``: the inverse of :meth:`q_from_joint_values`.
+
+        A continuous joint's (cos, sin) pair gives its angle in (-π, π].
+
+        Args:
+            q: Configuration, shape (nq,).
+
+        Returns:
+            Shape (n_joints,) [rad or m], in :attr:`joint_names` order.
+
+        Raises:
+            DimensionError: If ``q`` does not have nq entries.
+            NonFiniteError: If an entry is NaN or infinite.
+            InputError: If a joint has several degrees of freedom.
+        """
+        q = as_vector(q, self.nq, "q")
+        plain, pairs, pair_values = self._value_slots()
+        values = np.empty(len(plain) + len(pairs))
+        plain_values = np.ones(values.size, dtype=bool)
+        plain_values[pair_values] = False
+        values[plain_values] = q[plain]
+        cos = q[pairs]
+        values[pair_values] = np.arctan2(q[pairs + 1], cos)
+        return values
+
+    def as_configuration(self, values: npt.ArrayLike) -> FloatArray:
+        """``q`` from either joint values (n_joints,) or a configuration (nq,).
+
+        The two lengths never clash: they differ when a continuous joint
+        stores (cos, sin), and when they are equal every joint has one
+        coordinate and joint values *are* q.
+
+        Args:
+            values: Shape (n_joints,) [rad or m] or (nq,).
+
+        Returns:
+            ``q``, shape (nq,), float64.
+
+        Raises:
+            DimensionError: If the length is neither n_joints nor nq (the
+                message asks for n_joints values).
+            NonFiniteError: If an entry is NaN or infinite.
+        """
+        arr = np.asarray(values, dtype=np.float64)
+        if arr.ndim == 1 and arr.size != self.nq and arr.size == self.n_joints:
+            return self.q_from_joint_values(arr)
+        if arr.ndim == 1 and arr.size != self.nq:
+            followers = ", ".join(
+                f"{m.joint} follows {m.leader}" for m in self.mimic_joints
+            )
+            name = f"joint values ({followers})" if followers else "joint values"
+            raise DimensionError(name, (self.n_joints,), arr.shape)
+        return self.check_configuration(arr)
 
     @property
     def frame_names(self) -> list[str]:

@@ -133,9 +133,8 @@ class LimitViolation:
 
 
 def _rate_limit(robot: Robot, order: int) -> FloatArray:
-    """Speed (1) or acceleration (2) limits; a URDF's 0 ("not given") as inf."""
-    limit = np.asarray(robot.velocity_limit if order == 1 else robot.acceleration_limit)
-    return np.where(limit > 0.0, limit, np.inf)
+    """Speed (1) or acceleration (2) limits, inf where not given (see Robot)."""
+    return np.asarray(robot.velocity_limit if order == 1 else robot.acceleration_limit)
 
 
 def _bounds(robot: Robot, order: int) -> tuple[FloatArray, FloatArray]:
@@ -154,8 +153,9 @@ def check_limits(trajectory: _HasExtrema) -> list[LimitViolation]:
     """Every position, speed and acceleration limit the trajectory leaves.
 
     Uses the exact extremes of the trajectory (:meth:`get_extrema`), so a
-    violation between samples is found too. Infinite limits are never
-    violated, nor is a speed limit of 0 (how a URDF says "not given"). A value
+    violation between samples is found too. Infinite limits (not given, as a
+    URDF's ``velocity="0"``: see :attr:`Robot.velocity_limit`) are never
+    violated. A value
     counts as outside when it passes the limit by more than :data:`LIMIT_RTOL`
     of the limit.
 
@@ -208,7 +208,7 @@ def minimum_duration(
 
     Closed form (see the module docstring) from the spline's exact peaks of
     :math:`|\dot s|` and :math:`|\ddot s|` and ``robot.velocity_limit`` /
-    ``robot.acceleration_limit`` (only limits that are finite and > 0). A
+    ``robot.acceleration_limit`` (only finite limits count). A
     trajectory planned with exactly this T reaches the binding limit and leaves
     none. Position limits do not depend on T and are not considered.
 
