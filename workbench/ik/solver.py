@@ -52,6 +52,7 @@ from workbench.ik._puma import (
     check_reach,
     get_geometry,
 )
+from workbench.ik._refine_kernel import refine_batch, refine_pose, refinement_chain
 from workbench.ik._targets import as_targets, check_poses, pose_rows
 from workbench.ik.structure import get_structure
 from workbench.model.per_robot import per_robot
@@ -102,7 +103,9 @@ class ClosedFormSolver:
         geometry: The arm's constants, the kernel's (1,) record, read-only.
     """
 
-    __slots__ = ("__weakref__", "_kernel", "_robot", "branches", "family", "geometry")
+    __slots__ = (
+        "__weakref__", "_kernel", "_refine", "_robot", "branches", "family", "geometry"
+    )  # fmt: skip
 
     def __init__(self, robot: Robot):
         """Recognise the family of ``robot`` and pack its constants.
@@ -118,6 +121,8 @@ class ClosedFormSolver:
         self.geometry: np.ndarray = geometry
         self._kernel: types.ModuleType = kernel
         self._robot = weakref.ref(robot)
+        # the model's chain when it differs from the idealised structure
+        self._refine: FloatArray | None = refinement_chain(robot)
 
     @property
     def robot(self) -> Robot:
@@ -151,7 +156,9 @@ class ClosedFormSolver:
         else:
             pose = np.array(pose_rows(target))  # every check, with its error
         prev = _NO_PREVIOUS if q_previous is None else self._previous(q_previous)
-        q, flags = self.solve_arrays(pose, prev)
+        q, flags = np.empty((8, 6)), np.empty(FLAG_COUNT, dtype=bool)
+        if self._kernel.solve_pose(self.geometry, pose, prev, q, flags, True):
+            q, flags = self.solve_arrays(pose, prev)  # not OK: rechecked, or raises
         q.setflags(write=False)
         flag_list = flags.tolist()
         shared = (q, flag_list, self.branches)
@@ -187,6 +194,8 @@ class ClosedFormSolver:
             status = kernel.solve_pose(self.geometry, pose, q_previous, q, flags, False)
         if status != kernel.OK:
             self._explain(pose)
+        if self._refine is not None and not refine_pose(self._refine, pose, q, flags):
+            raise UnreachableError(0.0, (0.0, 0.0), "model")
         return q, flags
 
     def track(
@@ -274,6 +283,8 @@ class ClosedFormSolver:
                 geometry, angles[:n], y[:n], status[:n], exact[:n],
                 q[start : start + n], valid[start : start + n],
             )  # fmt: skip
+        if self._refine is not None:
+            refine_batch(self._refine, poses, q, valid)
         return q, valid
 
 

@@ -34,8 +34,16 @@ def _stamp(robot: Robot) -> tuple[Any, ...]:
 
 
 def _same(a: tuple[Any, ...], b: tuple[Any, ...]) -> bool:
-    """Whether two stamps hold the same objects (and the same frame index)."""
-    return all(x is y or (type(x) is int and x == y) for x, y in zip(a, b, strict=True))
+    """Whether two stamps hold the same objects (or equal ones).
+
+    Tuple comparison tests identity first, so the usual case (nothing
+    replaced) compares no array; two different arrays of more than one entry
+    make ``==`` ambiguous, which means "replaced".
+    """
+    try:
+        return a == b
+    except ValueError:
+        return False
 
 
 def per_robot(build: Callable[[Robot], T]) -> Callable[[Robot], T]:
