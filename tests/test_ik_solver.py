@@ -72,9 +72,13 @@ def test_value_rebuilt_when_the_model_is_replaced(puma) -> None:
 
     robot = load_robot("puma560")
     assert count(robot) == count(robot) == 1
-    robot.model = pin.Model(robot.model)
+    robot.model = pin.Model(robot.model)  # an equal copy: the same kinematics
+    assert count(robot) == 1
+    model = pin.Model(robot.model)
+    model.jointPlacements[2].translation[0] += 1e-3
+    robot.model = model
     assert count(robot) == 2
-    robot.tool_frame_id = robot.model.getFrameId("frame6")
+    robot.tool_frame_id = robot.model.getFrameId("frame5")
     assert count(robot) == 3 == count(robot)
 
 

@@ -5,7 +5,8 @@ its kinematic structure, the closed-form solver, the compiled chain. Each is
 computed once per robot object with :func:`per_robot` and forgotten with the
 robot: the cache holds no strong reference to it (an entry leaves when the
 robot is garbage-collected), and an entry is rebuilt when the robot's model,
-limits or tool frame have been replaced since (its *stamp*).
+limits or tool frame have been replaced since (its *stamp*) by objects that are
+not equal to them (an equal copy of the model describes the same arm).
 """
 
 from __future__ import annotations
