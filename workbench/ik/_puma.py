@@ -69,16 +69,25 @@ class UnreachableError(InfeasibleError):
         distance: Distance [m] of the wrist centre from the shoulder (``kind``
             ``"reach"``) or from the base axis (``kind`` ``"cylinder"``).
         bounds: Reachable interval of that distance, ``(low, high)`` [m].
-        kind: ``"reach"`` (too far or too close to the shoulder) or
+        kind: ``"reach"`` (too far or too close to the shoulder),
             ``"cylinder"`` (inside the cylinder of radius |d2 + d3| around the
-            base axis that the shoulder offset keeps the wrist out of).
+            base axis that the shoulder offset keeps the wrist out of) or
+            ``"model"`` (at the edge of the reach, where a model that is of
+            its family only up to rounding reaches less than its idealised
+            structure: no branch refines onto the pose; distance and bounds
+            then 0).
     """
 
     def __init__(self, distance: float, bounds: tuple[float, float], kind: str):
         self.distance = distance
         self.bounds = bounds
         self.kind = kind
-        if kind == "cylinder":
+        if kind == "model":
+            message = (
+                "out of reach: the pose is at the edge of the reach of the "
+                "idealised arm, and no branch reaches it on the robot's own model"
+            )
+        elif kind == "cylinder":
             message = (
                 f"out of reach: wrist centre at {distance:.6g} m from the base axis, "
                 f"inside the unreachable cylinder of radius {bounds[0]:.6g} m "

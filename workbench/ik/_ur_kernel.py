@@ -37,7 +37,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench._compiled import entry_point, helper
-from workbench.ik._puma import LIMIT_TOL, WRIST_SINGULAR_TOL
+from workbench.ik._puma import LIMIT_TOL, MODEL_ERROR_SLACK, WRIST_SINGULAR_TOL
 from workbench.ik.structure import KinematicStructure
 from workbench.poses import RIGIDITY_TOL
 
@@ -121,11 +121,13 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     low, high = abs(abs(j[1].a) - abs(j[2].a)), abs(j[1].a) + abs(j[2].a)
     # frame 3 comes from θ6, which a near-singular wrist knows to ~1e-16 / |s5|:
     # a pose at the folded or stretched elbow may land ~1e-11 m outside, and
-    # clamping it costs at most the slack in position
-    slack = 1e-10 * high
+    # clamping it costs at most the slack in position; a model that differs
+    # from the idealised chain reaches that much farther (MODEL_ERROR_SLACK)
+    model_slack = MODEL_ERROR_SLACK * structure.residual
+    slack = 1e-10 * high + model_slack
     g["reach_low"], g["reach_high"] = low - slack, high + slack
-    g["cylinder2"] = j[1].d + j[2].d + j[3].d
-    g["cylinder2"] = g["cylinder2"] ** 2 * (1.0 - 1e-12)
+    radius = max(abs(j[1].d + j[2].d + j[3].d) - model_slack, 0.0)
+    g["cylinder2"] = radius**2 * (1.0 - 1e-12)
     offsets = [x.theta_offset for x in j]
     g["theta_offset"], g["joint_sign"] = offsets, structure.joint_sign
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)

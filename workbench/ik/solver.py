@@ -157,8 +157,11 @@ class ClosedFormSolver:
             pose = np.array(pose_rows(target))  # every check, with its error
         prev = _NO_PREVIOUS if q_previous is None else self._previous(q_previous)
         q, flags = np.empty((8, 6)), np.empty(FLAG_COUNT, dtype=bool)
-        if self._kernel.solve_pose(self.geometry, pose, prev, q, flags, True):
-            q, flags = self.solve_arrays(pose, prev)  # not OK: rechecked, or raises
+        kernel = self._kernel
+        if self._refine is not None or kernel.solve_pose(
+            self.geometry, pose, prev, q, flags, True
+        ):  # not OK (rechecked, or raises), or refined on the model
+            q, flags = self.solve_arrays(pose, prev)
         q.setflags(write=False)
         flag_list = flags.tolist()
         shared = (q, flag_list, self.branches)

@@ -1,0 +1,196 @@
+r"""Compiled Newton refinement of closed-form branches on the robot's true chain.
+
+The closed forms solve the *idealised* structure fitted to the joint axes
+(:mod:`workbench.ik.structure`: right angles exact, lengths within
+``STRUCTURE_TOL`` of 0 set to 0). A URDF that is of a family only up to its
+rounding (α = π/2 written ``1.570796325``, 1.8e-9 rad off) then gets branches
+that miss its pose by about that deviation times the reach. Each such branch
+is the start of a few Newton steps on the true chain (``_chain.get_chain``),
+with the forward kinematics, Jacobian and error of ``_chain_kernel``:
+
+.. math:: q \leftarrow q - J^T (J J^T + \lambda I)^{-1} e, \quad
+   e = \log_6(T^{-1} M(q)), \quad \lambda = |e|^2
+
+(J the LOCAL Jacobian of the tool; λ = |e|² is Levenberg–Marquardt's damping
+of Yamashita and Fukushima: Newton's quadratic convergence where J is regular,
+bounded steps where it is singular). A branch is kept when its FK residual,
+position :math:`|p(q) - p_T|` [m] and rotation :math:`|\log_3(R_T^T R(q))|`
+[rad], is within :data:`POSITION_TOL` and :data:`ROTATION_TOL` after at most
+:data:`REFINE_STEPS` steps; else it is reported as not reaching (its row NaN),
+never returned with a larger residual.
+
+Only robots whose model differs from the idealised structure are refined
+(:func:`refinement_chain`): the DH tables of the PUMA models and clean URDFs
+keep the closed form's speed.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+
+from workbench._compiled import entry_point, helper
+from workbench.ik._chain import get_chain
+from workbench.ik._chain_kernel import _damped_step, _error, _forward, _jacobian
+from workbench.ik._puma import LIMIT_TOL
+from workbench.ik.structure import get_structure
+from workbench.model.robot import Robot
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Largest FK position residual [m] of a returned branch.
+POSITION_TOL = 1e-12
+#: Largest FK rotation residual [rad] of a returned branch.
+ROTATION_TOL = 1e-12
+#: Refinement goes on until the residual is this fraction of the tolerances
+#: (or stops decreasing), a margin for the rounding of other FK codes.
+POLISH = 1.0 / 16.0
+#: Newton steps a branch may take (a regular one needs one or two; next to a
+#: singularity of the true chain convergence is linear, halving per step).
+REFINE_STEPS = 30
+#: A fitted structure whose FK differs from the model's by more than this
+#: [m, and rotation entries] (``KinematicStructure.residual``) is refined; the
+#: catalog's URDFs are within 6e-16.
+EXACT_STRUCTURE_TOL = 1e-13
+
+#: Slots of the flags of ``solve_pose`` that refine_pose updates.
+_WITHIN, _SOME_UNREACHED = 0, 13
+
+
+def refinement_chain(robot: Robot) -> FloatArray | None:
+    """The packed model chain to refine a robot's branches on, or None.
+
+    Args:
+        robot: A robot with a closed form.
+
+    Returns:
+        ``get_chain(robot).packed``, (7, CHAIN_WIDTH) read-only, when the
+        structure fitted to its axes differs from its model by more than
+        :data:`EXACT_STRUCTURE_TOL`; else None (the closed form is exact).
+    """
+    if get_structure(robot).residual <= EXACT_STRUCTURE_TOL:
+        return None
+    chain = get_chain(robot)
+    if not chain.identity:  # (a closed form needs six one-coordinate joints)
+        return None
+    return chain.packed
+
+
+@helper()
+def _refine_branch(chain: FloatArray, target: FloatArray, q: FloatArray, work) -> bool:
+    """Newton steps on ``q`` (6,) in place; whether its residual is within tolerance.
+
+    Steps are taken until the residual is :data:`POLISH` times the tolerance,
+    stops decreasing, or :data:`REFINE_STEPS` are taken; ``q`` is then the
+    best iterate. ``work``: (24, 12) scratch.
+    """
+    frames = work[0:7]
+    jac, normal = work[7:13, 0:6], work[13:19, 0:6]
+    e, dq, pull, y = work[19, 0:6], work[20, 0:6], work[21, 0:6], work[22, 0:6]
+    best_q = work[23, 0:6]
+    no_pull = work.shape[0] < 0  # False, as a computed bool (no literal copy)
+    best = math.inf
+    for step in range(REFINE_STEPS + 1):
+        _forward(chain, q, frames)
+        position = _error(target, frames, e) / POSITION_TOL
+        rotation = math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5]) / ROTATION_TOL
+        error = max(position, rotation)  # in tolerances; NaN fails every test
+        if not error < best:
+            break
+        best = error
+        for k in range(6):
+            best_q[k] = q[k]
+        if error <= POLISH or step == REFINE_STEPS:
+            break
+        damping = 0.0
+        for i in range(6):
+            damping += e[i] * e[i]
+        _jacobian(chain, frames, jac)
+        _damped_step(jac, 6, e, pull, no_pull, damping, normal, y, dq)
+        for k in range(6):
+            q[k] -= dq[k]
+    for k in range(6):
+        q[k] = best_q[k]
+    return best <= 1.0
+
+
+@helper()
+def _refine_pose(
+    chain: FloatArray, target: FloatArray, q: FloatArray, work: FloatArray
+) -> int:
+    """Refine the reached rows (not NaN) of ``q`` (8, 6); NaN the ones that fail.
+
+    Returns a bit mask of the branches that reach.
+    """
+    reached = 0
+    for b in range(8):
+        row = q[b]
+        if row[0] == row[0] and _refine_branch(chain, target, row, work):
+            reached |= 1 << b
+        else:
+            for k in range(6):
+                row[k] = np.nan
+    return reached
+
+
+@entry_point(outputs=("q", "flags"), contiguous=("chain", "pose"))
+def refine_pose(
+    chain: FloatArray, pose: FloatArray, q: FloatArray, flags: npt.NDArray[np.bool_]
+) -> int:
+    """Refine the branches of one pose on the true chain.
+
+    Args:
+        chain: (7, CHAIN_WIDTH) packed true chain (``_chain_kernel``).
+        pose: (4, 4) target pose of the tool frame in the base frame [m].
+        q: (8, 6) branches of the closed form [rad], NaN rows for those that
+            do not reach; refined in place, NaN where refinement fails.
+        flags: (14,) flags of ``solve_pose``: "within limits" (slots 0..7) and
+            "some branches do not reach" (slot 13) are updated.
+
+    Returns:
+        The number of branches that reach.
+    """
+    work = np.empty((24, 12))
+    reached = _refine_pose(chain, pose, q, work)
+    count = 0
+    for b in range(8):
+        alive = reached >> b & 1 != 0
+        count += alive
+        within = alive
+        for k in range(6):
+            within &= chain[k, 16] - LIMIT_TOL <= q[b, k] <= chain[k, 17] + LIMIT_TOL
+        flags[_WITHIN + b] = within
+    flags[_SOME_UNREACHED] = count < 8
+    return count
+
+
+@entry_point(outputs=("q", "valid"), contiguous=("chain", "targets"))
+def refine_batch(
+    chain: FloatArray,
+    targets: FloatArray,
+    q: FloatArray,
+    valid: npt.NDArray[np.bool_],
+) -> int:
+    """Refine the branches of N poses on the true chain.
+
+    Args:
+        chain: (7, CHAIN_WIDTH) packed true chain.
+        targets: (N, 4, 4) target poses [m].
+        q: (N, 8, 6) branches [rad] (NaN rows where not valid), refined in
+            place; NaN where refinement fails.
+        valid: (N, 8) True where a branch reaches; cleared where it fails.
+
+    Returns:
+        The number of branches that were valid and failed.
+    """
+    work = np.empty((24, 12))
+    failed = 0
+    for i in range(targets.shape[0]):
+        reached = _refine_pose(chain, targets[i], q[i], work)
+        for b in range(8):
+            alive = reached >> b & 1 != 0
+            failed += valid[i, b] and not alive
+            valid[i, b] = alive
+    return failed
