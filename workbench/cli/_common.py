@@ -46,8 +46,15 @@ def add_robot_argument(
     )
 
 
-def add_limit_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--velocity-limit`` and ``--acceleration-limit``: one value or one per joint."""
+def add_limit_arguments(
+    parser: argparse.ArgumentParser, *, acceleration: bool = True
+) -> None:
+    """``--velocity-limit`` (and ``--acceleration-limit``): one value or one per joint.
+
+    Args:
+        parser: The command's parser.
+        acceleration: Whether the command uses acceleration limits too.
+    """
     parser.add_argument(
         "--velocity-limit",
         nargs="+",
@@ -56,6 +63,8 @@ def add_limit_arguments(parser: argparse.ArgumentParser) -> None:
         help="joint speed limits [rad/s], > 0: one for every joint or one per "
         "joint (default: the URDF's; velocity=0 there means none)",
     )
+    if not acceleration:
+        return
     parser.add_argument(
         "--acceleration-limit",
         nargs="+",

@@ -63,7 +63,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         parser,
         help_text="robot name or URDF (default: puma560, puma560-kang for --fishcut)",
     )
-    add_limit_arguments(parser)
+    add_limit_arguments(parser, acceleration=False)
     parser.add_argument(
         "--servo-rate",
         type=finite_float,
@@ -107,6 +107,8 @@ def run(args: argparse.Namespace) -> int:
     check_output(args.out, folder=args.format == "ros2-bag")
     if args.format == "urscript" and not (args.servo_rate > 0.0):
         raise InputError(f"--servo-rate must be > 0 [Hz], got {args.servo_rate:g}")
+    if args.velocity_limit is not None and not args.fishcut:
+        raise InputError("--velocity-limit applies to --fishcut (its planner) only")
     name = args.robot or ("puma560-kang" if args.fishcut else "puma560")
     robot = load_robot_from_args(args, name)
     names = robot.joint_names

@@ -53,7 +53,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         ),
     )
     add_robot_argument(parser, default=DEFAULT_ROBOT)
-    add_limit_arguments(parser)
+    add_limit_arguments(parser, acceleration=False)
     parser.add_argument(
         "--csv", type=Path, metavar="FILE", help="write the servo-rate joint commands"
     )

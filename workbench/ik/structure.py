@@ -101,6 +101,14 @@ def axis_lines(robot: Robot) -> tuple[FloatArray, FloatArray]:
     """
     model = robot.model
     name = robot.name
+    if robot.mimic_joints:
+        followers = ", ".join(
+            f"{m.joint} follows {m.leader}" for m in robot.mimic_joints
+        )
+        raise UnsupportedRobotError(
+            f"robot {name!r} has mimic joints ({followers}), closed-form IK needs "
+            "6 independent revolute joints"
+        )
     if model.nq != 6 or model.nv != 6 or model.njoints != 7:
         raise UnsupportedRobotError(
             f"robot {name!r} has {model.nq} joint variables, closed-form IK needs "
