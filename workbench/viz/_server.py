@@ -2,7 +2,10 @@
 
 Runs Tornado on its own event loop in a daemon thread, so it works from a
 script, from the CLI and inside a Jupyter kernel alike. It only ever binds the
-loopback interface.
+loopback interface, and answers only requests whose ``Host`` (and ``Origin``,
+when sent) names that interface with the server's port: a page of another site
+cannot reach it through DNS rebinding. Nothing is logged per request, and what a
+page sends over the websocket is ignored.
 """
 
 from __future__ import annotations
@@ -11,6 +14,8 @@ import asyncio
 import logging
 import threading
 from collections.abc import Callable
+from typing import Any
+from urllib.parse import urlsplit
 
 import tornado.httpserver
 import tornado.ioloop
@@ -24,29 +29,83 @@ from workbench.viz._scene import SceneRecorder
 logger = logging.getLogger(__name__)
 
 HOST = "127.0.0.1"
+#: Names of the loopback interface a ``Host`` or ``Origin`` header may use.
+LOOPBACK_NAMES = ("localhost", "127.0.0.1", "[::1]")
+#: Body of the 403 answer to a request from another host or origin.
+FORBIDDEN_MESSAGE = "forbidden: this server answers only loopback pages\n"
 
 
-class _PageHandler(tornado.web.RequestHandler):
+def get_allowed_hosts(port: int) -> frozenset[str]:
+    """``Host`` header values the server on ``port`` accepts (lower case)."""
+    hosts = {f"{name}:{port}" for name in LOOPBACK_NAMES}
+    if port == 80:  # a browser leaves out the default port
+        hosts |= set(LOOPBACK_NAMES)
+    return frozenset(hosts)
+
+
+def is_allowed_origin(origin: str, port: int) -> bool:
+    """Whether an ``Origin`` header is ``http://`` one of the allowed hosts."""
+    parts = urlsplit(origin.strip().lower())
+    return (
+        parts.scheme == "http"
+        and parts.netloc in get_allowed_hosts(port)
+        and parts.path in ("", "/")
+    )
+
+
+def _log_nothing(handler: tornado.web.RequestHandler) -> None:
+    """Tornado's per-request log function: no access log on stderr."""
+
+
+class _LoopbackHandler(tornado.web.RequestHandler):
+    """Answers 403 unless ``Host`` and ``Origin`` name the loopback server."""
+
     def initialize(self, server: LiveServer) -> None:
         self._server = server
 
+    def prepare(self) -> None:
+        host = self.request.headers.get("Host", "").strip().lower()
+        origin = self.request.headers.get("Origin")
+        port = self._server.port
+        if host not in get_allowed_hosts(port) or (
+            origin is not None and not is_allowed_origin(origin, port)
+        ):
+            self.set_status(403)
+            self.set_header("Content-Type", "text/plain; charset=utf-8")
+            self.finish(FORBIDDEN_MESSAGE)
+
+    def write_error(self, status_code: int, **kwargs: Any) -> None:
+        """A one-line plain-text body, never a traceback."""
+        self.set_header("Content-Type", "text/plain; charset=utf-8")
+        self.finish(f"{status_code} {self._reason}\n")
+
+
+class _NotFound(_LoopbackHandler):
+    def get(self) -> None:
+        raise tornado.web.HTTPError(404)
+
+
+class _PageHandler(_LoopbackHandler):
     def get(self) -> None:
         self.set_header("Content-Type", "text/html; charset=utf-8")
         self.set_header("Cache-Control", "no-store")
         self.write(self._server.render())
 
 
-class _NoIcon(tornado.web.RequestHandler):
+class _NoIcon(_LoopbackHandler):
     def get(self) -> None:
         self.set_status(204)
 
 
-class _SceneSocket(tornado.websocket.WebSocketHandler):
-    def initialize(self, server: LiveServer) -> None:
-        self._server = server
+class _SceneSocket(tornado.websocket.WebSocketHandler, _LoopbackHandler):
+    def check_origin(self, origin: str) -> bool:
+        return is_allowed_origin(origin, self._server.port)
 
     def open(self, *args: str, **kwargs: str) -> None:
         self._server.on_open(self)
+
+    def on_message(self, message: str | bytes) -> None:
+        """The page only listens: whatever it sends is ignored."""
 
     def on_close(self) -> None:
         self._server.on_close(self)
@@ -106,8 +165,11 @@ class LiveServer:
             [
                 (r"/", _PageHandler, {"server": self}),
                 (r"/ws", _SceneSocket, {"server": self}),
-                (r"/favicon.ico", _NoIcon),
-            ]
+                (r"/favicon.ico", _NoIcon, {"server": self}),
+            ],
+            default_handler_class=_NotFound,
+            default_handler_args={"server": self},
+            log_function=_log_nothing,
         )
         try:
             sockets = tornado.netutil.bind_sockets(self._requested_port, address=HOST)
