@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import json
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -12,8 +14,9 @@ import numpy as np
 import pytest
 from numba.core import types
 
+import workbench
 from workbench import _compiled
-from workbench._compiled import entry_point, helper, interpreted
+from workbench._compiled import entry_point, helper, interpreted, source_digest
 
 
 @helper(forceinline=True)
@@ -215,3 +218,89 @@ def test_vectorize_sets_llvm_options_only_while_the_kernel_compiles(
     ]
     _halves(np.arange(9.0), out)  # compiled: nothing set again
     assert len(calls) == 4
+
+
+_PROBE = """
+import json
+import numpy as np
+from workbench import ik, load_robot
+
+robot = load_robot("puma560")
+q = np.array([0.3, -0.5, 0.4, 0.2, 0.3, -0.1])  # theta5 = 0.3 rad
+solutions = ik.analytic(robot, robot.fk(q))
+print(json.dumps({
+    "wrist_singular": [s.wrist_singular for s in solutions],
+    "q": [s.q.tolist() for s in solutions],
+}))
+"""
+
+
+def _edit(path: Path, old: str, new: str) -> None:
+    text = path.read_text()
+    assert text.count(old) == 1, f"{old!r} not once in {path}"
+    path.write_text(text.replace(old, new))
+
+
+def test_an_edited_callee_or_constant_is_recompiled_not_loaded(tmp_path: Path) -> None:
+    """Numba keys its cache on the entry point's own file; ours on all it imports.
+
+    In a copy of the package with a cache of its own: warm the cache, then
+    edit a constant the closed form reads (``_puma.WRIST_SINGULAR_TOL``) and a
+    helper in another file than the entry point (``_kernel_common``, called
+    by ``_puma_kernel.solve_pose``); a fresh process must run the new code.
+    """
+    package = Path(workbench.__file__).parent
+    source = tmp_path / "source"
+    ignore = shutil.ignore_patterns("__pycache__")
+    shutil.copytree(package, source / "workbench", ignore=ignore)
+    if (package.parent / "urdf").is_dir():  # a source checkout
+        shutil.copytree(package.parent / "urdf", source / "urdf", ignore=ignore)
+    env = dict(
+        os.environ,
+        PYTHONPATH=str(source),
+        NUMBA_CACHE_DIR=str(tmp_path / "cache"),
+        WORKBENCH_PROGRESS="0",
+    )
+
+    def solve() -> dict[str, list]:
+        done = subprocess.run(
+            [sys.executable, "-c", _PROBE],
+            cwd=tmp_path,  # not the checkout: the copy is imported
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
+        assert done.returncode == 0, done.stderr
+        return json.loads(done.stdout)
+
+    before = solve()  # compiles, fills the cache
+    assert not any(before["wrist_singular"])
+    ik = source / "workbench" / "ik"
+    _edit(ik / "_puma.py", "WRIST_SINGULAR_TOL = 1e-10", "WRIST_SINGULAR_TOL = 1.0")
+    assert all(solve()["wrist_singular"])  # |sin 0.3| <= 1.0
+    _edit(ik / "_puma.py", "WRIST_SINGULAR_TOL = 1.0", "WRIST_SINGULAR_TOL = 1e-10")
+    assert solve() == before  # the first entries again
+    _edit(
+        ik / "_kernel_common.py",
+        "angles[slot] = math.atan2(y[slot], x[slot])",
+        "angles[slot] = -math.atan2(y[slot], x[slot])",
+    )
+    after = solve()
+    assert not any(after["wrist_singular"])
+    assert after["q"] != before["q"]
+
+
+def test_source_digest_covers_the_import_closure() -> None:
+    """A kernel module's digest covers what it imports, directly or not."""
+    digest = source_digest("workbench.ik._puma_kernel")
+    assert len(digest) == 64
+    closure = set(_compiled._closure("workbench.ik._puma_kernel"))
+    assert {
+        "workbench.ik._puma_kernel",
+        "workbench.ik._kernel_common",  # a helper module
+        "workbench.ik._puma",  # constants
+        "workbench.poses.rigid",  # RIGIDITY_TOL, through workbench.poses
+        "workbench._compiled",
+    } <= closure
+    assert "workbench.cli" not in closure  # only what it imports

@@ -77,8 +77,14 @@ numpy's floating-point errors are silenced as in the compiled code.
 
 from __future__ import annotations
 
+import ast
 import contextlib
+import functools
+import hashlib
 import inspect
+import os
+import sys
+import threading
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import IO, Any, TypeVar, cast
@@ -86,6 +92,7 @@ from typing import IO, Any, TypeVar, cast
 import numpy as np
 from llvmlite import binding as llvm
 from numba.core import config, registry, sigutils, types
+from numba.core.caching import FunctionCache
 from numba.core.compiler_lock import global_compiler_lock
 
 try:
@@ -115,6 +122,17 @@ _LLVM_DEFAULTS = {"vectorize-scev-check-threshold": 16, "force-vector-width": 0}
 #: Scalar types fixed by a parameter's annotation.
 _ANNOTATED = {"float": types.float64, "int": types.int64, "bool": types.boolean}
 
+#: The line said on stderr when this process first compiles a kernel (module
+#: docstring), unless the environment sets ``WORKBENCH_PROGRESS=0``.
+COMPILING = (
+    "compiling {what} with Numba (first use on this machine or after an "
+    "upgrade, a few seconds; cached for later runs)…"
+)
+
+#: Kernels whose compile this process has announced (at most one).
+_announced: list[str] = []
+_announce_lock = threading.Lock()
+
 
 @contextlib.contextmanager
 def interpreted() -> Iterator[None]:
@@ -137,6 +155,138 @@ def _as_attributes(arg: Any) -> Any:
     if isinstance(arg, np.ndarray) and arg.dtype.names is not None:
         return arg.view(np.recarray)
     return arg
+
+
+@functools.cache
+def _module_file(name: str) -> Path | None:
+    """The source file of module ``name``, found from its top package's folder.
+
+    Without importing anything (a package's ``__init__`` would run): ``None``
+    for a module that is not a ``.py`` file of an imported top-level package.
+    """
+    top, _, rest = name.partition(".")
+    package = sys.modules.get(top)
+    if package is None:
+        return None
+    folders = getattr(package, "__path__", None)
+    if not folders:  # a top-level module
+        file = getattr(package, "__file__", None)
+        return Path(file) if not rest and file and file.endswith(".py") else None
+    base = Path(folders[0]).joinpath(*rest.split(".")) if rest else Path(folders[0])
+    for candidate in (base.with_suffix(".py"), base / "__init__.py"):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def _imported_modules(name: str, source: bytes) -> set[str]:
+    """Modules of ``name``'s own top package that ``source`` imports.
+
+    ``from package import name`` counts as ``package.name`` when that is a
+    module, else as ``package`` (its ``__init__`` defines the name).
+    """
+    top = name.split(".")[0]
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            found.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:  # relative: from the package of this module
+                parts = name.split(".")[: -node.level]
+                origin = ".".join([*parts, node.module] if node.module else parts)
+            else:
+                origin = node.module or ""
+            for alias in node.names:
+                submodule = f"{origin}.{alias.name}"
+                found.add(submodule if _module_file(submodule) else origin)
+    return {m for m in found if m.split(".")[0] == top}
+
+
+def _closure(name: str) -> dict[str, bytes]:
+    """Source of module ``name`` and of the modules it imports, transitively.
+
+    Within its own top package (:func:`_imported_modules`), by module name.
+    """
+    seen: dict[str, bytes] = {}
+    todo = [name]
+    while todo:
+        module = todo.pop()
+        if module in seen:
+            continue
+        read = _read_module(module)
+        if read is not None:
+            seen[module], imported = read
+            todo.extend(imported)
+    return seen
+
+
+@functools.cache
+def _read_module(name: str) -> tuple[bytes, frozenset[str]] | None:
+    """Source of module ``name`` and the modules it imports; None if no file."""
+    file = _module_file(name)
+    if file is None:
+        return None
+    source = file.read_bytes()
+    return source, frozenset(_imported_modules(name, source))
+
+
+@functools.cache
+def source_digest(name: str) -> str:
+    """SHA-256 of the source of module ``name`` and of every module it imports.
+
+    Transitively, within its own top package (for ``workbench.ik._puma_kernel``:
+    every ``workbench`` module its compiled code can reach, with the constants
+    they define). Computed once per process.
+    """
+    closure = _closure(name)
+    digest = hashlib.sha256()
+    for module in sorted(closure):
+        digest.update(f"{module}\0{len(closure[module])}\0".encode())
+        digest.update(closure[module])
+    return digest.hexdigest()
+
+
+class _SourceKeyedCache(FunctionCache):
+    """Numba's disk cache of a kernel, keyed on the source it can reach too.
+
+    Numba keys a cache entry on the kernel's own bytecode and checks only the
+    timestamp of the kernel's own file, so code compiled in from another
+    module (an inlined helper, a kernel it calls, a constant it reads) would
+    stay as it was when first cached. The key here also holds
+    :func:`source_digest` of the kernel's module: an edit of any module it
+    imports, directly or not, makes a new entry.
+    """
+
+    def _index_key(self, sig: Any, codegen: Any) -> tuple[Any, ...]:
+        key = super()._index_key(sig, codegen)
+        return (*key, source_digest(self._py_func.__module__))
+
+    def load_overload(self, sig: Any, target_context: Any) -> Any:
+        loaded = super().load_overload(sig, target_context)
+        if loaded is None and self._enabled:
+            _announce_compile(self._py_func)
+        return loaded
+
+
+def _announce_compile(func: Callable[..., Any]) -> None:
+    """Say once per process, on stderr, that a kernel is being compiled.
+
+    The line names the kernel's module (its docstring's first line says what
+    it computes). Silenced by ``WORKBENCH_PROGRESS=0``, as the command line's
+    progress lines.
+    """
+    with _announce_lock:
+        if _announced or os.environ.get("WORKBENCH_PROGRESS", "1") == "0":
+            return
+        _announced.append(f"{func.__module__}.{func.__qualname__}")
+    module = sys.modules.get(func.__module__)
+    summary = ((module.__doc__ if module else None) or "").strip().splitlines()
+    what = func.__module__ + (f" ({summary[0].rstrip('.')})" if summary else "")
+    try:
+        sys.stderr.write(f"workbench: {COMPILING.format(what=what)}\n")
+        sys.stderr.flush()
+    except (OSError, ValueError, AttributeError):  # no stderr: the line is optional
+        pass
 
 
 class _Interpretable(_CPUDispatcher):
@@ -265,7 +415,7 @@ def entry_point(
         dispatcher = _EntryPoint(func, targetoptions=dict(_OPTIONS))
         dispatcher._outputs, dispatcher._contiguous = outputs, contiguous
         dispatcher._vectorize = vectorize
-        dispatcher.enable_caching()
+        dispatcher._cache = _SourceKeyedCache(func)
         return cast(F, dispatcher)
 
     return decorate
@@ -286,7 +436,7 @@ def helper(*, forceinline: bool = False) -> Callable[[F], F]:
             return func
         options = dict(_OPTIONS, forceinline=True) if forceinline else dict(_OPTIONS)
         dispatcher = _Helper(func, targetoptions=options)
-        dispatcher.enable_caching()
+        dispatcher._cache = _SourceKeyedCache(func)
         return cast(F, dispatcher)
 
     return decorate

@@ -47,6 +47,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench._compiled import entry_point, helper
+from workbench.ik._kernel_common import is_rigid
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -95,11 +96,6 @@ null-space pull is off then)."""
 
 UNBOUNDED_SPAN = math.pi
 """Restarts draw unbounded coordinates within +-this [rad]."""
-
-#: Fast acceptance of a target: columns x, y of R orthonormal, z = x × y and
-#: the bottom row, each within RIGIDITY_TOL / 5 (``workbench.poses``), as one
-#: sum of squares. A target that fails it takes the exact checks in Python.
-FAST_TOL2 = (1e-6 / 5.0) ** 2
 
 _MAX_STEP2, _SINGULAR_STEP2 = MAX_STEP**2, SINGULAR_STEP**2
 _NULL_OFF_ERROR2, _ACTIVE_SET_ERROR2 = NULL_OFF_ERROR**2, ACTIVE_SET_ERROR**2
@@ -329,25 +325,6 @@ def _damped_step(jac, n, e, pull, use_pull, damping, normal, y, dq):
 
 
 @helper()
-def _roughly_rigid(pose: FloatArray) -> bool:
-    """The fast acceptance test of a target (finite, rigid to RIGIDITY_TOL / 5)."""
-    r00, r01, r02 = pose[0, 0], pose[0, 1], pose[0, 2]
-    r10, r11, r12 = pose[1, 0], pose[1, 1], pose[1, 2]
-    r20, r21, r22 = pose[2, 0], pose[2, 1], pose[2, 2]
-    e0 = r00 * r00 + r10 * r10 + r20 * r20 - 1.0
-    e1 = r01 * r01 + r11 * r11 + r21 * r21 - 1.0
-    e2 = r00 * r01 + r10 * r11 + r20 * r21
-    ex = r10 * r21 - r20 * r11 - r02  # x × y - z
-    ey = r20 * r01 - r00 * r21 - r12
-    ez = r00 * r11 - r10 * r01 - r22
-    b0, b1, b2, b3 = pose[3, 0], pose[3, 1], pose[3, 2], pose[3, 3] - 1.0
-    err2 = e0 * e0 + e1 * e1 + e2 * e2 + ex * ex + ey * ey + ez * ez
-    err2 += b0 * b0 + b1 * b1 + b2 * b2 + b3 * b3
-    # a NaN fails the comparison; an infinite translation makes the sum NaN
-    return err2 <= FAST_TOL2 and (pose[0, 3] + pose[1, 3] + pose[2, 3]) * 0.0 == 0.0
-
-
-@helper()
 def _first_guess(features: np.ndarray, starts: FloatArray, target: FloatArray, q):
     """Copy into ``q`` the candidate start whose tool pose is nearest ``target``.
 
@@ -423,12 +400,13 @@ def run(
             instead of ``q``.
         features: (16, count) float32 candidate features (:func:`_first_guess`).
         starts: (count, n) candidate coordinates.
-        check: Apply the fast rigidity test to ``target`` first.
+        check: Test first that ``target`` is finite and rigid (the test and
+            tolerance of ``workbench.poses``).
 
     Returns:
         ``(status, err2, position, rotation, steps)``: CONVERGED, STALLED (a
         restart is due), EXHAUSTED (no steps left) or NOT_RIGID (``target``
-        failed the fast rigidity test; nothing done), then the statistics
+        is not finite and rigid; nothing done), then the statistics
         ERR2, POSITION, ROTATION and STEPS of the best configuration so far
         (a tuple: Python reads them without converting the state).
     """
@@ -436,7 +414,7 @@ def run(
     state = states[row]
     q, best_q, stats = state[:n], state[n : 2 * n], state[2 * n :]
     status = NOT_RIGID
-    if check and not _roughly_rigid(target):
+    if check and not is_rigid(target):
         return status, stats[ERR2], stats[POSITION], stats[ROTATION], int(stats[STEPS])
     if guess:
         _first_guess(features, starts, target, q)

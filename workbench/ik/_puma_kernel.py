@@ -18,8 +18,12 @@ Conventions of every function here:
   ±4π that is (else the one in (−π, π]); with one, the representative
   nearest it.
 
-The status codes tell the Python side which error to raise; it then runs the
-slow, exact checks that word the message.
+The status codes and flag slots are those of
+:mod:`workbench.ik._kernel_common`, which holds the helpers both closed forms
+share. A pose is checked rigid here, with the test and tolerance of
+``workbench.poses``: :data:`NOT_RIGID` means it is not, and the Python side
+only words the error; :func:`diagnose` gives what the message of an
+unreachable pose needs, from the packed record alone.
 
 A batch (:func:`batch_arguments`, ``_atan2_kernel.atan2_into``,
 :func:`batch_assemble`) makes the atan2 calls in one vectorised loop, several
@@ -42,14 +46,38 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench._compiled import entry_point, helper
+from workbench.ik._kernel_common import (
+    FLAG_COUNT,
+    FLAG_SHOULDER_SINGULAR,
+    FLAG_SOME_UNREACHED,
+    FLAG_WITHIN_LIMITS,
+    FLAG_WRIST_SINGULAR,
+    IN_CYLINDER,
+    NOT_RIGID,
+    OK,
+    OUT_OF_REACH,
+    PI,
+    clamped_root,
+    clip_unit,
+    copy_previous,
+    flat_index,
+    frame_rows,
+    frames,
+    inline,
+    is_rigid,
+    joint_value,
+    pose_row,
+    remainder,
+    rigid_rows,
+    set_exact_angles,
+    slot_angles,
+    within_limits,
+    write_framed,
+)
 from workbench.ik._puma import WRIST_SINGULAR_TOL, PumaGeometry, get_geometry
 from workbench.model.robot import Robot
-from workbench.poses import RIGIDITY_TOL
 
 FloatArray = npt.NDArray[np.float64]
-
-#: Status codes of :func:`solve_pose`.
-OK, NOT_RIGID, OUT_OF_REACH, IN_CYLINDER = 0, 1, 2, 3
 
 #: The record of arm constants the kernels read (see ``PumaGeometry``).
 GEOMETRY_DTYPE = np.dtype(
@@ -84,15 +112,6 @@ GEOMETRY_DTYPE = np.dtype(
     align=True,
 )
 
-#: Fast acceptance of a pose: columns x, y of R orthonormal and z = x × y, and
-#: the bottom row, each to within RIGIDITY_TOL / 5, as one sum of squares (then
-#: every entry of RᵀR − I is well within RIGIDITY_TOL and det R > 0). A pose
-#: that fails it takes the exact checks of ``_targets``.
-_FAST_TOL2 = (RIGIDITY_TOL / 5.0) ** 2
-
-_PI = math.pi
-_TAU = 2.0 * math.pi
-
 
 @lru_cache(maxsize=16)
 def packed_geometry(robot: Robot) -> np.ndarray:
@@ -123,140 +142,7 @@ def pack_geometry(geo: PumaGeometry) -> np.ndarray:
     return packed
 
 
-#: For the helpers called per angle or per pose inside the batch loops: inlined
-#: into their callers by LLVM (measured: the batch's joint-value stage 3x faster
-#: than calls). ``forceinline`` (LLVM's alwaysinline) rather than Numba's
-#: ``inline="always"`` (inlining in Numba's IR, before type inference): same
-#: machine code speed, a third of the compile time on the first run.
-_inline = helper(forceinline=True)
-
-
-@_inline
-def _remainder(x: float) -> float:
-    """IEEE remainder of ``x`` by 2π, in [−π, π] (exact; ties may keep ±π)."""
-    if -_PI <= x <= _PI:
-        return x
-    if -3.0 * _PI <= x <= 3.0 * _PI:  # one turn off: x ∓ 2π is exact
-        return x - _TAU if x > 0.0 else x + _TAU
-    r = np.fmod(x, _TAU)  # exact, then at most one exact turn
-    if r > _PI:
-        return r - _TAU
-    if r < -_PI:
-        return r + _TAU
-    return r
-
-
-@_inline
-def _joint_value(geo, j: int, theta: float, prev: FloatArray, has_prev: bool) -> float:
-    """Joint value of DH angle ``theta``: near ``prev[j]`` if given, else wrapped."""
-    sign = geo.joint_sign[j]
-    if has_prev:
-        return prev[j] + _remainder(sign * (theta - geo.theta_offset[j]) - prev[j])
-    if geo.plain[j] != 0.0:  # theta in [-pi, pi] is its own value, but -pi is pi
-        return theta if theta > -_PI else _PI
-    y = _remainder(sign * (theta - geo.theta_offset[j]))
-    if y <= -_PI:
-        y += _TAU
-    lo, hi = geo.lower[j], geo.upper[j]
-    if lo <= y <= hi:
-        return y
-    for turns in (1.0, -1.0, 2.0, -2.0):
-        z = y + turns * _TAU
-        if lo <= z <= hi:
-            return z
-    return y
-
-
-@_inline
-def _clip_unit(k: float) -> float:
-    """``k`` clipped to [−1, 1] (selects, which the batch loop vectorises)."""
-    k = k if k > -1.0 else -1.0
-    return k if k < 1.0 else 1.0
-
-
-@_inline
-def _clamped_root(v: float) -> float:
-    """√max(v, 0): the root of a quantity ≥ 0 up to rounding.
-
-    ``abs`` of the clamped value (the same value) tells LLVM the root's
-    argument is not negative, so that it uses the sqrt instruction (which a
-    vectorised loop can) rather than libm's ``sqrt``, which may set errno.
-    """
-    return math.sqrt(abs(v if v > 0.0 else 0.0))
-
-
-@_inline
-def _matrix_row(m: FloatArray, i: int) -> tuple[float, float, float, float]:
-    """Row ``i`` of a (4, 4) matrix."""
-    return m[i, 0], m[i, 1], m[i, 2], m[i, 3]
-
-
-@_inline
-def _pose_row(poses: FloatArray, i: int, row: int) -> tuple[float, float, float, float]:
-    """Row ``row`` of pose ``i`` of the flat (N · 16,) array of N poses."""
-    k = 4 * row
-    return (
-        poses[_at(i, 16, k)],
-        poses[_at(i, 16, k + 1)],
-        poses[_at(i, 16, k + 2)],
-        poses[_at(i, 16, k + 3)],
-    )
-
-
-@_inline
-def _at(i: int, width: int, slot: int) -> np.uint64:
-    """Flat index ``i * width + slot``, unsigned: no negative-index test."""
-    return np.uint64(i) * np.uint64(width) + np.uint64(slot)
-
-
-@_inline
-def _frame_rows(r0, r1, r2, tool, base):
-    """Rows 0..2 of ``base_inv · pose · tool_inv`` from rows 0..2 of the pose.
-
-    ``tool``, ``base``: rows 0..2 of ``tool_inv`` and ``base_inv`` (their row
-    3 is 0 0 0 1). Rows as 4-tuples, so that the batch's vectorised loop and
-    :func:`frame_pose` share the arithmetic.
-    """
-    t0, t1, t2 = _times_tool(r0, tool), _times_tool(r1, tool), _times_tool(r2, tool)
-    return (
-        _base_row(base[0], t0, t1, t2),
-        _base_row(base[1], t0, t1, t2),
-        _base_row(base[2], t0, t1, t2),
-    )
-
-
-@_inline
-def _times_tool(r, tool) -> tuple[float, float, float, float]:
-    """A pose row times ``tool_inv`` (rows ``tool``)."""
-    (p0, p1, p2, p3), (e0, e1, e2) = r, tool
-    return (
-        p0 * e0[0] + p1 * e1[0] + p2 * e2[0],
-        p0 * e0[1] + p1 * e1[1] + p2 * e2[1],
-        p0 * e0[2] + p1 * e1[2] + p2 * e2[2],
-        p0 * e0[3] + p1 * e1[3] + p2 * e2[3] + p3,
-    )
-
-
-@_inline
-def _base_row(b, t0, t1, t2) -> tuple[float, float, float, float]:
-    """Row ``b`` of ``base_inv`` times the rows t0, t1, t2 (and 0 0 0 1)."""
-    return (
-        b[0] * t0[0] + b[1] * t1[0] + b[2] * t2[0],
-        b[0] * t0[1] + b[1] * t1[1] + b[2] * t2[1],
-        b[0] * t0[2] + b[1] * t1[2] + b[2] * t2[2],
-        b[0] * t0[3] + b[1] * t1[3] + b[2] * t2[3] + b[3],
-    )
-
-
-@_inline
-def _frames(geo):
-    """Rows 0..2 of ``tool_inv`` and of ``base_inv``, for :func:`_frame_rows`."""
-    e, b = geo.tool_inv, geo.base_inv
-    tool = (_matrix_row(e, 0), _matrix_row(e, 1), _matrix_row(e, 2))
-    return tool, (_matrix_row(b, 0), _matrix_row(b, 1), _matrix_row(b, 2))
-
-
-@_inline
+@inline
 def frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
     """Rows 0..2 of ``base_inv · pose · tool_inv``: the target of the DH chain.
 
@@ -265,13 +151,8 @@ def frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
         pose: (4, 4) pose of the tool frame in the base frame.
         out: (4, 4) scratch; rows 0..2 are written.
     """
-    r0, r1, r2 = _matrix_row(pose, 0), _matrix_row(pose, 1), _matrix_row(pose, 2)
-    if geo.framed != 0.0:
-        tool, base = _frames(geo)
-        r0, r1, r2 = _frame_rows(r0, r1, r2, tool, base)
-    out[0, 0], out[0, 1], out[0, 2], out[0, 3] = r0
-    out[1, 0], out[1, 1], out[1, 2], out[1, 3] = r1
-    out[2, 0], out[2, 1], out[2, 2], out[2, 3] = r2
+    tool, base = frames(geo)
+    write_framed(pose, out, tool, base, geo.framed != 0.0)
 
 
 @entry_point()
@@ -282,7 +163,46 @@ def wrist_centre(geo, pose: FloatArray) -> tuple[float, float, float]:
     return _centre(geo, framed)
 
 
-@_inline
+@entry_point()
+def diagnose(geometry: np.ndarray, pose: FloatArray) -> tuple[int, float, float, float]:
+    """Why a pose is unreachable, from the packed record alone (as ``check_reach``).
+
+    Args:
+        geometry: (1,) record array of :data:`GEOMETRY_DTYPE`.
+        pose: (4, 4) target pose of the tool frame, finite and rigid.
+
+    Returns:
+        ``(status, distance, low, high)``: :data:`OUT_OF_REACH` with the wrist
+        centre's distance [m] from the shoulder (with a shoulder offset a1, of
+        the arm nearer its reach) and the arm's reach ``[low, high]`` [m];
+        :data:`IN_CYLINDER` with its distance from the base axis and the
+        cylinder's radius |d2 + d3| twice; else ``(OK, 0, 0, 0)``.
+    """
+    geo = geometry[0]
+    px, py, pz = wrist_centre(geo, pose)
+    r2 = px * px + py * py
+    low, high = geo.reach_low, geo.reach_high  # the tests' bounds (slack in)
+    reach_low = abs(abs(geo.a2) - geo.forearm)
+    reach_high = abs(geo.a2) + geo.forearm
+    distance = math.sqrt(r2 + pz * pz)
+    if geo.a1 == 0.0 and not (low <= distance <= high):
+        return OUT_OF_REACH, distance, reach_low, reach_high
+    if r2 < geo.cylinder2:
+        radius = abs(geo.offset)
+        return IN_CYLINDER, math.sqrt(r2), radius, radius
+    if geo.a1 != 0.0:  # the arm whose in-plane distance is nearer the reach
+        rho = clamped_root(r2 - geo.offset * geo.offset)
+        right, left = math.hypot(rho - geo.a1, pz), math.hypot(-rho - geo.a1, pz)
+        if max(low - left, left - high) < max(low - right, right - high):
+            distance = left
+        else:
+            distance = right
+        if not (low <= distance <= high):
+            return OUT_OF_REACH, distance, reach_low, reach_high
+    return OK, 0.0, 0.0, 0.0
+
+
+@inline
 def _centre(geo, pose: FloatArray) -> tuple[float, float, float]:
     """Wrist centre of a pose of the last DH frame, as :func:`wrist_centre`."""
     ax, ay, az = pose[0, 2], pose[1, 2], pose[2, 2]
@@ -296,35 +216,6 @@ def _centre(geo, pose: FloatArray) -> tuple[float, float, float]:
         pose[1, 3] - geo.d6 * ay,
         pose[2, 3] - geo.d6 * az - geo.d1,
     )
-
-
-@_inline
-def _roughly_rigid(pose: FloatArray) -> bool:
-    """The fast acceptance test (finite, rigid to RIGIDITY_TOL / 5)."""
-    return _rigid_rows(
-        _matrix_row(pose, 0),
-        _matrix_row(pose, 1),
-        _matrix_row(pose, 2),
-        _matrix_row(pose, 3),
-    )
-
-
-@_inline
-def _rigid_rows(row0, row1, row2, row3) -> bool:
-    """:func:`_roughly_rigid` of the four rows of a pose."""
-    (r00, r01, r02, r03), (r10, r11, r12, r13) = row0, row1
-    (r20, r21, r22, r23), (b0, b1, b2, b3) = row2, row3
-    e0 = r00 * r00 + r10 * r10 + r20 * r20 - 1.0
-    e1 = r01 * r01 + r11 * r11 + r21 * r21 - 1.0
-    e2 = r00 * r01 + r10 * r11 + r20 * r21
-    ex = r10 * r21 - r20 * r11 - r02  # x × y - z
-    ey = r20 * r01 - r00 * r21 - r12
-    ez = r00 * r11 - r10 * r01 - r22
-    b3 = b3 - 1.0
-    err2 = e0 * e0 + e1 * e1 + e2 * e2 + ex * ex + ey * ey + ez * ez
-    err2 += b0 * b0 + b1 * b1 + b2 * b2 + b3 * b3
-    # a NaN fails the comparison; an infinite translation makes the sum NaN
-    return (err2 <= _FAST_TOL2) & ((r03 + r13 + r23) * 0.0 == 0.0)
 
 
 #: Slots of the 22 angles of one pose that come from an atan2: θ1 per arm;
@@ -344,7 +235,7 @@ SHOULDER = 24
 SHOULDER_SINGULAR_TOL = 1e-10
 
 
-@_inline
+@inline
 def angle_arguments(
     geo,
     target: FloatArray,
@@ -402,7 +293,7 @@ def angle_arguments(
     sd = s1g * geo.offset
     right = 1.0 if sd >= 0.0 else -1.0  # sign of x1 on the right arm
     # planar arm in the plane of z1: wrist centre at (x1, y1) = (+-rho, s1 pz)
-    rho, y1 = _clamped_root(r2 - geo.offset * geo.offset), s1g * pz
+    rho, y1 = clamped_root(r2 - geo.offset * geo.offset), s1g * pz
     distance = math.sqrt(r2 + pz * pz)  # from the shoulder when a1 = 0
     exact = (1 << SHOULDER) if rho <= SHOULDER_SINGULAR_TOL else 0
     k = big_a = root = 0.0
@@ -423,9 +314,9 @@ def angle_arguments(
             continue
         if arm == 0 or geo.a1 != 0.0:  # a1 = 0: both arms alike, up to sides
             k = (xp * xp + pz * pz - a2 * a2 - ell * ell) / (2.0 * a2 * ell)
-            k = _clip_unit(k)  # cos(gamma), gamma = theta3 + beta
+            k = clip_unit(k)  # cos(gamma), gamma = theta3 + beta
             big_a = a2 + ell * k
-            root = _clamped_root(1.0 - k * k)
+            root = clamped_root(1.0 - k * k)
         # elbow-up: sin(gamma) of the sign of up_sign times that of xp
         if xp != 0.0:
             side = 1.0 if xp > 0.0 else -1.0
@@ -482,7 +373,7 @@ def angle_arguments(
                     # difference
                     kappa = -1.0 if m22 > 0.0 else 1.0
                     step6 = t6 - geo.theta_offset[5] - geo.joint_sign[5] * prev[5]
-                    t4 -= kappa * _remainder(step6) / 2.0
+                    t4 -= kappa * remainder(step6) / 2.0
                     c4, s4 = math.cos(t4), math.sin(t4)
                 y[T4 + pair] = t4
                 exact |= 1 << (T4 + pair)
@@ -495,7 +386,7 @@ def angle_arguments(
     return OK, exact
 
 
-@_inline
+@inline
 def assemble(
     geo,
     angles: FloatArray,
@@ -526,26 +417,23 @@ def assemble(
                 if within.shape[0]:
                     within[b] = False
             continue
-        q1 = _joint_value(geo, 0, angles[T1 + arm], prev, has_prev)
+        q1 = joint_value(geo, 0, angles[T1 + arm], prev, has_prev)
         for elbow in range(2):
             pair = 2 * arm + elbow
-            q2 = _joint_value(geo, 1, angles[T2 + pair], prev, has_prev)
-            q3 = _joint_value(geo, 2, angles[T3 + pair], prev, has_prev)
+            q2 = joint_value(geo, 1, angles[T2 + pair], prev, has_prev)
+            q3 = joint_value(geo, 2, angles[T3 + pair], prev, has_prev)
             t4, t5, t6 = angles[T4 + pair], angles[T5 + pair], angles[T6 + pair]
             # the flip twin: (theta4 + pi, -theta5, theta6 + pi)
-            t4f = t4 - _PI if t4 > 0.0 else t4 + _PI
-            t6f = t6 - _PI if t6 > 0.0 else t6 + _PI
+            t4f = t4 - PI if t4 > 0.0 else t4 + PI
+            t6f = t6 - PI if t6 > 0.0 else t6 + PI
             for flip in range(2):
                 b = 2 * pair + flip
                 q[b, 0], q[b, 1], q[b, 2] = q1, q2, q3
-                q[b, 3] = _joint_value(geo, 3, t4f if flip else t4, prev, has_prev)
-                q[b, 4] = _joint_value(geo, 4, -t5 if flip else t5, prev, has_prev)
-                q[b, 5] = _joint_value(geo, 5, t6f if flip else t6, prev, has_prev)
+                q[b, 3] = joint_value(geo, 3, t4f if flip else t4, prev, has_prev)
+                q[b, 4] = joint_value(geo, 4, -t5 if flip else t5, prev, has_prev)
+                q[b, 5] = joint_value(geo, 5, t6f if flip else t6, prev, has_prev)
                 if within.shape[0]:
-                    ok = True
-                    for j in range(6):
-                        ok &= geo.lower[j] <= q[b, j] <= geo.upper[j]
-                    within[b] = ok
+                    within[b] = within_limits(geo, q, b)
 
 
 @entry_point(outputs=("q", "flags"))
@@ -566,42 +454,35 @@ def solve_pose(
             representative nearest it, and a free θ4/θ6 split by continuity;
             or (0,) for none.
         q: (8, 6) output, joint values [rad].
-        flags: (14,) output: per branch, within the limits (8), then per
-            (arm, elbow) pair, wrist singular (4), then shoulder singular, then
-            "an arm cannot reach" (its branches are NaN).
-        check: Run the fast rigidity test first (False once the exact
-            checks of ``_targets`` accepted the pose).
+        flags: (FLAG_COUNT,) output, slots ``FLAG_*`` (``_kernel_common``):
+            per branch within the limits; per (arm, elbow) pair wrist
+            singular; shoulder singular; an arm cannot reach (its branches
+            are NaN).
+        check: Test first that the pose is finite and rigid (the test of
+            ``workbench.poses``); False for a pose known to be.
 
     Returns:
         :data:`OK`, or :data:`NOT_RIGID`, :data:`OUT_OF_REACH`,
         :data:`IN_CYLINDER` (outputs then undefined).
     """
     geo = geometry[0]
-    if check and not _roughly_rigid(pose):
+    if check and not is_rigid(pose):
         return NOT_RIGID
     y, x = np.empty(N_ANGLES), np.empty(N_ANGLES)
-    # prev as the batch passes it (writable, C): the helpers compile once
-    previous = np.empty(prev.shape[0])
-    for j in range(prev.shape[0]):  # (a slice assignment compiles an overload)
-        previous[j] = prev[j]
+    previous = copy_previous(prev)
     status, exact = angle_arguments(geo, pose, previous, y, x, np.empty((4, 4)))
     if status != OK:
         return status
-    angles = np.empty(N_ANGLES)
-    for slot in range(N_ANGLES):
-        if exact >> slot & 1:
-            angles[slot] = y[slot]
-        else:
-            angles[slot] = math.atan2(y[slot], x[slot])
-    assemble(geo, angles, previous, q, flags[:8], exact)
+    angles = slot_angles(y, x, exact)
+    assemble(geo, angles, previous, q, flags[FLAG_WITHIN_LIMITS:8], exact)
     for pair in range(4):
-        flags[8 + pair] = exact >> (T4 + pair) & 1
-    flags[12] = exact >> SHOULDER & 1
-    flags[13] = exact >> DEAD & 3 != 0
+        flags[FLAG_WRIST_SINGULAR + pair] = exact >> (T4 + pair) & 1
+    flags[FLAG_SHOULDER_SINGULAR] = exact >> SHOULDER & 1
+    flags[FLAG_SOME_UNREACHED] = exact >> DEAD & 3 != 0
     return OK
 
 
-@_inline
+@inline
 def _pair_arguments(y, x, i, pair, dead, sgb, k, xp, big_a, y1, a0, a1, m1, geo):
     """The slots of one (arm, elbow) pair of pose ``i``, as angle_arguments.
 
@@ -615,10 +496,10 @@ def _pair_arguments(y, x, i, pair, dead, sgb, k, xp, big_a, y1, a0, a1, m1, geo)
     s3 = sgb * geo.cos_beta - k * geo.sin_beta
     big_b = ell * sgb
     c2, s2 = xp * big_a + y1 * big_b, y1 * big_a - xp * big_b
-    y[_at(i, N_ANGLES, T3 + pair)] = 0.0 if dead else s3
-    x[_at(i, N_ANGLES, T3 + pair)] = 1.0 if dead else c3
-    y[_at(i, N_ANGLES, T2 + pair)] = 0.0 if dead else s2
-    x[_at(i, N_ANGLES, T2 + pair)] = 1.0 if dead else c2
+    y[flat_index(i, N_ANGLES, T3 + pair)] = 0.0 if dead else s3
+    x[flat_index(i, N_ANGLES, T3 + pair)] = 1.0 if dead else c3
+    y[flat_index(i, N_ANGLES, T2 + pair)] = 0.0 if dead else s2
+    x[flat_index(i, N_ANGLES, T2 + pair)] = 1.0 if dead else c2
     norm = math.sqrt(c2 * c2 + s2 * s2)
     c2, s2 = (c2 / norm, s2 / norm) if norm > 0.0 else (1.0, 0.0)
     c23, s23 = c2 * c3 - s2 * s3, s2 * c3 + c2 * s3
@@ -626,16 +507,16 @@ def _pair_arguments(y, x, i, pair, dead, sgb, k, xp, big_a, y1, a0, a1, m1, geo)
     m22 = s3g * (s23 * a02 - c23 * a12)
     m00, m01 = c23 * a00 + s23 * a10, c23 * a01 + s23 * a11
     h = math.sqrt(m02 * m02 + m12 * m12)
-    y[_at(i, N_ANGLES, T4 + pair)] = 0.0 if dead else m12
-    x[_at(i, N_ANGLES, T4 + pair)] = 1.0 if dead else m02
-    y[_at(i, N_ANGLES, T5 + pair)] = 0.0 if dead else geo.sigma5 * h
-    x[_at(i, N_ANGLES, T5 + pair)] = 1.0 if dead else -g * m22
-    y[_at(i, N_ANGLES, T6 + pair)] = 0.0 if dead else g * (m12 * m00 - m02 * m10)
-    x[_at(i, N_ANGLES, T6 + pair)] = 1.0 if dead else g * (m12 * m01 - m02 * m11)
+    y[flat_index(i, N_ANGLES, T4 + pair)] = 0.0 if dead else m12
+    x[flat_index(i, N_ANGLES, T4 + pair)] = 1.0 if dead else m02
+    y[flat_index(i, N_ANGLES, T5 + pair)] = 0.0 if dead else geo.sigma5 * h
+    x[flat_index(i, N_ANGLES, T5 + pair)] = 1.0 if dead else -g * m22
+    y[flat_index(i, N_ANGLES, T6 + pair)] = 0.0 if dead else g * (m12 * m00 - m02 * m10)
+    x[flat_index(i, N_ANGLES, T6 + pair)] = 1.0 if dead else g * (m12 * m01 - m02 * m11)
     return (not dead) & (h <= WRIST_SINGULAR_TOL)
 
 
-@_inline
+@inline
 def _arm_arguments(y, x, i, arm, x1, xp, distance, pz, px, py, r2, pose, geo):
     """The slots of one arm of pose ``i``: (dead, singular) as angle_arguments.
 
@@ -645,16 +526,16 @@ def _arm_arguments(y, x, i, arm, x1, xp, distance, pz, px, py, r2, pose, geo):
     a2, ell, sd = geo.a2, geo.forearm, geo.sigma1 * geo.offset
     dead = (distance < geo.reach_low) | (distance > geo.reach_high)
     k = (xp * xp + pz * pz - a2 * a2 - ell * ell) / (2.0 * a2 * ell)
-    k = _clip_unit(k)
+    k = clip_unit(k)
     big_a = a2 + ell * k
-    root = _clamped_root(1.0 - k * k)
+    root = clamped_root(1.0 - k * k)
     right = 1.0 if sd >= 0.0 else -1.0
     side_x = 1.0 if xp > 0.0 else -1.0
     side = side_x if xp != 0.0 else (right if arm == 0 else -right)
     sg = geo.up_sign * side * root
     c1, s1 = (px * x1 - py * sd) / r2, (py * x1 + px * sd) / r2
-    y[_at(i, N_ANGLES, T1 + arm)] = 0.0 if dead else s1
-    x[_at(i, N_ANGLES, T1 + arm)] = 1.0 if dead else c1
+    y[flat_index(i, N_ANGLES, T1 + arm)] = 0.0 if dead else s1
+    x[flat_index(i, N_ANGLES, T1 + arm)] = 1.0 if dead else c1
     a0 = (c1 * nx + s1 * ny, c1 * ox + s1 * oy, c1 * ax + s1 * ay)
     s13 = geo.sigma3 * geo.sigma1
     m1 = (
@@ -702,24 +583,24 @@ def batch_arguments(
         status: (N,) output status per pose.
         exact: (N,) output bit masks.
         odd: (N,) output: bit 0 the pose needs angle_arguments, bit 1 it
-            failed the fast rigidity test.
-        check: Run the fast rigidity test on each pose.
+            is not finite and rigid (the test of ``workbench.poses``).
+        check: Test that each pose is finite and rigid.
 
     Returns:
         The number of poses flagged in ``odd`` (0: nothing left to do).
     """
     geo = geometry[0]
-    tool, base = _frames(geo)
+    tool, base = frames(geo)
     framed, rotated = geo.framed != 0.0, geo.sin_alpha6 != 0.0
     ca, sa, d6, a1g = geo.cos_alpha6, geo.sin_alpha6, geo.d6, geo.a1
     s1g, off = geo.sigma1, geo.offset
     right = 1.0 if s1g * off >= 0.0 else -1.0
     flagged = 0
     for i in range(status.shape[0]):
-        row0, row1 = _pose_row(poses, i, 0), _pose_row(poses, i, 1)
-        row2, row3 = _pose_row(poses, i, 2), _pose_row(poses, i, 3)
-        rigid = _rigid_rows(row0, row1, row2, row3)
-        f0, f1, f2 = _frame_rows(row0, row1, row2, tool, base)  # as frame_pose
+        row0, row1 = pose_row(poses, i, 0), pose_row(poses, i, 1)
+        row2, row3 = pose_row(poses, i, 2), pose_row(poses, i, 3)
+        rigid = rigid_rows(row0, row1, row2, row3)
+        f0, f1, f2 = frame_rows(row0, row1, row2, tool, base, True)  # frame_pose
         nx, ox, ax, qx = f0 if framed else row0
         ny, oy, ay, qy = f1 if framed else row1
         nz, oz, az, qz = f2 if framed else row2
@@ -730,7 +611,7 @@ def batch_arguments(
         px, py, pz = qx - d6 * ax, qy - d6 * ay, qz - d6 * az - geo.d1
         r2 = px * px + py * py
         total = math.sqrt(r2 + pz * pz)
-        rho, y1 = _clamped_root(r2 - off * off), s1g * pz
+        rho, y1 = clamped_root(r2 - off * off), s1g * pz
         pose = (nx, ny, ox, oy, ax, ay, s1g * nz, s1g * oz, s1g * az, y1)
         x1 = right * rho
         xp = x1 - a1g
@@ -780,8 +661,8 @@ def batch_fallback(
     it cannot vectorise).
 
     Returns:
-        −1, or the index of the first pose that failed the fast rigidity test
-        (the outputs of it and later poses then undefined).
+        −1, or the index of the first pose that is not finite and rigid (the
+        outputs of it and later poses then undefined).
     """
     geo = geometry[0]
     none, scratch = np.empty(0), np.empty((4, 4))
@@ -825,9 +706,7 @@ def batch_assemble(
             continue
         mask = exact[i]
         if mask:
-            for slot in range(N_ANGLES):
-                if mask >> slot & 1:
-                    angles[i, slot] = y[i, slot]
+            set_exact_angles(angles[i], y[i], mask)
         assemble(geo, angles[i], none, q[i], no_within, mask)
         for arm in range(2):
             alive = not (mask >> (DEAD + arm) & 1)
@@ -870,3 +749,29 @@ def continuing_branch(
         if d2 < best_d2:
             best, best_d2 = b, d2
     return best
+
+
+#: The names the Python side uses (the status codes and flag slots are
+#: ``_kernel_common``'s, importable from here as well).
+__all__ = [
+    "FLAG_COUNT",
+    "FLAG_SHOULDER_SINGULAR",
+    "FLAG_SOME_UNREACHED",
+    "FLAG_WITHIN_LIMITS",
+    "FLAG_WRIST_SINGULAR",
+    "GEOMETRY_DTYPE",
+    "IN_CYLINDER",
+    "NOT_RIGID",
+    "N_ANGLES",
+    "OK",
+    "OUT_OF_REACH",
+    "batch_arguments",
+    "batch_assemble",
+    "batch_fallback",
+    "continuing_branch",
+    "diagnose",
+    "pack_geometry",
+    "packed_geometry",
+    "solve_pose",
+    "wrist_centre",
+]

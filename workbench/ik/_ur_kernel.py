@@ -24,9 +24,9 @@ Like ``_puma_kernel``, every angle is an atan2 of arguments computed first, so
 that a batch makes all atan2 calls in one vectorised loop, and the batch's
 first stage (:func:`batch_arguments`) is :func:`angle_arguments` rewritten for
 LLVM's loop vectoriser, bitwise equal (poses with a singular wrist or the
-wrist point on the base axis go to :func:`angle_arguments`). The helpers
-that ``_puma_kernel`` also has are repeated here: Numba's cache is not
-invalidated across files, so a kernel calls only functions of its own file.
+wrist point on the base axis go to :func:`angle_arguments`). Status codes,
+flag slots and the helpers both closed forms use are those of
+:mod:`workbench.ik._kernel_common`.
 """
 
 from __future__ import annotations
@@ -36,15 +36,39 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from workbench._compiled import entry_point, helper
+from workbench._compiled import entry_point
+from workbench.ik._kernel_common import (
+    FLAG_COUNT,
+    FLAG_SHOULDER_SINGULAR,
+    FLAG_SOME_UNREACHED,
+    FLAG_WITHIN_LIMITS,
+    FLAG_WRIST_SINGULAR,
+    IN_CYLINDER,
+    NOT_RIGID,
+    OK,
+    OUT_OF_REACH,
+    PI,
+    clamped_root,
+    clip_unit,
+    copy_previous,
+    flat_index,
+    frame_rows,
+    frames,
+    inline,
+    is_rigid,
+    joint_value,
+    pose_row,
+    remainder,
+    rigid_rows,
+    set_exact_angles,
+    slot_angles,
+    within_limits,
+    write_framed,
+)
 from workbench.ik._puma import LIMIT_TOL, MODEL_ERROR_SLACK, WRIST_SINGULAR_TOL
 from workbench.ik.structure import KinematicStructure
-from workbench.poses import RIGIDITY_TOL
 
 FloatArray = npt.NDArray[np.float64]
-
-#: Status codes, as ``_puma_kernel``'s.
-OK, NOT_RIGID, OUT_OF_REACH, IN_CYLINDER = 0, 1, 2, 3
 
 GEOMETRY_DTYPE = np.dtype(
     [
@@ -97,10 +121,6 @@ REACH_MARGIN = 1e-12
 #: The bits of the mask that mark slots.
 _SLOT_BITS = (1 << N_ANGLES) - 1
 
-_FAST_TOL2 = (RIGIDITY_TOL / 5.0) ** 2
-_PI = math.pi
-_TAU = 2.0 * math.pi
-
 
 def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     """The constants of a UR-type arm as a read-only (1,) record array.
@@ -132,7 +152,7 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     g["theta_offset"], g["joint_sign"] = offsets, structure.joint_sign
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
     g["plain"] = [  # as PumaGeometry.plain
-        o == 0.0 and s == 1.0 and ((-_PI <= lo and hi <= _PI) or lo <= -_PI < _PI <= hi)
+        o == 0.0 and s == 1.0 and ((-PI <= lo and hi <= PI) or lo <= -PI < PI <= hi)
         for o, s, lo, hi in zip(
             offsets, structure.joint_sign, lower, upper, strict=True
         )
@@ -145,176 +165,14 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     return g
 
 
-#: Helpers inlined into their callers by LLVM (``forceinline``), as in the PUMA
-#: kernel: with Numba's ``inline="always"`` (IR inlining) the kernel took 2.4
-#: times as long to compile (14.6 s against 6.2 s measured).
-_inline = helper(forceinline=True)
-
-
-@_inline
-def _remainder(x: float) -> float:
-    """IEEE remainder of ``x`` by 2π, in [−π, π]."""
-    if -_PI <= x <= _PI:
-        return x
-    if -3.0 * _PI <= x <= 3.0 * _PI:
-        return x - _TAU if x > 0.0 else x + _TAU
-    r = np.fmod(x, _TAU)
-    if r > _PI:
-        return r - _TAU
-    if r < -_PI:
-        return r + _TAU
-    return r
-
-
-@_inline
-def _joint_value(geo, j: int, theta: float, prev: FloatArray, has_prev: bool) -> float:
-    """Joint value of DH angle ``theta`` (as ``_puma_kernel._joint_value``)."""
-    sign = geo.joint_sign[j]
-    if has_prev:
-        return prev[j] + _remainder(sign * (theta - geo.theta_offset[j]) - prev[j])
-    if geo.plain[j] != 0.0:
-        return theta if theta > -_PI else _PI
-    y = _remainder(sign * (theta - geo.theta_offset[j]))
-    if y <= -_PI:
-        y += _TAU
-    lo, hi = geo.lower[j], geo.upper[j]
-    if lo <= y <= hi:
-        return y
-    for turns in (1.0, -1.0, 2.0, -2.0):
-        z = y + turns * _TAU
-        if lo <= z <= hi:
-            return z
-    return y
-
-
-@_inline
-def _roughly_rigid(pose: FloatArray) -> bool:
-    """Fast acceptance test of a pose (as ``_puma_kernel._roughly_rigid``)."""
-    return _rigid_rows(
-        _matrix_row(pose, 0),
-        _matrix_row(pose, 1),
-        _matrix_row(pose, 2),
-        _matrix_row(pose, 3),
-    )
-
-
-@_inline
-def _rigid_rows(row0, row1, row2, row3) -> bool:
-    """:func:`_roughly_rigid` of the four rows of a pose."""
-    (r00, r01, r02, r03), (r10, r11, r12, r13) = row0, row1
-    (r20, r21, r22, r23), (b0, b1, b2, b3) = row2, row3
-    e0 = r00 * r00 + r10 * r10 + r20 * r20 - 1.0
-    e1 = r01 * r01 + r11 * r11 + r21 * r21 - 1.0
-    e2 = r00 * r01 + r10 * r11 + r20 * r21
-    ex = r10 * r21 - r20 * r11 - r02
-    ey = r20 * r01 - r00 * r21 - r12
-    ez = r00 * r11 - r10 * r01 - r22
-    b3 = b3 - 1.0
-    err2 = e0 * e0 + e1 * e1 + e2 * e2 + ex * ex + ey * ey + ez * ez
-    err2 += b0 * b0 + b1 * b1 + b2 * b2 + b3 * b3
-    return (err2 <= _FAST_TOL2) & ((r03 + r13 + r23) * 0.0 == 0.0)
-
-
-@_inline
-def _clip_unit(k: float) -> float:
-    """``k`` clipped to [−1, 1] (as ``_puma_kernel._clip_unit``)."""
-    k = k if k > -1.0 else -1.0
-    return k if k < 1.0 else 1.0
-
-
-@_inline
-def _clamped_root(v: float) -> float:
-    """√max(v, 0), as ``_puma_kernel._clamped_root`` (vectorisable)."""
-    return math.sqrt(abs(v if v > 0.0 else 0.0))
-
-
-@_inline
-def _at(i: int, width: int, slot: int) -> np.uint64:
-    """Flat index ``i * width + slot``, unsigned (as ``_puma_kernel._at``)."""
-    return np.uint64(i) * np.uint64(width) + np.uint64(slot)
-
-
-@_inline
-def _matrix_row(m: FloatArray, i: int) -> tuple[float, float, float, float]:
-    """Row ``i`` of a (4, 4) matrix."""
-    return m[i, 0], m[i, 1], m[i, 2], m[i, 3]
-
-
-@_inline
-def _pose_row(poses: FloatArray, i: int, row: int) -> tuple[float, float, float, float]:
-    """Row ``row`` of pose ``i`` of the flat (N · 16,) array of N poses."""
-    k = 4 * row
-    return (
-        poses[_at(i, 16, k)],
-        poses[_at(i, 16, k + 1)],
-        poses[_at(i, 16, k + 2)],
-        poses[_at(i, 16, k + 3)],
-    )
-
-
-@_inline
-def _frame_rows(r0, r1, r2, tool, base, based: bool):
-    """Rows 0..2 of ``base_inv · pose · tool_inv``, from rows 0..2 of the pose.
-
-    As ``_puma_kernel._frame_rows``; without ``base_inv`` unless ``based``.
-    """
-    t0, t1, t2 = _times_tool(r0, tool), _times_tool(r1, tool), _times_tool(r2, tool)
-    return (
-        _base_row(base[0], t0, t1, t2) if based else t0,
-        _base_row(base[1], t0, t1, t2) if based else t1,
-        _base_row(base[2], t0, t1, t2) if based else t2,
-    )
-
-
-@_inline
-def _times_tool(r, tool) -> tuple[float, float, float, float]:
-    """A pose row times ``tool_inv`` (rows ``tool``)."""
-    (p0, p1, p2, p3), (e0, e1, e2) = r, tool
-    return (
-        p0 * e0[0] + p1 * e1[0] + p2 * e2[0],
-        p0 * e0[1] + p1 * e1[1] + p2 * e2[1],
-        p0 * e0[2] + p1 * e1[2] + p2 * e2[2],
-        p0 * e0[3] + p1 * e1[3] + p2 * e2[3] + p3,
-    )
-
-
-@_inline
-def _base_row(b, t0, t1, t2) -> tuple[float, float, float, float]:
-    """Row ``b`` of ``base_inv`` times the rows t0, t1, t2 (and 0 0 0 1)."""
-    return (
-        b[0] * t0[0] + b[1] * t1[0] + b[2] * t2[0],
-        b[0] * t0[1] + b[1] * t1[1] + b[2] * t2[1],
-        b[0] * t0[2] + b[1] * t1[2] + b[2] * t2[2],
-        b[0] * t0[3] + b[1] * t1[3] + b[2] * t2[3] + b[3],
-    )
-
-
-@_inline
-def _frames(geo):
-    """Rows 0..2 of ``tool_inv`` and of ``base_inv``, for :func:`_frame_rows`."""
-    e, b = geo.tool_inv, geo.base_inv
-    tool = (_matrix_row(e, 0), _matrix_row(e, 1), _matrix_row(e, 2))
-    return tool, (_matrix_row(b, 0), _matrix_row(b, 1), _matrix_row(b, 2))
-
-
-@_inline
+@inline
 def _frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
     """Rows 0..2 of ``base_inv · pose · tool_inv`` into ``out``."""
-    tool, base = _frames(geo)
-    r0, r1, r2 = _frame_rows(
-        _matrix_row(pose, 0),
-        _matrix_row(pose, 1),
-        _matrix_row(pose, 2),
-        tool,
-        base,
-        geo.based != 0.0,
-    )
-    out[0, 0], out[0, 1], out[0, 2], out[0, 3] = r0
-    out[1, 0], out[1, 1], out[1, 2], out[1, 3] = r1
-    out[2, 0], out[2, 1], out[2, 2], out[2, 3] = r2
+    tool, base = frames(geo)
+    write_framed(pose, out, tool, base, geo.based != 0.0)
 
 
-@_inline
+@inline
 def _planar(geo, c1, s1, c5, c6, s6, s5, rot, big_px, big_py):
     """x4 = (c234, s234) and the origin of frame 3 (X, Y) in the arm plane.
 
@@ -336,7 +194,7 @@ def _planar(geo, c1, s1, c5, c6, s6, s5, rot, big_px, big_py):
     return c234, s234, big_x, big_y
 
 
-@_inline
+@inline
 def _turn_may_reach(geo, s5: float, dist: float) -> bool:
     """Whether a turn of θ6 within NEAR_SINGULAR_TOL may bring frame 3 in reach.
 
@@ -353,7 +211,7 @@ def _turn_may_reach(geo, s5: float, dist: float) -> bool:
     return (miss > 0.0) & (abs(s5) * miss <= NEAR_SINGULAR_TOL * arm)
 
 
-@_inline
+@inline
 def _reach_turn(geo, c1, s1, m, big_px, big_py, big_x, big_y, dist):
     """Turn of θ6 [rad] at a wrist singularity that brings frame 3 within reach.
 
@@ -380,8 +238,8 @@ def _reach_turn(geo, c1, s1, m, big_px, big_py, big_x, big_y, dist):
     cos_angle = (pn * pn + rm * rm - t * t) / (2.0 * pn * rm)
     angle = math.acos(min(max(cos_angle, -1.0), 1.0))
     a_p, a_v = math.atan2(big_py, big_px), math.atan2(vy, vx)
-    turn_a = _remainder(a_p + angle - a_v)
-    turn_b = _remainder(a_p - angle - a_v)
+    turn_a = remainder(a_p + angle - a_v)
+    turn_b = remainder(a_p - angle - a_v)
     turn = turn_a if abs(turn_a) <= abs(turn_b) else turn_b
     npx, npy = c1 * m[0, 0] + s1 * m[1, 0], geo.sigma1 * m[2, 0]
     opx, opy = c1 * m[0, 1] + s1 * m[1, 1], geo.sigma1 * m[2, 1]
@@ -389,7 +247,7 @@ def _reach_turn(geo, c1, s1, m, big_px, big_py, big_x, big_y, dist):
     return turn / rate
 
 
-@_inline
+@inline
 def angle_arguments(
     geo,
     target: FloatArray,
@@ -431,7 +289,7 @@ def angle_arguments(
     s1g, s4g, s5g = geo.sigma1, geo.sigma4, geo.sigma5
     sd = s1g * geo.offset
     right = 1.0 if sd >= 0.0 else -1.0
-    rho = _clamped_root(r2 - geo.offset * geo.offset)
+    rho = clamped_root(r2 - geo.offset * geo.offset)
     a2, a3 = geo.a2, geo.a3
     mask = np.int64(0)
     if rho <= SHOULDER_SINGULAR_TOL:
@@ -480,7 +338,7 @@ def angle_arguments(
             dist2 = big_x * big_x + big_y * big_y
             dist = math.sqrt(dist2)
             if singular:
-                t6p = t6 if wrist == 0 else (t6 - _PI if t6 > 0.0 else t6 + _PI)
+                t6p = t6 if wrist == 0 else (t6 - PI if t6 > 0.0 else t6 + PI)
                 if not (geo.reach_low <= dist <= geo.reach_high):
                     # turn theta6 (and with it frame 4 about the wrist point)
                     # until frame 3 is within reach, if it can be
@@ -521,9 +379,9 @@ def angle_arguments(
                     y[U2 + b], x[U2 + b] = 0.0, 1.0
                 continue
             c3 = (dist2 - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)
-            c3 = _clip_unit(c3)
+            c3 = clip_unit(c3)
             up = -1.0 if s1g * a2 * a3 * big_x > 0.0 else 1.0
-            s3_up = up * _clamped_root(1.0 - c3 * c3)
+            s3_up = up * clamped_root(1.0 - c3 * c3)
             y[U3 + pair], x[U3 + pair] = s3_up, c3
             for elbow in range(2):
                 b = 4 * arm + 2 * elbow + wrist
@@ -537,7 +395,7 @@ def angle_arguments(
     return OK, int(mask)
 
 
-@_inline
+@inline
 def assemble(
     geo,
     angles: FloatArray,
@@ -558,13 +416,13 @@ def assemble(
     """
     has_prev = prev.shape[0] != 0
     for arm in range(2):
-        q1 = _joint_value(geo, 0, angles[U1 + arm], prev, has_prev)
+        q1 = joint_value(geo, 0, angles[U1 + arm], prev, has_prev)
         t5 = angles[U5 + arm]
         for wrist in range(2):
             pair = 2 * arm + wrist
             dead = mask >> (DEAD + pair) & 1
-            q5 = _joint_value(geo, 4, -t5 if wrist else t5, prev, has_prev)
-            q6 = _joint_value(geo, 5, angles[U6 + pair], prev, has_prev)
+            q5 = joint_value(geo, 4, -t5 if wrist else t5, prev, has_prev)
+            q6 = joint_value(geo, 5, angles[U6 + pair], prev, has_prev)
             for elbow in range(2):
                 b = 4 * arm + 2 * elbow + wrist
                 if dead:
@@ -575,17 +433,14 @@ def assemble(
                     continue
                 t2, t3 = angles[U2 + b], angles[U3 + pair]
                 t3 = -t3 if elbow else t3
-                t4 = _remainder(angles[U234 + pair] - t2 - t3)
+                t4 = remainder(angles[U234 + pair] - t2 - t3)
                 q[b, 0] = q1
-                q[b, 1] = _joint_value(geo, 1, t2, prev, has_prev)
-                q[b, 2] = _joint_value(geo, 2, t3, prev, has_prev)
-                q[b, 3] = _joint_value(geo, 3, t4, prev, has_prev)
+                q[b, 1] = joint_value(geo, 1, t2, prev, has_prev)
+                q[b, 2] = joint_value(geo, 2, t3, prev, has_prev)
+                q[b, 3] = joint_value(geo, 3, t4, prev, has_prev)
                 q[b, 4], q[b, 5] = q5, q6
                 if within.shape[0]:
-                    ok = True
-                    for j in range(6):
-                        ok &= geo.lower[j] <= q[b, j] <= geo.upper[j]
-                    within[b] = ok
+                    within[b] = within_limits(geo, q, b)
 
 
 @entry_point(outputs=("q", "flags"))
@@ -604,49 +459,48 @@ def solve_pose(
         pose: (4, 4) target pose of the tool frame.
         prev: (6,) previous configuration [rad], or (0,) for none.
         q: (8, 6) output [rad], NaN rows for branches that cannot reach.
-        flags: (13,) output: per branch within the limits (8), then per
-            (shoulder, elbow) pair of branches 2·pair, 2·pair + 1, wrist
-            singular (4), then shoulder singular, then "a pair cannot reach"
-            (its branches are NaN).
-        check: Run the fast rigidity test first.
+        flags: (FLAG_COUNT,) output, slots ``FLAG_*`` (``_kernel_common``):
+            per branch within the limits; per (shoulder, elbow) pair of
+            branches 2·pair, 2·pair + 1 wrist singular; shoulder singular; a
+            (shoulder, wrist) pair cannot reach (its branches are NaN).
+        check: Test first that the pose is finite and rigid (the test of
+            ``workbench.poses``); False for a pose known to be.
 
     Returns:
         :data:`OK`, :data:`NOT_RIGID`, :data:`OUT_OF_REACH` or
-        :data:`IN_CYLINDER`.
+        :data:`IN_CYLINDER` (outputs then undefined).
     """
     geo = geometry[0]
-    if check and not _roughly_rigid(pose):
+    if check and not is_rigid(pose):
         return NOT_RIGID
     y, x = np.empty(N_ANGLES), np.empty(N_ANGLES)
-    # prev as the batch passes it (writable, C): the helpers compile once
-    previous = np.empty(prev.shape[0])
-    for j in range(prev.shape[0]):  # (a slice assignment compiles an overload)
-        previous[j] = prev[j]
+    previous = copy_previous(prev)
     status, mask = angle_arguments(geo, pose, previous, y, x, np.empty((4, 4)))
     if status != OK:
         return status
-    angles = np.empty(N_ANGLES)
-    for slot in range(N_ANGLES):
-        if mask >> slot & 1:
-            angles[slot] = y[slot]
-        else:
-            angles[slot] = math.atan2(y[slot], x[slot])
-    assemble(geo, angles, previous, q, flags[:8], mask)
+    angles = slot_angles(y, x, mask & _SLOT_BITS)
+    assemble(geo, angles, previous, q, flags[FLAG_WITHIN_LIMITS:8], mask)
     for pair in range(4):
-        flags[8 + pair] = mask >> (SINGULAR + (pair >> 1)) & 1
-    flags[12] = mask >> SHOULDER & 1
-    flags[13] = mask >> DEAD & 15 != 0
+        flags[FLAG_WRIST_SINGULAR + pair] = mask >> (SINGULAR + (pair >> 1)) & 1
+    flags[FLAG_SHOULDER_SINGULAR] = mask >> SHOULDER & 1
+    flags[FLAG_SOME_UNREACHED] = mask >> DEAD & 15 != 0
     return OK
 
 
 @entry_point()
-def diagnose(geometry: np.ndarray, pose: FloatArray) -> tuple[int, float]:
-    """Why a pose is unreachable: status and the distance that fails [m].
+def diagnose(geometry: np.ndarray, pose: FloatArray) -> tuple[int, float, float, float]:
+    """Why a pose is unreachable, from the packed record alone.
+
+    Args:
+        geometry: (1,) record array of :data:`GEOMETRY_DTYPE`.
+        pose: (4, 4) target pose of the tool frame, finite and rigid.
 
     Returns:
-        ``(IN_CYLINDER, distance of the wrist point from the base axis)`` or
-        ``(OUT_OF_REACH, in-plane distance nearest the reach)``, else
-        ``(OK, 0.0)``.
+        ``(status, distance, low, high)``: :data:`OUT_OF_REACH` with the
+        in-plane distance [m] of frame 3 from the shoulder nearest the reach
+        and the reach ``[|a2| − |a3|, |a2| + |a3|]`` [m] (absolute);
+        :data:`IN_CYLINDER` with the wrist point's distance from the base axis
+        and the cylinder's radius |d2 + d3 + d4| twice; else ``(OK, 0, 0, 0)``.
     """
     geo = geometry[0]
     y, x = np.empty(N_ANGLES), np.empty(N_ANGLES)
@@ -658,13 +512,15 @@ def diagnose(geometry: np.ndarray, pose: FloatArray) -> tuple[int, float]:
             miss = max(geo.reach_low - d, d - geo.reach_high)
             if miss < worst:
                 best, worst = d, miss
-        return status, best
+        a2, a3 = abs(geo.a2), abs(geo.a3)
+        return status, best, abs(a2 - a3), a2 + a3
     if status == IN_CYLINDER:
-        return status, x[U3]
-    return OK, 0.0
+        radius = abs(geo.offset)
+        return status, x[U3], radius, radius
+    return OK, 0.0, 0.0, 0.0
 
 
-@_inline
+@inline
 def _pair_arguments(y, x, i, arm, wrist, planar, s5, geo) -> tuple[bool, bool]:
     """θ3 and θ2 slots of one (shoulder, wrist) pair of pose ``i``.
 
@@ -680,24 +536,24 @@ def _pair_arguments(y, x, i, arm, wrist, planar, s5, geo) -> tuple[bool, bool]:
     dist = math.sqrt(dist2)
     dead = (dist < geo.reach_low) | (dist > geo.reach_high)
     turn = _turn_may_reach(geo, s5, dist)
-    y[_at(i, N_ANGLES, U234 + pair)] = s234
-    x[_at(i, N_ANGLES, U234 + pair)] = c234
-    c3 = _clip_unit((dist2 - a2 * a2 - a3 * a3) / (2.0 * a2 * a3))
+    y[flat_index(i, N_ANGLES, U234 + pair)] = s234
+    x[flat_index(i, N_ANGLES, U234 + pair)] = c234
+    c3 = clip_unit((dist2 - a2 * a2 - a3 * a3) / (2.0 * a2 * a3))
     up = -1.0 if geo.sigma1 * a2 * a3 * big_x > 0.0 else 1.0
-    s3_up = up * _clamped_root(1.0 - c3 * c3)
-    y[_at(i, N_ANGLES, U3 + pair)] = 0.0 if dead else s3_up
-    x[_at(i, N_ANGLES, U3 + pair)] = dist if dead else c3
+    s3_up = up * clamped_root(1.0 - c3 * c3)
+    y[flat_index(i, N_ANGLES, U3 + pair)] = 0.0 if dead else s3_up
+    x[flat_index(i, N_ANGLES, U3 + pair)] = dist if dead else c3
     for elbow in range(2):
         b = 4 * arm + 2 * elbow + wrist
         s3 = s3_up if elbow == 0 else -s3_up
         k1, k2 = a2 + a3 * c3, a3 * s3
         c2, s2 = big_x * k1 + big_y * k2, big_y * k1 - big_x * k2
-        y[_at(i, N_ANGLES, U2 + b)] = 0.0 if dead else s2
-        x[_at(i, N_ANGLES, U2 + b)] = 1.0 if dead else c2
+        y[flat_index(i, N_ANGLES, U2 + b)] = 0.0 if dead else s2
+        x[flat_index(i, N_ANGLES, U2 + b)] = 1.0 if dead else c2
     return dead, turn
 
 
-@_inline
+@inline
 def _arm_arguments(y, x, i, arm, x1, point, rot, geo):
     """Slots of one shoulder of pose ``i``: (dead up, dead down, special).
 
@@ -710,21 +566,21 @@ def _arm_arguments(y, x, i, arm, x1, point, rot, geo):
     s1g, s4g, s5g = geo.sigma1, geo.sigma4, geo.sigma5
     sd = s1g * geo.offset
     c1, s1 = (px * x1 - py * sd) / r2, (py * x1 + px * sd) / r2
-    y[_at(i, N_ANGLES, U1 + arm)] = s1
-    x[_at(i, N_ANGLES, U1 + arm)] = c1
+    y[flat_index(i, N_ANGLES, U1 + arm)] = s1
+    x[flat_index(i, N_ANGLES, U1 + arm)] = c1
     c5 = -s4g * s5g * s1g * (s1 * ax - c1 * ay)
     vx, vy = s1g * (s1 * nx - c1 * ny), s1g * (s1 * ox - c1 * oy)
     s5 = s5g * math.sqrt(vx * vx + vy * vy)
-    y[_at(i, N_ANGLES, U5 + arm)] = s5
-    x[_at(i, N_ANGLES, U5 + arm)] = c5
+    y[flat_index(i, N_ANGLES, U5 + arm)] = s5
+    x[flat_index(i, N_ANGLES, U5 + arm)] = c5
     singular = abs(s5) <= WRIST_SINGULAR_TOL
     inv = s4g / s5
     c6, s6 = vx * inv, -vy * inv
     big_px, big_py = c1 * px + s1 * py - geo.a1, s1g * (pz - geo.d1)
-    y[_at(i, N_ANGLES, U6 + 2 * arm)] = s6
-    x[_at(i, N_ANGLES, U6 + 2 * arm)] = c6
-    y[_at(i, N_ANGLES, U6 + 2 * arm + 1)] = -s6
-    x[_at(i, N_ANGLES, U6 + 2 * arm + 1)] = -c6
+    y[flat_index(i, N_ANGLES, U6 + 2 * arm)] = s6
+    x[flat_index(i, N_ANGLES, U6 + 2 * arm)] = c6
+    y[flat_index(i, N_ANGLES, U6 + 2 * arm + 1)] = -s6
+    x[flat_index(i, N_ANGLES, U6 + 2 * arm + 1)] = -c6
     c234, s234, big_x, big_y = _planar(geo, c1, s1, c5, c6, s6, s5, rot, big_px, big_py)
     up, turn_up = _pair_arguments(y, x, i, arm, 0, (c234, s234, big_x, big_y), s5, geo)
     # the other wrist: frame 3 mirrored about the wrist point
@@ -758,18 +614,18 @@ def batch_arguments(
     of :func:`angle_arguments`, bitwise. Returns the number of poses flagged.
     """
     geo = geometry[0]
-    tool, base = _frames(geo)
+    tool, base = frames(geo)
     based = geo.based != 0.0
     right = 1.0 if geo.sigma1 * geo.offset >= 0.0 else -1.0
     flagged = 0
     for i in range(status.shape[0]):
-        row0, row1 = _pose_row(poses, i, 0), _pose_row(poses, i, 1)
-        row2, row3 = _pose_row(poses, i, 2), _pose_row(poses, i, 3)
-        rigid = _rigid_rows(row0, row1, row2, row3)
-        f0, f1, f2 = _frame_rows(row0, row1, row2, tool, base, based)
+        row0, row1 = pose_row(poses, i, 0), pose_row(poses, i, 1)
+        row2, row3 = pose_row(poses, i, 2), pose_row(poses, i, 3)
+        rigid = rigid_rows(row0, row1, row2, row3)
+        f0, f1, f2 = frame_rows(row0, row1, row2, tool, base, based)
         (nx, ox, ax, px), (ny, oy, ay, py), (nz, oz, az, pz) = f0, f1, f2
         r2 = px * px + py * py
-        rho = _clamped_root(r2 - geo.offset * geo.offset)
+        rho = clamped_root(r2 - geo.offset * geo.offset)
         rot = (nx, ox, ax, ny, oy, ay, nz, oz, az)
         point = (px, py, pz, r2)
         x1 = right * rho
@@ -809,8 +665,8 @@ def batch_fallback(
     it cannot vectorise).
 
     Returns:
-        −1, or the index of the first pose that failed the fast rigidity test
-        (the outputs of it and later poses then undefined).
+        −1, or the index of the first pose that is not finite and rigid (the
+        outputs of it and later poses then undefined).
     """
     geo = geometry[0]
     none, scratch = np.empty(0), np.empty((4, 4))
@@ -844,9 +700,30 @@ def batch_assemble(
             continue
         mask = exact[i]
         if mask & _SLOT_BITS:  # (rare: a free theta1 or theta6)
-            for slot in range(N_ANGLES):
-                if mask >> slot & 1:
-                    angles[i, slot] = y[i, slot]
+            set_exact_angles(angles[i], y[i], mask)
         assemble(geo, angles[i], none, q[i], no_within, mask)
         for b in range(8):
             valid[i, b] = not (mask >> (DEAD + 2 * (b >> 2) + (b & 1)) & 1)
+
+
+#: The names the Python side uses (the status codes and flag slots are
+#: ``_kernel_common``'s, importable from here as well).
+__all__ = [
+    "FLAG_COUNT",
+    "FLAG_SHOULDER_SINGULAR",
+    "FLAG_SOME_UNREACHED",
+    "FLAG_WITHIN_LIMITS",
+    "FLAG_WRIST_SINGULAR",
+    "GEOMETRY_DTYPE",
+    "IN_CYLINDER",
+    "NOT_RIGID",
+    "N_ANGLES",
+    "OK",
+    "OUT_OF_REACH",
+    "batch_arguments",
+    "batch_assemble",
+    "batch_fallback",
+    "diagnose",
+    "pack_geometry",
+    "solve_pose",
+]

@@ -1,0 +1,317 @@
+r"""What the compiled closed forms share: status codes, flag slots, pose rows, angles.
+
+The kernels of both families (:mod:`workbench.ik._puma_kernel`,
+:mod:`workbench.ik._ur_kernel`) call these helpers; the cache of every kernel
+is keyed on the source of the modules it imports (``workbench._compiled``),
+so an edit here recompiles them.
+
+Conventions: a pose is a (4, 4) homogeneous matrix [m] or, in a batch, 16
+consecutive entries of a flat (N · 16,) array; a row is a 4-tuple of floats.
+The helpers called per pose or per angle in the batch loops are written for
+LLVM's loop vectoriser: selects rather than branches, no library calls but
+``sqrt``, unsigned flat indices (:func:`flat_index`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+
+from workbench._compiled import helper
+from workbench.poses import RIGIDITY_TOL
+
+FloatArray = npt.NDArray[np.float64]
+Row = tuple[float, float, float, float]
+
+#: Status codes of the kernels' ``solve_pose``, ``batch_arguments`` and
+#: ``diagnose``: solved; the pose is not a finite rigid transform (within
+#: RIGIDITY_TOL, the test of ``workbench.poses``); the wrist is out of the arm's
+#: reach; it is inside the cylinder the shoulder offset keeps it out of.
+OK, NOT_RIGID, OUT_OF_REACH, IN_CYLINDER = 0, 1, 2, 3
+
+#: Slots of the (FLAG_COUNT,) flags of ``solve_pose``. Branch ``b`` within
+#: the joint limits (± LIMIT_TOL): slot ``FLAG_WITHIN_LIMITS + b``, 8 slots.
+FLAG_WITHIN_LIMITS = 0
+#: Wrist singular for branches ``2 pair`` and ``2 pair + 1`` (the two wrists of
+#: an (arm, elbow) pair): slot ``FLAG_WRIST_SINGULAR + pair``, 4 slots.
+FLAG_WRIST_SINGULAR = 8
+#: The shoulder is singular (wrist centre on the surface where the arms meet).
+FLAG_SHOULDER_SINGULAR = 12
+#: Some branches cannot reach the pose (their rows of ``q`` are NaN) though
+#: others can.
+FLAG_SOME_UNREACHED = 13
+FLAG_COUNT = 14
+
+PI = math.pi
+TAU = 2.0 * math.pi
+
+#: For the helpers called per angle or per pose inside the batch loops:
+#: inlined into their callers by LLVM (``forceinline``, LLVM's alwaysinline),
+#: not by Numba (``inline="always"``, several times slower to compile).
+inline = helper(forceinline=True)
+
+
+@inline
+def remainder(x: float) -> float:
+    """IEEE remainder of ``x`` by 2π, in [−π, π] (exact; ties may keep ±π)."""
+    if -PI <= x <= PI:
+        return x
+    if -3.0 * PI <= x <= 3.0 * PI:  # one turn off: x ∓ 2π is exact
+        return x - TAU if x > 0.0 else x + TAU
+    r = np.fmod(x, TAU)  # exact, then at most one exact turn
+    if r > PI:
+        return r - TAU
+    if r < -PI:
+        return r + TAU
+    return r
+
+
+@inline
+def joint_value(geo, j: int, theta: float, prev: FloatArray, has_prev: bool) -> float:
+    """Joint value [rad] of DH angle ``theta`` of joint ``j``.
+
+    Near ``prev[j]`` if ``has_prev``; else the representative (mod 2π) in
+    (−π, π] if within the limits, else the first of ±2π, ±4π from it that is
+    (else the one in (−π, π]). ``geo``: a record with the fields
+    ``joint_sign``, ``theta_offset``, ``plain``, ``lower``, ``upper``.
+    """
+    sign = geo.joint_sign[j]
+    if has_prev:
+        return prev[j] + remainder(sign * (theta - geo.theta_offset[j]) - prev[j])
+    if geo.plain[j] != 0.0:  # theta in [-pi, pi] is its own value, but -pi is pi
+        return theta if theta > -PI else PI
+    y = remainder(sign * (theta - geo.theta_offset[j]))
+    if y <= -PI:
+        y += TAU
+    lo, hi = geo.lower[j], geo.upper[j]
+    if lo <= y <= hi:
+        return y
+    for turns in (1.0, -1.0, 2.0, -2.0):
+        z = y + turns * TAU
+        if lo <= z <= hi:
+            return z
+    return y
+
+
+@inline
+def within_limits(geo, q: FloatArray, b: int) -> bool:
+    """Whether branch ``b`` of ``q`` (8, 6) is within ``geo``'s widened limits."""
+    ok = True
+    for j in range(6):
+        ok &= geo.lower[j] <= q[b, j] <= geo.upper[j]
+    return ok
+
+
+@inline
+def clip_unit(k: float) -> float:
+    """``k`` clipped to [−1, 1] (selects, which the batch loop vectorises)."""
+    k = k if k > -1.0 else -1.0
+    return k if k < 1.0 else 1.0
+
+
+@inline
+def clamped_root(v: float) -> float:
+    """√max(v, 0): the root of a quantity ≥ 0 up to rounding.
+
+    ``abs`` of the clamped value (the same value) tells LLVM the root's
+    argument is not negative, so that it uses the sqrt instruction (which a
+    vectorised loop can) rather than libm's ``sqrt``, which may set errno.
+    """
+    return math.sqrt(abs(v if v > 0.0 else 0.0))
+
+
+@inline
+def flat_index(i: int, width: int, slot: int) -> np.uint64:
+    """Flat index ``i * width + slot``, unsigned: no negative-index test."""
+    return np.uint64(i) * np.uint64(width) + np.uint64(slot)
+
+
+@inline
+def matrix_row(m: FloatArray, i: int) -> Row:
+    """Row ``i`` of a (4, 4) matrix."""
+    return m[i, 0], m[i, 1], m[i, 2], m[i, 3]
+
+
+@inline
+def pose_row(poses: FloatArray, i: int, row: int) -> Row:
+    """Row ``row`` of pose ``i`` of the flat (N · 16,) array of N poses."""
+    k = 4 * row
+    return (
+        poses[flat_index(i, 16, k)],
+        poses[flat_index(i, 16, k + 1)],
+        poses[flat_index(i, 16, k + 2)],
+        poses[flat_index(i, 16, k + 3)],
+    )
+
+
+@inline
+def frames(geo):
+    """Rows 0..2 of ``geo.tool_inv`` and of ``geo.base_inv``, for frame_rows."""
+    e, b = geo.tool_inv, geo.base_inv
+    tool = (matrix_row(e, 0), matrix_row(e, 1), matrix_row(e, 2))
+    return tool, (matrix_row(b, 0), matrix_row(b, 1), matrix_row(b, 2))
+
+
+@inline
+def frame_rows(r0: Row, r1: Row, r2: Row, tool, base, based: bool):
+    """Rows 0..2 of ``base_inv · pose · tool_inv`` from rows 0..2 of the pose.
+
+    ``tool``, ``base``: rows 0..2 of ``tool_inv`` and ``base_inv``
+    (:func:`frames`; their row 3 is 0 0 0 1); ``base_inv`` is left out unless
+    ``based``. Rows as 4-tuples, so that the batch's vectorised loops and the
+    one-pose kernels share the arithmetic.
+    """
+    t0, t1, t2 = _times_tool(r0, tool), _times_tool(r1, tool), _times_tool(r2, tool)
+    return (
+        _base_row(base[0], t0, t1, t2) if based else t0,
+        _base_row(base[1], t0, t1, t2) if based else t1,
+        _base_row(base[2], t0, t1, t2) if based else t2,
+    )
+
+
+@inline
+def _times_tool(r: Row, tool) -> Row:
+    """A pose row times ``tool_inv`` (rows ``tool``)."""
+    (p0, p1, p2, p3), (e0, e1, e2) = r, tool
+    return (
+        p0 * e0[0] + p1 * e1[0] + p2 * e2[0],
+        p0 * e0[1] + p1 * e1[1] + p2 * e2[1],
+        p0 * e0[2] + p1 * e1[2] + p2 * e2[2],
+        p0 * e0[3] + p1 * e1[3] + p2 * e2[3] + p3,
+    )
+
+
+@inline
+def _base_row(b: Row, t0: Row, t1: Row, t2: Row) -> Row:
+    """Row ``b`` of ``base_inv`` times the rows t0, t1, t2 (and 0 0 0 1)."""
+    return (
+        b[0] * t0[0] + b[1] * t1[0] + b[2] * t2[0],
+        b[0] * t0[1] + b[1] * t1[1] + b[2] * t2[1],
+        b[0] * t0[2] + b[1] * t1[2] + b[2] * t2[2],
+        b[0] * t0[3] + b[1] * t1[3] + b[2] * t2[3] + b[3],
+    )
+
+
+@inline
+def write_framed(pose: FloatArray, out: FloatArray, tool, base, based: bool) -> None:
+    """Rows 0..2 of ``base_inv · pose · tool_inv`` into rows 0..2 of ``out``.
+
+    Args:
+        pose: (4, 4) pose of the tool frame in the base frame.
+        out: (4, 4) scratch; rows 0..2 are written.
+        tool: Rows of ``tool_inv``, as :func:`frame_rows`.
+        base: Rows of ``base_inv``.
+        based: Apply ``base_inv``.
+    """
+    r0, r1, r2 = matrix_row(pose, 0), matrix_row(pose, 1), matrix_row(pose, 2)
+    r0, r1, r2 = frame_rows(r0, r1, r2, tool, base, based)
+    out[0, 0], out[0, 1], out[0, 2], out[0, 3] = r0
+    out[1, 0], out[1, 1], out[1, 2], out[1, 3] = r1
+    out[2, 0], out[2, 1], out[2, 2], out[2, 3] = r2
+
+
+@inline
+def rigid_rows(row0: Row, row1: Row, row2: Row, row3: Row) -> bool:
+    """Whether the pose of these rows is finite and rigid, as ``workbench.poses``.
+
+    The exact test of ``ik._targets.pose_rows`` (``poses.check_rigid_rows``):
+    every entry of RᵀR − I and of the bottom row minus [0, 0, 0, 1] within
+    RIGIDITY_TOL, det R > 0, the translation finite. Comparisons joined by
+    ``&`` (no branches: the batch loop vectorises it); a NaN fails them.
+    """
+    (a, b, c, p0), (d, e, f, p1), (g, h, i, p2), (w0, w1, w2, w3) = (
+        row0,
+        row1,
+        row2,
+        row3,
+    )
+    tol = RIGIDITY_TOL
+    ok = abs(a * a + d * d + g * g - 1.0) <= tol  # entries of R^T R - I
+    ok &= abs(b * b + e * e + h * h - 1.0) <= tol
+    ok &= abs(c * c + f * f + i * i - 1.0) <= tol
+    ok &= abs(a * b + d * e + g * h) <= tol
+    ok &= abs(a * c + d * f + g * i) <= tol
+    ok &= abs(b * c + e * f + h * i) <= tol
+    ok &= (abs(w0) <= tol) & (abs(w1) <= tol) & (abs(w2) <= tol)
+    ok &= abs(w3 - 1.0) <= tol
+    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    # an infinite or NaN translation makes the sum NaN
+    return ok & (det > 0.0) & ((p0 + p1 + p2) * 0.0 == 0.0)
+
+
+@inline
+def is_rigid(pose: FloatArray) -> bool:
+    """:func:`rigid_rows` of a (4, 4) pose."""
+    return rigid_rows(
+        matrix_row(pose, 0),
+        matrix_row(pose, 1),
+        matrix_row(pose, 2),
+        matrix_row(pose, 3),
+    )
+
+
+@inline
+def copy_previous(prev: FloatArray) -> FloatArray:
+    """A writable C copy of ``prev`` (6,) or (0,), as the batch passes it.
+
+    So that the helpers taking it compile once. (A slice assignment would
+    compile an overload of its own.)
+    """
+    previous = np.empty(prev.shape[0])
+    for j in range(prev.shape[0]):
+        previous[j] = prev[j]
+    return previous
+
+
+@inline
+def slot_angles(y: FloatArray, x: FloatArray, exact: int) -> FloatArray:
+    """``atan2(y, x)`` per slot; ``y`` itself for a slot whose bit is in ``exact``."""
+    angles = np.empty(y.shape[0])
+    for slot in range(y.shape[0]):
+        if exact >> slot & 1:
+            angles[slot] = y[slot]
+        else:
+            angles[slot] = math.atan2(y[slot], x[slot])
+    return angles
+
+
+@inline
+def set_exact_angles(angles: FloatArray, y: FloatArray, exact: int) -> None:
+    """``angles[slot] = y[slot]`` for each slot whose bit is in ``exact``."""
+    for slot in range(angles.shape[0]):
+        if exact >> slot & 1:
+            angles[slot] = y[slot]
+
+
+__all__ = [
+    "FLAG_COUNT",
+    "FLAG_SHOULDER_SINGULAR",
+    "FLAG_SOME_UNREACHED",
+    "FLAG_WITHIN_LIMITS",
+    "FLAG_WRIST_SINGULAR",
+    "IN_CYLINDER",
+    "NOT_RIGID",
+    "OK",
+    "OUT_OF_REACH",
+    "PI",
+    "TAU",
+    "clamped_root",
+    "clip_unit",
+    "copy_previous",
+    "flat_index",
+    "frame_rows",
+    "frames",
+    "inline",
+    "is_rigid",
+    "joint_value",
+    "matrix_row",
+    "pose_row",
+    "remainder",
+    "rigid_rows",
+    "set_exact_angles",
+    "slot_angles",
+    "within_limits",
+    "write_framed",
+]
