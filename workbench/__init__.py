@@ -20,6 +20,7 @@ from workbench.model.dh import DHJoint, DHTable
 from workbench.model.loading import get_robot_names, load_robot
 from workbench.model.robot import Robot
 from workbench.model.urdf_generator import generate_urdf
+from workbench.model.urdf_joints import MimicJoint
 
 logging.getLogger(__name__).addHandler(logging.NullHandler())
 
@@ -39,6 +40,7 @@ __all__ = [
     "InputError",
     "JointLimitError",
     "JointNotFoundError",
+    "MimicJoint",
     "NonFiniteError",
     "Robot",
     "RobotNotFoundError",

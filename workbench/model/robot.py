@@ -466,7 +466,20 @@ class Robot:
 
         Returns:
             Shape (6, nv), LOCAL_WORLD_ALIGNED, per unit joint speed, per second.
+
+        Raises:
+            InputError: If the robot has mimic joints: Pinocchio 4.1's
+                ``getFrameJacobianTimeVariation`` is wrong for them
+                (``docs/pinocchio-notes.md``), so it is refused, naming them.
         """
+        if self.mimic_joints:
+            followers = ", ".join(
+                f"{m.joint} follows {m.leader}" for m in self.mimic_joints
+            )
+            raise InputError(
+                f"jacobian_time_derivative does not support mimic joints "
+                f"({followers}) of robot {self.name}"
+            )
         q = self.check_configuration(q)
         v = as_vector(v, self.nv, "v")
         frame_id = self.get_frame_id(frame)

@@ -121,8 +121,9 @@ def apply_mimic_joints(
 
     Raises:
         URDFLoadError: If a leader is not a moving joint of the model, is
-            itself a mimicking joint, or comes after its follower in
-            Pinocchio's joint order (which Pinocchio cannot represent).
+            itself a mimicking joint, is not revolute or prismatic (nor its
+            follower), or comes after its follower in Pinocchio's joint order
+            (which Pinocchio cannot represent).
     """
     followers = {m.joint for m in mimics}
     for mimic in mimics:
@@ -141,14 +142,19 @@ def apply_mimic_joints(
             )
         leader = model.getJointId(mimic.leader)
         follower = model.getJointId(mimic.joint)
-        if leader > follower or any(
+        if any(
             model.joints[j].nq != 1 or model.joints[j].nv != 1
             for j in (leader, follower)
         ):
             raise URDFLoadError(
+                f"{path}: joint {mimic.joint!r} mimics {mimic.leader!r}: mimic "
+                "joints must be revolute or prismatic (one coordinate each), "
+                "leader and follower"
+            )
+        if leader > follower:
+            raise URDFLoadError(
                 f"{path}: joint {mimic.joint!r} mimics {mimic.leader!r}, which "
-                "Pinocchio cannot represent: both must be revolute or prismatic "
-                "(one coordinate each) and the leader must come before its "
+                "Pinocchio cannot represent: the leader must come before its "
                 "follower in the kinematic tree (depth first, sibling joints by "
                 "name)"
             )
