@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import json
 import re
 import subprocess
 import sys
@@ -11,7 +12,9 @@ from html.parser import HTMLParser
 import numpy as np
 import pytest
 
+from tests.conftest import run_cli
 from workbench import load_robot
+from workbench.reports import singularity_report
 from workbench.reports.singularity_report import (
     build_singularity_report,
     write_singularity_report,
@@ -21,6 +24,10 @@ PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 DATA_URI = "data:image/png;base64,"
 SMALL = {"grid_size": 60, "svd_grid_size": 16, "samples": 200}
 REL_DET = 1e-9
+#: Relative agreement of the report's SVD measures with numpy's SVD of
+#: Pinocchio's Jacobians (the same numbers, computed again).
+REL_MEASURE = 1e-12
+NUMERIC_FIGURES = ("sigma_min_map", "manipulability_map", "condition_number_map")
 
 
 class _Sources(HTMLParser):
@@ -109,8 +116,75 @@ def test_report_of_a_robot_without_dh_table() -> None:
     )
     assert report.summary["elbow_theta3_deg"] is None
     assert report.summary["puma_type"] is False
-    assert set(report.figures) == {"det_j_map", "sigma_min_map"}
+    assert set(report.figures) == {"det_j_map", *NUMERIC_FIGURES}
     assert "numeric measures only" in report.html
+
+
+def grid_jacobians(robot, size: int) -> np.ndarray:
+    """Pinocchio's Jacobians over the report's (θ2, θ3) grid, shape (size², 6, nv)."""
+    q_fixed = singularity_report._fixed_joints(robot, None, 0)
+    x, y = (np.linspace(*singularity_report._window(robot, j), size) for j in (1, 2))
+    jacobians = []
+    for theta3 in y:
+        for theta2 in x:
+            q = q_fixed.copy()
+            q[1], q[2] = theta2, theta3
+            jacobians.append(robot.jacobian(q))
+    return np.array(jacobians)
+
+
+def test_report_of_a_seven_axis_arm_has_the_numeric_maps_and_no_det() -> None:
+    robot = load_robot("panda")
+    size = 9
+    stages: dict[str, tuple[int, int]] = {}
+    report = build_singularity_report(
+        robot,
+        grid_size=size,
+        svd_grid_size=size,
+        samples=10,
+        progress=lambda stage, done, total: stages.__setitem__(stage, (done, total)),
+    )
+    summary = report.summary
+    assert summary["det_j_map"] is None and summary["elbow_theta3_deg"] is None
+    assert summary["sigma_min_map"]["shape"] == [size, size]
+    assert stages == {"σmin map": (size * size, size * size)}
+    assert summary["figures"] == list(report.figures) == list(NUMERIC_FIGURES)
+    for name in NUMERIC_FIGURES:
+        assert report.figures[name].startswith(PNG_MAGIC)
+    parser = _Sources()
+    parser.feed(report.html)
+    assert len(parser.images) == len(NUMERIC_FIGURES)
+    for heading in ("σmin over", "Manipulability over", "Condition number over"):
+        assert heading in report.html
+    assert "no determinant" in report.html and "det J map" not in report.html
+    sv = np.linalg.svd(grid_jacobians(robot, size), compute_uv=False)
+    expected = {
+        "sigma_min": sv[:, -1],
+        "manipulability": np.prod(sv, axis=1),
+        "condition_number": sv[:, 0] / sv[:, -1],
+    }
+    assert set(summary["map_ranges"]) == set(expected)
+    for name, values in expected.items():
+        np.testing.assert_allclose(
+            summary["map_ranges"][name],
+            [values.min(), values.max()],
+            rtol=REL_MEASURE,
+            atol=0,
+        )
+
+
+def test_cli_report_of_a_seven_axis_arm(capsys, tmp_path) -> None:
+    html = tmp_path / "panda.html"
+    argv = ["--robot", "panda", "--out", str(html), "--svd-grid", "6", "--no-progress"]
+    code, out, err = run_cli(capsys, "report", "singularities", *argv, "--json")
+    assert (code, err) == (0, "")
+    summary = json.loads(out)
+    assert summary["det_j_map"] is None
+    assert summary["figures"] == list(NUMERIC_FIGURES)
+    assert "Manipulability over" in html.read_text(encoding="utf-8")
+    code, out, err = run_cli(capsys, "report", "singularities", *argv)
+    assert (code, err) == (0, "")
+    assert "σmin map 6×6" in out and "det J" not in out
 
 
 @pytest.mark.parametrize("name", ["ur5", "kuka-kr6-r700"])

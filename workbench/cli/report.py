@@ -141,6 +141,8 @@ def run_singularities(args: argparse.Namespace) -> int:
             f"degenerate directions: {len(records)} configurations, "
             f"max |u^T J| {worst:.1e}"
         )
-    grid = summary["det_j_map"]
-    print(f"det J map {grid['shape'][0]}×{grid['shape'][1]}: {grid['seconds']:.3f} s")
+    for name, key in (("det J", "det_j_map"), ("σmin", "sigma_min_map")):
+        if (grid := summary[key]) is not None:  # no det J map when nv ≠ 6
+            shape, seconds = grid["shape"], grid["seconds"]
+            print(f"{name} map {shape[0]}×{shape[1]}: {seconds:.3f} s")
     return 0

@@ -32,6 +32,10 @@ _ELBOW_COLOR = "#ff7f0e"
 _LIMIT_COLOR = "#333333"
 _DPI = 110
 _HALO = [patheffects.withStroke(linewidth=4.5, foreground="white")]
+#: Smallest σmin drawn on the log scale (zeros would be -inf).
+SIGMA_FLOOR = 1e-6
+#: Largest condition number drawn on the log scale (singular points are inf).
+CONDITION_CEILING = 1e6
 
 
 def png_bytes(fig: Figure, *, tight: bool = True) -> bytes:
@@ -156,18 +160,7 @@ def plot_det_map(
     fig, ax = _axes(ax, (7.2, 5.8))
     det = grid.values["det_j"]
     vmax = float(np.max(np.abs(det))) or 1.0
-    extent = np.degrees([grid.x[0], grid.x[-1], grid.y[0], grid.y[-1]])
-    image = ax.imshow(
-        det,
-        origin="lower",
-        extent=tuple(extent),
-        aspect="auto",
-        cmap="RdBu_r",
-        vmin=-vmax,
-        vmax=vmax,
-        interpolation="nearest",
-    )
-    fig.colorbar(image, ax=ax, label="det J [m³]")
+    _image(fig, ax, grid, det, "RdBu_r", "det J [m³]", vmin=-vmax, vmax=vmax)
     _overlay(ax, robot, grid, shoulder, elbow_theta3, examples)
     ax.set_title(
         f"{robot.name}: det J over (θ2, θ3), {grid.x.size} × {grid.y.size} grid",
@@ -201,23 +194,77 @@ def plot_sigma_map(
         The Figure.
     """
     fig, ax = _axes(ax, (7.2, 5.8))
-    sigma = np.log10(np.maximum(grid.values["sigma_min"], 1e-6))
-    extent = np.degrees([grid.x[0], grid.x[-1], grid.y[0], grid.y[-1]])
-    image = ax.imshow(
-        sigma,
-        origin="lower",
-        extent=tuple(extent),
-        aspect="auto",
-        cmap="viridis",
-        interpolation="nearest",
-    )
-    fig.colorbar(image, ax=ax, label="log10 σmin (clipped at 1e-6)")
+    sigma = np.log10(np.maximum(grid.values["sigma_min"], SIGMA_FLOOR))
+    _image(fig, ax, grid, sigma, "viridis", "log10 σmin (clipped at 1e-6)")
     _overlay(ax, robot, grid, shoulder, elbow_theta3, examples, thin=True)
     ax.set_title(
         f"{robot.name}: smallest singular value of J, {grid.x.size} × {grid.y.size}",
         fontsize=10,
     )
     return _finish(fig, path)
+
+
+def plot_measure_map(
+    robot: Robot,
+    grid: JointGrid,
+    measure: str,
+    path: str | Path | None = None,
+    *,
+    ax: Any = None,
+) -> Figure:
+    """Manipulability or log10 condition number over the grid's two joints.
+
+    Dark is near-singular on both maps, as on :func:`plot_sigma_map`.
+
+    Args:
+        robot: The robot of the grid.
+        grid: Joint grid with ``values[measure]`` (mixed units, see
+            :mod:`workbench.singularities.measures`).
+        measure: ``"manipulability"`` or ``"condition_number"``.
+        path: PNG file to write; None writes nothing.
+        ax: Axes to draw on; None makes a new Figure.
+
+    Returns:
+        The Figure.
+    """
+    fig, ax = _axes(ax, (7.2, 5.8))
+    values = grid.values[measure]
+    if measure == "condition_number":
+        shown = np.log10(np.minimum(values, CONDITION_CEILING))
+        _image(fig, ax, grid, shown, "viridis_r", "log10 σmax/σmin (clipped at 1e6)")
+        title = "condition number of J"
+    else:
+        _image(fig, ax, grid, values, "viridis", "manipulability √det(J Jᵀ)")
+        title = "manipulability of J"
+    _overlay(ax, robot, grid, None, None, {}, thin=True)
+    ax.set_title(f"{robot.name}: {title}, {grid.x.size} × {grid.y.size}", fontsize=10)
+    return _finish(fig, path)
+
+
+def _image(
+    fig: Figure,
+    ax: Any,
+    grid: JointGrid,
+    values: FloatArray,
+    cmap: str,
+    label: str,
+    **limits: float,
+) -> None:
+    """``values`` (ny, nx) drawn over the grid's joint angles, with a colour bar.
+
+    ``limits`` are ``vmin``/``vmax`` of the colour scale (default: the data's).
+    """
+    extent = np.degrees([grid.x[0], grid.x[-1], grid.y[0], grid.y[-1]])
+    image = ax.imshow(
+        values,
+        origin="lower",
+        extent=tuple(extent),
+        aspect="auto",
+        cmap=cmap,
+        interpolation="nearest",
+        **limits,
+    )
+    fig.colorbar(image, ax=ax, label=label)
 
 
 def plot_singular_arms(

@@ -57,8 +57,14 @@ def _head(robot: Any, fac: Any, data: dict[str, Any]) -> str:
             "det J factorised into shoulder, elbow and wrist conditions; maps "
             "and numeric measures."
         )
-    else:
+    elif robot.nv == 6:
         kind = "No OPW or UR structure: numeric measures only (Pinocchio's Jacobian)."
+    else:
+        kind = (
+            f"{robot.nv} joints: J is 6 × {robot.nv}, so it has no determinant; "
+            "numeric measures only (σmin, manipulability, condition number of "
+            "Pinocchio's Jacobian)."
+        )
     return f"""<!DOCTYPE html><html lang="en"><head><meta charset="utf-8">
 <title>Singularities of {name}</title><style>{_CSS}</style></head><body>
 <h1>Singularities of {name}</h1>
@@ -106,15 +112,22 @@ def _key_numbers(data: dict[str, Any], summary: dict[str, Any]) -> str:
                 ", ".join(f"{k}: {v}" for k, v in classes.items()),
             ),
         ]
-    rows += [
-        (
-            "det J map",
-            f"{det.x.size} × {det.y.size} in {det.seconds:.3f} s ({det.method})",
-        ),
+    if det is not None:
+        rows.append(
+            (
+                "det J map",
+                f"{det.x.size} × {det.y.size} in {det.seconds:.3f} s ({det.method})",
+            )
+        )
+    rows.append(
         (
             "σmin map",
             f"{svd.x.size} × {svd.y.size} in {svd.seconds:.3f} s ({svd.method})",
-        ),
+        )
+    )
+    rows += [
+        (f"{_MEASURE_NAMES[name]} over the map", f"{_number(lo)} … {_number(hi)}")
+        for name, (lo, hi) in summary["map_ranges"].items()
     ]
     body = "".join(f"<tr><th>{k}</th><td>{v}</td></tr>" for k, v in rows)
     return f'<div class="box"><h3>Key numbers</h3><table>{body}</table></div>'
@@ -144,9 +157,14 @@ the configuration is singular where one of them is 0.</p>
 {rows}</table>"""
 
 
+def _number(value: float | None) -> str:
+    return "∞" if value is None else f"{value:.3g}"
+
+
 def _maps(data: dict[str, Any], uri: dict[str, str]) -> str:
     det, svd, fac = data["det_grid"], data["svd_grid"], data["fac"]
-    held = " ".join(f"{v:.0f}" for v in np.degrees(det.q_fixed) + 0.0)
+    held = " ".join(f"{v:.0f}" for v in np.degrees(svd.q_fixed) + 0.0)
+    j2, j3 = (j + 1 for j in svd.joints)
     markers = "; ".join(
         f"{k + 1}. {html.escape(n)}"
         for k, n in enumerate(data["examples"])
@@ -159,17 +177,42 @@ def _maps(data: dict[str, Any], uri: dict[str, str]) -> str:
         if fac is not None
         else ""
     )
-    return f"""<h2>det J over (θ2, θ3)</h2>
+    det_section = ""
+    if det is not None:
+        det_section = f"""<h2>det J over (θ{j2}, θ{j3})</h2>
 <img alt="det J map" src="{uri["det_j_map"]}">
 <p class="cap">Other joints held at [{held}] deg. {det.x.size} × {det.y.size}
 points ({det.method}, {det.seconds:.3f} s); slightly more than one turn is shown
-(the map is 360°-periodic).{loci}</p>
-<h2>σmin over (θ2, θ3)</h2>
+(the map is 360°-periodic).{loci}</p>"""
+    measures = "".join(
+        f"""<h2>{_MEASURE_NAMES[name]} over (θ{j2}, θ{j3})</h2>
+<img alt="{name} map" src="{uri[f"{name}_map"]}">
+<p class="cap">{_MEASURE_CAPTIONS[name]} Same grid as the σmin map.</p>"""
+        for name in ("manipulability", "condition_number")
+        if f"{name}_map" in uri
+    )
+    return f"""{det_section}
+<h2>σmin over (θ{j2}, θ{j3})</h2>
 <img alt="sigma_min map" src="{uri["sigma_min_map"]}">
 <p class="cap">Smallest singular value of the numeric Jacobian, {svd.x.size} ×
-{svd.y.size} points ({svd.method}, {svd.seconds:.3f} s). Its dark troughs are
+{svd.y.size} points ({svd.method}, {svd.seconds:.3f} s), other joints held at
+[{held}] deg; slightly more than one turn is shown. Its dark troughs are
 where J loses rank{"; they lie on the analytic loci (thin lines)" if fac else ""}.
-Its values depend on units (m vs rad); its zeros do not.</p>"""
+Its values depend on units (m vs rad); its zeros do not.</p>{measures}"""
+
+
+_MEASURE_NAMES = {
+    "sigma_min": "σmin",
+    "manipulability": "Manipulability",
+    "condition_number": "Condition number",
+}
+_MEASURE_CAPTIONS = {
+    "manipulability": "Yoshikawa's manipulability √det(J Jᵀ), the product of the "
+    "singular values: 0 where J loses rank, larger where the tool moves more "
+    "freely in every direction.",
+    "condition_number": "σmax / σmin of J on a log scale (clipped at 10⁶): 1 is "
+    "isotropic, ∞ singular, so the dark regions are near-singular.",
+}
 
 
 def _vec(v: FloatArray) -> str:

@@ -7,7 +7,9 @@ configuration, the analytic factorisation checked against Pinocchio, the
 degenerate directions and, given a trajectory, its closest approaches. Any
 other OPW or UR-type arm gets the maps, its factors of det J checked against
 Pinocchio, the classes of random configurations, the arm at each singularity
-and the degenerate directions; other robots the numeric maps and measures only.
+and the degenerate directions; other robots (a 7-axis arm, any arm without that
+structure) the numeric maps only: σmin, manipulability and condition number, and
+det J when the Jacobian is square.
 """
 
 from __future__ import annotations
@@ -53,6 +55,8 @@ NUMERIC_GRID_MAX = 120
 SUBGRID_STRIDE = 50
 #: Half width of the (θ2, θ3) maps around the middle of the joint limits [rad].
 MAP_HALF_WIDTH = np.radians(200.0)
+#: Maps drawn from the σmin grid for robots without an analytic factorisation.
+NUMERIC_MAPS = ("manipulability", "condition_number")
 
 
 @dataclass(frozen=True, slots=True)
@@ -84,7 +88,8 @@ def build_singularity_report(
 
     Args:
         robot: Any robot; PUMA-type ones get the analytic sections, other OPW
-            and UR-type arms their factors, classes and degenerate directions.
+            and UR-type arms their factors, classes and degenerate directions,
+            the others the numeric maps (no det J map when nv ≠ 6).
         grid_size: Points per axis of the det J map.
         svd_grid_size: Points per axis of the σmin map.
         samples: Random configurations (within limits) of the det J check.
@@ -112,9 +117,11 @@ def build_singularity_report(
     def stage(name: str) -> Callable[[int, int], None] | None:
         return None if progress is None else (lambda d, n: progress(name, d, n))
 
-    det_grid = compute_joint_grid(
-        robot, *axes, q_fixed=q_fixed, progress=stage("det J map")
-    )
+    det_grid = None
+    if robot.nv == 6:  # det J needs a square Jacobian
+        det_grid = compute_joint_grid(
+            robot, *axes, q_fixed=q_fixed, progress=stage("det J map")
+        )
     svd_grid = compute_joint_grid(
         robot, *svd_axes, q_fixed=q_fixed, quantity="svd", progress=stage("σmin map")
     )
@@ -124,8 +131,9 @@ def build_singularity_report(
         "robot": robot.name,
         "puma_type": fac is not None,
         "elbow_theta3_deg": None,
-        "det_j_map": _grid_summary(det_grid),
+        "det_j_map": None if det_grid is None else _grid_summary(det_grid),
         "sigma_min_map": _grid_summary(svd_grid),
+        "map_ranges": _map_ranges(svd_grid),
     }
     overlay: dict[str, Any] = {"shoulder": None, "elbow_theta3": None, "examples": {}}
     data["family_fac"] = None
@@ -133,7 +141,7 @@ def build_singularity_report(
         data["family_fac"] = _family_data(robot, samples, seed, summary)
         if data["family_fac"] is not None:
             data |= _direction_data(robot, summary)
-    if fac is not None:
+    if fac is not None and det_grid is not None:  # a PUMA has six joints
         data |= _analytic_data(robot, fac, det_grid, samples, seed, summary)
         sub = det_grid.configurations()[::2, ::2]
         shoulder = compute_conditions(robot, sub).shoulder
@@ -142,12 +150,16 @@ def build_singularity_report(
             "elbow_theta3": data["elbow"],
             "examples": data["examples"],
         }
-    figures = {
-        "det_j_map": figs.png_bytes(figs.plot_det_map(robot, det_grid, **overlay)),
-        "sigma_min_map": figs.png_bytes(
-            figs.plot_sigma_map(robot, svd_grid, **overlay)
-        ),
-    }
+    figures: dict[str, bytes] = {}
+    if det_grid is not None:
+        det_map = figs.plot_det_map(robot, det_grid, **overlay)
+        figures["det_j_map"] = figs.png_bytes(det_map)
+    sigma_map = figs.plot_sigma_map(robot, svd_grid, **overlay)
+    figures["sigma_min_map"] = figs.png_bytes(sigma_map)
+    if fac is None and data["family_fac"] is None:
+        for measure in NUMERIC_MAPS:
+            measure_map = figs.plot_measure_map(robot, svd_grid, measure)
+            figures[f"{measure}_map"] = figs.png_bytes(measure_map)
     if data.get("directions"):
         arms = figs.plot_singular_arms(robot, data["examples"], data["directions"])
         figures["arms"] = figs.png_bytes(arms, tight=False)
@@ -314,4 +326,16 @@ def _grid_summary(grid: Any) -> dict[str, Any]:
         "shape": [grid.y.size, grid.x.size],
         "method": grid.method,
         "seconds": round(grid.seconds, 4),
+    }
+
+
+def _map_ranges(grid: Any) -> dict[str, list[float | None]]:
+    """``[min, max]`` of each SVD measure over the grid; None stands for inf."""
+    return {
+        name: [
+            float(v) if np.isfinite(v) else None
+            for v in (np.min(values), np.max(values))
+        ]
+        for name, values in grid.values.items()
+        if name != "det_j"
     }
