@@ -102,9 +102,7 @@ def axis_lines(robot: Robot) -> tuple[FloatArray, FloatArray]:
     model = robot.model
     name = robot.name
     if robot.mimic_joints:
-        followers = ", ".join(
-            f"{m.joint} follows {m.leader}" for m in robot.mimic_joints
-        )
+        followers = ", ".join(map(str, robot.mimic_joints))
         raise UnsupportedRobotError(
             f"robot {name!r} has mimic joints ({followers}), closed-form IK needs "
             "6 independent revolute joints"

@@ -328,9 +328,7 @@ class Robot:
         if arr.ndim == 1 and arr.size != self.nq and arr.size == self.n_joints:
             return self.q_from_joint_values(arr)
         if arr.ndim == 1 and arr.size != self.nq:
-            followers = ", ".join(
-                f"{m.joint} follows {m.leader}" for m in self.mimic_joints
-            )
+            followers = ", ".join(map(str, self.mimic_joints))
             name = f"joint values ({followers})" if followers else "joint values"
             raise DimensionError(name, (self.n_joints,), arr.shape)
         return self.check_configuration(arr)
@@ -473,9 +471,7 @@ class Robot:
                 (``docs/pinocchio-notes.md``), so it is refused, naming them.
         """
         if self.mimic_joints:
-            followers = ", ".join(
-                f"{m.joint} follows {m.leader}" for m in self.mimic_joints
-            )
+            followers = ", ".join(map(str, self.mimic_joints))
             raise InputError(
                 f"jacobian_time_derivative does not support mimic joints "
                 f"({followers}) of robot {self.name}"

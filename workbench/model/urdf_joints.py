@@ -39,6 +39,10 @@ class MimicJoint:
     multiplier: float
     offset: float
 
+    def __str__(self) -> str:
+        """``"JOINT follows LEADER"``, for messages."""
+        return f"{self.joint} follows {self.leader}"
+
 
 def parse_urdf_joints(text: str, path: Path) -> list[MimicJoint]:
     """Check every moving joint of a URDF; return its mimic joints.
