@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import csv
+import importlib.metadata
 import json
 import re
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -107,6 +109,28 @@ def test_bag_errors(tmp_path: Path) -> None:
     assert list(tmp_path.iterdir()) == []
     with pytest.raises(InputError, match="cannot read bag"):
         read_ros2_bag(tmp_path / "none")
+
+
+def test_missing_rosbags_names_this_distribution_and_its_extra(
+    tmp_path: Path, monkeypatch
+) -> None:
+    """The hint installs this project's ``export`` extra, not a namesake on PyPI."""
+    monkeypatch.setitem(sys.modules, "rosbags.rosbag2", None)  # import fails
+    s = JointTrajectorySamples(np.zeros(1), *(np.zeros((1, 1)),) * 3)
+    with pytest.raises(InputError) as error:
+        write_ros2_bag(tmp_path / "b", s, ["a"])
+    message = str(error.value)
+    assert "\n" not in message
+    requirement = re.search(r'pip install "([^"\[]+)\[(\w+)\]"', message)
+    assert requirement is not None, message
+    metadata = importlib.metadata.metadata(requirement.group(1))
+    assert metadata["Name"] == "kinematics-workbench"
+    assert requirement.group(2) in metadata.get_all("Provides-Extra")
+    extra = requirement.group(2)
+    assert any(
+        r.startswith("rosbags") and r.replace('"', "'").endswith(f"extra == '{extra}'")
+        for r in metadata.get_all("Requires-Dist")
+    )
 
 
 def test_urscript_for_a_ur5(capsys, tmp_path: Path, ur5_csv: Path) -> None:

@@ -1,7 +1,8 @@
 """Joint trajectories as ROS 2 bags (MCAP) of ``trajectory_msgs/msg/JointTrajectory``.
 
 Written and read with the `rosbags <https://gitlab.com/ternaris/rosbags>`_
-library, so no ROS installation is needed (``pip install "workbench[export]"``).
+library, so no ROS installation is needed
+(``pip install "kinematics-workbench[export]"``).
 The bag holds one message on :data:`DEFAULT_TOPIC`: the whole trajectory, as a
 ``joint_trajectory_controller`` takes it, with the joint names, and per point
 the positions [rad], velocities [rad/s], accelerations [rad/s²] and
@@ -46,7 +47,7 @@ def _rosbags() -> tuple[Any, Any, Any]:
     except ImportError as err:
         raise InputError(
             "ROS 2 bag export needs the rosbags library: "
-            'pip install "workbench[export]"'
+            'pip install "kinematics-workbench[export]"'
         ) from err
     return (Writer, StoragePlugin), Reader, get_typestore(Stores.ROS2_HUMBLE)
 
