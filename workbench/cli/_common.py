@@ -13,6 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError, NonFiniteError
+from workbench.json_numbers import to_json_ready
 from workbench.model.loading import load_robot
 from workbench.model.robot import Robot
 
@@ -186,8 +187,13 @@ def q_from_degrees(robot: Robot, values: list[float]) -> npt.NDArray[np.float64]
 
 
 def print_json(payload: dict[str, Any]) -> None:
-    """Print one JSON object (NumPy arrays become lists) on stdout."""
-    json.dump(payload, sys.stdout, default=_to_builtin, allow_nan=False)
+    """Print one JSON object (NumPy arrays become lists) on stdout.
+
+    Full precision; in a list of floats, rounding noise of its largest entry
+    prints as 0 (:func:`workbench.json_numbers.to_json_ready`).
+    """
+    ready = to_json_ready(payload)
+    json.dump(ready, sys.stdout, default=_to_builtin, allow_nan=False)
     sys.stdout.write("\n")
 
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 import functools
 import json
 import logging
-import math
 import multiprocessing
 import os
 import sys
@@ -29,6 +28,7 @@ import numpy.typing as npt
 from workbench import paper_data
 from workbench.collision import CollisionChecker, check_path, get_angeles_scene
 from workbench.demo.pick_and_place import run_pick_and_place_demo
+from workbench.json_numbers import to_json_ready
 from workbench.model.loading import load_robot
 from workbench.model.robot import Robot
 from workbench.planning.online_planner import load_kernels
@@ -273,7 +273,9 @@ def round_for_json(value: Any, digits: int = SUMMARY_DIGITS) -> Any:
 
     Nine digits are far below the accuracy of anything the demo reports
     (the papers print 2-4 digits) and far above what a reader compares, and
-    they keep ``-94.07`` from showing up as ``-94.07000000000001``.
+    they keep ``-94.07`` from showing up as ``-94.07000000000001``. In a list
+    of floats (a vector), entries within rounding of its largest one are 0
+    (see :func:`workbench.json_numbers.to_json_ready`).
 
     Args:
         value: Nested dicts, lists, tuples, NumPy arrays and scalars.
@@ -282,17 +284,7 @@ def round_for_json(value: Any, digits: int = SUMMARY_DIGITS) -> Any:
     Returns:
         The same structure with builtin types only.
     """
-    if isinstance(value, dict):
-        return {key: round_for_json(item, digits) for key, item in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [round_for_json(item, digits) for item in value]
-    if isinstance(value, np.ndarray):
-        return round_for_json(value.tolist(), digits)
-    if isinstance(value, np.generic):
-        return round_for_json(value.item(), digits)
-    if isinstance(value, float) and math.isfinite(value):
-        return float(f"{value:.{digits}g}")
-    return value
+    return to_json_ready(value, digits=digits)
 
 
 def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, Any]:
