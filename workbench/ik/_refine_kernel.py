@@ -49,7 +49,9 @@ ROTATION_TOL = 1e-12
 POLISH = 1.0 / 16.0
 #: Newton steps a branch may take (a regular one needs one or two; next to a
 #: singularity of the true chain convergence is linear, halving per step).
-REFINE_STEPS = 30
+REFINE_STEPS = 60
+#: Refinement stops when the residual has not decreased for this many steps.
+STALL_STEPS = 20
 #: A fitted structure whose FK differs from the model's by more than this
 #: [m, and rotation entries] (``KinematicStructure.residual``) is refined; the
 #: catalog's URDFs are within 6e-16.
@@ -83,26 +85,28 @@ def _refine_branch(chain: FloatArray, target: FloatArray, q: FloatArray, work) -
     """Newton steps on ``q`` (6,) in place; whether its residual is within tolerance.
 
     Steps are taken until the residual is :data:`POLISH` times the tolerance,
-    stops decreasing, or :data:`REFINE_STEPS` are taken; ``q`` is then the
-    best iterate. ``work``: (24, 12) scratch.
+    has not decreased for :data:`STALL_STEPS` steps (next to a singularity a
+    step may first increase it), or :data:`REFINE_STEPS` are taken; ``q`` is
+    then the best iterate. ``work``: (24, 12) scratch.
     """
     frames = work[0:7]
     jac, normal = work[7:13, 0:6], work[13:19, 0:6]
     e, dq, pull, y = work[19, 0:6], work[20, 0:6], work[21, 0:6], work[22, 0:6]
     best_q = work[23, 0:6]
     no_pull = work.shape[0] < 0  # False, as a computed bool (no literal copy)
-    best = math.inf
+    best, best_step = math.inf, 0
     for step in range(REFINE_STEPS + 1):
         _forward(chain, q, frames)
         position = _error(target, frames, e) / POSITION_TOL
         rotation = math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5]) / ROTATION_TOL
         error = max(position, rotation)  # in tolerances; NaN fails every test
-        if not error < best:
+        if error < best:
+            best, best_step = error, step
+            for k in range(6):
+                best_q[k] = q[k]
+        elif not error == error or step - best_step >= STALL_STEPS:
             break
-        best = error
-        for k in range(6):
-            best_q[k] = q[k]
-        if error <= POLISH or step == REFINE_STEPS:
+        if best <= POLISH or step == REFINE_STEPS:
             break
         damping = 0.0
         for i in range(6):
