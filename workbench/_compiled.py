@@ -305,7 +305,15 @@ class _Interpretable(_CPUDispatcher):
 
 
 class _Helper(_Interpretable):
-    """A dispatcher that compiles constant scalar arguments as their plain types."""
+    """A dispatcher for kernels only: constant scalars compile as plain types.
+
+    Compiled without the wrappers that a call from Python needs (their code
+    costs a fifth of a first compile), so a call from Python runs the Python
+    source, as within :func:`interpreted`.
+    """
+
+    def __call__(self, *args: Any) -> Any:
+        return self._interpret(*args)
 
     def compile(self, sig: Any) -> Any:
         args, return_type = sigutils.normalize_signature(sig)
@@ -434,7 +442,9 @@ def helper(*, forceinline: bool = False) -> Callable[[F], F]:
     def decorate(func: F) -> F:
         if _config.DISABLE_JIT:
             return func
-        options = dict(_OPTIONS, forceinline=True) if forceinline else dict(_OPTIONS)
+        options = dict(_OPTIONS, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+        if forceinline:
+            options["forceinline"] = True
         dispatcher = _Helper(func, targetoptions=options)
         dispatcher._cache = _SourceKeyedCache(func)
         return cast(F, dispatcher)
