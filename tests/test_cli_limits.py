@@ -12,7 +12,6 @@ from tests.conftest import run_cli as run
 from tests.test_model_checks import write_packaged_arm
 from workbench import load_robot
 from workbench.model.catalog import get_own_urdf_dir
-from workbench.model.loading import ROS_PACKAGE_PATH
 from workbench.trajectory import minimum_duration
 
 ATOL_EXACT = 1e-12
@@ -185,7 +184,7 @@ def test_a_zero_axis_exits_2(capsys, tmp_path) -> None:
 
 
 def test_package_dir_and_ros_package_path(capsys, tmp_path, monkeypatch) -> None:
-    monkeypatch.delenv(ROS_PACKAGE_PATH, raising=False)
+    monkeypatch.delenv("ROS_PACKAGE_PATH", raising=False)
     monkeypatch.delenv("AMENT_PREFIX_PATH", raising=False)
     urdf, packages = write_packaged_arm(tmp_path)
     srdf = ("urdf", "srdf", "--robot", str(urdf))
@@ -197,6 +196,6 @@ def test_package_dir_and_ros_package_path(capsys, tmp_path, monkeypatch) -> None
     assert code == 2 and "package folder not found: /nowhere" in err
     code, with_option, err = run(capsys, *srdf, "--package-dir", str(packages))
     assert (code, err) == (0, "") and 'link1="m1" link2="m2"' in with_option
-    monkeypatch.setenv(ROS_PACKAGE_PATH, str(packages))
+    monkeypatch.setenv("ROS_PACKAGE_PATH", str(packages))
     code, with_variable, err = run(capsys, *srdf)
     assert (code, err, with_variable) == (0, "", with_option)

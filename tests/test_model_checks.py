@@ -3,6 +3,7 @@ joint values of continuous joints, package folders."""
 
 from __future__ import annotations
 
+import os
 import re
 import warnings
 from pathlib import Path
@@ -17,7 +18,6 @@ from hypothesis.extra.numpy import arrays
 from workbench import DimensionError, InputError, URDFLoadError, load_robot
 from workbench.ik import UnsupportedRobotError, analytic, numeric
 from workbench.model.catalog import get_own_urdf_dir
-from workbench.model.loading import ROS_PACKAGE_PATH
 from workbench.model.urdf_joints import MimicJoint
 from workbench.trajectory import minimum_duration, pick_and_place
 
@@ -366,7 +366,7 @@ def write_packaged_arm(tmp_path: Path) -> tuple[Path, Path]:
 
 
 def test_package_uris_need_a_package_folder(tmp_path, monkeypatch) -> None:
-    monkeypatch.delenv(ROS_PACKAGE_PATH, raising=False)
+    monkeypatch.delenv("ROS_PACKAGE_PATH", raising=False)
     monkeypatch.delenv("AMENT_PREFIX_PATH", raising=False)
     urdf, packages = write_packaged_arm(tmp_path)
     with pytest.raises(
@@ -378,7 +378,9 @@ def test_package_uris_need_a_package_folder(tmp_path, monkeypatch) -> None:
         robot = load_robot(urdf, package_dirs=[given_dir])
         paths = [Path(g.meshPath) for g in robot.visual_model.geometryObjects]
         assert paths == [expected, expected]
-    monkeypatch.setenv(ROS_PACKAGE_PATH, f"/no/such/dir:{packages}")
+    monkeypatch.setenv(
+        "ROS_PACKAGE_PATH", os.pathsep.join(["/no/such/dir", str(packages)])
+    )
     robot = load_robot(urdf)
     assert Path(robot.collision_model.geometryObjects[0].meshPath) == expected
 

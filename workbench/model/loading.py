@@ -20,8 +20,9 @@ from workbench.model.urdf_joints import (
     parse_urdf_joints,
 )
 
-ROS_PACKAGE_PATH = "ROS_PACKAGE_PATH"
-"""Environment variable: folders (``os.pathsep``-separated) holding ROS packages."""
+_ROS_PACKAGE_PATH = (
+    "ROS_PACKAGE_PATH"  # folders holding ROS packages, os.pathsep-separated
+)
 
 
 def get_robot_names() -> list[str]:
@@ -92,12 +93,12 @@ def load_robot(
         model,
         path,
         tool_frame,
-        package_dirs=get_package_dirs(path, package_dirs),
+        package_dirs=_get_package_dirs(path, package_dirs),
         dh_table=dh_table,
     )
 
 
-def get_package_dirs(urdf: Path, given: Sequence[str | Path] = ()) -> list[str]:
+def _get_package_dirs(urdf: Path, given: Sequence[str | Path] = ()) -> list[str]:
     """Folders searched for ``package://`` URIs, in order, without repeats.
 
     Each folder of ``given`` (and its parent, so that a package's own folder
@@ -113,7 +114,7 @@ def get_package_dirs(urdf: Path, given: Sequence[str | Path] = ()) -> list[str]:
         if not folder.is_dir():
             raise URDFLoadError(f"package folder not found: {folder}")
         found += [folder.resolve(), folder.resolve().parent]
-    for entry in os.environ.get(ROS_PACKAGE_PATH, "").split(os.pathsep):
+    for entry in os.environ.get(_ROS_PACKAGE_PATH, "").split(os.pathsep):
         if entry and Path(entry).is_dir():
             found += [Path(entry).resolve(), Path(entry).resolve().parent]
     found += [urdf.resolve().parent, *urdf.resolve().parents]
@@ -170,4 +171,4 @@ def _lock_joints(model: pin.Model, names: tuple[str, ...]) -> pin.Model:
     return pin.buildReducedModel(model, ids, pin.neutral(model))
 
 
-__all__ = ["ROS_PACKAGE_PATH", "get_package_dirs", "get_robot_names", "load_robot"]
+__all__ = ["get_robot_names", "load_robot"]
