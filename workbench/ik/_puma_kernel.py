@@ -185,8 +185,14 @@ def diagnose(geometry: np.ndarray, pose: FloatArray) -> tuple[int, float, float,
     reach_low = abs(abs(geo.a2) - geo.forearm)
     reach_high = abs(geo.a2) + geo.forearm
     distance = math.sqrt(r2 + pz * pz)
-    if geo.a1 == 0.0 and not (low <= distance <= high):
-        return OUT_OF_REACH, distance, reach_low, reach_high
+    if geo.a1 == 0.0 and not (low <= distance <= high):  # in 3-D, offset included
+        offset = geo.offset
+        return (
+            OUT_OF_REACH,
+            distance,
+            math.hypot(reach_low, offset),
+            math.hypot(reach_high, offset),
+        )
     if r2 < geo.cylinder2:
         radius = abs(geo.offset)
         return IN_CYLINDER, math.sqrt(r2), radius, radius

@@ -46,12 +46,7 @@ from workbench.errors import InputError
 from workbench.ik import _puma_kernel as opw_kernel
 from workbench.ik import _ur_kernel as ur_kernel
 from workbench.ik._atan2_kernel import atan2_into
-from workbench.ik._puma import (
-    UnreachableError,
-    UnsupportedRobotError,
-    check_reach,
-    get_geometry,
-)
+from workbench.ik._puma import UnreachableError, UnsupportedRobotError, get_geometry
 from workbench.ik._refine_kernel import refine_batch, refine_pose, refinement_chain
 from workbench.ik._targets import as_targets, check_poses, pose_rows
 from workbench.ik.structure import get_structure
@@ -246,16 +241,9 @@ class ClosedFormSolver:
 
     def _explain(self, pose: FloatArray) -> None:
         """Raise the :class:`UnreachableError` of a pose the arm cannot reach."""
-        if self.family == "ur":
-            status, distance = ur_kernel.diagnose(self.geometry, pose)
-            geo = self.geometry[0]
-            if status == ur_kernel.IN_CYLINDER:
-                radius = abs(float(geo["offset"]))
-                raise UnreachableError(distance, (radius, radius), "cylinder")
-            a2, a3 = abs(float(geo["a2"])), abs(float(geo["a3"]))
-            raise UnreachableError(distance, (abs(a2 - a3), a2 + a3), "reach")
-        centre = opw_kernel.wrist_centre(self.geometry[0], pose)
-        check_reach(get_geometry(self.robot), *centre)
+        status, distance, low, high = self._kernel.diagnose(self.geometry, pose)
+        kind = "cylinder" if status == self._kernel.IN_CYLINDER else "reach"
+        raise UnreachableError(distance, (low, high), kind)
 
     # -- many poses -----------------------------------------------------------
     def solve_batch(self, targets: npt.ArrayLike) -> tuple[FloatArray, BoolArray]:
