@@ -141,7 +141,7 @@ class PumaGeometry:
             point on axis 2 nearest axis 1), in the arm's plane when
             a1 != 0, ``(low, high)`` [m].
         reach_test: ``(low, high, cylinder)``: the distance bounds of
-            :func:`check_reach` with its slack folded in, and the squared
+            kernel's ``diagnose`` with their slack folded in, and the squared
             radius below which the wrist centre is inside the cylinder.
     """
 
@@ -327,28 +327,3 @@ def get_geometry(robot: Robot) -> PumaGeometry:
         tool=structure.tool,
         model_error=structure.residual,
     )
-
-
-def check_reach(geo: PumaGeometry, px: float, py: float, pz: float) -> None:
-    """Raise :class:`UnreachableError` unless the wrist centre can be reached.
-
-    Args:
-        geo: Arm constants.
-        px: Wrist centre x in DH frame 0 [m].
-        py: Wrist centre y in DH frame 0 [m].
-        pz: Wrist centre z in DH frame 0, from the shoulder height d1 [m].
-    """
-    r2 = px * px + py * py
-    low, high, cylinder2 = geo.reach_test
-    distance = math.sqrt(r2 + pz * pz)
-    if geo.a1 == 0.0 and not low <= distance <= high:
-        raise UnreachableError(distance, geo.reach, "reach")
-    if r2 < cylinder2:
-        radius = abs(geo.offset)
-        raise UnreachableError(math.sqrt(r2), (radius, radius), "cylinder")
-    if geo.a1 != 0.0:  # the arm whose in-plane distance is nearer the reach
-        rho = math.sqrt(max(r2 - geo.offset * geo.offset, 0.0))
-        options = [math.hypot(x - geo.a1, pz) for x in (rho, -rho)]
-        distance = min(options, key=lambda r: max(low - r, r - high))
-        if not low <= distance <= high:
-            raise UnreachableError(distance, geo.reach, "reach")
