@@ -140,8 +140,8 @@ class PumaGeometry:
         reach: Reachable distance of the wrist centre from the shoulder (the
             point on axis 2 nearest axis 1), in the arm's plane when
             a1 != 0, ``(low, high)`` [m].
-        reach_test: ``(low, high, cylinder)``: the distance bounds of
-            kernel's ``diagnose`` with their slack folded in, and the squared
+        reach_test: ``(low, high, cylinder)``: the distance bounds of the
+            kernel's reach tests with their slack folded in, and the squared
             radius below which the wrist centre is inside the cylinder.
     """
 
