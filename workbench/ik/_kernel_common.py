@@ -285,6 +285,97 @@ def set_exact_angles(angles: FloatArray, y: FloatArray, exact: int) -> None:
             angles[slot] = y[slot]
 
 
+@inline
+def solve_one(
+    geo,
+    pose: FloatArray,
+    prev: FloatArray,
+    q: FloatArray,
+    flags: npt.NDArray[np.bool_],
+    check: bool,
+    angle_arguments,
+    assemble,
+    layout,
+) -> int:
+    """All eight branches of one pose: the body of a family's ``solve_pose``.
+
+    Args:
+        geo: The arm's record.
+        pose: (4, 4) target pose of the tool frame in the base frame [m].
+        prev: (6,) previous configuration [rad], or (0,) for none.
+        q: (8, 6) output [rad].
+        flags: (FLAG_COUNT,) output, slots ``FLAG_*``.
+        check: Test first that the pose is finite and rigid.
+        angle_arguments: The family's ``angle_arguments``.
+        assemble: The family's ``assemble``.
+        layout: The family's mask, ``(n_angles, wrist_bits, shoulder_bit,
+            dead_bits)``: the number of angle slots, the mask bit of a
+            singular wrist per (arm, elbow) pair (4,), of a singular
+            shoulder, and the bits of the parts that cannot reach.
+
+    Returns:
+        OK, NOT_RIGID, OUT_OF_REACH or IN_CYLINDER (outputs then undefined).
+    """
+    n_angles, wrist_bits, shoulder_bit, dead_bits = layout
+    if check and not is_rigid(pose):
+        return NOT_RIGID
+    y, x = np.empty(n_angles), np.empty(n_angles)
+    previous = copy_previous(prev)
+    status, mask = angle_arguments(geo, pose, previous, y, x, np.empty((4, 4)))
+    if status != OK:
+        return status
+    angles = slot_angles(y, x, mask & ((1 << n_angles) - 1))
+    assemble(geo, angles, previous, q, flags[FLAG_WITHIN_LIMITS:8], mask)
+    for pair in range(4):
+        flags[FLAG_WRIST_SINGULAR + pair] = mask >> wrist_bits[pair] & 1
+    flags[FLAG_SHOULDER_SINGULAR] = mask >> shoulder_bit & 1
+    flags[FLAG_SOME_UNREACHED] = mask & dead_bits != 0
+    return OK
+
+
+@inline
+def fallback_poses(geo, poses, y, x, status, exact, odd, angle_arguments) -> int:
+    """The body of a family's ``batch_fallback``: the poses flagged ``odd``.
+
+    Each pose with bit 0 of ``odd`` gets ``angle_arguments`` (its ``status``,
+    ``exact``, rows of ``y`` and ``x``); a pose with bit 1 (not finite and
+    rigid) stops the loop. Returns −1, or the index of that pose.
+    """
+    none, scratch = np.empty(0), np.empty((4, 4))
+    for i in range(poses.shape[0]):
+        if odd[i]:
+            if odd[i] & 2:
+                return i
+            status[i], exact[i] = angle_arguments(
+                geo, poses[i], none, y[i], x[i], scratch
+            )
+    return -1
+
+
+@inline
+def assemble_poses(geo, angles, y, status, exact, q, valid, assemble, dead_bits):
+    """The body of a family's ``batch_assemble``.
+
+    Joint values of N poses from ``angles = arctan2(y, x)`` (N, n_angles),
+    with the slots marked in ``exact`` taken from ``y``; ``q`` (N, 8, 6) NaN
+    and ``valid`` (N, 8) False for a pose whose ``status`` is not OK.
+    ``dead_bits`` (8,): the mask bit per branch that says it cannot reach.
+    """
+    none, no_within = np.empty(0), np.empty(0, dtype=np.bool_)
+    slot_bits = (1 << angles.shape[1]) - 1
+    for i in range(angles.shape[0]):
+        if status[i] != OK:
+            q[i] = np.nan
+            valid[i] = False
+            continue
+        mask = exact[i]
+        if mask & slot_bits:  # (rare: an angle known without atan2)
+            set_exact_angles(angles[i], y[i], mask)
+        assemble(geo, angles[i], none, q[i], no_within, mask)
+        for b in range(8):
+            valid[i, b] = not (mask >> dead_bits[b] & 1)
+
+
 __all__ = [
     "FLAG_COUNT",
     "FLAG_SHOULDER_SINGULAR",
@@ -297,9 +388,11 @@ __all__ = [
     "OUT_OF_REACH",
     "PI",
     "TAU",
+    "assemble_poses",
     "clamped_root",
     "clip_unit",
     "copy_previous",
+    "fallback_poses",
     "flat_index",
     "frame_rows",
     "frames",
@@ -312,6 +405,7 @@ __all__ = [
     "rigid_rows",
     "set_exact_angles",
     "slot_angles",
+    "solve_one",
     "within_limits",
     "write_framed",
 ]

@@ -46,34 +46,16 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench._compiled import entry_point, helper
-from workbench.ik._kernel_common import (
-    FLAG_COUNT,
-    FLAG_SHOULDER_SINGULAR,
-    FLAG_SOME_UNREACHED,
-    FLAG_WITHIN_LIMITS,
-    FLAG_WRIST_SINGULAR,
-    IN_CYLINDER,
-    NOT_RIGID,
-    OK,
-    OUT_OF_REACH,
-    PI,
-    clamped_root,
-    clip_unit,
-    copy_previous,
-    flat_index,
-    frame_rows,
-    frames,
-    inline,
-    is_rigid,
-    joint_value,
-    pose_row,
-    remainder,
-    rigid_rows,
-    set_exact_angles,
-    slot_angles,
-    within_limits,
-    write_framed,
-)
+from workbench.ik import _kernel_common as common
+from workbench.ik._kernel_common import FLAG_COUNT as FLAG_COUNT
+from workbench.ik._kernel_common import FLAG_SHOULDER_SINGULAR as FLAG_SHOULDER_SINGULAR
+from workbench.ik._kernel_common import FLAG_SOME_UNREACHED as FLAG_SOME_UNREACHED
+from workbench.ik._kernel_common import FLAG_WITHIN_LIMITS as FLAG_WITHIN_LIMITS
+from workbench.ik._kernel_common import FLAG_WRIST_SINGULAR as FLAG_WRIST_SINGULAR
+from workbench.ik._kernel_common import IN_CYLINDER as IN_CYLINDER
+from workbench.ik._kernel_common import NOT_RIGID as NOT_RIGID
+from workbench.ik._kernel_common import OK as OK
+from workbench.ik._kernel_common import OUT_OF_REACH as OUT_OF_REACH
 from workbench.ik._puma import WRIST_SINGULAR_TOL, PumaGeometry, get_geometry
 from workbench.model.robot import Robot
 
@@ -142,7 +124,7 @@ def pack_geometry(geo: PumaGeometry) -> np.ndarray:
     return packed
 
 
-@inline
+@common.inline
 def frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
     """Rows 0..2 of ``base_inv · pose · tool_inv``: the target of the DH chain.
 
@@ -151,8 +133,8 @@ def frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
         pose: (4, 4) pose of the tool frame in the base frame.
         out: (4, 4) scratch; rows 0..2 are written.
     """
-    tool, base = frames(geo)
-    write_framed(pose, out, tool, base, geo.framed != 0.0)
+    tool, base = common.frames(geo)
+    common.write_framed(pose, out, tool, base, geo.framed != 0.0)
 
 
 @entry_point()
@@ -197,7 +179,7 @@ def diagnose(geometry: np.ndarray, pose: FloatArray) -> tuple[int, float, float,
         radius = abs(geo.offset)
         return IN_CYLINDER, math.sqrt(r2), radius, radius
     if geo.a1 != 0.0:  # the arm whose in-plane distance is nearer the reach
-        rho = clamped_root(r2 - geo.offset * geo.offset)
+        rho = common.clamped_root(r2 - geo.offset * geo.offset)
         right, left = math.hypot(rho - geo.a1, pz), math.hypot(-rho - geo.a1, pz)
         if max(low - left, left - high) < max(low - right, right - high):
             distance = left
@@ -208,7 +190,7 @@ def diagnose(geometry: np.ndarray, pose: FloatArray) -> tuple[int, float, float,
     return OK, 0.0, 0.0, 0.0
 
 
-@inline
+@common.inline
 def _centre(geo, pose: FloatArray) -> tuple[float, float, float]:
     """Wrist centre of a pose of the last DH frame, as :func:`wrist_centre`."""
     ax, ay, az = pose[0, 2], pose[1, 2], pose[2, 2]
@@ -239,9 +221,13 @@ SHOULDER = 24
 #: Distance [m] of the wrist centre's projection from the shoulder-singular
 #: surface below which the shoulder counts as singular.
 SHOULDER_SINGULAR_TOL = 1e-10
+#: The bits of the mask that flag a singular wrist, per (arm, elbow) pair, and
+#: an arm that cannot reach, per branch.
+_WRIST_BITS = (T4, T4 + 1, T4 + 2, T4 + 3)
+_DEAD_BITS = (DEAD, DEAD, DEAD, DEAD, DEAD + 1, DEAD + 1, DEAD + 1, DEAD + 1)
 
 
-@inline
+@common.inline
 def angle_arguments(
     geo,
     target: FloatArray,
@@ -299,7 +285,7 @@ def angle_arguments(
     sd = s1g * geo.offset
     right = 1.0 if sd >= 0.0 else -1.0  # sign of x1 on the right arm
     # planar arm in the plane of z1: wrist centre at (x1, y1) = (+-rho, s1 pz)
-    rho, y1 = clamped_root(r2 - geo.offset * geo.offset), s1g * pz
+    rho, y1 = common.clamped_root(r2 - geo.offset * geo.offset), s1g * pz
     distance = math.sqrt(r2 + pz * pz)  # from the shoulder when a1 = 0
     exact = (1 << SHOULDER) if rho <= SHOULDER_SINGULAR_TOL else 0
     k = big_a = root = 0.0
@@ -320,9 +306,9 @@ def angle_arguments(
             continue
         if arm == 0 or geo.a1 != 0.0:  # a1 = 0: both arms alike, up to sides
             k = (xp * xp + pz * pz - a2 * a2 - ell * ell) / (2.0 * a2 * ell)
-            k = clip_unit(k)  # cos(gamma), gamma = theta3 + beta
+            k = common.clip_unit(k)  # cos(gamma), gamma = theta3 + beta
             big_a = a2 + ell * k
-            root = clamped_root(1.0 - k * k)
+            root = common.clamped_root(1.0 - k * k)
         # elbow-up: sin(gamma) of the sign of up_sign times that of xp
         if xp != 0.0:
             side = 1.0 if xp > 0.0 else -1.0
@@ -379,7 +365,7 @@ def angle_arguments(
                     # difference
                     kappa = -1.0 if m22 > 0.0 else 1.0
                     step6 = t6 - geo.theta_offset[5] - geo.joint_sign[5] * prev[5]
-                    t4 -= kappa * remainder(step6) / 2.0
+                    t4 -= kappa * common.remainder(step6) / 2.0
                     c4, s4 = math.cos(t4), math.sin(t4)
                 y[T4 + pair] = t4
                 exact |= 1 << (T4 + pair)
@@ -392,7 +378,7 @@ def angle_arguments(
     return OK, exact
 
 
-@inline
+@common.inline
 def assemble(
     geo,
     angles: FloatArray,
@@ -423,23 +409,29 @@ def assemble(
                 if within.shape[0]:
                     within[b] = False
             continue
-        q1 = joint_value(geo, 0, angles[T1 + arm], prev, has_prev)
+        q1 = common.joint_value(geo, 0, angles[T1 + arm], prev, has_prev)
         for elbow in range(2):
             pair = 2 * arm + elbow
-            q2 = joint_value(geo, 1, angles[T2 + pair], prev, has_prev)
-            q3 = joint_value(geo, 2, angles[T3 + pair], prev, has_prev)
+            q2 = common.joint_value(geo, 1, angles[T2 + pair], prev, has_prev)
+            q3 = common.joint_value(geo, 2, angles[T3 + pair], prev, has_prev)
             t4, t5, t6 = angles[T4 + pair], angles[T5 + pair], angles[T6 + pair]
             # the flip twin: (theta4 + pi, -theta5, theta6 + pi)
-            t4f = t4 - PI if t4 > 0.0 else t4 + PI
-            t6f = t6 - PI if t6 > 0.0 else t6 + PI
+            t4f = t4 - common.PI if t4 > 0.0 else t4 + common.PI
+            t6f = t6 - common.PI if t6 > 0.0 else t6 + common.PI
             for flip in range(2):
                 b = 2 * pair + flip
                 q[b, 0], q[b, 1], q[b, 2] = q1, q2, q3
-                q[b, 3] = joint_value(geo, 3, t4f if flip else t4, prev, has_prev)
-                q[b, 4] = joint_value(geo, 4, -t5 if flip else t5, prev, has_prev)
-                q[b, 5] = joint_value(geo, 5, t6f if flip else t6, prev, has_prev)
+                q[b, 3] = common.joint_value(
+                    geo, 3, t4f if flip else t4, prev, has_prev
+                )
+                q[b, 4] = common.joint_value(
+                    geo, 4, -t5 if flip else t5, prev, has_prev
+                )
+                q[b, 5] = common.joint_value(
+                    geo, 5, t6f if flip else t6, prev, has_prev
+                )
                 if within.shape[0]:
-                    within[b] = within_limits(geo, q, b)
+                    within[b] = common.within_limits(geo, q, b)
 
 
 @entry_point(outputs=("q", "flags"))
@@ -471,24 +463,14 @@ def solve_pose(
         :data:`OK`, or :data:`NOT_RIGID`, :data:`OUT_OF_REACH`,
         :data:`IN_CYLINDER` (outputs then undefined).
     """
+    layout = (N_ANGLES, _WRIST_BITS, SHOULDER, 3 << DEAD)
     geo = geometry[0]
-    if check and not is_rigid(pose):
-        return NOT_RIGID
-    y, x = np.empty(N_ANGLES), np.empty(N_ANGLES)
-    previous = copy_previous(prev)
-    status, exact = angle_arguments(geo, pose, previous, y, x, np.empty((4, 4)))
-    if status != OK:
-        return status
-    angles = slot_angles(y, x, exact)
-    assemble(geo, angles, previous, q, flags[FLAG_WITHIN_LIMITS:8], exact)
-    for pair in range(4):
-        flags[FLAG_WRIST_SINGULAR + pair] = exact >> (T4 + pair) & 1
-    flags[FLAG_SHOULDER_SINGULAR] = exact >> SHOULDER & 1
-    flags[FLAG_SOME_UNREACHED] = exact >> DEAD & 3 != 0
-    return OK
+    return common.solve_one(
+        geo, pose, prev, q, flags, check, angle_arguments, assemble, layout
+    )
 
 
-@inline
+@common.inline
 def _pair_arguments(y, x, i, pair, dead, sgb, k, xp, big_a, y1, a0, a1, m1, geo):
     """The slots of one (arm, elbow) pair of pose ``i``, as angle_arguments.
 
@@ -502,10 +484,10 @@ def _pair_arguments(y, x, i, pair, dead, sgb, k, xp, big_a, y1, a0, a1, m1, geo)
     s3 = sgb * geo.cos_beta - k * geo.sin_beta
     big_b = ell * sgb
     c2, s2 = xp * big_a + y1 * big_b, y1 * big_a - xp * big_b
-    y[flat_index(i, N_ANGLES, T3 + pair)] = 0.0 if dead else s3
-    x[flat_index(i, N_ANGLES, T3 + pair)] = 1.0 if dead else c3
-    y[flat_index(i, N_ANGLES, T2 + pair)] = 0.0 if dead else s2
-    x[flat_index(i, N_ANGLES, T2 + pair)] = 1.0 if dead else c2
+    y[common.flat_index(i, N_ANGLES, T3 + pair)] = 0.0 if dead else s3
+    x[common.flat_index(i, N_ANGLES, T3 + pair)] = 1.0 if dead else c3
+    y[common.flat_index(i, N_ANGLES, T2 + pair)] = 0.0 if dead else s2
+    x[common.flat_index(i, N_ANGLES, T2 + pair)] = 1.0 if dead else c2
     norm = math.sqrt(c2 * c2 + s2 * s2)
     c2, s2 = (c2 / norm, s2 / norm) if norm > 0.0 else (1.0, 0.0)
     c23, s23 = c2 * c3 - s2 * s3, s2 * c3 + c2 * s3
@@ -513,16 +495,20 @@ def _pair_arguments(y, x, i, pair, dead, sgb, k, xp, big_a, y1, a0, a1, m1, geo)
     m22 = s3g * (s23 * a02 - c23 * a12)
     m00, m01 = c23 * a00 + s23 * a10, c23 * a01 + s23 * a11
     h = math.sqrt(m02 * m02 + m12 * m12)
-    y[flat_index(i, N_ANGLES, T4 + pair)] = 0.0 if dead else m12
-    x[flat_index(i, N_ANGLES, T4 + pair)] = 1.0 if dead else m02
-    y[flat_index(i, N_ANGLES, T5 + pair)] = 0.0 if dead else geo.sigma5 * h
-    x[flat_index(i, N_ANGLES, T5 + pair)] = 1.0 if dead else -g * m22
-    y[flat_index(i, N_ANGLES, T6 + pair)] = 0.0 if dead else g * (m12 * m00 - m02 * m10)
-    x[flat_index(i, N_ANGLES, T6 + pair)] = 1.0 if dead else g * (m12 * m01 - m02 * m11)
+    y[common.flat_index(i, N_ANGLES, T4 + pair)] = 0.0 if dead else m12
+    x[common.flat_index(i, N_ANGLES, T4 + pair)] = 1.0 if dead else m02
+    y[common.flat_index(i, N_ANGLES, T5 + pair)] = 0.0 if dead else geo.sigma5 * h
+    x[common.flat_index(i, N_ANGLES, T5 + pair)] = 1.0 if dead else -g * m22
+    y[common.flat_index(i, N_ANGLES, T6 + pair)] = (
+        0.0 if dead else g * (m12 * m00 - m02 * m10)
+    )
+    x[common.flat_index(i, N_ANGLES, T6 + pair)] = (
+        1.0 if dead else g * (m12 * m01 - m02 * m11)
+    )
     return (not dead) & (h <= WRIST_SINGULAR_TOL)
 
 
-@inline
+@common.inline
 def _arm_arguments(y, x, i, arm, x1, xp, distance, pz, px, py, r2, pose, geo):
     """The slots of one arm of pose ``i``: (dead, singular) as angle_arguments.
 
@@ -532,16 +518,16 @@ def _arm_arguments(y, x, i, arm, x1, xp, distance, pz, px, py, r2, pose, geo):
     a2, ell, sd = geo.a2, geo.forearm, geo.sigma1 * geo.offset
     dead = (distance < geo.reach_low) | (distance > geo.reach_high)
     k = (xp * xp + pz * pz - a2 * a2 - ell * ell) / (2.0 * a2 * ell)
-    k = clip_unit(k)
+    k = common.clip_unit(k)
     big_a = a2 + ell * k
-    root = clamped_root(1.0 - k * k)
+    root = common.clamped_root(1.0 - k * k)
     right = 1.0 if sd >= 0.0 else -1.0
     side_x = 1.0 if xp > 0.0 else -1.0
     side = side_x if xp != 0.0 else (right if arm == 0 else -right)
     sg = geo.up_sign * side * root
     c1, s1 = (px * x1 - py * sd) / r2, (py * x1 + px * sd) / r2
-    y[flat_index(i, N_ANGLES, T1 + arm)] = 0.0 if dead else s1
-    x[flat_index(i, N_ANGLES, T1 + arm)] = 1.0 if dead else c1
+    y[common.flat_index(i, N_ANGLES, T1 + arm)] = 0.0 if dead else s1
+    x[common.flat_index(i, N_ANGLES, T1 + arm)] = 1.0 if dead else c1
     a0 = (c1 * nx + s1 * ny, c1 * ox + s1 * oy, c1 * ax + s1 * ay)
     s13 = geo.sigma3 * geo.sigma1
     m1 = (
@@ -596,17 +582,17 @@ def batch_arguments(
         The number of poses flagged in ``odd`` (0: nothing left to do).
     """
     geo = geometry[0]
-    tool, base = frames(geo)
+    tool, base = common.frames(geo)
     framed, rotated = geo.framed != 0.0, geo.sin_alpha6 != 0.0
     ca, sa, d6, a1g = geo.cos_alpha6, geo.sin_alpha6, geo.d6, geo.a1
     s1g, off = geo.sigma1, geo.offset
     right = 1.0 if s1g * off >= 0.0 else -1.0
     flagged = 0
     for i in range(status.shape[0]):
-        row0, row1 = pose_row(poses, i, 0), pose_row(poses, i, 1)
-        row2, row3 = pose_row(poses, i, 2), pose_row(poses, i, 3)
-        rigid = rigid_rows(row0, row1, row2, row3)
-        f0, f1, f2 = frame_rows(row0, row1, row2, tool, base, True)  # frame_pose
+        row0, row1 = common.pose_row(poses, i, 0), common.pose_row(poses, i, 1)
+        row2, row3 = common.pose_row(poses, i, 2), common.pose_row(poses, i, 3)
+        rigid = common.rigid_rows(row0, row1, row2, row3)
+        f0, f1, f2 = common.frame_rows(row0, row1, row2, tool, base, True)  # frame_pose
         nx, ox, ax, qx = f0 if framed else row0
         ny, oy, ay, qy = f1 if framed else row1
         nz, oz, az, qz = f2 if framed else row2
@@ -617,7 +603,7 @@ def batch_arguments(
         px, py, pz = qx - d6 * ax, qy - d6 * ay, qz - d6 * az - geo.d1
         r2 = px * px + py * py
         total = math.sqrt(r2 + pz * pz)
-        rho, y1 = clamped_root(r2 - off * off), s1g * pz
+        rho, y1 = common.clamped_root(r2 - off * off), s1g * pz
         pose = (nx, ny, ox, oy, ax, ay, s1g * nz, s1g * oz, s1g * az, y1)
         x1 = right * rho
         xp = x1 - a1g
@@ -670,16 +656,9 @@ def batch_fallback(
         −1, or the index of the first pose that is not finite and rigid (the
         outputs of it and later poses then undefined).
     """
-    geo = geometry[0]
-    none, scratch = np.empty(0), np.empty((4, 4))
-    for i in range(poses.shape[0]):
-        if odd[i]:
-            if odd[i] & 2:
-                return i
-            status[i], exact[i] = angle_arguments(
-                geo, poses[i], none, y[i], x[i], scratch
-            )
-    return -1
+    return common.fallback_poses(
+        geometry[0], poses, y, x, status, exact, odd, angle_arguments
+    )
 
 
 @entry_point(outputs=("angles", "q", "valid"), contiguous=("y", "status", "exact"))
@@ -704,20 +683,7 @@ def batch_assemble(
         valid: (N, 8) output, True where the status is OK.
     """
     geo = geometry[0]
-    none, no_within = np.empty(0), np.empty(0, dtype=np.bool_)
-    for i in range(angles.shape[0]):
-        if status[i] != OK:
-            q[i] = np.nan
-            valid[i] = False
-            continue
-        mask = exact[i]
-        if mask:
-            set_exact_angles(angles[i], y[i], mask)
-        assemble(geo, angles[i], none, q[i], no_within, mask)
-        for arm in range(2):
-            alive = not (mask >> (DEAD + arm) & 1)
-            for b in range(4 * arm, 4 * arm + 4):
-                valid[i, b] = alive
+    common.assemble_poses(geo, angles, y, status, exact, q, valid, assemble, _DEAD_BITS)
 
 
 @helper()
@@ -755,29 +721,3 @@ def continuing_branch(
         if d2 < best_d2:
             best, best_d2 = b, d2
     return best
-
-
-#: The names the Python side uses (the status codes and flag slots are
-#: ``_kernel_common``'s, importable from here as well).
-__all__ = [
-    "FLAG_COUNT",
-    "FLAG_SHOULDER_SINGULAR",
-    "FLAG_SOME_UNREACHED",
-    "FLAG_WITHIN_LIMITS",
-    "FLAG_WRIST_SINGULAR",
-    "GEOMETRY_DTYPE",
-    "IN_CYLINDER",
-    "NOT_RIGID",
-    "N_ANGLES",
-    "OK",
-    "OUT_OF_REACH",
-    "batch_arguments",
-    "batch_assemble",
-    "batch_fallback",
-    "continuing_branch",
-    "diagnose",
-    "pack_geometry",
-    "packed_geometry",
-    "solve_pose",
-    "wrist_centre",
-]

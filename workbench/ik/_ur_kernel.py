@@ -37,34 +37,16 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench._compiled import entry_point
-from workbench.ik._kernel_common import (
-    FLAG_COUNT,
-    FLAG_SHOULDER_SINGULAR,
-    FLAG_SOME_UNREACHED,
-    FLAG_WITHIN_LIMITS,
-    FLAG_WRIST_SINGULAR,
-    IN_CYLINDER,
-    NOT_RIGID,
-    OK,
-    OUT_OF_REACH,
-    PI,
-    clamped_root,
-    clip_unit,
-    copy_previous,
-    flat_index,
-    frame_rows,
-    frames,
-    inline,
-    is_rigid,
-    joint_value,
-    pose_row,
-    remainder,
-    rigid_rows,
-    set_exact_angles,
-    slot_angles,
-    within_limits,
-    write_framed,
-)
+from workbench.ik import _kernel_common as common
+from workbench.ik._kernel_common import FLAG_COUNT as FLAG_COUNT
+from workbench.ik._kernel_common import FLAG_SHOULDER_SINGULAR as FLAG_SHOULDER_SINGULAR
+from workbench.ik._kernel_common import FLAG_SOME_UNREACHED as FLAG_SOME_UNREACHED
+from workbench.ik._kernel_common import FLAG_WITHIN_LIMITS as FLAG_WITHIN_LIMITS
+from workbench.ik._kernel_common import FLAG_WRIST_SINGULAR as FLAG_WRIST_SINGULAR
+from workbench.ik._kernel_common import IN_CYLINDER as IN_CYLINDER
+from workbench.ik._kernel_common import NOT_RIGID as NOT_RIGID
+from workbench.ik._kernel_common import OK as OK
+from workbench.ik._kernel_common import OUT_OF_REACH as OUT_OF_REACH
 from workbench.ik._puma import LIMIT_TOL, MODEL_ERROR_SLACK, WRIST_SINGULAR_TOL
 from workbench.ik.structure import KinematicStructure
 
@@ -118,8 +100,11 @@ SHOULDER_SINGULAR_TOL = 1e-10
 NEAR_SINGULAR_TOL = 1e-13
 #: A turned frame 3 lands this fraction of a2 + a3 inside the arm's reach.
 REACH_MARGIN = 1e-12
-#: The bits of the mask that mark slots.
-_SLOT_BITS = (1 << N_ANGLES) - 1
+#: The bits of the mask that flag a singular wrist, per (shoulder, elbow) pair
+#: of branches 2·pair, 2·pair + 1, and a (shoulder, wrist) pair that cannot
+#: reach, per branch.
+_WRIST_BITS = (SINGULAR, SINGULAR, SINGULAR + 1, SINGULAR + 1)
+_DEAD_BITS = tuple(DEAD + 2 * (b >> 2) + (b & 1) for b in range(8))
 
 
 def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
@@ -152,7 +137,11 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     g["theta_offset"], g["joint_sign"] = offsets, structure.joint_sign
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
     g["plain"] = [  # as PumaGeometry.plain
-        o == 0.0 and s == 1.0 and ((-PI <= lo and hi <= PI) or lo <= -PI < PI <= hi)
+        o == 0.0
+        and s == 1.0
+        and (
+            (-common.PI <= lo and hi <= common.PI) or lo <= -common.PI < common.PI <= hi
+        )
         for o, s, lo, hi in zip(
             offsets, structure.joint_sign, lower, upper, strict=True
         )
@@ -165,14 +154,14 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     return g
 
 
-@inline
+@common.inline
 def _frame_pose(geo, pose: FloatArray, out: FloatArray) -> None:
     """Rows 0..2 of ``base_inv · pose · tool_inv`` into ``out``."""
-    tool, base = frames(geo)
-    write_framed(pose, out, tool, base, geo.based != 0.0)
+    tool, base = common.frames(geo)
+    common.write_framed(pose, out, tool, base, geo.based != 0.0)
 
 
-@inline
+@common.inline
 def _planar(geo, c1, s1, c5, c6, s6, s5, rot, big_px, big_py):
     """x4 = (c234, s234) and the origin of frame 3 (X, Y) in the arm plane.
 
@@ -194,7 +183,7 @@ def _planar(geo, c1, s1, c5, c6, s6, s5, rot, big_px, big_py):
     return c234, s234, big_x, big_y
 
 
-@inline
+@common.inline
 def _turn_may_reach(geo, s5: float, dist: float) -> bool:
     """Whether a turn of θ6 within NEAR_SINGULAR_TOL may bring frame 3 in reach.
 
@@ -211,7 +200,7 @@ def _turn_may_reach(geo, s5: float, dist: float) -> bool:
     return (miss > 0.0) & (abs(s5) * miss <= NEAR_SINGULAR_TOL * arm)
 
 
-@inline
+@common.inline
 def _reach_turn(geo, c1, s1, m, big_px, big_py, big_x, big_y, dist):
     """Turn of θ6 [rad] at a wrist singularity that brings frame 3 within reach.
 
@@ -238,8 +227,8 @@ def _reach_turn(geo, c1, s1, m, big_px, big_py, big_x, big_y, dist):
     cos_angle = (pn * pn + rm * rm - t * t) / (2.0 * pn * rm)
     angle = math.acos(min(max(cos_angle, -1.0), 1.0))
     a_p, a_v = math.atan2(big_py, big_px), math.atan2(vy, vx)
-    turn_a = remainder(a_p + angle - a_v)
-    turn_b = remainder(a_p - angle - a_v)
+    turn_a = common.remainder(a_p + angle - a_v)
+    turn_b = common.remainder(a_p - angle - a_v)
     turn = turn_a if abs(turn_a) <= abs(turn_b) else turn_b
     npx, npy = c1 * m[0, 0] + s1 * m[1, 0], geo.sigma1 * m[2, 0]
     opx, opy = c1 * m[0, 1] + s1 * m[1, 1], geo.sigma1 * m[2, 1]
@@ -247,7 +236,7 @@ def _reach_turn(geo, c1, s1, m, big_px, big_py, big_x, big_y, dist):
     return turn / rate
 
 
-@inline
+@common.inline
 def angle_arguments(
     geo,
     target: FloatArray,
@@ -289,7 +278,7 @@ def angle_arguments(
     s1g, s4g, s5g = geo.sigma1, geo.sigma4, geo.sigma5
     sd = s1g * geo.offset
     right = 1.0 if sd >= 0.0 else -1.0
-    rho = clamped_root(r2 - geo.offset * geo.offset)
+    rho = common.clamped_root(r2 - geo.offset * geo.offset)
     a2, a3 = geo.a2, geo.a3
     mask = np.int64(0)
     if rho <= SHOULDER_SINGULAR_TOL:
@@ -338,7 +327,11 @@ def angle_arguments(
             dist2 = big_x * big_x + big_y * big_y
             dist = math.sqrt(dist2)
             if singular:
-                t6p = t6 if wrist == 0 else (t6 - PI if t6 > 0.0 else t6 + PI)
+                t6p = (
+                    t6
+                    if wrist == 0
+                    else (t6 - common.PI if t6 > 0.0 else t6 + common.PI)
+                )
                 if not (geo.reach_low <= dist <= geo.reach_high):
                     # turn theta6 (and with it frame 4 about the wrist point)
                     # until frame 3 is within reach, if it can be
@@ -379,9 +372,9 @@ def angle_arguments(
                     y[U2 + b], x[U2 + b] = 0.0, 1.0
                 continue
             c3 = (dist2 - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)
-            c3 = clip_unit(c3)
+            c3 = common.clip_unit(c3)
             up = -1.0 if s1g * a2 * a3 * big_x > 0.0 else 1.0
-            s3_up = up * clamped_root(1.0 - c3 * c3)
+            s3_up = up * common.clamped_root(1.0 - c3 * c3)
             y[U3 + pair], x[U3 + pair] = s3_up, c3
             for elbow in range(2):
                 b = 4 * arm + 2 * elbow + wrist
@@ -395,7 +388,7 @@ def angle_arguments(
     return OK, int(mask)
 
 
-@inline
+@common.inline
 def assemble(
     geo,
     angles: FloatArray,
@@ -416,13 +409,13 @@ def assemble(
     """
     has_prev = prev.shape[0] != 0
     for arm in range(2):
-        q1 = joint_value(geo, 0, angles[U1 + arm], prev, has_prev)
+        q1 = common.joint_value(geo, 0, angles[U1 + arm], prev, has_prev)
         t5 = angles[U5 + arm]
         for wrist in range(2):
             pair = 2 * arm + wrist
             dead = mask >> (DEAD + pair) & 1
-            q5 = joint_value(geo, 4, -t5 if wrist else t5, prev, has_prev)
-            q6 = joint_value(geo, 5, angles[U6 + pair], prev, has_prev)
+            q5 = common.joint_value(geo, 4, -t5 if wrist else t5, prev, has_prev)
+            q6 = common.joint_value(geo, 5, angles[U6 + pair], prev, has_prev)
             for elbow in range(2):
                 b = 4 * arm + 2 * elbow + wrist
                 if dead:
@@ -433,14 +426,14 @@ def assemble(
                     continue
                 t2, t3 = angles[U2 + b], angles[U3 + pair]
                 t3 = -t3 if elbow else t3
-                t4 = remainder(angles[U234 + pair] - t2 - t3)
+                t4 = common.remainder(angles[U234 + pair] - t2 - t3)
                 q[b, 0] = q1
-                q[b, 1] = joint_value(geo, 1, t2, prev, has_prev)
-                q[b, 2] = joint_value(geo, 2, t3, prev, has_prev)
-                q[b, 3] = joint_value(geo, 3, t4, prev, has_prev)
+                q[b, 1] = common.joint_value(geo, 1, t2, prev, has_prev)
+                q[b, 2] = common.joint_value(geo, 2, t3, prev, has_prev)
+                q[b, 3] = common.joint_value(geo, 3, t4, prev, has_prev)
                 q[b, 4], q[b, 5] = q5, q6
                 if within.shape[0]:
-                    within[b] = within_limits(geo, q, b)
+                    within[b] = common.within_limits(geo, q, b)
 
 
 @entry_point(outputs=("q", "flags"))
@@ -470,21 +463,11 @@ def solve_pose(
         :data:`OK`, :data:`NOT_RIGID`, :data:`OUT_OF_REACH` or
         :data:`IN_CYLINDER` (outputs then undefined).
     """
+    layout = (N_ANGLES, _WRIST_BITS, SHOULDER, 15 << DEAD)
     geo = geometry[0]
-    if check and not is_rigid(pose):
-        return NOT_RIGID
-    y, x = np.empty(N_ANGLES), np.empty(N_ANGLES)
-    previous = copy_previous(prev)
-    status, mask = angle_arguments(geo, pose, previous, y, x, np.empty((4, 4)))
-    if status != OK:
-        return status
-    angles = slot_angles(y, x, mask & _SLOT_BITS)
-    assemble(geo, angles, previous, q, flags[FLAG_WITHIN_LIMITS:8], mask)
-    for pair in range(4):
-        flags[FLAG_WRIST_SINGULAR + pair] = mask >> (SINGULAR + (pair >> 1)) & 1
-    flags[FLAG_SHOULDER_SINGULAR] = mask >> SHOULDER & 1
-    flags[FLAG_SOME_UNREACHED] = mask >> DEAD & 15 != 0
-    return OK
+    return common.solve_one(
+        geo, pose, prev, q, flags, check, angle_arguments, assemble, layout
+    )
 
 
 @entry_point()
@@ -520,7 +503,7 @@ def diagnose(geometry: np.ndarray, pose: FloatArray) -> tuple[int, float, float,
     return OK, 0.0, 0.0, 0.0
 
 
-@inline
+@common.inline
 def _pair_arguments(y, x, i, arm, wrist, planar, s5, geo) -> tuple[bool, bool]:
     """θ3 and θ2 slots of one (shoulder, wrist) pair of pose ``i``.
 
@@ -536,24 +519,24 @@ def _pair_arguments(y, x, i, arm, wrist, planar, s5, geo) -> tuple[bool, bool]:
     dist = math.sqrt(dist2)
     dead = (dist < geo.reach_low) | (dist > geo.reach_high)
     turn = _turn_may_reach(geo, s5, dist)
-    y[flat_index(i, N_ANGLES, U234 + pair)] = s234
-    x[flat_index(i, N_ANGLES, U234 + pair)] = c234
-    c3 = clip_unit((dist2 - a2 * a2 - a3 * a3) / (2.0 * a2 * a3))
+    y[common.flat_index(i, N_ANGLES, U234 + pair)] = s234
+    x[common.flat_index(i, N_ANGLES, U234 + pair)] = c234
+    c3 = common.clip_unit((dist2 - a2 * a2 - a3 * a3) / (2.0 * a2 * a3))
     up = -1.0 if geo.sigma1 * a2 * a3 * big_x > 0.0 else 1.0
-    s3_up = up * clamped_root(1.0 - c3 * c3)
-    y[flat_index(i, N_ANGLES, U3 + pair)] = 0.0 if dead else s3_up
-    x[flat_index(i, N_ANGLES, U3 + pair)] = dist if dead else c3
+    s3_up = up * common.clamped_root(1.0 - c3 * c3)
+    y[common.flat_index(i, N_ANGLES, U3 + pair)] = 0.0 if dead else s3_up
+    x[common.flat_index(i, N_ANGLES, U3 + pair)] = dist if dead else c3
     for elbow in range(2):
         b = 4 * arm + 2 * elbow + wrist
         s3 = s3_up if elbow == 0 else -s3_up
         k1, k2 = a2 + a3 * c3, a3 * s3
         c2, s2 = big_x * k1 + big_y * k2, big_y * k1 - big_x * k2
-        y[flat_index(i, N_ANGLES, U2 + b)] = 0.0 if dead else s2
-        x[flat_index(i, N_ANGLES, U2 + b)] = 1.0 if dead else c2
+        y[common.flat_index(i, N_ANGLES, U2 + b)] = 0.0 if dead else s2
+        x[common.flat_index(i, N_ANGLES, U2 + b)] = 1.0 if dead else c2
     return dead, turn
 
 
-@inline
+@common.inline
 def _arm_arguments(y, x, i, arm, x1, point, rot, geo):
     """Slots of one shoulder of pose ``i``: (dead up, dead down, special).
 
@@ -566,21 +549,21 @@ def _arm_arguments(y, x, i, arm, x1, point, rot, geo):
     s1g, s4g, s5g = geo.sigma1, geo.sigma4, geo.sigma5
     sd = s1g * geo.offset
     c1, s1 = (px * x1 - py * sd) / r2, (py * x1 + px * sd) / r2
-    y[flat_index(i, N_ANGLES, U1 + arm)] = s1
-    x[flat_index(i, N_ANGLES, U1 + arm)] = c1
+    y[common.flat_index(i, N_ANGLES, U1 + arm)] = s1
+    x[common.flat_index(i, N_ANGLES, U1 + arm)] = c1
     c5 = -s4g * s5g * s1g * (s1 * ax - c1 * ay)
     vx, vy = s1g * (s1 * nx - c1 * ny), s1g * (s1 * ox - c1 * oy)
     s5 = s5g * math.sqrt(vx * vx + vy * vy)
-    y[flat_index(i, N_ANGLES, U5 + arm)] = s5
-    x[flat_index(i, N_ANGLES, U5 + arm)] = c5
+    y[common.flat_index(i, N_ANGLES, U5 + arm)] = s5
+    x[common.flat_index(i, N_ANGLES, U5 + arm)] = c5
     singular = abs(s5) <= WRIST_SINGULAR_TOL
     inv = s4g / s5
     c6, s6 = vx * inv, -vy * inv
     big_px, big_py = c1 * px + s1 * py - geo.a1, s1g * (pz - geo.d1)
-    y[flat_index(i, N_ANGLES, U6 + 2 * arm)] = s6
-    x[flat_index(i, N_ANGLES, U6 + 2 * arm)] = c6
-    y[flat_index(i, N_ANGLES, U6 + 2 * arm + 1)] = -s6
-    x[flat_index(i, N_ANGLES, U6 + 2 * arm + 1)] = -c6
+    y[common.flat_index(i, N_ANGLES, U6 + 2 * arm)] = s6
+    x[common.flat_index(i, N_ANGLES, U6 + 2 * arm)] = c6
+    y[common.flat_index(i, N_ANGLES, U6 + 2 * arm + 1)] = -s6
+    x[common.flat_index(i, N_ANGLES, U6 + 2 * arm + 1)] = -c6
     c234, s234, big_x, big_y = _planar(geo, c1, s1, c5, c6, s6, s5, rot, big_px, big_py)
     up, turn_up = _pair_arguments(y, x, i, arm, 0, (c234, s234, big_x, big_y), s5, geo)
     # the other wrist: frame 3 mirrored about the wrist point
@@ -614,18 +597,18 @@ def batch_arguments(
     of :func:`angle_arguments`, bitwise. Returns the number of poses flagged.
     """
     geo = geometry[0]
-    tool, base = frames(geo)
+    tool, base = common.frames(geo)
     based = geo.based != 0.0
     right = 1.0 if geo.sigma1 * geo.offset >= 0.0 else -1.0
     flagged = 0
     for i in range(status.shape[0]):
-        row0, row1 = pose_row(poses, i, 0), pose_row(poses, i, 1)
-        row2, row3 = pose_row(poses, i, 2), pose_row(poses, i, 3)
-        rigid = rigid_rows(row0, row1, row2, row3)
-        f0, f1, f2 = frame_rows(row0, row1, row2, tool, base, based)
+        row0, row1 = common.pose_row(poses, i, 0), common.pose_row(poses, i, 1)
+        row2, row3 = common.pose_row(poses, i, 2), common.pose_row(poses, i, 3)
+        rigid = common.rigid_rows(row0, row1, row2, row3)
+        f0, f1, f2 = common.frame_rows(row0, row1, row2, tool, base, based)
         (nx, ox, ax, px), (ny, oy, ay, py), (nz, oz, az, pz) = f0, f1, f2
         r2 = px * px + py * py
-        rho = clamped_root(r2 - geo.offset * geo.offset)
+        rho = common.clamped_root(r2 - geo.offset * geo.offset)
         rot = (nx, ox, ax, ny, oy, ay, nz, oz, az)
         point = (px, py, pz, r2)
         x1 = right * rho
@@ -668,16 +651,9 @@ def batch_fallback(
         −1, or the index of the first pose that is not finite and rigid (the
         outputs of it and later poses then undefined).
     """
-    geo = geometry[0]
-    none, scratch = np.empty(0), np.empty((4, 4))
-    for i in range(poses.shape[0]):
-        if odd[i]:
-            if odd[i] & 2:
-                return i
-            status[i], exact[i] = angle_arguments(
-                geo, poses[i], none, y[i], x[i], scratch
-            )
-    return -1
+    return common.fallback_poses(
+        geometry[0], poses, y, x, status, exact, odd, angle_arguments
+    )
 
 
 @entry_point(outputs=("angles", "q", "valid"), contiguous=("y", "status", "exact"))
@@ -692,38 +668,4 @@ def batch_assemble(
 ) -> None:
     """Stage 3 of a batch (as ``_puma_kernel.batch_assemble``)."""
     geo = geometry[0]
-    none, no_within = np.empty(0), np.empty(0, dtype=np.bool_)
-    for i in range(angles.shape[0]):
-        if status[i] != OK:
-            q[i] = np.nan
-            valid[i] = False
-            continue
-        mask = exact[i]
-        if mask & _SLOT_BITS:  # (rare: a free theta1 or theta6)
-            set_exact_angles(angles[i], y[i], mask)
-        assemble(geo, angles[i], none, q[i], no_within, mask)
-        for b in range(8):
-            valid[i, b] = not (mask >> (DEAD + 2 * (b >> 2) + (b & 1)) & 1)
-
-
-#: The names the Python side uses (the status codes and flag slots are
-#: ``_kernel_common``'s, importable from here as well).
-__all__ = [
-    "FLAG_COUNT",
-    "FLAG_SHOULDER_SINGULAR",
-    "FLAG_SOME_UNREACHED",
-    "FLAG_WITHIN_LIMITS",
-    "FLAG_WRIST_SINGULAR",
-    "GEOMETRY_DTYPE",
-    "IN_CYLINDER",
-    "NOT_RIGID",
-    "N_ANGLES",
-    "OK",
-    "OUT_OF_REACH",
-    "batch_arguments",
-    "batch_assemble",
-    "batch_fallback",
-    "diagnose",
-    "pack_geometry",
-    "solve_pose",
-]
+    common.assemble_poses(geo, angles, y, status, exact, q, valid, assemble, _DEAD_BITS)
