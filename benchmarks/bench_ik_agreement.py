@@ -3,9 +3,10 @@
 Run from the repository root: ``python -m benchmarks.bench_ik_agreement
 [--poses N] [--edge-poses M] [--robots puma560,ur5,...]``.
 
-Per model, clean (the catalog's URDF) and rounded (the same URDF with every
+Per model, clean (the catalog's URDF), rounded (the same URDF with every
 nonzero ``rpy`` of a joint origin moved by 1.8e-9 rad and every nonzero ``xyz``
-by 1e-9 m, as a file written with nine decimals is; :func:`rounded_urdf`):
+by 1e-9 m, as a file written with nine decimals is) and perturbed (the zeros
+moved too: of its family only up to 1e-9; :func:`rounded_urdf`):
 
 * the largest FK residual of every branch of ``analytic`` on N random poses,
   of EAIK's and of ik-geo's exact (not least-squares) answers: position
@@ -58,16 +59,22 @@ _BISECTIONS = 80
 Peer = Callable[[np.ndarray], np.ndarray]
 
 
-def rounded_urdf(name: str, folder: Path, seed: int = 0) -> Robot:
+def rounded_urdf(
+    name: str, folder: Path, *, zeros: bool = False, seed: int = 0
+) -> Robot:
     """The catalog robot ``name`` loaded from a copy of its URDF with rounded numbers.
 
     Every nonzero ``rpy`` value of a joint origin moves by ±(1…2) ×
     :data:`ROUNDING_RPY`, every nonzero ``xyz`` value by ±(1…2) ×
-    :data:`ROUNDING_XYZ` (zeros stay zero, as a file's rounding leaves them).
+    :data:`ROUNDING_XYZ`; zeros stay zero, as a file's rounding leaves them,
+    unless ``zeros``. (A UR arm's URDF turns its joints about their own axes,
+    so rounding leaves it exactly of its family; moving its zeros too makes it
+    UR-type only up to 1e-9.)
 
     Args:
         name: Catalog name (``"ur5"``, ``"kuka-kr6-r700"``, ...).
         folder: Where the URDF copy is written.
+        zeros: Move the zero values too.
         seed: Seed of the perturbations.
 
     Returns:
@@ -83,11 +90,13 @@ def rounded_urdf(name: str, folder: Path, seed: int = 0) -> Robot:
         for key, size in (("rpy", ROUNDING_RPY), ("xyz", ROUNDING_XYZ)):
             values = [float(v) for v in origin.get(key, "0 0 0").split()]
             moved = [
-                v + size * rng.uniform(1.0, 2.0) * rng.choice((-1.0, 1.0)) if v else v
+                v + size * rng.uniform(1.0, 2.0) * rng.choice((-1.0, 1.0))
+                if v or zeros
+                else v
                 for v in values
             ]
             origin.set(key, " ".join(repr(float(v)) for v in moved))
-    path = Path(folder) / f"{name}-rounded.urdf"
+    path = Path(folder) / f"{name}-{'perturbed' if zeros else 'rounded'}.urdf"
     tree.write(path)
     package = Path(robot.urdf_path).parent
     return load_robot(path, tool_frame=robot.tool_frame, package_dirs=[package])
@@ -339,7 +348,8 @@ def main() -> None:
         for name in args.robots.split(","):
             for label, robot in (
                 (name, load_robot(name)),
-                (f"{name} (rounded)", rounded_urdf(name, Path(folder))),
+                (f"{name} rounded", rounded_urdf(name, Path(folder))),
+                (f"{name} perturbed", rounded_urdf(name, Path(folder), zeros=True)),
             ):
                 peers = {"EAIK": eaik_solver(robot), "ik-geo": ik_geo_solver(robot)}
                 row = agreement(robot, peers, args.poses)

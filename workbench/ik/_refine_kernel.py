@@ -33,7 +33,13 @@ import numpy.typing as npt
 
 from workbench._compiled import entry_point, helper
 from workbench.ik._chain import get_chain
-from workbench.ik._chain_kernel import _damped_step, _error, _forward, _jacobian
+from workbench.ik._chain_kernel import (
+    _damped_step,
+    _error,
+    _forward,
+    _jacobian,
+    _solve,
+)
 from workbench.ik._puma import LIMIT_TOL
 from workbench.ik.structure import get_structure
 from workbench.model.robot import Robot
@@ -52,6 +58,12 @@ POLISH = 1.0 / 16.0
 REFINE_STEPS = 60
 #: Refinement stops when the residual has not decreased for this many steps.
 STALL_STEPS = 20
+#: Valley search (:func:`_valley_search`): values of the fixed joint scanned
+#: over a turn, Gauss–Newton steps of the other five per value, and the
+#: steps of the root search between two scanned values.
+VALLEY_SCAN = 36
+VALLEY_INNER_STEPS = 8
+VALLEY_ROOT_STEPS = 40
 #: A fitted structure whose FK differs from the model's by more than this
 #: [m, and rotation entries] (``KinematicStructure.residual``) is refined; the
 #: catalog's URDFs are within 6e-16.
@@ -87,7 +99,7 @@ def _refine_branch(chain: FloatArray, target: FloatArray, q: FloatArray, work) -
     Steps are taken until the residual is :data:`POLISH` times the tolerance,
     has not decreased for :data:`STALL_STEPS` steps (next to a singularity a
     step may first increase it), or :data:`REFINE_STEPS` are taken; ``q`` is
-    then the best iterate. ``work``: (24, 12) scratch.
+    then the best iterate. ``work``: (30, 12) scratch.
     """
     frames = work[0:7]
     jac, normal = work[7:13, 0:6], work[13:19, 0:6]
@@ -121,17 +133,195 @@ def _refine_branch(chain: FloatArray, target: FloatArray, q: FloatArray, work) -
 
 
 @helper()
+def _inner(chain, target, x, j: int, work) -> float:
+    """Gauss–Newton on the joints of ``x`` but ``j``; the residual's normal part.
+
+    At most :data:`VALLEY_INNER_STEPS` steps of the least squares of the
+    error over the five other joints. Leaves in ``work[19]`` the error e and in
+    ``work[24:30, 0:5]`` the Jacobian J5 of those joints; returns |e|.
+    """
+    frames, jac = work[0:7], work[7:13, 0:6]
+    j5, normal = work[24:30, 0:5], work[13:19, 0:6]
+    e, dq = work[19, 0:6], work[20, 0:6]
+    size = 0.0
+    for step in range(VALLEY_INNER_STEPS + 1):
+        _forward(chain, x, frames)
+        _error(target, frames, e)
+        _jacobian(chain, frames, jac)
+        for r in range(6):
+            for c in range(5):
+                j5[r, c] = jac[r, c if c < j else c + 1]
+        size = 0.0
+        for r in range(6):
+            size += e[r] * e[r]
+        if step == VALLEY_INNER_STEPS:
+            break
+        for a in range(5):  # normal equations J5ᵀ J5 d = J5ᵀ e
+            s = 0.0
+            for r in range(6):
+                s += j5[r, a] * e[r]
+            dq[a] = s
+            for b in range(5):
+                s = 0.0
+                for r in range(6):
+                    s += j5[r, a] * j5[r, b]
+                normal[a, b] = s
+            normal[a, a] += 1e-30
+        if not _solve(normal, dq, 5):
+            break
+        moved = 0.0
+        for c in range(5):
+            x[c if c < j else c + 1] -= dq[c]
+            moved += dq[c] * dq[c]
+        if moved < 1e-30:
+            break
+    return math.sqrt(size)
+
+
+@helper()
+def _normal_part(work, previous) -> float:
+    """E · n, n the unit normal of range(J5) with n · ``previous`` > 0 (``work``)."""
+    j5, normal = work[24:30, 0:5], work[13:19, 0:6]
+    e, n = work[19, 0:6], work[21, 0:6]
+    for c in range(5):  # [J5ᵀ; previousᵀ] n = (0, ..., 0, 1)
+        for r in range(6):
+            normal[c, r] = j5[r, c]
+        n[c] = 0.0
+    for r in range(6):
+        normal[5, r] = previous[r]
+    n[5] = 1.0
+    if not _solve(normal, n, 6):
+        return 0.0
+    length, part = 0.0, 0.0
+    for r in range(6):
+        length += n[r] * n[r]
+    length = math.sqrt(length)
+    for r in range(6):
+        n[r] /= length
+        previous[r] = n[r]
+        part += e[r] * n[r]
+    return part
+
+
+@helper()
+def _valley_search(chain, target, q, work) -> bool:
+    """Find the model's solution along a singular family of the idealised arm.
+
+    Where the idealised arm has a one-parameter family of solutions (a singular
+    wrist's θ4/θ6 split, θ1 with the wrist centre on the base axis, θ2 with it
+    on the shoulder axis), the model's deviations fix one member, along a
+    valley of residuals ~1e-9 too curved for Newton to follow. The joint that
+    moves most along J's null direction is fixed at :data:`VALLEY_SCAN` values
+    over a turn, the five others solved by least squares at each; the normal
+    part of the remaining error changes sign at the model's solutions, found
+    by regula falsi (Illinois) and refined by :func:`_refine_branch`. The two
+    joints that move most are tried in turn.
+
+    Returns whether ``q`` (6,) now holds a solution within the tolerances.
+    """
+    frames, jac, normal = work[0:7], work[7:13, 0:6], work[13:19, 0:6]
+    e, v = work[19, 0:6], work[22, 0:6]
+    previous = np.empty(6)
+    start = np.empty(6)
+    for k in range(6):
+        start[k] = q[k]
+        v[k] = 1.0
+    _forward(chain, start, frames)
+    _error(target, frames, e)
+    _jacobian(chain, frames, jac)
+    for _ in range(4):  # inverse iteration: J's right singular vector of least σ
+        for a in range(6):
+            for b in range(6):
+                s = 0.0
+                for r in range(6):
+                    s += jac[r, a] * jac[r, b]
+                normal[a, b] = s
+            normal[a, a] += 1e-24
+        if not _solve(normal, v, 6):
+            return False
+        length = 0.0
+        for k in range(6):
+            length += v[k] * v[k]
+        length = math.sqrt(length)
+        for k in range(6):
+            v[k] /= length
+    order = np.argsort(-np.abs(v))
+    scanned, parts = np.empty((VALLEY_SCAN + 1, 6)), np.empty(VALLEY_SCAN + 1)
+    x = np.empty(6)
+    width = 2.0 * math.pi / VALLEY_SCAN
+    for choice in range(2):
+        j = order[choice]
+        for k in range(6):
+            x[k] = start[k]
+        for i in range(VALLEY_SCAN + 1):
+            x[j] = start[j] + i * width
+            size = _inner(chain, target, x, j, work)
+            if i == 0:  # e is normal to range(J5) at a least-squares optimum
+                for r in range(6):
+                    previous[r] = e[r] / size if size > 0.0 else 1.0
+            parts[i] = _normal_part(work, previous)
+            for k in range(6):
+                scanned[i, k] = x[k]
+        for i in range(VALLEY_SCAN):
+            if (parts[i] > 0.0) == (parts[i + 1] > 0.0):
+                continue
+            for k in range(6):
+                x[k] = scanned[i, k]
+                previous[k] = e[k]  # (overwritten below)
+            a, b = start[j] + i * width, start[j] + (i + 1) * width
+            ga, gb = parts[i], parts[i + 1]
+            _inner(chain, target, x, j, work)  # the normal at a, as reference
+            for r in range(6):
+                previous[r] = 0.0
+            previous[0] = 1.0
+            ga = _normal_part(work, previous)
+            x[j] = b
+            _inner(chain, target, x, j, work)
+            gb = _normal_part(work, previous)
+            for _ in range(VALLEY_ROOT_STEPS):
+                if ga == gb or abs(b - a) <= 1e-15:
+                    break
+                t = b - gb * (b - a) / (gb - ga)
+                x[j] = t
+                _inner(chain, target, x, j, work)
+                g = _normal_part(work, previous)
+                if (g > 0.0) == (gb > 0.0):
+                    ga *= 0.5
+                else:
+                    a, ga = b, gb
+                b, gb = t, g
+            if _refine_branch(chain, target, x, work):
+                for k in range(6):
+                    q[k] = x[k]
+                return True
+    return False
+
+
+@helper()
 def _refine_pose(
     chain: FloatArray, target: FloatArray, q: FloatArray, work: FloatArray
 ) -> int:
     """Refine the reached rows (not NaN) of ``q`` (8, 6); NaN the ones that fail.
 
+    A branch that Newton does not bring within the tolerances from the closed
+    form gets the valley search (:func:`_valley_search`) from there.
+
     Returns a bit mask of the branches that reach.
     """
+    start = np.empty(6)
     reached = 0
     for b in range(8):
         row = q[b]
-        if row[0] == row[0] and _refine_branch(chain, target, row, work):
+        if not row[0] == row[0]:
+            continue
+        for k in range(6):
+            start[k] = row[k]
+        if _refine_branch(chain, target, row, work):
+            reached |= 1 << b
+            continue
+        for k in range(6):
+            row[k] = start[k]
+        if _valley_search(chain, target, row, work):
             reached |= 1 << b
         else:
             for k in range(6):
@@ -156,7 +346,7 @@ def refine_pose(
     Returns:
         The number of branches that reach.
     """
-    work = np.empty((24, 12))
+    work = np.empty((30, 12))
     reached = _refine_pose(chain, pose, q, work)
     count = 0
     for b in range(8):
@@ -189,7 +379,7 @@ def refine_batch(
     Returns:
         The number of branches that were valid and failed.
     """
-    work = np.empty((24, 12))
+    work = np.empty((30, 12))
     failed = 0
     for i in range(targets.shape[0]):
         reached = _refine_pose(chain, targets[i], q[i], work)
