@@ -56,8 +56,9 @@ def _same(a: JointTrajectorySamples, b: JointTrajectorySamples) -> None:
 def test_bag_round_trip_from_the_cli(capsys, tmp_path: Path) -> None:
     bag, table = tmp_path / "bag", tmp_path / "pp.csv"
     code, out, err = run(
-        capsys, "export", "--format", "ros2-bag", "--pick-place", "--out", str(bag)
-    )
+        capsys, "export", "--format", "ros2-bag", "--pick-place", "--out", str(bag),
+        "--no-collision",
+    )  # fmt: skip
     assert (code, err) == (0, "") and "1001 samples" in out
     assert sorted(p.suffix for p in bag.iterdir()) == [".mcap", ".yaml"]
     run(capsys, "plan", "pick-place", "--robot", "puma560", "--pick-deg", "0", "45",
@@ -226,7 +227,7 @@ def test_failed_write_leaves_nothing(monkeypatch, tmp_path: Path) -> None:
         raise OSError("disk full")
 
     monkeypatch.setattr("csv.writer", broken)
-    with pytest.raises(OSError, match="disk full"):
+    with pytest.raises(InputError, match="disk full"):
         write_named_csv(tmp_path / "x.csv", s, NAMES)
     assert list(tmp_path.iterdir()) == []
 
@@ -234,7 +235,7 @@ def test_failed_write_leaves_nothing(monkeypatch, tmp_path: Path) -> None:
 def test_json_output(capsys, tmp_path: Path) -> None:
     out = tmp_path / "pp.csv"
     code, stdout, _ = run(capsys, "export", "--format", "csv", "--pick-place",
-                          "--out", str(out), "--json")  # fmt: skip
+                          "--out", str(out), "--json", "--no-collision")  # fmt: skip
     result = json.loads(stdout)
     assert code == 0 and result["samples"] == 1001 and result["duration"] == 10.0
     assert result["joint_names"] == NAMES and result["format"] == "csv"

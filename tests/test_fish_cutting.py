@@ -258,7 +258,7 @@ def test_cli_json_csv_and_html(tmp_path, capsys, run):
         (["--max-velocity", "0.6"], 3, "velocity"),  # fails mid-run
         (["--robot", "generic6r"], 2, "closed-form IK"),
         (["--servo-rate", "150"], 2, "integer multiple"),
-        (["--max-velocity", "nan"], 2, "max_velocity"),
+        (["--max-velocity", "nan"], 2, "--max-velocity: not a finite number"),
         (["--robot", "nope"], 2, "unknown robot"),
     ],
 )

@@ -17,6 +17,9 @@ PACKAGE = Path(__file__).resolve().parents[1] / "workbench"
 #: Lowest layer first. The key is the first part of the module path below ``workbench``.
 LAYERS: dict[str, int] = {
     "errors": 0,
+    "atomic_files": 0,
+    "json_numbers": 0,
+    "_sigint": 0,
     "validation": 0,
     "paper_data": 0,
     "_compiled": 0,

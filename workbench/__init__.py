@@ -3,6 +3,7 @@
 import importlib.metadata
 import logging
 
+from workbench import _sigint  # noqa: F401 (first: Ctrl-C while the command starts)
 from workbench.errors import (
     DHTableError,
     DimensionError,

@@ -1,4 +1,14 @@
-"""Write files and folders all at once: a temporary sibling, renamed on success."""
+"""Write files and folders all at once: a temporary sibling, renamed on success.
+
+Every file the workbench writes goes through :func:`atomic_file` (or
+:func:`atomic_files` for a set, :func:`write_text_atomic` for text): the data go
+to a hidden temporary file in the target's folder
+(``.<name>.<random>.tmp<suffix>``), which is flushed to disk (``fsync``) and
+renamed onto the target only when the writer returned. A failed or interrupted
+run leaves an existing output byte-identical; only a ``kill -9`` in the middle
+may leave a temporary file behind (never the target half-written). Commands
+call :func:`check_outputs` before any work, so a bad output path fails at once.
+"""
 
 from __future__ import annotations
 
@@ -6,25 +16,117 @@ import contextlib
 import os
 import shutil
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from workbench.errors import InputError
 
+#: Suffix of the temporary files (``.<name>.<random>`` + this + the suffix).
+TEMP_MARK = ".tmp"
 
-def check_output(path: Path, *, folder: bool = False) -> None:
+
+def check_output(
+    path: str | Path, *, folder: bool = False, inputs: Iterable[str | Path | None] = ()
+) -> None:
     """Raise a clear error if ``path`` cannot be written.
 
+    Args:
+        path: The file (or new folder) to write.
+        folder: Whether ``path`` is a new folder (bags are never replaced).
+        inputs: Files the command reads (None entries are skipped): ``path``
+            must be none of them.
+
     Raises:
-        InputError: If the parent folder is missing, ``path`` is a folder (for
-            a file), or already exists (for a folder: bags are never replaced).
+        InputError: If the parent folder is missing or not writable, ``path`` is
+            a folder (for a file), already exists (for a folder), or is one of
+            ``inputs``.
     """
-    if not path.parent.resolve().is_dir():
-        raise InputError(f"cannot write {path}: folder {path.parent} does not exist")
-    if folder and path.exists():
+    path = Path(path)
+    parent = path.parent
+    if not parent.is_dir():
+        raise InputError(f"cannot write {path}: folder {parent} does not exist")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(f"cannot write {path}: folder {parent} is not writable")
+    if folder and (path.exists() or path.is_symlink()):
         raise InputError(f"cannot write {path}: it already exists")
     if not folder and path.is_dir():
         raise InputError(f"cannot write {path}: it is a folder")
+    for source in inputs:
+        if source is not None and is_same_file(path, source):
+            raise InputError(f"cannot write {path}: it is also an input ({source})")
+
+
+def check_outputs(
+    outputs: Iterable[str | Path | None], inputs: Iterable[str | Path | None] = ()
+) -> None:
+    """:func:`check_output` for every output file; no two may be the same file.
+
+    Args:
+        outputs: Files to write (None entries are skipped).
+        inputs: Files the command reads (None entries are skipped).
+
+    Raises:
+        InputError: As :func:`check_output`, or if two outputs are one file.
+    """
+    sources = [Path(p) for p in inputs if p is not None]
+    seen: list[Path] = []
+    for out in (Path(p) for p in outputs if p is not None):
+        check_output(out, inputs=sources)
+        for other in seen:
+            if is_same_file(out, other):
+                raise InputError(f"cannot write {out} twice (also given as {other})")
+        seen.append(out)
+
+
+def is_same_file(a: str | Path, b: str | Path) -> bool:
+    """Whether two paths name one file (``samefile`` if both exist, else resolved)."""
+    a, b = Path(a), Path(b)
+    try:
+        return a.samefile(b)
+    except OSError:  # one of them does not exist (yet)
+        return a.resolve() == b.resolve()
+
+
+@contextlib.contextmanager
+def atomic_files(*paths: str | Path) -> Iterator[list[Path]]:
+    """Yield one temporary file per path; all replace their targets on success.
+
+    The temporary files are in the targets' folders and have the targets'
+    suffixes (writers such as Matplotlib pick the format from it). When the
+    block raises (or is interrupted), they are removed and no target changes.
+
+    Raises:
+        InputError: If a target cannot be written (see :func:`check_output`),
+            or writing fails (disk full, read-only file system).
+    """
+    targets = [Path(p) for p in paths]
+    temps: list[Path] = []
+    try:
+        for path in targets:
+            check_output(path)
+            handle, name = tempfile.mkstemp(
+                dir=path.parent,
+                prefix=f".{path.stem}.",
+                suffix=f"{TEMP_MARK}{path.suffix}",
+            )
+            os.close(handle)
+            temps.append(Path(name))
+        yield temps
+        mask = os.umask(0)  # mkstemp makes 0600 files: give the usual mode
+        os.umask(mask)
+        for tmp in temps:
+            _sync(tmp)
+            tmp.chmod(0o666 & ~mask)
+        for tmp, path in zip(temps, targets, strict=True):
+            tmp.replace(path)
+        for folder in {path.parent for path in targets}:
+            _sync_folder(folder)
+    except OSError as err:
+        where = err.filename or ", ".join(map(str, targets))
+        raise InputError(f"cannot write {where}: {err.strerror or err}") from err
+    finally:
+        for tmp in temps:
+            tmp.unlink(missing_ok=True)
 
 
 @contextlib.contextmanager
@@ -34,23 +136,22 @@ def atomic_file(path: str | Path) -> Iterator[Path]:
     On an exception the temporary file is removed and ``path`` is untouched.
 
     Raises:
-        InputError: If the folder does not exist or ``path`` is a folder.
+        InputError: If the folder does not exist or ``path`` is a folder, or
+            writing fails.
     """
-    path = Path(path)
-    check_output(path)
-    handle, name = tempfile.mkstemp(  # same suffix: writers may check it
-        dir=path.parent, prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}"
-    )
-    os.close(handle)
-    tmp = Path(name)
-    try:
+    with atomic_files(path) as (tmp,):
         yield tmp
-        mask = os.umask(0)  # mkstemp makes 0600 files: give the usual mode
-        os.umask(mask)
-        tmp.chmod(0o666 & ~mask)
-        tmp.replace(path)
-    finally:
-        tmp.unlink(missing_ok=True)
+
+
+def write_text_atomic(path: str | Path, text: str) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` all at once; returns ``path``.
+
+    Raises:
+        InputError: As :func:`atomic_file`.
+    """
+    with atomic_file(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return Path(path)
 
 
 @contextlib.contextmanager
@@ -68,6 +169,33 @@ def atomic_folder(path: str | Path) -> Iterator[Path]:
     tmp = parent / path.name
     try:
         yield tmp
+        for file in tmp.rglob("*"):
+            if file.is_file():
+                _sync(file)
         tmp.rename(path)
+        _sync_folder(path.parent)
     finally:
         shutil.rmtree(parent, ignore_errors=True)
+
+
+def _sync(path: Path) -> None:
+    """Flush a written file to disk."""
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def _sync_folder(folder: Path) -> None:
+    """Flush a folder's entries (the rename) to disk, where folders can be opened."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:  # e.g. Windows
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)

@@ -2,12 +2,19 @@
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import DimensionError, InputError, NonFiniteError
+
+#: Integers of more digits in a JSON file are read as floats (beyond 1e308: inf,
+#: which the finiteness checks refuse) instead of as unbounded Python ints.
+JSON_INT_DIGITS = 18
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -53,3 +60,42 @@ def check_positive(value: float, name: str, *, strict: bool) -> None:
     if not ok:
         bound = "> 0" if strict else ">= 0"
         raise InputError(f"{name} must be a finite number {bound}, got {value!r}")
+
+
+def read_json_file(path: str | Path, error: type[InputError], what: str) -> Any:
+    """The parsed JSON of a file, every failure an ``error`` with one line.
+
+    Integers of more than :data:`JSON_INT_DIGITS` digits become floats, so a
+    400-digit number is ``inf`` (refused by the caller's finiteness checks)
+    rather than an integer no float holds.
+
+    Args:
+        path: The file.
+        error: The error class to raise (e.g. ``SceneFileError``).
+        what: What the file is, for the message (``"scene"``).
+
+    Raises:
+        InputError: (as ``error``) If the file cannot be read, is not UTF-8, is
+            not JSON, or is nested too deeply to parse.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as err:
+        raise error(f"cannot read {what} {path}: {err.strerror or err}") from err
+    except UnicodeDecodeError as err:
+        raise error(f"{path}: not UTF-8 text (byte {err.start})") from err
+    try:
+        return json.loads(text, parse_int=_json_int)
+    except json.JSONDecodeError as err:
+        raise error(
+            f"{path}: not valid JSON (line {err.lineno}, column {err.colno}: "
+            f"{err.msg})"
+        ) from err
+    except RecursionError as err:
+        raise error(f"{path}: JSON nested too deeply to read") from err
+
+
+def _json_int(text: str) -> int | float:
+    digits = len(text.lstrip("-"))
+    return int(text) if digits <= JSON_INT_DIGITS else float(text)

@@ -1,11 +1,14 @@
 """The ``workbench`` command line: one module per command, one parser here.
 
-Exit codes: 0 success, 2 bad input, 3 infeasible request, 141 when the reader
-of stdout went away (``workbench ... | head``: a quiet exit, as for SIGPIPE).
-Errors print a single line on stderr and no traceback (set ``WORKBENCH_DEBUG=1``
-to see one). The package's log messages go to stderr: warnings by default,
-``-v`` adds info, ``-vv`` debug, ``-q`` keeps only errors (and no progress line;
-``WORKBENCH_PROGRESS=0`` turns off only the progress line).
+Exit codes: 0 success, 2 bad input, 3 infeasible request (with ``--json``, the
+JSON is printed all the same), 130 on Ctrl-C (SIGINT) at any moment, 141 when
+the reader of stdout went away (``workbench ... | head``: a quiet exit, as for
+SIGPIPE). Errors print a single line on stderr and no traceback (set
+``WORKBENCH_DEBUG=1`` to see one); NumPy's floating-point warnings are silenced
+(every result is checked for finiteness). The package's log messages go to
+stderr: warnings by default, ``-v`` adds info, ``-vv`` debug, ``-q`` keeps only
+errors (and no progress line; ``WORKBENCH_PROGRESS=0`` turns off only the
+progress line).
 """
 
 from __future__ import annotations
@@ -14,11 +17,17 @@ import argparse
 import contextlib
 import logging
 import os
+import re
+import signal
 import sys
+import warnings
 from collections.abc import Iterator, Sequence
 from typing import NoReturn
 
+import numpy as np
+
 import workbench
+from workbench._sigint import EXIT_INTERRUPTED, exit_on_interrupt, is_workbench_command
 from workbench.cli import (
     demo,
     export,
@@ -31,6 +40,7 @@ from workbench.cli import (
     urdf,
     view,
 )
+from workbench.cli._common import print_json
 from workbench.cli._progress import Progress
 from workbench.errors import InfeasibleError, InputError, WorkbenchError
 
@@ -42,9 +52,20 @@ EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for `yes | head`
 
 _COMMANDS = (fk, ik, urdf, demo, singularities, report, plan, view, fishcut, export)
 
+#: A number, as typed: ``-1``, ``-.5``, ``-1e-10``, ``-2.5E+3`` are values, not
+#: options (argparse's own pattern misses exponents).
+_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
+
 
 class _Parser(argparse.ArgumentParser):
-    """ArgumentParser whose errors are one line on stderr and exit code 2."""
+    """ArgumentParser whose errors are one line on stderr and exit code 2.
+
+    Negative numbers in every notation are values (see :data:`_NUMBER`).
+    """
+
+    def __init__(self, *args, **kwargs) -> None:  # type: ignore[no-untyped-def]
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NUMBER
 
     def error(self, message: str) -> NoReturn:
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
@@ -83,12 +104,33 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit code."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """Run the command line; returns the exit code.
+
+    Ctrl-C at any moment returns 130 (writers remove their temporary files
+    first); run as the ``workbench`` command, a Ctrl-C after this function
+    returned exits 130 too.
+    """
+    command = is_workbench_command()
+    if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        return EXIT_INTERRUPTED
+    finally:
+        if command:  # from here to the exit: no traceback either
+            exit_on_interrupt()
+
+
+def _main(argv: Sequence[str] | None) -> int:
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as stop:  # --help, --version (0), a usage error (2)
+        return stop.code if isinstance(stop.code, int) else EXIT_BAD_INPUT
     message = getattr(args, "progress_message", f"{args.command}: working")
     with (
         _log_to_stderr(_log_level(args)),
+        _quiet_numpy(),
         Progress(message, enabled=_progress_wanted(args)) as progress,
     ):
         args.progress = progress
@@ -101,13 +143,51 @@ def main(argv: Sequence[str] | None = None) -> int:
         except InputError as err:
             return _fail(err, EXIT_BAD_INPUT)
         except InfeasibleError as err:
+            _print_error_json(args, err)
             return _fail(err, EXIT_INFEASIBLE)
         except WorkbenchError as err:
             return _fail(err, EXIT_BAD_INPUT)
-        except KeyboardInterrupt:
-            return 130
+        except (MemoryError, OverflowError, RecursionError) as err:
+            return _fail(_too_large(err), EXIT_BAD_INPUT)
         except Exception as err:  # a bug: still one line, exit 1
             return _fail(err, EXIT_INTERNAL, prefix="internal error")
+
+
+def _too_large(err: BaseException) -> InputError:
+    """The input asked for more than this machine can compute or hold."""
+    what = {
+        MemoryError: "not enough memory",
+        RecursionError: "input nested too deeply",
+    }.get(type(err), "a number too large")
+    return InputError(f"the request is too large ({what}: {err or type(err).__name__})")
+
+
+def _print_error_json(args: argparse.Namespace, err: InfeasibleError) -> None:
+    """With ``--json``, the infeasible result as JSON: ``{command, error}``.
+
+    Commands that print their own JSON for an infeasible result return 3
+    instead of raising, so this JSON is the only one on stdout.
+    """
+    if getattr(args, "json", False):
+        print_json(
+            {
+                "command": args.command,
+                "feasible": False,
+                "error": " ".join(str(err).split()),
+            }
+        )
+
+
+@contextlib.contextmanager
+def _quiet_numpy() -> Iterator[None]:
+    """No NumPy floating-point warnings (overflow in a product, ...) on stderr.
+
+    Every result is checked for finiteness where it matters, and an error is
+    one line; a RuntimeWarning with its source line would be two more.
+    """
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        yield
 
 
 def _progress_wanted(args: argparse.Namespace) -> bool:

@@ -8,8 +8,19 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from workbench.collision import CollisionChecker, PathClearance, Scene, read_scene
+from workbench.collision import (
+    CollisionChecker,
+    PathClearance,
+    Scene,
+    check_path,
+    get_angeles_scene,
+    get_pedestal,
+    read_scene,
+)
+from workbench.errors import InputError
 from workbench.model.robot import Robot
+from workbench.tasks.fish_cutting import FishCuttingResult
+from workbench.tasks.fish_scene import get_fish_cutting_scene
 
 
 def add_collision_arguments(parser: argparse.ArgumentParser, default: str) -> None:
@@ -33,8 +44,11 @@ def load_scene(
     """The scene of ``--scene`` or ``default()``; None with ``--no-collision``.
 
     Raises:
+        InputError: If both ``--scene`` and ``--no-collision`` are given.
         SceneFileError: If the file is missing or invalid.
     """
+    if args.no_collision and args.scene is not None:
+        raise InputError("--scene and --no-collision contradict each other")
     if args.no_collision:
         return None
     return read_scene(args.scene) if args.scene is not None else default()
@@ -56,6 +70,48 @@ def build_checker(
     if robot.collision_model.ngeoms == 0 and not explicit:
         return None
     return CollisionChecker(robot, scene)
+
+
+def get_pick_place_scene(robot: Robot) -> Scene:
+    """Angeles' cell for his PUMA, the pedestal for other DH arms, else none."""
+    if robot.dh_table is None:
+        return Scene("empty")
+    if robot.dh_table.name == "puma560":
+        return get_angeles_scene(robot)
+    return Scene("pedestal", (get_pedestal(robot),), "the pedestal under the base")
+
+
+def check_fish_cutting_path(
+    robot: Robot,
+    result: FishCuttingResult,
+    given: Scene | None,
+    args: argparse.Namespace,
+) -> tuple[Scene | None, CollisionChecker | None, PathClearance | None]:
+    """The collision check of a fish-cutting run (``fishcut``, ``export --fishcut``).
+
+    Args:
+        robot: The arm.
+        result: The run.
+        given: The scene of ``--scene`` (read before the run), or None.
+        args: With ``scene`` and ``no_collision``.
+
+    The scene is ``given``, else Kang's cell scaled to the arm; distances at
+    the planning cycles, bound over the servo samples between them.
+
+    Returns:
+        The scene (None with ``--no-collision``), the checker and the clearance
+        (both None when the check is skipped).
+    """
+    if args.no_collision:
+        return None, None, None
+    scene = given or get_fish_cutting_scene(robot, result.fish, result.setup)
+    checker = build_checker(robot, scene, explicit=args.scene is not None)
+    if checker is None:
+        return scene, None, None
+    setup = result.setup
+    stride = max(1, round(setup.servo_rate / setup.planning_rate))
+    clearance = check_path(checker, result.servo.t, result.servo.q, stride=stride)
+    return scene, checker, clearance
 
 
 def get_collision_keys(
@@ -86,15 +142,22 @@ def print_collision_summary(report: PathClearance | None) -> None:
 
 def report_collision_error(report: PathClearance | None) -> bool:
     """Print the one-line error of the first contact; True if there was one."""
-    if report is None or not report.contacts:
+    message = get_collision_error(report)
+    if message is None:
         return False
+    print(f"workbench: error: {message}", file=sys.stderr)
+    return True
+
+
+def get_collision_error(report: PathClearance | None) -> str | None:
+    """The one-line message of the first contact, or None without contact."""
+    if report is None or not report.contacts:
+        return None
     first = report.contacts[0]
     more = len(report.contacts) - 1
     extra = f" (and {more} more contact(s))" if more else ""
-    print(
-        f"workbench: error: collision of {first.body_a} with {first.body_b} "
+    return (
+        f"collision of {first.body_a} with {first.body_b} "
         f"from t = {first.t_start:.6g} s, distance {first.distance:.6g} m at "
-        f"t = {first.t:.6g} s{extra}",
-        file=sys.stderr,
+        f"t = {first.t:.6g} s{extra}"
     )
-    return True

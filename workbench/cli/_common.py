@@ -6,6 +6,7 @@ import argparse
 import json
 import math
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -146,6 +147,52 @@ def positive_float(text: str) -> float:
     if not value > 0.0:
         raise argparse.ArgumentTypeError(f"must be > 0, got {text!r}")
     return value
+
+
+def bounded_float(
+    maximum: float, unit: str, *, minimum: float = 0.0
+) -> Callable[[str], float]:
+    """Argparse type: a float in ``(minimum, maximum]`` (``unit`` for messages)."""
+
+    def parse(text: str) -> float:
+        value = finite_float(text)
+        if not minimum < value <= maximum:
+            raise argparse.ArgumentTypeError(
+                f"must be > {minimum:g} and at most {maximum:g} {unit}, got {text!r}"
+            )
+        return value
+
+    return parse
+
+
+def bounded_int(minimum: int, maximum: int) -> Callable[[str], int]:
+    """Argparse type: an integer in ``[minimum, maximum]``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+        if not minimum <= value <= maximum:
+            raise argparse.ArgumentTypeError(
+                f"must be {minimum}..{maximum}, got {text!r}"
+            )
+        return value
+
+    return parse
+
+
+def get_input_paths(args: argparse.Namespace, *extra: Path | None) -> list[Path]:
+    """The files a command reads; its outputs must be none of them.
+
+    ``--robot`` when it is a URDF path, ``--scene``, ``--trajectory`` and
+    ``extra`` (None entries and paths that are no file are left out).
+    """
+    paths = [Path(args.robot)] if getattr(args, "robot", None) else []
+    for key in ("scene", "trajectory"):
+        if getattr(args, key, None) is not None:
+            paths.append(getattr(args, key))
+    return [p for p in (*paths, *extra) if p is not None and p.is_file()]
 
 
 def joint_values_rad(

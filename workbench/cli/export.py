@@ -7,19 +7,33 @@ from pathlib import Path
 
 import numpy as np
 
+from workbench.atomic_files import check_output
+from workbench.cli._collision import (
+    add_collision_arguments,
+    build_checker,
+    check_fish_cutting_path,
+    get_collision_error,
+    get_pick_place_scene,
+    load_scene,
+)
 from workbench.cli._common import (
     add_json_flag,
     add_limit_arguments,
     add_robot_argument,
-    finite_float,
+    bounded_float,
+    get_input_paths,
     load_robot_from_args,
     print_json,
 )
-from workbench.errors import InputError
+from workbench.collision import PathClearance
+from workbench.errors import InfeasibleError, InputError
 from workbench.export import write_named_csv, write_ros2_bag, write_urscript
-from workbench.export.atomic_files import check_output
 from workbench.export.ros2_bag import DEFAULT_TOPIC
-from workbench.export.urscript import DEFAULT_SERVO_RATE, check_ur_joints
+from workbench.export.urscript import (
+    DEFAULT_SERVO_RATE,
+    MAX_SERVO_RATE,
+    check_ur_joints,
+)
 from workbench.model.robot import Robot
 from workbench.trajectory.csv_io import JointTrajectorySamples, read_trajectory_csv
 
@@ -66,10 +80,16 @@ def register(commands: argparse._SubParsersAction) -> None:
     add_limit_arguments(parser, acceleration=False)
     parser.add_argument(
         "--servo-rate",
-        type=finite_float,
+        type=bounded_float(MAX_SERVO_RATE, "Hz"),
         default=DEFAULT_SERVO_RATE,
         metavar="HZ",
-        help=f"URScript servoj rate (default {DEFAULT_SERVO_RATE:g}; CB3: 125)",
+        help=f"URScript servoj rate (default {DEFAULT_SERVO_RATE:g}; CB3: 125; at "
+        f"most {MAX_SERVO_RATE:g})",
+    )
+    add_collision_arguments(
+        parser,
+        "for --pick-place Angeles' cell (as plan), for --fishcut Kang's cell "
+        "(as fishcut); a contact exits 3 and writes nothing",
     )
     parser.add_argument("--topic", default=DEFAULT_TOPIC, help="bag topic")
     parser.add_argument("--frame-id", default="base", help="bag header.frame_id")
@@ -80,6 +100,12 @@ def register(commands: argparse._SubParsersAction) -> None:
 
 
 def _samples(args: argparse.Namespace, robot: Robot) -> JointTrajectorySamples:
+    """The trajectory to export, checked as ``plan`` and ``fishcut`` check theirs.
+
+    Raises:
+        InfeasibleError: If the pick-and-place leaves a limit, or the planned
+            trajectory touches the scene or itself (unless ``--no-collision``).
+    """
     if args.trajectory is not None:
         return read_trajectory_csv(args.trajectory, robot.nq)
     if args.pick_place:
@@ -96,19 +122,41 @@ def _samples(args: argparse.Namespace, robot: Robot) -> JointTrajectorySamples:
             np.deg2rad(ANGELES_PLACE_Q_DEG),
             ANGELES_DURATION,
         )
+        violations = traj.check_limits()
+        if violations:
+            raise InfeasibleError(violations[0].message)
+        scene = load_scene(args, lambda: get_pick_place_scene(robot))
+        checker = build_checker(robot, scene, explicit=args.scene is not None)
+        if checker is not None:
+            _refuse_contact(traj.check_collisions(checker, PICK_PLACE_RATE_HZ))
         return traj.sample_uniform(PICK_PLACE_RATE_HZ)
     from workbench.tasks import run_fish_cutting
 
-    return run_fish_cutting(robot).servo
+    given = load_scene(args, lambda: None)
+    result = run_fish_cutting(robot)
+    _refuse_contact(check_fish_cutting_path(robot, result, given, args)[2])
+    return result.servo
+
+
+def _refuse_contact(clearance: PathClearance | None) -> None:
+    message = get_collision_error(clearance)
+    if message is not None:
+        raise InfeasibleError(f"{message}; nothing written (see --no-collision)")
 
 
 def run(args: argparse.Namespace) -> int:
     """Export; returns the exit code."""
-    check_output(args.out, folder=args.format == "ros2-bag")
-    if args.format == "urscript" and not (args.servo_rate > 0.0):
-        raise InputError(f"--servo-rate must be > 0 [Hz], got {args.servo_rate:g}")
+    check_output(
+        args.out, folder=args.format == "ros2-bag", inputs=get_input_paths(args)
+    )
     if args.velocity_limit is not None and not args.fishcut:
         raise InputError("--velocity-limit applies to --fishcut (its planner) only")
+    if args.trajectory is not None and (args.scene or args.no_collision):
+        raise InputError(
+            "--scene and --no-collision apply to --pick-place and --fishcut only"
+        )
+    if args.no_collision and args.scene is not None:
+        raise InputError("--scene and --no-collision contradict each other")
     name = args.robot or ("puma560-kang" if args.fishcut else "puma560")
     robot = load_robot_from_args(args, name)
     names = robot.joint_names

@@ -6,9 +6,10 @@ import argparse
 import dataclasses
 from pathlib import Path
 
+from workbench.atomic_files import atomic_files, check_outputs
 from workbench.cli._collision import (
     add_collision_arguments,
-    build_checker,
+    check_fish_cutting_path,
     get_collision_keys,
     load_scene,
     print_collision_summary,
@@ -18,19 +19,27 @@ from workbench.cli._common import (
     add_json_flag,
     add_limit_arguments,
     add_robot_argument,
+    bounded_float,
+    bounded_int,
+    get_input_paths,
     load_robot_from_args,
     print_json,
 )
-from workbench.collision import check_path
-from workbench.export.atomic_files import atomic_file, check_output
+from workbench.collision import CollisionChecker
+from workbench.model.robot import Robot
 from workbench.tasks import FishCuttingSetup, SimulatedFish, run_fish_cutting
-from workbench.tasks.fish_cutting import summarize_fish_cutting
+from workbench.tasks.fish_cutting import FishCuttingResult, summarize_fish_cutting
 from workbench.tasks.fish_program import get_cell_scale
-from workbench.tasks.fish_scene import get_fish_cutting_scene
 from workbench.trajectory.csv_io import write_trajectory_csv
 
 DEFAULT_ROBOT = "puma560-kang"
 _DEFAULTS = FishCuttingSetup()
+#: Largest ``--planning-rate`` and ``--servo-rate`` [Hz].
+MAX_RATE_HZ = 100_000.0
+#: Largest ``--max-velocity`` [m/s].
+MAX_TOOL_SPEED = 100.0
+#: Largest ``--seed`` (NumPy seeds are >= 0).
+MAX_SEED = 2**63 - 1
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -61,29 +70,33 @@ def register(commands: argparse._SubParsersAction) -> None:
         "--html", type=Path, metavar="FILE", help="write a 3D preview page (Meshcat)"
     )
     parser.add_argument(
-        "--seed", type=int, default=0, help="seed of the fish's flesh and bone (0)"
+        "--seed",
+        type=bounded_int(0, MAX_SEED),
+        default=0,
+        help="seed of the fish's flesh and bone, >= 0 (default 0)",
     )
     parser.add_argument(
         "--max-velocity",
-        type=float,
+        type=bounded_float(MAX_TOOL_SPEED, "m/s"),
         metavar="M_S",
         help=f"tool speed limit [m/s] (default {_DEFAULTS.max_velocity:g} times "
-        "the cell scale)",
+        f"the cell scale; at most {MAX_TOOL_SPEED:g})",
     )
     parser.add_argument(
         "--planning-rate",
-        type=float,
+        type=bounded_float(MAX_RATE_HZ, "Hz"),
         default=_DEFAULTS.planning_rate,
         metavar="HZ",
-        help=f"planning cycles per second (default {_DEFAULTS.planning_rate:g})",
+        help=f"planning cycles per second (default {_DEFAULTS.planning_rate:g}, "
+        f"at most {MAX_RATE_HZ:g})",
     )
     parser.add_argument(
         "--servo-rate",
-        type=float,
+        type=bounded_float(MAX_RATE_HZ, "Hz"),
         default=_DEFAULTS.servo_rate,
         metavar="HZ",
         help=f"servo samples per second, a multiple of the planning rate "
-        f"(default {_DEFAULTS.servo_rate:g})",
+        f"(default {_DEFAULTS.servo_rate:g}, at most {MAX_RATE_HZ:g})",
     )
     add_collision_arguments(
         parser, "Kang's cell scaled to the arm: table, fish, pedestal of a DH model"
@@ -96,40 +109,12 @@ def register(commands: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the program; write the CSV and the page only if it completes."""
-    for path in (args.csv, args.html):
-        if path is not None:
-            check_output(path)
+    check_outputs([args.csv, args.html], get_input_paths(args))
     robot = load_robot_from_args(args)
-    scene = load_scene(args, lambda: None)  # a --scene file is checked first
-    scale = get_cell_scale(robot)  # (an arm without a closed form fails here)
-    setup = FishCuttingSetup(
-        planning_rate=args.planning_rate, servo_rate=args.servo_rate
-    ).scaled(scale)
-    if args.max_velocity is not None:
-        setup = dataclasses.replace(setup, max_velocity=args.max_velocity)
-    fish = SimulatedFish(args.seed).scaled(scale)
-    result = run_fish_cutting(robot, fish, setup)
-    if scene is None and not args.no_collision:
-        scene = get_fish_cutting_scene(robot, fish, setup)
-    checker = build_checker(robot, scene, explicit=args.scene is not None)
-    clearance = None
-    if checker is not None:  # distances at the planning cycles, bound over the servo
-        stride = max(1, round(setup.servo_rate / setup.planning_rate))
-        clearance = check_path(checker, result.servo.t, result.servo.q, stride=stride)
-    if args.html is not None:  # viewer imported lazily (optional extra)
-        from workbench.viz import write_trajectory_html
-
-        with atomic_file(args.html) as tmp:
-            write_trajectory_html(
-                robot,
-                result.servo,
-                tmp,
-                title=f"workbench fishcut: {robot.name}, fish seed {args.seed}",
-                checker=checker,
-            )
-    if args.csv is not None:
-        with atomic_file(args.csv) as tmp:
-            write_trajectory_csv(tmp, result.servo)
+    given = load_scene(args, lambda: None)  # a --scene file is checked first
+    result = _run_fish_cutting(robot, args)
+    scene, checker, clearance = check_fish_cutting_path(robot, result, given, args)
+    _write_outputs(args, robot, result, checker)
     summary = {
         **summarize_fish_cutting(result, robot.name),
         **get_collision_keys(scene, clearance),
@@ -137,6 +122,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print_json(summary)
         return 3 if report_collision_error(clearance) else 0
+    setup = result.setup
     print(
         f"robot {robot.name}, Kang's cell scaled by {setup.scale:g}: "
         f"{summary['cycles']} planning cycles at "
@@ -157,3 +143,43 @@ def run(args: argparse.Namespace) -> int:
             print(f"{option} written to {path}")
     print_collision_summary(clearance)
     return 3 if report_collision_error(clearance) else 0
+
+
+def _run_fish_cutting(robot: Robot, args: argparse.Namespace) -> FishCuttingResult:
+    """Kang's program on ``robot`` with the options of ``args`` (rates, seed, speed).
+
+    Raises:
+        InfeasibleError: If the run does not finish or leaves a limit.
+    """
+    scale = get_cell_scale(robot)  # (an arm without a closed form fails here)
+    setup = FishCuttingSetup(
+        planning_rate=args.planning_rate, servo_rate=args.servo_rate
+    ).scaled(scale)
+    if args.max_velocity is not None:
+        setup = dataclasses.replace(setup, max_velocity=args.max_velocity)
+    fish = SimulatedFish(args.seed).scaled(scale)
+    return run_fish_cutting(robot, fish, setup)
+
+
+def _write_outputs(
+    args: argparse.Namespace,
+    robot: Robot,
+    result: FishCuttingResult,
+    checker: CollisionChecker | None,
+) -> None:
+    """``--html`` and ``--csv``, together (all or none)."""
+    outputs = [p for p in (args.html, args.csv) if p is not None]
+    with atomic_files(*outputs) as temps:
+        staged = dict(zip(outputs, temps, strict=True))
+        if args.html is not None:  # viewer imported lazily (optional extra)
+            from workbench.viz import write_trajectory_html
+
+            write_trajectory_html(
+                robot,
+                result.servo,
+                staged[args.html],
+                title=f"workbench fishcut: {robot.name}, fish seed {args.seed}",
+                checker=checker,
+            )
+        if args.csv is not None:
+            write_trajectory_csv(staged[args.csv], result.servo)

@@ -8,10 +8,12 @@ from pathlib import Path
 
 import numpy as np
 
+from workbench.atomic_files import atomic_files, check_outputs
 from workbench.cli._collision import (
     add_collision_arguments,
     build_checker,
     get_collision_keys,
+    get_pick_place_scene,
     load_scene,
     print_collision_summary,
     report_collision_error,
@@ -20,19 +22,27 @@ from workbench.cli._common import (
     add_json_flag,
     add_limit_arguments,
     add_robot_argument,
+    bounded_float,
+    bounded_int,
     finite_float,
+    get_input_paths,
     load_robot_from_args,
     print_json,
     q_from_degrees,
 )
-from workbench.collision import Scene, get_angeles_scene, get_pedestal
 from workbench.errors import InputError
 from workbench.trajectory import minimum_duration, pick_and_place
-from workbench.trajectory.csv_io import write_trajectory_csv
-from workbench.trajectory.normal_spline import DEFAULT_N_POINTS
+from workbench.trajectory.csv_io import check_sample_count, write_trajectory_csv
+from workbench.trajectory.normal_spline import DEFAULT_N_POINTS, MIN_N_POINTS
 
 EXIT_INFEASIBLE = 3
 DEFAULT_RATE_HZ = 100.0
+#: Largest ``--rate`` [Hz] (duration × rate is bounded by ``MAX_SAMPLES`` too).
+MAX_RATE_HZ = 100_000.0
+#: Largest ``--duration`` [s] (about 11.6 days).
+MAX_DURATION = 1e6
+#: Largest ``--n-points`` (knots of the normal spline).
+MAX_N_POINTS = 100_000
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -72,21 +82,26 @@ def register(commands: argparse._SubParsersAction) -> None:
         help="place configuration [deg]",
     )
     pick.add_argument(
-        "--duration", type=finite_float, required=True, help="duration T [s], > 0"
+        "--duration",
+        type=bounded_float(MAX_DURATION, "s"),
+        required=True,
+        help=f"duration T [s], > 0, at most {MAX_DURATION:g}",
     )
     pick.add_argument(
         "--rate",
-        type=finite_float,
+        type=bounded_float(MAX_RATE_HZ, "Hz"),
         default=DEFAULT_RATE_HZ,
         metavar="HZ",
-        help=f"sample rate of --csv [Hz] (default {DEFAULT_RATE_HZ:g})",
+        help=f"sample rate of --csv and of the collision check [Hz] (default "
+        f"{DEFAULT_RATE_HZ:g}, at most {MAX_RATE_HZ:g})",
     )
     pick.add_argument(
         "--n-points",
-        type=int,
+        type=bounded_int(MIN_N_POINTS, MAX_N_POINTS),
         default=DEFAULT_N_POINTS,
         metavar="N",
-        help=f"knots of the normal spline (default {DEFAULT_N_POINTS}, as the paper)",
+        help=f"knots of the normal spline (default {DEFAULT_N_POINTS}, as the paper; "
+        f"{MIN_N_POINTS}..{MAX_N_POINTS})",
     )
     pick.add_argument(
         "--csv", type=Path, metavar="FILE", help="write t,q..,qd..,qdd.. (SI units)"
@@ -107,32 +122,44 @@ def register(commands: argparse._SubParsersAction) -> None:
 
 
 def run_pick_place(args: argparse.Namespace) -> int:
-    """Plan, check, write; returns the exit code (3 on a limit violation)."""
-    if args.rate <= 0.0:
-        raise InputError(f"--rate must be > 0 [Hz], got {args.rate:g}")
+    """Plan, check, write; returns the exit code (3 on a limit violation).
+
+    The outputs are checked before any work and written together at the end
+    (all or none, :func:`workbench.atomic_files.atomic_files`).
+    """
+    check_outputs([args.csv, args.plot], get_input_paths(args))
+    if args.plot is not None:
+        check_plot_format(args.plot)
+    check_sample_count(
+        int(args.duration * args.rate) + 1,
+        f"--duration {args.duration:g} s at --rate {args.rate:g} Hz",
+    )
     robot = load_robot_from_args(args)
     q_pick = q_from_degrees(robot, args.pick_deg)
     q_place = q_from_degrees(robot, args.place_deg)
     traj = pick_and_place(robot, q_pick, q_place, args.duration, n_points=args.n_points)
     t_min = minimum_duration(robot, q_pick, q_place, n_points=args.n_points)
     violations = traj.check_limits()
-    scene = load_scene(args, lambda: _default_scene(robot))
+    scene = load_scene(args, lambda: get_pick_place_scene(robot))
     checker = build_checker(robot, scene, explicit=args.scene is not None)
     clearance = None
     if checker is not None:
         clearance = traj.check_collisions(checker, args.rate)
     samples = traj.sample_uniform(args.rate) if args.csv else None
-    if samples is not None:
-        write_trajectory_csv(args.csv, samples)
-    if args.plot:
-        from workbench.plots.trajectory import plot_joint_trajectory
+    outputs = [p for p in (args.csv, args.plot) if p is not None]
+    with atomic_files(*outputs) as temps:
+        staged = dict(zip(outputs, temps, strict=True))
+        if samples is not None:
+            write_trajectory_csv(staged[args.csv], samples)
+        if args.plot:
+            from workbench.plots.trajectory import plot_joint_trajectory
 
-        plot_joint_trajectory(
-            traj,
-            args.plot,
-            title=f"{robot.name}: pick-and-place, T = {traj.duration:g} s "
-            f"(minimum {t_min:.4g} s)",
-        )
+            plot_joint_trajectory(
+                traj,
+                staged[args.plot],
+                title=f"{robot.name}: pick-and-place, T = {traj.duration:g} s "
+                f"(minimum {t_min:.4g} s)",
+            )
     speed = traj.get_extrema(1)
     acc = traj.get_extrema(2)
     result = {
@@ -166,13 +193,21 @@ def run_pick_place(args: argparse.Namespace) -> int:
     return 0
 
 
-def _default_scene(robot) -> Scene:
-    """Angeles' cell for his PUMA, the pedestal for other DH arms, else none."""
-    if robot.dh_table is None:
-        return Scene("empty")
-    if robot.dh_table.name == "puma560":
-        return get_angeles_scene(robot)
-    return Scene("pedestal", (get_pedestal(robot),), "the pedestal under the base")
+def check_plot_format(path: Path) -> None:
+    """Refuse a figure file whose suffix Matplotlib cannot write.
+
+    Raises:
+        InputError: Listing the formats it can write.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    formats = FigureCanvasAgg(Figure()).get_supported_filetypes()
+    if path.suffix.lstrip(".").lower() not in formats:
+        raise InputError(
+            f"--plot {path}: unknown figure format {path.suffix or '(none)'!r}; "
+            f"use one of {', '.join('.' + f for f in sorted(formats))}"
+        )
 
 
 def _print_human(robot, traj, result: dict) -> None:

@@ -38,7 +38,9 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.collision.scene import SHAPES, Obstacle, Scene
-from workbench.errors import SceneFileError
+from workbench.atomic_files import write_text_atomic
+from workbench.errors import InputError, SceneFileError
+from workbench.validation import read_json_file
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -53,12 +55,10 @@ def write_scene(scene: Scene, path: str | Path) -> Path:
     Raises:
         SceneFileError: If the file cannot be written.
     """
-    path = Path(path)
     try:
-        path.write_text(json.dumps(scene.to_dict(), indent=1) + "\n", "utf-8")
-    except OSError as err:
-        raise SceneFileError(f"cannot write scene {path}: {err.strerror}") from err
-    return path
+        return write_text_atomic(path, json.dumps(scene.to_dict(), indent=1) + "\n")
+    except InputError as err:
+        raise SceneFileError(f"scene: {err}") from err
 
 
 def read_scene(path: str | Path) -> Scene:
@@ -69,12 +69,7 @@ def read_scene(path: str | Path) -> Scene:
             message names the object and the key.
     """
     path = Path(path)
-    try:
-        raw = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as err:
-        raise SceneFileError(f"cannot read scene {path}: {err.strerror}") from err
-    except (json.JSONDecodeError, UnicodeDecodeError) as err:
-        raise SceneFileError(f"{path}: not valid JSON ({err})") from err
+    raw = read_json_file(path, SceneFileError, "scene")
     return parse_scene(raw, source=str(path), folder=path.parent)
 
 

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from workbench.atomic_files import atomic_file
 from workbench.errors import DimensionError, InputError
-from workbench.export.atomic_files import atomic_file
 from workbench.trajectory.csv_io import JointTrajectorySamples
 
 

@@ -18,9 +18,9 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from workbench.atomic_files import write_text_atomic
 from workbench.errors import InputError
-from workbench.export.atomic_files import atomic_file
-from workbench.trajectory.csv_io import JointTrajectorySamples
+from workbench.trajectory.csv_io import JointTrajectorySamples, check_sample_count
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -34,6 +34,8 @@ UR_JOINTS = (
 )
 #: e-Series control rate [Hz] (CB3: 125 Hz).
 DEFAULT_SERVO_RATE = 500.0
+#: Largest servo rate [Hz] accepted.
+MAX_SERVO_RATE = 10_000.0
 LOOKAHEAD_TIME = 0.1  # [s], URScript's range 0.03 .. 0.2
 GAIN = 300  # URScript's range 100 .. 2000
 MOVEJ_SPEED = 0.5  # [rad/s] to the first sample
@@ -97,8 +99,15 @@ def generate_urscript(
         InputError: If the robot is not a UR arm or the rate is not > 0.
     """
     check_ur_joints(list(joint_names), robot_name)
-    if not (np.isfinite(servo_rate) and servo_rate > 0.0):
-        raise InputError(f"servo rate must be > 0 [Hz], got {servo_rate}")
+    if not (np.isfinite(servo_rate) and 0.0 < servo_rate <= MAX_SERVO_RATE):
+        raise InputError(
+            f"servo rate must be > 0 and at most {MAX_SERVO_RATE:g} Hz, got "
+            f"{servo_rate}"
+        )
+    check_sample_count(
+        int((samples.t[-1] - samples.t[0]) * servo_rate) + 1,
+        f"URScript at {servo_rate:g} Hz",
+    )
     q = resample_hermite(samples, servo_rate)
     dt = 1.0 / servo_rate
     lines = [
@@ -128,13 +137,12 @@ def write_urscript(
     text = generate_urscript(
         samples, joint_names, servo_rate=servo_rate, robot_name=robot_name
     )
-    with atomic_file(path) as tmp:
-        tmp.write_text(text, encoding="utf-8")
-    return Path(path)
+    return write_text_atomic(path, text)
 
 
 __all__ = [
     "DEFAULT_SERVO_RATE",
+    "MAX_SERVO_RATE",
     "UR_JOINTS",
     "check_ur_joints",
     "generate_urscript",

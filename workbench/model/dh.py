@@ -12,8 +12,8 @@ computation that shares no code with it.
 
 from __future__ import annotations
 
-import json
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar
@@ -22,7 +22,14 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import DHTableError
-from workbench.validation import as_vector
+from workbench.validation import as_vector, read_json_file
+
+#: Tool-frame names (a URDF link name): letters, digits, ``_`` and ``.``, single
+#: ``-`` between them.
+NAME_PATTERN = re.compile(r"[A-Za-z0-9_.]+(-[A-Za-z0-9_.]+)*")
+#: Robot names may also hold spaces and other printable characters, but no
+#: ``--`` and no ``-`` at the end (the name goes into an XML comment).
+ROBOT_NAME_PATTERN = re.compile(r"(?!.*--)(?!.*-$)[^\x00-\x1f\x7f]+")
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -109,16 +116,21 @@ class DHTable:
             raise DHTableError(
                 f"{source}: convention {convention!r} not supported (only 'standard')"
             )
-        name = raw.get("name")
-        if not isinstance(name, str) or not name:
-            raise DHTableError(f"{source}: 'name' must be a non-empty string")
+        name = _check_name(raw.get("name"), "name", source, ROBOT_NAME_PATTERN)
         rows = raw.get("joints")
         if not isinstance(rows, list) or not rows:
             raise DHTableError(f"{source}: 'joints' must be a non-empty list")
         joints = tuple(cls._parse_row(row, i, source) for i, row in enumerate(rows, 1))
-        tool_frame = raw.get("tool_frame", "tool")
-        if not isinstance(tool_frame, str) or not tool_frame:
-            raise DHTableError(f"{source}: 'tool_frame' must be a non-empty string")
+        tool_frame = _check_name(
+            raw.get("tool_frame", "tool"), "tool_frame", source, NAME_PATTERN
+        )
+        generated = {f"frame{i}" for i in range(len(joints) + 1)}
+        generated |= {f"link{i}" for i in range(1, len(joints) + 1)}
+        if tool_frame in generated:
+            raise DHTableError(
+                f"{source}: 'tool_frame' {tool_frame!r} is the name of a generated "
+                f"link (frame0..frame{len(joints)}, link1..link{len(joints)})"
+            )
         text = raw.get("source", "")
         if not isinstance(text, str):
             raise DHTableError(f"{source}: 'source' must be a string")
@@ -163,18 +175,7 @@ class DHTable:
         Raises:
             DHTableError: If the file is missing, not JSON, or malformed.
         """
-        path = Path(path)
-        try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as err:
-            raise DHTableError(f"cannot read DH table {path}: {err.strerror}") from err
-        try:
-            raw = json.loads(text)
-        except json.JSONDecodeError as err:
-            raise DHTableError(
-                f"{path}: not valid JSON "
-                f"(line {err.lineno}, column {err.colno}: {err.msg})"
-            ) from err
+        raw = read_json_file(path, DHTableError, "DH table")
         return cls.from_dict(raw, source=str(path))
 
     def link_transforms(self, q: npt.ArrayLike) -> FloatArray:
@@ -239,3 +240,17 @@ class DHTable:
         o = frames[:-1, :3, 3]
         p = frames[-1, :3, 3]
         return np.vstack([np.cross(z, p - o).T, z.T])
+
+
+def _check_name(value: Any, key: str, source: str, pattern: re.Pattern[str]) -> str:
+    """A table's ``name`` or ``tool_frame``, checked against ``pattern``."""
+    if not isinstance(value, str) or not value:
+        raise DHTableError(f"{source}: {key!r} must be a non-empty string")
+    if not pattern.fullmatch(value):
+        rule = (
+            "letters, digits, '_', '.' and single '-' between them"
+            if pattern is NAME_PATTERN
+            else "printable, without '--' or a final '-'"
+        )
+        raise DHTableError(f"{source}: {key!r} must be {rule}, got {value!r}")
+    return value

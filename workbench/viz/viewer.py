@@ -20,6 +20,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from workbench.atomic_files import write_text_atomic
 from workbench.collision import CollisionChecker
 from workbench.errors import DimensionError, InputError
 from workbench.model.robot import Robot
@@ -390,12 +391,7 @@ class Viewer:
         Raises:
             InputError: If the file cannot be written.
         """
-        path = Path(path)
-        try:
-            path.write_text(self.render_html(), encoding="utf-8")
-        except OSError as err:
-            raise InputError(f"cannot write {path}: {err}") from err
-        return path
+        return write_text_atomic(path, self.render_html())
 
     def render_inline(self, *, height: int = 480) -> str:
         """HTML for a notebook cell: the offline page in an ``iframe``."""
