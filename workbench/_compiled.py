@@ -429,14 +429,22 @@ def entry_point(
     return decorate
 
 
-def helper(*, forceinline: bool = False) -> Callable[[F], F]:
+def helper(
+    *, forceinline: bool = False, inline_source: bool = False
+) -> Callable[[F], F]:
     """Compile a kernel that only other kernels call (module docstring).
 
     Args:
         forceinline: Have LLVM inline it into every caller (its
             ``alwaysinline`` attribute): for the small functions called per
             angle or per pose in the loops. Numba's own ``inline="always"``
-            (inlining before type inference) compiles several times slower.
+            (inlining before type inference) compiles several times slower
+            when used for many small functions.
+        inline_source: Have Numba inline it into each caller before type
+            inference (``inline="always"``): for a large body called once
+            per entry point, which then gets no compile and no LLVM
+            optimisation of its own (every level of linked libraries is
+            optimised again in its caller).
     """
 
     def decorate(func: F) -> F:
@@ -445,6 +453,8 @@ def helper(*, forceinline: bool = False) -> Callable[[F], F]:
         options = dict(_OPTIONS, no_cpython_wrapper=True, no_cfunc_wrapper=True)
         if forceinline:
             options["forceinline"] = True
+        if inline_source:
+            options["inline"] = "always"
         dispatcher = _Helper(func, targetoptions=options)
         dispatcher._cache = _SourceKeyedCache(func)
         return cast(F, dispatcher)

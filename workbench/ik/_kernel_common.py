@@ -52,6 +52,10 @@ TAU = 2.0 * math.pi
 #: not by Numba (``inline="always"``, several times slower to compile).
 inline = helper(forceinline=True)
 
+#: For the bodies of the families' entry points (called once each): inlined by
+#: Numba into the entry point, without a compile and an LLVM pass of their own.
+body = helper(inline_source=True)
+
 
 @inline
 def remainder(x: float) -> float:
@@ -285,7 +289,7 @@ def set_exact_angles(angles: FloatArray, y: FloatArray, exact: int) -> None:
             angles[slot] = y[slot]
 
 
-@inline
+@body
 def solve_one(
     geo,
     pose: FloatArray,
@@ -333,7 +337,7 @@ def solve_one(
     return OK
 
 
-@inline
+@body
 def fallback_poses(geo, poses, y, x, status, exact, odd, angle_arguments) -> int:
     """The body of a family's ``batch_fallback``: the poses flagged ``odd``.
 
@@ -352,7 +356,7 @@ def fallback_poses(geo, poses, y, x, status, exact, odd, angle_arguments) -> int
     return -1
 
 
-@inline
+@body
 def assemble_poses(geo, angles, y, status, exact, q, valid, assemble, dead_bits):
     """The body of a family's ``batch_assemble``.
 
@@ -389,6 +393,7 @@ __all__ = [
     "PI",
     "TAU",
     "assemble_poses",
+    "body",
     "clamped_root",
     "clip_unit",
     "copy_previous",
