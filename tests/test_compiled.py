@@ -304,3 +304,48 @@ def test_source_digest_covers_the_import_closure() -> None:
         "workbench._compiled",
     } <= closure
     assert "workbench.cli" not in closure  # only what it imports
+
+
+_TWO_KERNELS = """
+\"\"\"Two kernels: a test module.\"\"\"
+from workbench._compiled import entry_point
+
+@entry_point()
+def triple(x: float) -> float:
+    return x * 3.0
+
+@entry_point()
+def halve(x: float) -> float:
+    return x / 2.0
+"""
+
+
+def test_the_first_compile_of_a_process_is_said_once_on_stderr(tmp_path: Path) -> None:
+    """One line for two compiles; none once cached, none with progress off."""
+    (tmp_path / "twokernels.py").write_text(_TWO_KERNELS)
+    script = (
+        "import sys; sys.path.insert(0, sys.argv[1]); import twokernels; "
+        "print(twokernels.triple(2.0) + twokernels.halve(2.0))"
+    )
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    env.pop("WORKBENCH_PROGRESS", None)
+
+    def stderr(**extra: str) -> str:
+        done = subprocess.run(
+            [sys.executable, "-c", script, str(tmp_path)],
+            env=dict(env, **extra),
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        assert done.returncode == 0 and done.stdout == "7.0\n", done.stderr
+        return done.stderr
+
+    first = stderr()
+    assert first == (
+        "workbench: "
+        + _compiled.COMPILING.format(what="twokernels.triple, two kernels")
+        + "\n"
+    )
+    assert stderr() == ""  # loaded from the cache
+    assert stderr(NUMBA_CACHE_DIR=str(tmp_path / "other"), WORKBENCH_PROGRESS="0") == ""

@@ -125,8 +125,8 @@ _ANNOTATED = {"float": types.float64, "int": types.int64, "bool": types.boolean}
 #: The line said on stderr when this process first compiles a kernel (module
 #: docstring), unless the environment sets ``WORKBENCH_PROGRESS=0``.
 COMPILING = (
-    "compiling {what} with Numba (first use on this machine or after an "
-    "upgrade, a few seconds; cached for later runs)…"
+    "compiling the Numba kernels on first use (a few seconds, cached for later "
+    "runs): {what}…"
 )
 
 #: Kernels whose compile this process has announced (at most one).
@@ -271,17 +271,19 @@ class _SourceKeyedCache(FunctionCache):
 def _announce_compile(func: Callable[..., Any]) -> None:
     """Say once per process, on stderr, that a kernel is being compiled.
 
-    The line names the kernel's module (its docstring's first line says what
-    it computes). Silenced by ``WORKBENCH_PROGRESS=0``, as the command line's
-    progress lines.
+    The line (:data:`COMPILING`) names the kernel and what its module
+    computes (its docstring's first line, up to a colon). Silenced by
+    ``WORKBENCH_PROGRESS=0``, as the command line's progress lines (a command
+    sets it while it runs: it says so itself).
     """
     with _announce_lock:
         if _announced or os.environ.get("WORKBENCH_PROGRESS", "1") == "0":
             return
         _announced.append(f"{func.__module__}.{func.__qualname__}")
     module = sys.modules.get(func.__module__)
-    summary = ((module.__doc__ if module else None) or "").strip().splitlines()
-    what = func.__module__ + (f" ({summary[0].rstrip('.')})" if summary else "")
+    lines = ((module.__doc__ if module else None) or "").strip().splitlines()
+    summary = lines[0].split(":")[0].rstrip(".").replace("``", "") if lines else ""
+    what = _announced[0] + (f", {summary[:1].lower()}{summary[1:]}" if summary else "")
     try:
         sys.stderr.write(f"workbench: {COMPILING.format(what=what)}\n")
         sys.stderr.flush()

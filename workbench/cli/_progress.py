@@ -20,6 +20,9 @@ from typing import TextIO
 
 PROGRESS_DELAY = 1.0  # [s] before a running command prints its line
 COMPILING = "compiling the Numba kernels on first use (cached for later runs)…"
+#: The environment variable that turns progress lines off (``0``); set while a
+#: command runs, so that ``workbench._compiled`` leaves its compile line to it.
+_ENVIRON = "WORKBENCH_PROGRESS"
 
 
 class Progress:
@@ -50,9 +53,13 @@ class Progress:
         self._finished = False
         self._said_compiling = False
         self._listener: object | None = None
+        self._environ: str | None = None
         _LIVE.add(self)
 
     def __enter__(self) -> Progress:
+        # the command speaks for compiles: the library's own line is off
+        self._environ = os.environ.get(_ENVIRON)
+        os.environ[_ENVIRON] = "0"
         if not self.enabled:
             return self
         self._timer = threading.Timer(self.delay, self._say, args=(self.message,))
@@ -68,6 +75,10 @@ class Progress:
         traceback: TracebackType | None,
     ) -> None:
         self.finish()
+        if self._environ is None:
+            os.environ.pop(_ENVIRON, None)
+        else:
+            os.environ[_ENVIRON] = self._environ
         if self._listener is not None:
             from numba.core import event
 
