@@ -162,7 +162,8 @@ def test_singularities_bad_input(capsys, argv, fragment) -> None:
     assert len(err.strip().splitlines()) == 1
 
 
-def test_report_singularities_json(capsys, tmp_path) -> None:
+def test_report_singularities_json(capsys, tmp_path, monkeypatch) -> None:
+    monkeypatch.setenv("WORKBENCH_PROGRESS", "1")  # the bar honours this (and -q)
     html = tmp_path / "kang.html"
     argv = ["--robot", "puma560-kang", "--out", str(html), *SMALL_GRID, "--json"]
     code, out, err = run(capsys, "report", "singularities", *argv)
@@ -174,6 +175,10 @@ def test_report_singularities_json(capsys, tmp_path) -> None:
     assert summary["out"] == str(html)
     assert html.read_text(encoding="utf-8").startswith("<!DOCTYPE html>")
     assert "100%" in err  # the progress bar, on stderr
+    for off in (["-q"], []):
+        monkeypatch.setenv("WORKBENCH_PROGRESS", "1" if off else "0")
+        code, _, err = run(capsys, *off, "report", "singularities", *argv)
+        assert code == 0 and "%" not in err
 
 
 def test_report_singularities_text_and_no_progress(capsys, tmp_path) -> None:
@@ -187,12 +192,12 @@ def test_report_singularities_text_and_no_progress(capsys, tmp_path) -> None:
 @pytest.mark.parametrize(
     ("extra", "fragment"),
     [
-        (["--out", "/nonexistent-dir/x.html"], "output folder does not exist"),
+        (["--out", "/nonexistent-dir/x.html"], "/nonexistent-dir does not exist"),
         (
             ["--out", "OUT", "--trajectory", "/nonexistent.csv"],
             "cannot read trajectory",
         ),
-        (["--out", "OUT", "--grid", "1"], "must be ≥ 2"),
+        (["--out", "OUT", "--grid", "1"], "--grid: must be 2..4000"),
     ],
 )
 def test_report_bad_input(capsys, tmp_path, extra, fragment) -> None:

@@ -3,17 +3,20 @@
 Every file the workbench writes goes through :func:`atomic_file` (or
 :func:`atomic_files` for a set, :func:`write_text_atomic` for text): the data go
 to a hidden temporary file in the target's folder
-(``.<name>.<random>.tmp<suffix>``), which is flushed to disk (``fsync``) and
-renamed onto the target only when the writer returned. A failed or interrupted
-run leaves an existing output byte-identical; only a ``kill -9`` in the middle
-may leave a temporary file behind (never the target half-written). Commands
+(``.<stem>.<pid>-<random>.tmp<suffix>``), which is flushed to disk (``fsync``)
+and renamed onto the target only when the writer returned. A failed or
+interrupted run leaves an existing output byte-identical; only a ``kill -9`` in
+the middle may leave a temporary file behind (never the target half-written),
+which the next write of that target removes (its process is gone). Commands
 call :func:`check_outputs` before any work, so a bad output path fails at once.
 """
 
 from __future__ import annotations
 
 import contextlib
+import glob
 import os
+import re
 import shutil
 import tempfile
 from collections.abc import Iterable, Iterator
@@ -104,9 +107,10 @@ def atomic_files(*paths: str | Path) -> Iterator[list[Path]]:
     try:
         for path in targets:
             check_output(path)
+            remove_stale_temporaries(path)
             handle, name = tempfile.mkstemp(
                 dir=path.parent,
-                prefix=f".{path.stem}.",
+                prefix=f".{path.stem}.{os.getpid()}-",
                 suffix=f"{TEMP_MARK}{path.suffix}",
             )
             os.close(handle)
@@ -176,6 +180,39 @@ def atomic_folder(path: str | Path) -> Iterator[Path]:
         _sync_folder(path.parent)
     finally:
         shutil.rmtree(parent, ignore_errors=True)
+
+
+def get_temporaries(path: str | Path) -> list[tuple[Path, int]]:
+    """The temporary files of ``path`` in its folder, with their writers' PIDs."""
+    path = Path(path)
+    pattern = re.compile(
+        re.escape(f".{path.stem}.")
+        + r"(\d+)-[^.]+"
+        + re.escape(TEMP_MARK + path.suffix)
+    )
+    found = []
+    for entry in path.parent.glob(f".{glob.escape(path.stem)}.*{TEMP_MARK}*"):
+        match = pattern.fullmatch(entry.name)
+        if match is not None:
+            found.append((entry, int(match.group(1))))
+    return found
+
+
+def remove_stale_temporaries(path: str | Path) -> None:
+    """Remove temporary files of ``path`` whose writing process is gone (kill -9)."""
+    for entry, pid in get_temporaries(path):
+        if pid != os.getpid() and not _is_running(pid):
+            entry.unlink(missing_ok=True)
+
+
+def _is_running(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):  # another user's process, or no kill()
+        return True
+    return True
 
 
 def _sync(path: Path) -> None:

@@ -11,6 +11,7 @@ Two families tell the command line which exit code to use:
 
 from __future__ import annotations
 
+import difflib
 from collections.abc import Iterable
 
 
@@ -61,8 +62,13 @@ class RobotNotFoundError(InputError):
     def __init__(self, name: str, valid: Iterable[str]):
         self.name = name
         self.valid = sorted(valid)
+        close = [v for v in self.valid if name and v.startswith(name)]
+        close += [
+            v for v in difflib.get_close_matches(name, self.valid) if v not in close
+        ]
+        hint = f" did you mean {', '.join(close[:3])}?" if close and name else ""
         super().__init__(
-            f"unknown robot {name!r}; valid names: {', '.join(self.valid)}"
+            f"unknown robot {name!r};{hint} valid names: {', '.join(self.valid)}"
             " (or a path to a .urdf file)"
         )
 

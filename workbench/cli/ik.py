@@ -23,7 +23,7 @@ from workbench.cli._common import (
     load_robot_from_args,
     print_json,
 )
-from workbench.errors import InfeasibleError
+from workbench.errors import InfeasibleError, InputError
 from workbench.ik.closed_form import (
     IKSolution,
     UnsupportedRobotError,
@@ -44,7 +44,10 @@ from workbench.poses import (
 #: decimals, as in "0.7071 0 0 0.7071", are enough.
 QUAT_TYPED_TOL = 1e-3
 
+EXIT_INFEASIBLE = 3
 _MM = 1e-3
+#: Largest |coordinate| of a target position [m] (1000 km: far beyond any arm).
+MAX_TARGET_COORDINATE = 1e6
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -104,6 +107,17 @@ def target_from_args(args: argparse.Namespace) -> pin.SE3:
         InputError: If the numbers do not make a rigid pose.
     """
     scale = _MM if args.mm else 1.0
+    if args.angeles7 is not None:
+        position = args.angeles7[4:]
+    elif args.matrix is not None:
+        position = args.matrix[3:12:4]
+    else:
+        position = args.xyz_quat_wxyz[:3]
+    if max(abs(x) * scale for x in position) > MAX_TARGET_COORDINATE:
+        raise InputError(
+            f"target position {position} too far: each coordinate at most "
+            f"{MAX_TARGET_COORDINATE:g} m"
+        )
     if args.angeles7 is not None:
         x = np.array(args.angeles7)
         x[4:] *= scale
@@ -167,49 +181,69 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _solve_and_print(args: argparse.Namespace, robot: Robot, target: pin.SE3) -> int:
-    rows: list[dict[str, Any]]
     try:
         family = get_closed_form(robot).family
     except UnsupportedRobotError as err:
         solver, reason = "numeric", str(err)
         if args.all and not args.json:
             print(f"no closed form: {reason}", file=sys.stderr)
-        rows = [_numeric_row(robot, target)]
     else:
         solver, reason = "closed-form", f"{family.upper()} family"
-        solutions = analytic(robot, target)
-        if not args.all:
-            solutions = [_pick(solutions, robot.nq)]
-        rows = [
-            {
-                "branch": s.branch,
-                "q": s.q,
-                "q_deg": np.rad2deg(s.q),
-                "within_limits": s.within_limits,
-                "wrist_singular": s.wrist_singular,
-                "shoulder_singular": s.shoulder_singular,
-                "residual": residual(robot, s.q, target),
-            }
-            for s in solutions
-        ]
+    head = {
+        "robot": robot.name,
+        "frame": robot.tool_frame,
+        "solver": solver,
+        "solver_note": reason,
+    }
+    try:
+        rows = _solve(args, robot, target, solver)
+    except InfeasibleError as err:
+        if not args.json:
+            raise
+        message = " ".join(str(err).split())
+        print_json({**head, "solutions": [], "feasible": False, "error": message})
+        print(f"workbench: error: {message}", file=sys.stderr)
+        return EXIT_INFEASIBLE
     if args.json:
-        print_json(
-            {
-                "robot": robot.name,
-                "frame": robot.tool_frame,
-                "solver": solver,
-                "solver_note": reason,
-                "solutions": rows,
-            }
-        )
+        print_json({**head, "solutions": rows, "feasible": True})
         return 0
     print(f"robot {robot.name}   frame {robot.tool_frame}   solver {solver}")
+    width = max(len(row["branch"]) for row in rows) + 2
     for row in rows:
         flags = "" if row["within_limits"] else "  (outside joint limits)"
         if row["wrist_singular"]:
             flags += "  (wrist singular)"
         if row["shoulder_singular"]:
             flags += "  (shoulder singular)"
-        print(f"{row['branch']:26s} q [deg] {format_vector(row['q_deg'], 3)}{flags}")
-        print(f"{'':26s} residual {row['residual']:.2e}")
+        q_deg = format_vector(row["q_deg"], 3)
+        print(f"{row['branch']:<{width}}q [deg] {q_deg}{flags}")
+        print(f"{'':<{width}}residual {row['residual']:.2e}")
     return 0
+
+
+def _solve(
+    args: argparse.Namespace, robot: Robot, target: pin.SE3, solver: str
+) -> list[dict[str, Any]]:
+    """The rows to print: the chosen branch, every branch (``--all``) or numeric.
+
+    Raises:
+        InfeasibleError: If the pose is out of reach, or no branch is within
+            the joint limits.
+    """
+    if solver == "numeric":
+        return [_numeric_row(robot, target)]
+    solutions = analytic(robot, target)
+    if not args.all:
+        solutions = [_pick(solutions, robot.nq)]
+    return [
+        {
+            "branch": s.branch,
+            "q": s.q,
+            "q_deg": np.rad2deg(s.q),
+            "within_limits": s.within_limits,
+            "wrist_singular": s.wrist_singular,
+            "shoulder_singular": s.shoulder_singular,
+            "residual": residual(robot, s.q, target),
+        }
+        for s in solutions
+    ]

@@ -216,17 +216,18 @@ def _print_human(robot, traj, result: dict) -> None:
         f"(minimum {result['min_duration']:.6g} s); normal spline N = "
         f"{traj.spline.n_points}, A = {traj.spline.amplitude:.6g}"
     )
+    w = max(14, *(len(name) + 2 for name in robot.joint_names))
     print(
-        f"{'joint':<14}{'pick':>9}{'place':>9}{'peak speed':>12}{'limit':>9}"
+        f"{'joint':<{w}}{'pick':>9}{'place':>9}{'peak speed':>12}{'limit':>9}"
         f"{'peak acc':>11}{'limit':>9}"
     )
     print(
-        f"{'':<14}{'[deg]':>9}{'[deg]':>9}{'[deg/s]':>12}{'[deg/s]':>9}"
+        f"{'':<{w}}{'[deg]':>9}{'[deg]':>9}{'[deg/s]':>12}{'[deg/s]':>9}"
         f"{'[deg/s²]':>11}{'[deg/s²]':>9}"
     )
     for i, name in enumerate(robot.joint_names):
         print(
-            f"{name:<14}{np.rad2deg(traj.q_pick[i]):9.2f}"
+            f"{name:<{w}}{np.rad2deg(traj.q_pick[i]):9.2f}"
             f"{np.rad2deg(traj.q_place[i]):9.2f}"
             f"{np.rad2deg(result['peak_velocity'][i]):12.3f}"
             f"{np.rad2deg(robot.velocity_limit[i]):9.2f}"

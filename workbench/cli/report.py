@@ -7,17 +7,23 @@ import sys
 from pathlib import Path
 from typing import TextIO
 
+from workbench.atomic_files import check_outputs, write_text_atomic
 from workbench.cli._common import (
     add_json_flag,
     add_robot_argument,
+    bounded_int,
+    get_input_paths,
     load_robot_from_args,
     print_json,
 )
-from workbench.errors import InputError
 from workbench.trajectory.csv_io import read_trajectory_csv
 
 #: Width of the progress bar [characters].
 BAR_WIDTH = 30
+#: Largest ``--grid`` (points per axis of the det J map).
+MAX_GRID = 4000
+#: Largest ``--svd-grid`` (points per axis of the σmin map: one SVD each).
+MAX_SVD_GRID = 1000
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -43,15 +49,15 @@ def register(commands: argparse._SubParsersAction) -> None:
     sing.add_argument("--out", required=True, type=Path, help="HTML file to write")
     sing.add_argument(
         "--grid",
-        type=_positive_int,
+        type=bounded_int(2, MAX_GRID),
         default=1000,
-        help="points per axis of the det J map (default: 1000)",
+        help=f"points per axis of the det J map (default: 1000; 2..{MAX_GRID})",
     )
     sing.add_argument(
         "--svd-grid",
-        type=_positive_int,
+        type=bounded_int(2, MAX_SVD_GRID),
         default=200,
-        help="points per axis of the σmin map (default: 200)",
+        help=f"points per axis of the σmin map (default: 200; 2..{MAX_SVD_GRID})",
     )
     sing.add_argument(
         "--trajectory",
@@ -59,23 +65,15 @@ def register(commands: argparse._SubParsersAction) -> None:
         help="joint trajectory CSV (t,q1..qn,qd..,qdd..): closest approaches",
     )
     sing.add_argument(
-        "--no-progress", action="store_true", help="no progress bar on stderr"
+        "--no-progress",
+        action="store_true",
+        help="no progress bar on stderr (nor with -q or WORKBENCH_PROGRESS=0)",
     )
     add_json_flag(sing)
     sing.set_defaults(
         run=run_singularities,
         progress_message="report: computing the singularity report…",
     )
-
-
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 2:
-        raise argparse.ArgumentTypeError(f"must be ≥ 2, got {value}")
-    return value
 
 
 class ProgressBar:
@@ -98,27 +96,25 @@ class ProgressBar:
 
 def run_singularities(args: argparse.Namespace) -> int:
     """Build and write the singularity report; returns the exit code."""
-    from workbench.reports.singularity_report import (
-        write_singularity_report,
-    )
+    from workbench.reports.singularity_report import build_singularity_report
 
+    out = args.out
+    check_outputs([out], get_input_paths(args))
+    bar = args.progress.enabled and not args.no_progress  # -q, WORKBENCH_PROGRESS=0
     args.progress.finish()  # the command draws its own progress bar (or none)
     robot = load_robot_from_args(args)
     trajectory = None
     if args.trajectory is not None:
         samples = read_trajectory_csv(args.trajectory, robot.nq)
         trajectory = (samples.t, samples.q)
-    out = args.out
-    if not out.parent.is_dir():
-        raise InputError(f"output folder does not exist: {out.parent}")
-    report = write_singularity_report(
+    report = build_singularity_report(
         robot,
-        out,
         grid_size=args.grid,
         svd_grid_size=args.svd_grid,
         trajectory=trajectory,
-        progress=None if args.no_progress else ProgressBar(sys.stderr),
+        progress=ProgressBar(sys.stderr) if bar else None,
     )
+    write_text_atomic(out, report.html)
     summary = {"out": str(out), **report.summary}
     if args.json:
         print_json(summary)

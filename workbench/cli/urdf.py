@@ -5,9 +5,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from workbench.atomic_files import check_outputs, write_text_atomic
 from workbench.cli._common import (
     add_json_flag,
     add_robot_argument,
+    get_input_paths,
     load_robot_from_args,
     print_json,
 )
@@ -41,6 +43,7 @@ def register(commands: argparse._SubParsersAction) -> None:
     )
     add_robot_argument(srdf)
     srdf.add_argument("--out", type=Path, help="SRDF file to write (default: stdout)")
+    add_json_flag(srdf)
     srdf.set_defaults(
         run=run_srdf, progress_message="urdf: writing the collision filter…"
     )
@@ -48,12 +51,9 @@ def register(commands: argparse._SubParsersAction) -> None:
 
 def run_from_dh(args: argparse.Namespace) -> int:
     """Write the URDF; returns the exit code."""
+    check_outputs([args.out], [args.table])
     table = DHTable.from_json(args.table)
-    text = generate_urdf(table)
-    try:
-        args.out.write_text(text, encoding="utf-8")
-    except OSError as err:
-        raise InputError(f"cannot write {args.out}: {err.strerror}") from err
+    write_text_atomic(args.out, generate_urdf(table))
     if args.json:
         print_json(
             {
@@ -72,19 +72,36 @@ def run_from_dh(args: argparse.Namespace) -> int:
 
 
 def run_srdf(args: argparse.Namespace) -> int:
-    """Print or write the self-collision filter; returns the exit code."""
+    """Print or write the self-collision filter; returns the exit code.
+
+    With ``--json``: ``{robot, out, disabled: [{link_a, link_b, reason}],
+    srdf}`` (``out`` None when the SRDF is not written to a file; ``srdf`` is
+    its text).
+    """
     from workbench.collision import compute_self_collision_filter
 
+    check_outputs([args.out], get_input_paths(args))
     robot = load_robot_from_args(args)
     if robot.collision_model.ngeoms == 0:
         raise InputError(f"robot {robot.name!r} has no collision geometry")
-    text = compute_self_collision_filter(robot).to_srdf()
-    if args.out is None:
+    pairs = compute_self_collision_filter(robot)
+    text = pairs.to_srdf()
+    if args.out is not None:
+        write_text_atomic(args.out, text)
+    if args.json:
+        print_json(
+            {
+                "robot": robot.name,
+                "out": None if args.out is None else str(args.out),
+                "disabled": [
+                    {"link_a": d.link_a, "link_b": d.link_b, "reason": d.reason}
+                    for d in pairs.disabled
+                ],
+                "srdf": text,
+            }
+        )
+    elif args.out is None:
         print(text, end="")
-        return 0
-    try:
-        args.out.write_text(text, encoding="utf-8")
-    except OSError as err:
-        raise InputError(f"cannot write {args.out}: {err.strerror}") from err
-    print(f"wrote {args.out}")
+    else:
+        print(f"wrote {args.out}")
     return 0

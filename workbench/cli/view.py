@@ -8,10 +8,12 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from workbench.atomic_files import check_outputs
 from workbench.cli._common import (
     add_robot_argument,
     configuration_from_args,
     finite_float,
+    get_input_paths,
     load_robot_from_args,
 )
 from workbench.errors import InputError
@@ -132,6 +134,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("give joint values or --trajectory, not both")
     if args.ik_branches and not args.q:
         raise InputError("--ik-branches needs joint values (the pose is their FK)")
+    if args.html is not None:
+        check_outputs([args.html], get_input_paths(args))
     robot = load_robot_from_args(args)
     samples = read_samples(args.trajectory, robot) if args.trajectory else None
     q = configuration_from_args(robot, args, args.q) if args.q else None

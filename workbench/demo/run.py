@@ -9,25 +9,29 @@ the figures.
 
 from __future__ import annotations
 
+import ctypes
 import functools
 import json
 import logging
 import multiprocessing
 import os
+import signal
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from pathlib import Path
-from types import TracebackType
+from types import FrameType, TracebackType
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from workbench import paper_data
+from workbench.atomic_files import write_text_atomic
 from workbench.collision import CollisionChecker, check_path, get_angeles_scene
 from workbench.demo.pick_and_place import run_pick_and_place_demo
+from workbench.errors import InputError
 from workbench.json_numbers import to_json_ready
 from workbench.model.loading import load_robot
 from workbench.model.robot import Robot
@@ -118,7 +122,7 @@ def format_table2(rows: list[Table2Comparison]) -> str:
 
 def _write_pages(robot: Robot, out_dir: Path) -> dict[str, str]:
     """The 3D preview and the singularity report of the pick-and-place path."""
-    from workbench.reports.singularity_report import write_singularity_report
+    from workbench.reports.singularity_report import build_singularity_report
     from workbench.viz import write_trajectory_html
 
     samples = read_trajectory_csv(out_dir / "pick_and_place.csv", robot.nq)
@@ -130,7 +134,8 @@ def _write_pages(robot: Robot, out_dir: Path) -> dict[str, str]:
         checker=CollisionChecker(robot, get_angeles_scene(robot)),
     )
     report = out_dir / "singularities.html"
-    write_singularity_report(robot, report, trajectory=(samples.t, samples.q))
+    built = build_singularity_report(robot, trajectory=(samples.t, samples.q))
+    write_text_atomic(report, built.html)
     return {"preview": str(preview), "singularity_report": str(report)}
 
 
@@ -170,7 +175,10 @@ class _InSecondProcess:
     whenever the second process fails, :meth:`result` makes the call in this
     process instead, so that an error is raised here with its traceback,
     exactly as without a second process. Leaving the ``with`` block early (an
-    error here) stops the second process.
+    error here, Ctrl-C) stops the second process. The second process ends with
+    this one: it gets SIGTERM when this process dies, even by ``kill -9``
+    (Linux ``PR_SET_PDEATHSIG``), ignores Ctrl-C (this process stops it), and
+    on SIGTERM leaves its files as they were (no temporary file stays).
     """
 
     def __init__(self, function: Callable[..., Any], *args: Any, **kwargs: Any):
@@ -181,7 +189,9 @@ class _InSecondProcess:
             context = multiprocessing.get_context("fork")
             receiver, sender = context.Pipe(duplex=False)
             process = context.Process(
-                target=_send_result, args=(sender, self._call), daemon=True
+                target=_send_result,
+                args=(sender, self._call, os.getpid()),
+                daemon=True,
             )
             try:
                 process.start()
@@ -227,14 +237,45 @@ class _InSecondProcess:
             self._process = None
 
 
-def _send_result(sender: Connection, call: Callable[[], Any]) -> None:
+def _send_result(sender: Connection, call: Callable[[], Any], parent: int) -> None:
     """In the second process: send ``(True, call())``, or ``(False, None)``."""
+    _end_with_parent(parent)
     try:
         result = (True, call())
+    except SystemExit:  # stopped by the parent (SIGTERM): nobody is listening
+        raise
     except BaseException:  # the parent makes the call again, to raise it
         result = (False, None)
-    sender.send(result)
-    sender.close()
+    try:
+        sender.send(result)
+        sender.close()
+    except OSError:  # the parent is gone
+        pass
+
+
+#: Linux prctl option: the signal a process gets when its parent dies.
+_PR_SET_PDEATHSIG = 1
+
+
+def _end_with_parent(parent: int) -> None:
+    """In a forked child: stop on the parent's death, cleanly on SIGTERM.
+
+    SIGTERM raises ``SystemExit`` (writers then remove their temporary files);
+    Ctrl-C is ignored, as the parent stops the child itself.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _exit_on_sigterm)
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+    except (OSError, AttributeError):  # not Linux: the parent's exit stops it
+        pass
+    if os.getppid() != parent:  # the parent died before prctl
+        raise SystemExit(0)
+
+
+def _exit_on_sigterm(signum: int, frame: FrameType | None) -> None:
+    raise SystemExit(128 + signum)
 
 
 def format_fish_cutting(summary: dict[str, Any]) -> str:
@@ -287,6 +328,23 @@ def round_for_json(value: Any, digits: int = SUMMARY_DIGITS) -> Any:
     return to_json_ready(value, digits=digits)
 
 
+def check_output_folder(out_dir: Path) -> None:
+    """Refuse an output folder that is a file or cannot be created or written.
+
+    Raises:
+        InputError: Naming the path and the reason.
+    """
+    if out_dir.exists() and not out_dir.is_dir():
+        raise InputError(f"--out {out_dir}: a file, not a folder")
+    existing = out_dir
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir():
+        raise InputError(f"--out {out_dir}: {existing} is a file, not a folder")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise InputError(f"--out {out_dir}: folder {existing} is not writable")
+
+
 def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, Any]:
     """Run the papers' examples and write the results into ``out_dir``.
 
@@ -301,9 +359,17 @@ def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, An
     Returns:
         A JSON-ready summary, also written to ``out_dir/summary.json`` with
         every float rounded to :data:`SUMMARY_DIGITS` significant digits (see
-        :func:`round_for_json`); the CSV files keep full precision.
+        :func:`round_for_json`); the CSV files keep full precision. Every file
+        is written all at once (:mod:`workbench.atomic_files`).
+
+    Raises:
+        InputError: If ``out_dir`` is a file or cannot be created or written.
     """
-    out_dir.mkdir(parents=True, exist_ok=True)
+    check_output_folder(out_dir)
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise InputError(f"cannot create {out_dir}: {err.strerror or err}") from err
     # The fish cutting (its own robot, kernels and files) runs in a second
     # process meanwhile: on a first run most of the time goes to compiling
     # kernels, the planner's there and the closed form here (which the planner
@@ -311,9 +377,9 @@ def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, An
     with _InSecondProcess(_run_fish_cutting, out_dir, pages=plots) as fish:
         rows = compare_table2(robot)
         table = format_table2(rows)
-        (out_dir / "table2.md").write_text(
+        write_text_atomic(
+            out_dir / "table2.md",
             "# Angeles et al. Table II reproduced from Table III\n\n" + table + "\n",
-            encoding="utf-8",
         )
         summary = {
             "robot": robot.name,
@@ -332,13 +398,13 @@ def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, An
             "pick_and_place": run_pick_and_place_demo(robot, out_dir, plots=plots),
         }
         checker = CollisionChecker(robot, get_angeles_scene(robot))
-        (out_dir / f"{robot.name}.srdf").write_text(checker.filter.to_srdf(), "utf-8")
+        write_text_atomic(out_dir / f"{robot.name}.srdf", checker.filter.to_srdf())
         pages = _write_pages(robot, out_dir) if plots else None
         summary["fish_cutting"] = fish.result()
     if pages is not None:
         summary["pages"] = pages
-    (out_dir / "summary.json").write_text(
-        json.dumps(round_for_json(summary), indent=2) + "\n", encoding="utf-8"
+    write_text_atomic(
+        out_dir / "summary.json", json.dumps(round_for_json(summary), indent=2) + "\n"
     )
     _log.info("demo written to %s", out_dir)
     return summary

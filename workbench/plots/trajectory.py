@@ -22,6 +22,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
+from workbench.atomic_files import atomic_file
 from workbench.model.robot import Robot
 from workbench.trajectory.cartesian import CartesianSamples
 from workbench.trajectory.normal_spline import NormalSpline, UniformCubicSpline
@@ -41,12 +42,16 @@ def _new_or_cleared(fig: Figure | None, figsize: tuple[float, float]) -> Figure:
 
 
 def save_figure(fig: Figure, path: str | Path) -> Path:
-    """Write ``fig`` as a PNG at :data:`_DPI` (folders created); returns the path."""
+    """Write ``fig`` at :data:`_DPI` (folders created), all at once; returns the path.
+
+    The format follows the suffix (``.png``, ``.svg``, ``.pdf``, ...).
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     if fig.canvas is None or type(fig.canvas).__name__ == "FigureCanvasBase":
         FigureCanvasAgg(fig)
-    fig.savefig(path, dpi=_DPI)
+    with atomic_file(path) as tmp:
+        fig.savefig(tmp, dpi=_DPI, format=path.suffix.lstrip(".").lower() or None)
     return path
 
 
