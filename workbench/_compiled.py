@@ -46,11 +46,29 @@ each process compiles its own).
 
 A helper keeps the array types of its callers (it is usually inlined into
 them, and a contiguous array compiles to faster code) and only drops the
-constant types of scalars.
+constant types of scalars. It is compiled without the wrappers that a call
+from Python needs (they would lengthen every first compile): called from
+Python, it runs its Python source, as within :func:`interpreted`.
 
 Both compile with the options of every kernel of the project: ``cache=True``,
 ``nogil=True``, ``error_model="numpy"`` (a division by zero gives inf or nan,
 as in numpy, rather than raising).
+
+Numba's disk cache alone would run stale code: it keys an entry on the
+kernel's own bytecode and checks only the timestamp of the kernel's own file,
+so a helper inlined from another file, or a constant imported from one, stays
+as it was when the entry was written (Numba issue #1833). Here the key of
+every entry point and helper also holds :func:`source_digest` of its module:
+a hash of the source of that module and of every module of its package it
+imports, transitively (read from the files, by their ``import`` statements).
+An edit anywhere in what a kernel can reach makes a new entry, compiled once;
+a helper may live in any module, once.
+
+The first compile of a process (a cache miss: the first use on a machine, or
+after an edit or an upgrade) says so in one line on stderr, :data:`COMPILING`,
+naming the kernel; ``WORKBENCH_PROGRESS=0`` in the environment silences it
+(the command line sets it while a command runs, and says so in its own
+progress line).
 
 An entry point declared with ``vectorize=True`` holds a loop written for
 LLVM's loop vectoriser (no branches but selects, no library calls, flat
@@ -309,9 +327,9 @@ class _Interpretable(_CPUDispatcher):
 class _Helper(_Interpretable):
     """A dispatcher for kernels only: constant scalars compile as plain types.
 
-    Compiled without the wrappers that a call from Python needs (their code
-    costs a fifth of a first compile), so a call from Python runs the Python
-    source, as within :func:`interpreted`.
+    Compiled without the wrappers that a call from Python needs (module
+    docstring), so a call from Python runs the Python source, as within
+    :func:`interpreted`.
     """
 
     def __call__(self, *args: Any) -> Any:

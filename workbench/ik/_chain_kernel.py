@@ -1,11 +1,11 @@
 r"""Compiled serial-chain kinematics and the Levenberg–Marquardt loop of ``numeric``.
 
 Everything here is compiled with Numba (``cache=True``: compiled once per
-machine on first use, then loaded from the cache). The module is kept whole,
-although longer than the usual ~300 lines: Numba's cache of a function is not
-invalidated when a function it calls changes in *another* file, so the
-kernels that call each other live in one file. Only :func:`run`,
-:func:`solve_batch` and :func:`chain_kinematics` are entry points.
+machine on first use, then loaded from the cache, whose key covers the source
+of every module imported here: ``workbench._compiled``). Only :func:`run`,
+:func:`solve_batch` and :func:`chain_kinematics` are entry points; a target is
+checked finite and rigid with the closed forms' test
+(``_kernel_common.is_rigid``).
 
 Compile time matters (the first ``numeric`` call with an empty cache): no
 array slicing assignments or other library overloads (each compiles as a

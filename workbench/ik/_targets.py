@@ -1,8 +1,7 @@
 """Exact checks of IK targets: shape, finiteness, rigidity (``poses.RIGIDITY_TOL``).
 
-The compiled kernel (``_puma_kernel``) accepts a rigid pose by a quick test;
-a pose that fails it comes here, to be rejected with a clear message (or, if
-it is rigid within the tolerance after all, solved).
+The compiled kernels (``_kernel_common.is_rigid``) make the same test with
+the same tolerance; a pose they refuse comes here for the message.
 """
 
 from __future__ import annotations
@@ -22,8 +21,8 @@ FloatArray = npt.NDArray[np.float64]
 def pose_rows(target: pin.SE3 | npt.ArrayLike) -> list[list[float]]:
     """Rows of the (4, 4) homogeneous matrix as floats, every check made.
 
-    The exact checks behind the kernel's quick acceptance test
-    (``_puma_kernel``), which decide and word the error.
+    The checks of the kernels' rigidity test (``_kernel_common.is_rigid``),
+    which word the error.
 
     Raises:
         DimensionError: If ``target`` is not (4, 4).
