@@ -1,17 +1,37 @@
-"""MkDocs hooks: the command-line reference, generated from the parser itself.
+"""MkDocs hooks: the CLI reference from the parser, Sphinx roles as links.
 
 ``docs/cli.md`` holds the marker ``<!-- workbench-cli-help -->``; it is replaced
 by the ``--help`` text of every command and subcommand, so the page cannot drift
 from the code.
+
+The docstrings keep Sphinx's roles (``:func:`name```, ``:class:`~a.b.C```...),
+which read well in an editor; :class:`SphinxRoles`, a Griffe extension that
+``mkdocs.yml`` hands to mkdocstrings, turns each into a cross-reference before
+the docstring is rendered. The name is resolved as Python would from where the
+docstring sits (the object, then its parents, following imports); mkdocs-autorefs
+links it to the page that documents the target, and shows plain code when no
+page does (a private module, numpy, Pinocchio).
 """
 
 from __future__ import annotations
 
 import argparse
+import html
 import os
+import re
 from typing import Any
 
+import griffe
+
 MARKER = "<!-- workbench-cli-help -->"
+#: A cross-reference role: ``:kind:`target```, ``:kind:`~target``` (show the
+#: last part only) or ``:kind:`title <target>```.
+ROLE = re.compile(
+    r":(?:py:)?(?P<kind>func|class|meth|mod|data|attr|exc|obj|const):"
+    r"`(?P<tilde>~?)(?P<text>[^`<]+?)(?:\s*<(?P<target>[^`>]+)>)?`"
+)
+#: The package whose docstrings are rewritten.
+PACKAGE = "workbench"
 
 
 def _subcommands(
@@ -49,3 +69,55 @@ def on_page_markdown(markdown: str, page: Any, config: Any, files: Any) -> str:
     if MARKER in markdown:
         return markdown.replace(MARKER, render_cli_reference())
     return markdown
+
+
+def _resolve(scope: griffe.Object, name: str) -> str:
+    """Full path of ``name`` seen from ``scope``: its members, then its parents'."""
+    name = name.lstrip(".")
+    if name == PACKAGE or name.startswith(PACKAGE + "."):
+        return name
+    first, _, rest = name.partition(".")
+    current: griffe.Object | None = scope
+    while current is not None:
+        has_members = current.is_module or current.is_class
+        member = current.members.get(first) if has_members else None
+        if member is not None:
+            path = member.target_path if member.is_alias else member.path
+            return f"{path}.{rest}" if rest else path
+        current = current.parent
+    return name  # outside the package (numpy, pinocchio...): left to autorefs
+
+
+def link_roles(text: str, scope: griffe.Object) -> str:
+    """``text`` with every Sphinx role turned into an optional autorefs link."""
+
+    def replace(match: re.Match[str]) -> str:
+        target = (match["target"] or match["text"]).strip()
+        shown = match["text"].strip()
+        if match["tilde"]:
+            shown = shown.rsplit(".", 1)[-1]
+        identifier = html.escape(_resolve(scope, target), quote=True)
+        return (
+            f'<autoref identifier="{identifier}" optional>'
+            f"<code>{html.escape(shown)}</code></autoref>"
+        )
+
+    return ROLE.sub(replace, text)
+
+
+class SphinxRoles(griffe.Extension):
+    """Griffe extension: Sphinx roles in the package's docstrings become links."""
+
+    def on_package(self, *, pkg: griffe.Module, **kwargs: Any) -> None:
+        """Rewrite every docstring of the package once it is loaded."""
+        if pkg.name == PACKAGE:
+            _rewrite(pkg)
+
+
+def _rewrite(obj: griffe.Object) -> None:
+    if obj.docstring is not None:
+        scope = obj if obj.is_module or obj.is_class else obj.parent or obj
+        obj.docstring.value = link_roles(obj.docstring.value, scope)
+    for member in obj.members.values():
+        if not member.is_alias:
+            _rewrite(member)
