@@ -1,0 +1,99 @@
+"""``workbench.ik._kernel_common``: what the compiled closed forms share."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from workbench import load_robot
+from workbench.errors import InputError
+from workbench.ik import _kernel_common as common
+from workbench.ik import _puma_kernel, _ur_kernel, get_closed_form
+from workbench.ik._targets import pose_rows
+from workbench.poses import RIGIDITY_TOL
+
+_FLAGS = (
+    "FLAG_WITHIN_LIMITS",
+    "FLAG_WRIST_SINGULAR",
+    "FLAG_SHOULDER_SINGULAR",
+    "FLAG_SOME_UNREACHED",
+    "FLAG_COUNT",
+)
+_STATUSES = ("OK", "NOT_RIGID", "OUT_OF_REACH", "IN_CYLINDER")
+
+
+def test_flag_slots_and_status_codes_are_the_same_in_both_kernels() -> None:
+    for name in _FLAGS + _STATUSES:
+        value = getattr(common, name)
+        assert getattr(_puma_kernel, name) == value == getattr(_ur_kernel, name)
+    slots = [
+        *range(common.FLAG_WITHIN_LIMITS, common.FLAG_WITHIN_LIMITS + 8),
+        *range(common.FLAG_WRIST_SINGULAR, common.FLAG_WRIST_SINGULAR + 4),
+        common.FLAG_SHOULDER_SINGULAR,
+        common.FLAG_SOME_UNREACHED,
+    ]
+    assert sorted(slots) == list(range(common.FLAG_COUNT))  # each slot once
+    assert len({getattr(common, name) for name in _STATUSES}) == 4
+
+
+@pytest.fixture(scope="module")
+def solvers() -> list:
+    return [get_closed_form(load_robot(name)) for name in ("puma560", "ur5")]
+
+
+def _rotation(q: list[float]) -> np.ndarray:
+    w, x, y, z = np.asarray(q) / np.linalg.norm(q)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+_SPECIAL = st.sampled_from([math.nan, math.inf, -math.inf])
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    quaternion=st.lists(st.floats(-1.0, 1.0), min_size=4, max_size=4).filter(
+        lambda q: np.linalg.norm(q) > 0.1
+    ),
+    entry=st.integers(0, 15),
+    change=st.one_of(
+        st.floats(-3.0 * RIGIDITY_TOL, 3.0 * RIGIDITY_TOL), st.just(0.0), _SPECIAL
+    ),
+    mirrored=st.booleans(),
+)
+def test_kernels_refuse_exactly_the_poses_the_exact_checks_refuse(
+    solvers, quaternion, entry, change, mirrored
+) -> None:
+    """NOT_RIGID (one pose and batch) if and only if ``pose_rows`` raises."""
+    pose = np.eye(4)
+    pose[:3, :3] = _rotation(quaternion)
+    pose[:3, 3] = 0.3, -0.2, 0.4
+    if mirrored:  # det R = -1
+        pose[:3, 2] *= -1.0
+    pose.flat[entry] += change
+    try:
+        pose_rows(pose)
+        rigid = True
+    except InputError:
+        rigid = False
+    for solver in solvers:
+        kernel, geometry = solver._kernel, solver.geometry
+        q, flags = np.empty((8, 6)), np.empty(common.FLAG_COUNT, dtype=bool)
+        status = kernel.solve_pose(geometry, pose, np.empty(0), q, flags, True)
+        assert (status == common.NOT_RIGID) == (not rigid)
+        n = kernel.N_ANGLES
+        y, x = np.empty(n), np.empty(n)
+        codes, exact = np.empty(1, np.int8), np.empty(1, np.int64)
+        odd = np.empty(1, np.uint8)
+        flat = np.ascontiguousarray(pose).reshape(16)
+        kernel.batch_arguments(geometry, flat, y, x, codes, exact, odd, True)
+        assert bool(odd[0] & 2) == (not rigid)
