@@ -51,8 +51,11 @@ POSITION_TOL = 1e-12
 #: Largest FK rotation residual [rad] of a returned branch.
 ROTATION_TOL = 1e-12
 #: Refinement goes on until the residual is this fraction of the tolerances
-#: (or stops decreasing), a margin for the rounding of other FK codes.
+#: (or stops decreasing).
 POLISH = 1.0 / 16.0
+#: A branch is kept when its residual (this chain's FK) is within this
+#: fraction of the tolerances: a margin for FK codes that round differently.
+ACCEPT = 0.5
 #: Newton steps a branch may take (a regular one needs one or two; next to a
 #: singularity of the true chain convergence is linear, halving per step).
 REFINE_STEPS = 60
@@ -129,7 +132,7 @@ def _refine_branch(chain: FloatArray, target: FloatArray, q: FloatArray, work) -
             q[k] -= dq[k]
     for k in range(6):
         q[k] = best_q[k]
-    return best <= 1.0
+    return best <= ACCEPT
 
 
 @helper()

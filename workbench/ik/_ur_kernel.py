@@ -68,6 +68,7 @@ GEOMETRY_DTYPE = np.dtype(
         ("reach_low", "f8"),
         ("reach_high", "f8"),
         ("cylinder2", "f8"),
+        ("turn_tol", "f8"),  # NEAR_SINGULAR_TOL, plus the model's error
         ("theta_offset", "f8", 6),
         ("joint_sign", "f8", 6),
         ("plain", "f8", 6),
@@ -96,7 +97,9 @@ SHOULDER_SINGULAR_TOL = 1e-10
 #: from a vector of length |s5| known to ~1e-16, so it is known to ~1e-16 /
 #: |s5| only, and frame 3 (√(d5² + a4²) from the wrist point) moves with it:
 #: a pose at the stretched or folded elbow may land outside the reach by far
-#: more than its rounding, and is turned back into it, not refused.
+#: more than its rounding, and is turned back into it, not refused. A model
+#: that is UR-type only up to an error (``turn_tol`` of the record) gets
+#: MODEL_ERROR_SLACK times it more: its branches are refined on the model.
 NEAR_SINGULAR_TOL = 1e-13
 #: A turned frame 3 lands this fraction of a2 + a3 inside the arm's reach.
 REACH_MARGIN = 1e-12
@@ -133,6 +136,8 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     g["reach_low"], g["reach_high"] = low - slack, high + slack
     radius = max(abs(j[1].d + j[2].d + j[3].d) - model_slack, 0.0)
     g["cylinder2"] = radius**2 * (1.0 - 1e-12)
+    # a model that differs from the idealised chain moves θ6 by its error / s5
+    g["turn_tol"] = NEAR_SINGULAR_TOL + model_slack
     offsets = [x.theta_offset for x in j]
     g["theta_offset"], g["joint_sign"] = offsets, structure.joint_sign
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
@@ -185,7 +190,7 @@ def _planar(geo, c1, s1, c5, c6, s6, s5, rot, big_px, big_py):
 
 @common.inline
 def _turn_may_reach(geo, s5: float, dist: float) -> bool:
-    """Whether a turn of θ6 within NEAR_SINGULAR_TOL may bring frame 3 in reach.
+    """Whether a turn of θ6 within ``turn_tol`` may bring frame 3 in reach.
 
     ``dist``: frame 3's distance from the shoulder [m]. A turn δ moves it by at
     most √(d5² + a4²) |δ| and costs about |s5| |δ| of orientation; a pair
@@ -197,7 +202,7 @@ def _turn_may_reach(geo, s5: float, dist: float) -> bool:
     a2, a3 = abs(geo.a2), abs(geo.a3)
     miss = max(abs(a2 - a3) - dist, dist - (a2 + a3))
     arm = math.sqrt(geo.d5 * geo.d5 + geo.a4 * geo.a4)
-    return (miss > 0.0) & (abs(s5) * miss <= NEAR_SINGULAR_TOL * arm)
+    return (miss > 0.0) & (abs(s5) * miss <= geo.turn_tol * arm)
 
 
 @common.inline
@@ -353,7 +358,7 @@ def angle_arguments(
                     turn = _reach_turn(
                         geo, c1, s1, m, big_px, big_py, big_x, big_y, dist
                     )
-                    if abs(ss5 * turn) <= NEAR_SINGULAR_TOL:
+                    if abs(ss5 * turn) <= geo.turn_tol:
                         t6p = math.atan2(ss6, cs6) + turn
                         c234, s234, big_x, big_y = _planar(
                             geo, c1, s1, c5, math.cos(t6p), math.sin(t6p), ss5,
