@@ -256,39 +256,6 @@ def is_rigid(pose: FloatArray) -> bool:
     )
 
 
-@inline
-def copy_previous(prev: FloatArray) -> FloatArray:
-    """A writable C copy of ``prev`` (6,) or (0,), as the batch passes it.
-
-    So that the helpers taking it compile once. (A slice assignment would
-    compile an overload of its own.)
-    """
-    previous = np.empty(prev.shape[0])
-    for j in range(prev.shape[0]):
-        previous[j] = prev[j]
-    return previous
-
-
-@inline
-def slot_angles(y: FloatArray, x: FloatArray, exact: int) -> FloatArray:
-    """``atan2(y, x)`` per slot; ``y`` itself for a slot whose bit is in ``exact``."""
-    angles = np.empty(y.shape[0])
-    for slot in range(y.shape[0]):
-        if exact >> slot & 1:
-            angles[slot] = y[slot]
-        else:
-            angles[slot] = math.atan2(y[slot], x[slot])
-    return angles
-
-
-@inline
-def set_exact_angles(angles: FloatArray, y: FloatArray, exact: int) -> None:
-    """``angles[slot] = y[slot]`` for each slot whose bit is in ``exact``."""
-    for slot in range(angles.shape[0]):
-        if exact >> slot & 1:
-            angles[slot] = y[slot]
-
-
 @body
 def solve_one(
     geo,
@@ -324,11 +291,17 @@ def solve_one(
     if check and not is_rigid(pose):
         return NOT_RIGID
     y, x = np.empty(n_angles), np.empty(n_angles)
-    previous = copy_previous(prev)
+    # prev as the batch passes it (writable, C): the helpers compile once
+    previous = np.empty(prev.shape[0])
+    for j in range(prev.shape[0]):  # (a slice assignment compiles an overload)
+        previous[j] = prev[j]
     status, mask = angle_arguments(geo, pose, previous, y, x, np.empty((4, 4)))
     if status != OK:
         return status
-    angles = slot_angles(y, x, mask & ((1 << n_angles) - 1))
+    angles = np.empty(n_angles)
+    for slot in range(n_angles):  # atan2, or the angle itself in y
+        exact = mask >> slot & 1
+        angles[slot] = y[slot] if exact else math.atan2(y[slot], x[slot])
     assemble(geo, angles, previous, q, flags[FLAG_WITHIN_LIMITS:8], mask)
     for pair in range(4):
         flags[FLAG_WRIST_SINGULAR + pair] = mask >> wrist_bits[pair] & 1
@@ -374,7 +347,9 @@ def assemble_poses(geo, angles, y, status, exact, q, valid, assemble, dead_bits)
             continue
         mask = exact[i]
         if mask & slot_bits:  # (rare: an angle known without atan2)
-            set_exact_angles(angles[i], y[i], mask)
+            for slot in range(angles.shape[1]):
+                if mask >> slot & 1:
+                    angles[i, slot] = y[i, slot]
         assemble(geo, angles[i], none, q[i], no_within, mask)
         for b in range(8):
             valid[i, b] = not (mask >> dead_bits[b] & 1)
@@ -396,7 +371,6 @@ __all__ = [
     "body",
     "clamped_root",
     "clip_unit",
-    "copy_previous",
     "fallback_poses",
     "flat_index",
     "frame_rows",
@@ -408,8 +382,6 @@ __all__ = [
     "pose_row",
     "remainder",
     "rigid_rows",
-    "set_exact_angles",
-    "slot_angles",
     "solve_one",
     "within_limits",
     "write_framed",
