@@ -15,6 +15,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from benchmarks.bench_ik_agreement import rounded_urdf
 from workbench import Robot, load_robot
 from workbench.ik import analytic, get_structure, numeric
 from workbench.ik.structure import axis_lines
@@ -133,3 +134,63 @@ def test_numeric_ik_lands_on_a_branch(name: str) -> None:
         landed += 1
     assert landed >= 15
     assert get_structure(robot).family in ("opw", "ur")
+
+
+# -- URDFs that are of their family only up to rounding ---------------------------
+
+ROUNDED = ("kuka-kr6-r700", "puma560", "ur5")
+ATOL_Q_ROUNDED = 1e-9  # [rad] refined branches against the peers' exact answers
+MIN_SIGMA = 1e-2  # poses whose Jacobian has a smaller singular value are skipped
+
+
+def _peer_answers(robot: Robot, peer_name: str):
+    """The peer's exact answers (k, 6) for a target (4, 4), as a function."""
+    if peer_name == "eaik":
+        peer, rotation0 = eaik_robot(robot)
+
+        def solve(target: np.ndarray) -> np.ndarray:
+            pose = target.copy()
+            pose[:3, :3] = target[:3, :3] @ rotation0.T
+            solution = peer.IK(pose)
+            exact = ~np.asarray(solution.is_LS, dtype=bool)
+            return np.array(solution.Q).reshape(-1, 6)[exact]
+
+        return solve
+    peer, rotation0 = ik_geo_robot(robot)
+
+    def solve(target: np.ndarray) -> np.ndarray:
+        answers = peer.get_ik((target[:3, :3] @ rotation0.T).T, target[:3, 3])
+        return np.array([q for q, is_ls in answers if not is_ls]).reshape(-1, 6)
+
+    return solve
+
+
+@pytest.mark.parametrize("peer_name", ["eaik", "ik_geo"])
+@pytest.mark.parametrize("name", ROUNDED)
+def test_rounded_urdf_branches_agree_with_peers(
+    name: str, peer_name: str, tmp_path
+) -> None:
+    """Rounded URDF (1e-9 off), away from singularities: same branches to 1e-9.
+
+    Our branches are refined on the model (FK residual <= 1e-12); EAIK and
+    ik-geo solve the model's own axes.
+    """
+    robot = rounded_urdf(name, tmp_path)
+    solve = _peer_answers(robot, peer_name)
+    rng = np.random.default_rng(14)
+    model, data = robot.model, robot.model.createData()
+    compared = 0
+    for q in rng.uniform(robot.lower, robot.upper, size=(N_POSES, 6)):
+        jacobian = pin.computeJointJacobians(model, data, q)
+        if np.linalg.svd(jacobian, compute_uv=False)[-1] < MIN_SIGMA:
+            continue
+        target = robot.fk(q).homogeneous
+        ours = np.array([s.q for s in analytic(robot, target)])
+        theirs = solve(target)
+        assert len(theirs) == len(ours)
+        for q_peer in theirs:
+            assert np.abs(wrapped(ours - q_peer)).max(axis=1).min() <= ATOL_Q_ROUNDED
+        for q_ours in ours:
+            assert np.abs(wrapped(theirs - q_ours)).max(axis=1).min() <= ATOL_Q_ROUNDED
+        compared += 1
+    assert compared >= N_POSES // 2
