@@ -33,8 +33,12 @@ def _exit_interrupted(signum: int, frame: FrameType | None) -> None:
 
 
 def exit_on_interrupt() -> None:
-    """SIGINT ends the process with :data:`EXIT_INTERRUPTED`, nothing printed."""
-    signal.signal(signal.SIGINT, _exit_interrupted)
+    """SIGINT ends the process with :data:`EXIT_INTERRUPTED`, nothing printed.
+
+    An ignored SIGINT (a background job of a script, ``nohup``) stays ignored.
+    """
+    if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
+        signal.signal(signal.SIGINT, _exit_interrupted)
 
 
 if is_workbench_command():

@@ -20,6 +20,7 @@ import os
 import re
 import signal
 import sys
+import threading
 import warnings
 from collections.abc import Iterator, Sequence
 from typing import NoReturn
@@ -111,7 +112,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     returned exits 130 too.
     """
     command = is_workbench_command()
-    if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
+    in_main_thread = threading.current_thread() is threading.main_thread()
+    if in_main_thread and signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
         signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         return _main(argv)

@@ -1,0 +1,227 @@
+"""The command line's contract under bad input, drawn by hypothesis.
+
+Every input class of ``tests/_cli_fuzz.py`` (unwritable or input-clobbering
+output paths, malformed JSON and CSV files, sizes beyond the stated maxima,
+numbers in every notation, contradictory flags): the exit code is 0, 2 or 3,
+a failure prints one line on stderr and no traceback, and a failed run leaves
+every existing file byte-identical. A few cases also run as a real process.
+``python -m tests.run_cli_robustness`` runs hundreds of cases per class.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from tests._cli_fuzz import (
+    CLASSES,
+    OLD,
+    PICK,
+    PLACE,
+    PLAN,
+    contract_violations,
+    run_case,
+    write_inputs,
+)
+
+EXAMPLES_PER_CLASS = 8
+ATOL_IK = 1e-9  # [m, rad] FK residual of the IK of an FK pose printed with repr()
+
+
+@pytest.mark.parametrize("name", sorted(CLASSES))
+def test_bad_input_keeps_the_contract(name: str) -> None:
+    @settings(
+        max_examples=EXAMPLES_PER_CLASS,
+        suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+    )
+    @given(case=CLASSES[name])
+    def check(case: tuple[list[str], bytes]) -> None:
+        argv, bad = case
+        with tempfile.TemporaryDirectory() as folder:
+            write_inputs(Path(folder))
+            outcome = run_case(argv, Path(folder), bad)
+        assert contract_violations(outcome) == [], (argv, outcome)
+
+    check()
+
+
+def _run_in(tmp_path: Path, *argv: str) -> tuple[int, str, str]:
+    write_inputs(tmp_path)
+    outcome = run_case(list(argv), tmp_path)
+    assert contract_violations(outcome) == [], outcome
+    return outcome.code, outcome.stdout, outcome.stderr
+
+
+@pytest.mark.parametrize(
+    ("argv", "fragment"),
+    [
+        (["urdf", "from-dh", "t.json", "--out", "t.json"], "also an input"),
+        (
+            ["view", "--robot", "ur5", "--scene", "scene.json", "--html", "scene.json"],
+            "also an input",
+        ),
+        ([*PLAN, "--csv", "old.csv", "--plot", "o.xyz"], "unknown figure format"),
+        ([*PLAN, "--csv", "nodir/o.csv"], "does not exist"),
+        ([*PLAN, "--plot", "nodir/o.png"], "does not exist"),
+        (
+            ["report", "singularities", "--robot", "puma560", "--out", "dir"],
+            "is a folder",
+        ),
+        (["demo", "--out", "old.txt"], "not a folder"),
+        ([*PLAN, "--rate", "1e9"], "at most 100000 Hz"),
+        (["fishcut", "--seed", "-1"], "--seed: must be 0.."),
+        ([*PLAN, "--scene", "scene.json", "--no-collision"], "contradict"),
+        (
+            [
+                "ik",
+                "--robot",
+                "ur5",
+                "--angeles7",
+                "0",
+                "0",
+                "0",
+                "1",
+                "1e308",
+                "1e308",
+                "1e308",
+                "--mm",
+            ],
+            "at most 1e+06 m",
+        ),
+    ],
+)
+def test_found_cases_exit_2(tmp_path: Path, argv: list[str], fragment: str) -> None:
+    code, out, err = _run_in(tmp_path, *argv)
+    assert (code, out) == (2, "") and fragment in err, err
+    assert (tmp_path / "old.csv").read_text() == OLD
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "fragment"),
+    [
+        ("tool_frame", 'a"b<c>&', "'tool_frame' must be letters"),
+        ("tool_frame", "link1", "name of a generated link"),
+        ("name", "arm-->x", "without '--'"),
+    ],
+)
+def test_dh_names_that_break_the_urdf_exit_2(
+    tmp_path: Path, key: str, value: str, fragment: str
+) -> None:
+    table = {"name": "t", "joints": [{"alpha": 0.0, "a": 0.1, "d": 0.2}] * 6}
+    (tmp_path / "n.json").write_text(json.dumps({**table, key: value}))
+    code, _, err = _run_in(tmp_path, "urdf", "from-dh", "n.json", "--out", "o.urdf")
+    assert code == 2 and fragment in err
+    assert not (tmp_path / "o.urdf").exists()
+
+
+def test_numbers_in_any_notation_are_values(tmp_path: Path) -> None:
+    code, out, _ = _run_in(
+        tmp_path, "fk", "--robot", "ur5", "--rad", "-1", "1", "0", "-1.25", "-1e-10",
+        "0", "--json",
+    )  # fmt: skip
+    assert code == 0
+    pose = json.loads(out)
+    matrix = np.eye(4)
+    matrix[:3, :3], matrix[:3, 3] = pose["rotation"], pose["position"]
+    typed = [repr(float(x)) for x in matrix.ravel()]  # as pasted from fk's output
+    code, out, err = _run_in(
+        tmp_path, "ik", "--robot", "ur5", "--matrix", *typed, "--json"
+    )
+    assert code == 0, err
+    assert any(-1e-9 < x < 0.0 for x in matrix.ravel())  # e.g. -2.9e-11
+    residual = json.loads(out)["solutions"][0]["residual"]
+    assert residual <= ATOL_IK
+
+
+def test_infeasible_ik_prints_its_json(tmp_path: Path) -> None:
+    code, out, err = _run_in(
+        tmp_path, "ik", "--robot", "ur5", "--xyz-quat-wxyz", "5", "5", "5", "1", "0",
+        "0", "0", "--json",
+    )  # fmt: skip
+    result = json.loads(out)
+    assert code == 3 and result["feasible"] is False and result["solutions"] == []
+    assert "out of reach" in result["error"] and err.count("\n") == 1
+
+
+def test_plan_writes_an_infeasible_result_and_nothing_on_bad_input(
+    tmp_path: Path,
+) -> None:
+    code, _, _ = _run_in(
+        tmp_path, *PLAN, "--duration", "0.5", "--csv", "old.csv", "--plot", "old.png"
+    )
+    assert code == 3  # too fast: the CSV and plot are written, exit 3 after
+    assert (tmp_path / "old.csv").read_text() != OLD
+    (tmp_path / "old.csv").write_text(OLD)
+    code, _, _ = _run_in(tmp_path, *PLAN, "--csv", "old.csv", "--plot", "nodir/p.png")
+    assert code == 2 and (tmp_path / "old.csv").read_text() == OLD
+
+
+def test_export_checks_what_plan_checks(tmp_path: Path) -> None:
+    code, out, err = _run_in(
+        tmp_path, "export", "--format", "csv", "--pick-place", "--out", "old.csv",
+        "--json",
+    )  # fmt: skip
+    assert code == 3 and "collision of" in err
+    assert json.loads(out)["feasible"] is False
+    assert (tmp_path / "old.csv").read_text() == OLD
+    plan_code, _, _ = _run_in(
+        tmp_path, "plan", "pick-place", "--robot", "puma560", "--pick-deg", *PICK,
+        "--place-deg", *PLACE, "--duration", "10", "--rate", "100",
+    )  # fmt: skip
+    assert plan_code == 3
+
+
+@pytest.mark.parametrize(
+    ("argv", "code"),
+    [
+        (["fk", "--robot", "ur5", "--rad", "-1", "1", "0", "-1.25", "-1e-10", "0"], 0),
+        (["urdf", "from-dh", "t.json", "--out", "t.json"], 2),
+        (
+            [
+                "ik",
+                "--robot",
+                "ur5",
+                "--angeles7",
+                "0",
+                "0",
+                "0",
+                "1",
+                "5",
+                "5",
+                "5",
+                "--json",
+            ],
+            3,
+        ),
+    ],
+)
+def test_as_a_process(tmp_path: Path, argv: list[str], code: int) -> None:
+    write_inputs(tmp_path)
+    done = subprocess.run(
+        [sys.executable, "-m", "workbench", *argv],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == code, done.stderr
+    assert "Traceback" not in done.stderr
+    assert len(done.stderr.splitlines()) == (code != 0)
+    if code == 3:
+        assert json.loads(done.stdout)["feasible"] is False
+
+
+@given(st.sampled_from(["-1e-10", "-2.5E+3", "-.5", "-7", "-1.", "-0e0"]))
+@settings(max_examples=6)
+def test_negative_number_pattern(text: str) -> None:
+    from workbench.cli import _NUMBER
+
+    assert _NUMBER.match(text) and float(text) <= 0.0
