@@ -147,7 +147,7 @@ def wrist_centre(geo, pose: FloatArray) -> tuple[float, float, float]:
 
 @entry_point()
 def diagnose(geometry: np.ndarray, pose: FloatArray) -> tuple[int, float, float, float]:
-    """Why a pose is unreachable, from the packed record alone (as ``check_reach``).
+    """Why a pose is unreachable, from the packed record alone.
 
     Args:
         geometry: (1,) record array of :data:`GEOMETRY_DTYPE`.

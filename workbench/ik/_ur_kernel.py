@@ -450,23 +450,11 @@ def solve_pose(
     flags: npt.NDArray[np.bool_],
     check: bool,
 ) -> int:
-    """All eight branches of one pose (as ``_puma_kernel.solve_pose``).
+    """All eight branches of one pose, as ``_puma_kernel.solve_pose``.
 
-    Args:
-        geometry: (1,) record array of :data:`GEOMETRY_DTYPE`.
-        pose: (4, 4) target pose of the tool frame.
-        prev: (6,) previous configuration [rad], or (0,) for none.
-        q: (8, 6) output [rad], NaN rows for branches that cannot reach.
-        flags: (FLAG_COUNT,) output, slots ``FLAG_*`` (``_kernel_common``):
-            per branch within the limits; per (shoulder, elbow) pair of
-            branches 2·pair, 2·pair + 1 wrist singular; shoulder singular; a
-            (shoulder, wrist) pair cannot reach (its branches are NaN).
-        check: Test first that the pose is finite and rigid (the test of
-            ``workbench.poses``); False for a pose known to be.
-
-    Returns:
-        :data:`OK`, :data:`NOT_RIGID`, :data:`OUT_OF_REACH` or
-        :data:`IN_CYLINDER` (outputs then undefined).
+    ``q`` has NaN rows for the branches of a (shoulder, wrist) pair that
+    cannot reach; the wrist of the (shoulder, elbow) pair ``p`` (branches
+    2·p, 2·p + 1) is singular with shoulder ``p >> 1``.
     """
     layout = (N_ANGLES, _WRIST_BITS, SHOULDER, 15 << DEAD)
     geo = geometry[0]
@@ -477,11 +465,7 @@ def solve_pose(
 
 @entry_point()
 def diagnose(geometry: np.ndarray, pose: FloatArray) -> tuple[int, float, float, float]:
-    """Why a pose is unreachable, from the packed record alone.
-
-    Args:
-        geometry: (1,) record array of :data:`GEOMETRY_DTYPE`.
-        pose: (4, 4) target pose of the tool frame, finite and rigid.
+    """Why a pose is unreachable (arguments as ``_puma_kernel.diagnose``).
 
     Returns:
         ``(status, distance, low, high)``: :data:`OUT_OF_REACH` with the
@@ -648,13 +632,8 @@ def batch_fallback(
 ) -> int:
     """Stage 1 of a batch, the poses :func:`batch_arguments` flagged ``odd``.
 
-    Its own kernel, compiled without the vectoriser options of
-    :func:`batch_arguments` (which would have LLVM warn about each loop here
-    it cannot vectorise).
-
-    Returns:
-        −1, or the index of the first pose that is not finite and rigid (the
-        outputs of it and later poses then undefined).
+    As ``_puma_kernel.batch_fallback`` (its own kernel, without the
+    vectoriser's options); returns −1 or the first pose not finite and rigid.
     """
     return common.fallback_poses(
         geometry[0], poses, y, x, status, exact, odd, angle_arguments
