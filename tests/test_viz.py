@@ -592,7 +592,8 @@ def test_every_page_has_a_title_and_a_legend(puma) -> None:
     viewer.show_frames()
     page = viewer.render_html()
     assert "<title>Sec. V &lt;pick&gt;</title>" in page
-    assert '<div id="workbench-legend"><h1>Sec. V &lt;pick&gt;</h1>' in page
+    legend = '<details id="workbench-legend" open><summary><h1>Sec. V &lt;pick&gt;</h1>'
+    assert legend in page
     assert "distance to the nearest singularity" in page
     assert "frame wrist_center: x red, y green, z blue" in page
     assert "start of the path" not in page

@@ -200,3 +200,32 @@ def test_title_and_legend_are_drawn_top_left(chromium, puma, tmp_path) -> None:
     r, g, b = box[..., 0], box[..., 1], box[..., 2]
     assert ((r > 180) & (g < 80) & (b < 80)).sum() > 50  # red end of the ramp
     assert ((g > 150) & (r < 90) & (b < 110)).sum() > 50  # green end
+
+
+def test_legend_starts_folded_in_a_small_view(chromium, puma, tmp_path) -> None:
+    """Inlined in a notebook or the docs, the legend leaves the arm in view."""
+    from workbench.viz._legend import SMALL_VIEW_PX
+
+    width, height = SMALL_VIEW_PX[0] - 160, SMALL_VIEW_PX[1] - 60
+    viewer = Viewer(puma, np.deg2rad(Q1_DEG), color_by_singularity=True)
+    viewer.show_frames()
+
+    def render(name: str, page: str, script: str | None = None) -> np.ndarray:
+        html = (tmp_path / name).with_suffix(".html")
+        html.write_text(page, encoding="utf-8")
+        png = html.with_suffix(".png")
+        take_screenshot(chromium, html, png, width=width, height=height, script=script)
+        return np.asarray(Image.open(png).convert("RGB"), dtype=np.int16)
+
+    bare = render("bare", viewer.render_html(legend=False))
+    folded = render("folded", viewer.render_html())
+    opened = render(
+        "opened",
+        viewer.render_html(),
+        "document.querySelector('#workbench-legend summary').click(); true",
+    )
+    rows, _ = np.nonzero(changed(bare, folded))
+    assert rows.size > 0  # the title is there
+    assert rows.max() < 0.12 * height  # one line at the top
+    assert changed(bare, folded).sum() < 0.05 * width * height
+    assert changed(bare, opened).sum() > 2.0 * changed(bare, folded).sum()

@@ -5,7 +5,9 @@ here, next to it: the singularity colour ramp, the tool path with its start and
 end markers, the frame triads, the ghost arms. Each entry is an HTML fragment;
 :func:`render_overlay` stacks them under the page title. Meshcat's own control
 panel stays at the top right, so the box sits at the top left, and it ignores
-the mouse so the scene can still be turned underneath it.
+the mouse so the scene can still be turned underneath it. In a small view (a page
+inlined in a notebook or the docs) the box starts folded to its title, which opens
+it with a click.
 """
 
 from __future__ import annotations
@@ -32,7 +34,16 @@ _STYLE = """<style>
   font: 12px/1.35 system-ui, -apple-system, "Segoe UI", Roboto, sans-serif;
   box-shadow: 0 1px 3px rgba(0, 0, 0, 0.3);
 }
-#workbench-legend h1 { font-size: 15px; margin: 0 0 6px 0; }
+#workbench-legend h1 { font-size: 15px; margin: 0; display: inline; }
+#workbench-legend summary { pointer-events: auto; cursor: pointer;
+  list-style: none; margin-bottom: 6px; }
+#workbench-legend summary::-webkit-details-marker { display: none; }
+#workbench-legend summary::after { content: " ▾"; color: #555; }
+#workbench-legend:not([open]) { padding: 4px 8px; }
+#workbench-legend:not([open]) summary { margin-bottom: 0; }
+#workbench-legend:not([open]) h1 { font-size: 13px; }
+#workbench-legend:not([open]) summary::after { content: " ▸ legend";
+  font-size: 11px; }
 #workbench-legend .row { display: flex; align-items: center; margin: 2px 0; }
 #workbench-legend .key { flex: none; width: 22px; margin-right: 6px; }
 #workbench-legend .dot { height: 10px; width: 10px; border-radius: 50%;
@@ -48,6 +59,17 @@ _STYLE = """<style>
 #workbench-legend .ticks span:first-child { transform: none; }
 #workbench-legend .ticks span:last-child { transform: translateX(-100%); }
 </style>"""
+
+
+#: Width and height [CSS px] below which the legend starts folded.
+SMALL_VIEW_PX = (720, 480)
+_FOLD_IN_SMALL_VIEW = f"""<script>
+(function () {{
+  var box = document.getElementById("workbench-legend");
+  if (box && (window.innerWidth < {SMALL_VIEW_PX[0]}
+              || window.innerHeight < {SMALL_VIEW_PX[1]})) box.open = false;
+}})();
+</script>"""
 
 
 def _css(rgb: npt.ArrayLike) -> str:
@@ -141,8 +163,13 @@ def collisions(obstacles: Sequence[str]) -> str:
 
 
 def render_overlay(title: str, entries: Iterable[str]) -> str:
-    """The box: ``title`` as a heading, then each legend entry (HTML)."""
+    """The box: ``title`` as a heading, then each legend entry (HTML).
+
+    The box is a ``<details>`` element: open, unless the view is smaller than
+    :data:`SMALL_VIEW_PX`, where it starts folded to its title.
+    """
     body = "".join(entries)
     return (
-        f'{_STYLE}<div id="workbench-legend"><h1>{html.escape(title)}</h1>{body}</div>'
+        f'{_STYLE}<details id="workbench-legend" open><summary>'
+        f"<h1>{html.escape(title)}</h1></summary>{body}</details>{_FOLD_IN_SMALL_VIEW}"
     )
