@@ -10,7 +10,9 @@ which read well in an editor; :class:`SphinxRoles`, a Griffe extension that
 the docstring is rendered. The name is resolved as Python would from where the
 docstring sits (the object, then its parents, following imports); mkdocs-autorefs
 links it to the page that documents the target, and shows plain code when no
-page does (a private module, numpy, Pinocchio).
+page does (a private module, numpy, Pinocchio). ``:math:`...``` roles and
+``.. math::`` blocks become MathML (latex2mathml), which browsers draw with no
+script, offline.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ import re
 from typing import Any
 
 import griffe
+from latex2mathml.converter import convert as latex_to_mathml
 
 MARKER = "<!-- workbench-cli-help -->"
 #: A cross-reference role: ``:kind:`target```, ``:kind:`~target``` (show the
@@ -30,6 +33,12 @@ ROLE = re.compile(
     r":(?:py:)?(?P<kind>func|class|meth|mod|data|attr|exc|obj|const):"
     r"`(?P<tilde>~?)(?P<text>[^`<]+?)(?:\s*<(?P<target>[^`>]+)>)?`"
 )
+#: An inline formula: ``:math:`LaTeX```.
+MATH_ROLE = re.compile(r":math:`(?P<latex>[^`]+)`")
+#: A displayed formula: ``.. math::``, LaTeX on that line or the indented ones.
+MATH_DIRECTIVE = re.compile(r"^(?P<indent>\s*)\.\. math::\s*(?P<latex>.*)$")
+#: LaTeX operators latex2mathml does not know, as ``\operatorname``.
+UNKNOWN_OPERATORS = re.compile(r"\\(arg)(?![A-Za-z])")
 #: The package whose docstrings are rewritten.
 PACKAGE = "workbench"
 
@@ -105,8 +114,45 @@ def link_roles(text: str, scope: griffe.Object) -> str:
     return ROLE.sub(replace, text)
 
 
+def _mathml(latex: str, *, block: bool) -> str:
+    """MathML of a LaTeX formula; the LaTeX as code if it cannot be converted."""
+    latex = UNKNOWN_OPERATORS.sub(r"\\operatorname{\1}", " ".join(latex.split()))
+    try:
+        mathml = latex_to_mathml(latex, display="block" if block else "inline")
+    except Exception:  # latex2mathml raises its own and plain exceptions
+        return f"<code>{html.escape(latex)}</code>"
+    # Markdown takes a line that starts with <math> for an HTML block: a span
+    # keeps an inline formula inside its paragraph.
+    return mathml if block else f'<span class="math">{mathml}</span>'
+
+
+def render_math(text: str) -> str:
+    """``text`` with its ``.. math::`` blocks and ``:math:`` roles as MathML."""
+    lines, out, i = text.split("\n"), [], 0
+    while i < len(lines):
+        directive = MATH_DIRECTIVE.match(lines[i])
+        i += 1
+        if directive is None:
+            out.append(lines[i - 1])
+            continue
+        indent = directive["indent"]
+        body = [directive["latex"]] if directive["latex"].strip() else []
+        while i < len(lines):
+            line = lines[i]
+            if not line.strip():
+                if body:
+                    break  # a blank line after the formula ends it
+            elif len(line) - len(line.lstrip()) <= len(indent):
+                break  # back to the text
+            else:
+                body.append(line.strip())
+            i += 1
+        out.append(indent + _mathml(" ".join(body), block=True))
+    return MATH_ROLE.sub(lambda m: _mathml(m["latex"], block=False), "\n".join(out))
+
+
 class SphinxRoles(griffe.Extension):
-    """Griffe extension: Sphinx roles in the package's docstrings become links."""
+    """Griffe extension: the package's Sphinx roles become links and MathML."""
 
     def on_package(self, *, pkg: griffe.Module, **kwargs: Any) -> None:
         """Rewrite every docstring of the package once it is loaded."""
@@ -117,7 +163,7 @@ class SphinxRoles(griffe.Extension):
 def _rewrite(obj: griffe.Object) -> None:
     if obj.docstring is not None:
         scope = obj if obj.is_module or obj.is_class else obj.parent or obj
-        obj.docstring.value = link_roles(obj.docstring.value, scope)
+        obj.docstring.value = link_roles(render_math(obj.docstring.value), scope)
     for member in obj.members.values():
         if not member.is_alias:
             _rewrite(member)

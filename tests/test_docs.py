@@ -180,3 +180,35 @@ def test_no_docstring_keeps_a_role(package) -> None:
 
     left = [path for path, text in walk(package) if RAW_ROLE.search(text)]
     assert left == []
+
+
+def test_math_becomes_mathml(hooks) -> None:
+    text = "\n".join(
+        [
+            "A speed :math:`\\dot q_r` and",
+            ":math:`J^\\#` at a line start.",
+            "",
+            "    .. math:: \\dot q = \\arg\\min",
+            "              \\|J\\dot q\\|^2,",
+            "",
+            "after.",
+        ]
+    )
+    out = hooks.render_math(text).split("\n")
+    assert out[0].startswith('A speed <span class="math"><math ')
+    assert out[1].startswith('<span class="math"><math ')  # inline, not a block
+    assert out[3].startswith('    <math xmlns="http://www.w3.org/1998/Math/MathML"')
+    assert 'display="block"' in out[3] and "<mo>arg</mo>" in out[3]
+    assert out[4:] == ["", "after."]
+    assert "\\" not in "".join(out)
+    assert hooks.render_math(":math:`\\frac{1}{`") == "<code>\\frac{1}{</code>"
+
+
+def test_api_pages_draw_math(site) -> None:
+    for page in sorted((site / "api").glob("*/index.html")):
+        text = page.read_text("utf-8")
+        assert ":math:" not in text and ".. math::" not in text, page
+        formulas = re.findall(r"<math .*?</math>", text, flags=re.DOTALL)
+        assert all("\\" not in f for f in formulas), page
+    page = (site / "api" / "ik" / "index.html").read_text("utf-8")
+    assert page.count("<math ") >= 10 and 'display="block"' in page
