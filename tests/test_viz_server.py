@@ -6,7 +6,6 @@ import asyncio
 import http.client
 import logging
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -15,6 +14,7 @@ import pytest
 from tornado.httpclient import HTTPClientError, HTTPRequest
 from tornado.websocket import websocket_connect
 
+from tests.test_viz import free_port
 from workbench.viz import Viewer
 from workbench.viz._server import (
     FORBIDDEN_MESSAGE,
@@ -150,12 +150,6 @@ def test_unknown_path_is_a_short_404(served, caplog) -> None:
     caplog.set_level(logging.DEBUG)
     assert request(port, "/elsewhere") == (404, "404 Not Found\n")
     assert [r.name for r in caplog.records if r.name.startswith("tornado")] == []
-
-
-def free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return int(probe.getsockname()[1])
 
 
 def test_served_cli_writes_nothing_on_stderr() -> None:

@@ -160,12 +160,9 @@ def plot_det_map(
     fig, ax = _axes(ax, (7.2, 5.8))
     det = grid.values["det_j"]
     vmax = float(np.max(np.abs(det))) or 1.0
-    _image(fig, ax, grid, det, "RdBu_r", "det J [m³]", vmin=-vmax, vmax=vmax)
+    title = f"{robot.name}: det J over (θ2, θ3)"
+    _image(ax, grid, det, "RdBu_r", "det J [m³]", title, vmin=-vmax, vmax=vmax)
     _overlay(ax, robot, grid, shoulder, elbow_theta3, examples)
-    ax.set_title(
-        f"{robot.name}: det J over (θ2, θ3), {grid.x.size} × {grid.y.size} grid",
-        fontsize=10,
-    )
     return _finish(fig, path)
 
 
@@ -195,12 +192,9 @@ def plot_sigma_map(
     """
     fig, ax = _axes(ax, (7.2, 5.8))
     sigma = np.log10(np.maximum(grid.values["sigma_min"], SIGMA_FLOOR))
-    _image(fig, ax, grid, sigma, "viridis", "log10 σmin (clipped at 1e-6)")
+    title = f"{robot.name}: smallest singular value of J"
+    _image(ax, grid, sigma, "viridis", "log10 σmin (clipped at 1e-6)", title)
     _overlay(ax, robot, grid, shoulder, elbow_theta3, examples, thin=True)
-    ax.set_title(
-        f"{robot.name}: smallest singular value of J, {grid.x.size} × {grid.y.size}",
-        fontsize=10,
-    )
     return _finish(fig, path)
 
 
@@ -231,27 +225,27 @@ def plot_measure_map(
     values = grid.values[measure]
     if measure == "condition_number":
         shown = np.log10(np.minimum(values, CONDITION_CEILING))
-        _image(fig, ax, grid, shown, "viridis_r", "log10 σmax/σmin (clipped at 1e6)")
-        title = "condition number of J"
+        label = "log10 σmax/σmin (clipped at 1e6)"
+        _image(ax, grid, shown, "viridis_r", label, f"{robot.name}: condition number")
     else:
-        _image(fig, ax, grid, values, "viridis", "manipulability √det(J Jᵀ)")
-        title = "manipulability of J"
+        label = "manipulability √det(J Jᵀ)"
+        _image(ax, grid, values, "viridis", label, f"{robot.name}: manipulability")
     _overlay(ax, robot, grid, None, None, {}, thin=True)
-    ax.set_title(f"{robot.name}: {title}, {grid.x.size} × {grid.y.size}", fontsize=10)
     return _finish(fig, path)
 
 
 def _image(
-    fig: Figure,
     ax: Any,
     grid: JointGrid,
     values: FloatArray,
     cmap: str,
     label: str,
+    title: str,
     **limits: float,
 ) -> None:
     """``values`` (ny, nx) drawn over the grid's joint angles, with a colour bar.
 
+    ``label`` names the colour bar, ``title`` the map (the grid size is added);
     ``limits`` are ``vmin``/``vmax`` of the colour scale (default: the data's).
     """
     extent = np.degrees([grid.x[0], grid.x[-1], grid.y[0], grid.y[-1]])
@@ -264,7 +258,8 @@ def _image(
         interpolation="nearest",
         **limits,
     )
-    fig.colorbar(image, ax=ax, label=label)
+    ax.get_figure().colorbar(image, ax=ax, label=label)
+    ax.set_title(f"{title}, {grid.x.size} × {grid.y.size} grid", fontsize=10)
 
 
 def plot_singular_arms(
