@@ -5,10 +5,12 @@ from __future__ import annotations
 import os
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from workbench.atomic_files import atomic_file
 from workbench.demo.pick_and_place import (
     format_pick_and_place,
     run_pick_and_place_demo,
@@ -83,8 +85,8 @@ def _fail_in_child(parent: int) -> int:
     return os.getpid()
 
 
-def test_second_process_returns_the_result() -> None:
-    section = _InSecondProcess(os.getpid)
+def test_second_process_returns_the_result(tmp_path: Path) -> None:
+    section = _InSecondProcess(tmp_path, os.getpid)
     with section:
         pid = section.result()
     if sys.platform == "linux" and len(os.sched_getaffinity(0)) > 1:
@@ -93,11 +95,29 @@ def test_second_process_returns_the_result() -> None:
         assert pid == os.getpid()
 
 
-def test_second_process_failure_makes_the_call_here() -> None:
+def test_second_process_failure_makes_the_call_here(tmp_path: Path) -> None:
     # here the call succeeds (and would raise its own error if it failed)
-    with _InSecondProcess(_fail_in_child, os.getpid()) as section:
+    with _InSecondProcess(tmp_path, _fail_in_child, os.getpid()) as section:
         assert section.result() == os.getpid()
     start = time.perf_counter()
-    with pytest.raises(InputError), _InSecondProcess(time.sleep, 60.0):
+    with pytest.raises(InputError), _InSecondProcess(tmp_path, time.sleep, 60.0):
         raise InputError("raised here: the second process is stopped")
     assert time.perf_counter() - start < 30.0
+
+
+def _write_forever(folder: Path) -> None:
+    with atomic_file(folder / "slow.csv") as tmp:
+        tmp.write_text("partial")
+        time.sleep(60.0)
+
+
+def test_second_process_ends_with_its_parent_and_leaves_no_file(
+    tmp_path: Path,
+) -> None:
+    with (
+        pytest.raises(InputError),
+        _InSecondProcess(tmp_path, _write_forever, tmp_path),
+    ):
+        time.sleep(0.5)  # the child is writing now
+        raise InputError("stops the child: SIGTERM, its temporary file removed")
+    assert list(tmp_path.iterdir()) == []

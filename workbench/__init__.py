@@ -1,9 +1,12 @@
 """workbench: a kinematics workbench for the PUMA 560 and any URDF arm, on Pinocchio."""
 
+# isort: off
+from workbench import _sigint  # noqa: F401 (first: Ctrl-C while the command starts)
+
+# isort: on
 import importlib.metadata
 import logging
 
-from workbench import _sigint  # noqa: F401 (first: Ctrl-C while the command starts)
 from workbench.errors import (
     DHTableError,
     DimensionError,

@@ -205,6 +205,12 @@ def remove_stale_temporaries(path: str | Path) -> None:
             entry.unlink(missing_ok=True)
 
 
+def remove_temporaries_of_process(folder: str | Path, pid: int) -> None:
+    """Remove the temporary files process ``pid`` has in ``folder`` (its exit)."""
+    for entry in Path(folder).glob(f".*.{pid}-*{TEMP_MARK}*"):
+        entry.unlink(missing_ok=True)
+
+
 def _is_running(pid: int) -> bool:
     try:
         os.kill(pid, 0)

@@ -42,6 +42,7 @@ from workbench.cli import (
     view,
 )
 from workbench.cli._common import print_json
+from workbench.cli._interrupt_guard import interrupts_wait_for_compiler
 from workbench.cli._progress import Progress
 from workbench.errors import InfeasibleError, InputError, WorkbenchError
 
@@ -133,6 +134,7 @@ def _main(argv: Sequence[str] | None) -> int:
     with (
         _log_to_stderr(_log_level(args)),
         _quiet_numpy(),
+        interrupts_wait_for_compiler(),
         Progress(message, enabled=_progress_wanted(args)) as progress,
     ):
         args.progress = progress

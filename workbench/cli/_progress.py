@@ -18,6 +18,8 @@ import weakref
 from types import TracebackType
 from typing import TextIO
 
+from workbench.cli._interrupt_guard import block_interrupts_in_this_thread
+
 PROGRESS_DELAY = 1.0  # [s] before a running command prints its line
 COMPILING = "compiling the Numba kernels on first use (cached for later runs)…"
 #: The environment variable that turns progress lines off (``0``); set while a
@@ -62,7 +64,7 @@ class Progress:
         os.environ[_ENVIRON] = "0"
         if not self.enabled:
             return self
-        self._timer = threading.Timer(self.delay, self._say, args=(self.message,))
+        self._timer = _Timer(self.delay, self._say, args=(self.message,))
         self._timer.daemon = True
         self._timer.start()
         self._listener = _listen_to_numba(self)
@@ -110,6 +112,14 @@ class Progress:
                 stream.flush()
             except (OSError, ValueError):  # stderr closed: progress is optional
                 pass
+
+
+class _Timer(threading.Timer):
+    """A timer thread that leaves Ctrl-C to the main thread."""
+
+    def run(self) -> None:
+        block_interrupts_in_this_thread()
+        super().run()
 
 
 #: Every Progress of the process, silenced in a forked child.

@@ -28,7 +28,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench import paper_data
-from workbench.atomic_files import write_text_atomic
+from workbench.atomic_files import remove_temporaries_of_process, write_text_atomic
 from workbench.collision import CollisionChecker, check_path, get_angeles_scene
 from workbench.demo.pick_and_place import run_pick_and_place_demo
 from workbench.errors import InputError
@@ -181,7 +181,9 @@ class _InSecondProcess:
     on SIGTERM leaves its files as they were (no temporary file stays).
     """
 
-    def __init__(self, function: Callable[..., Any], *args: Any, **kwargs: Any):
+    def __init__(
+        self, folder: Path, function: Callable[..., Any], *args: Any, **kwargs: Any
+    ):
         self._call = functools.partial(function, *args, **kwargs)
         self._process: multiprocessing.process.BaseProcess | None = None
         self._receiver: Connection | None = None
@@ -190,16 +192,21 @@ class _InSecondProcess:
             receiver, sender = context.Pipe(duplex=False)
             process = context.Process(
                 target=_send_result,
-                args=(sender, self._call, os.getpid()),
+                args=(sender, self._call, os.getpid(), folder),
                 daemon=True,
             )
+            # Ctrl-C waits until the fork is done (in its hooks, it would be
+            # printed and lost); the child unblocks it after ignoring it.
+            blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
             try:
                 process.start()
             except (AssertionError, OSError):  # e.g. in a daemonic process
                 receiver.close()
             else:
                 self._process, self._receiver = process, receiver
-            sender.close()
+            finally:
+                sender.close()
+                signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
 
     def __enter__(self) -> _InSecondProcess:
         return self
@@ -237,12 +244,14 @@ class _InSecondProcess:
             self._process = None
 
 
-def _send_result(sender: Connection, call: Callable[[], Any], parent: int) -> None:
+def _send_result(
+    sender: Connection, call: Callable[[], Any], parent: int, folder: Path
+) -> None:
     """In the second process: send ``(True, call())``, or ``(False, None)``."""
-    _end_with_parent(parent)
+    _end_with_parent(parent, folder)
     try:
         result = (True, call())
-    except SystemExit:  # stopped by the parent (SIGTERM): nobody is listening
+    except SystemExit:  # the call asked to exit: nothing to send
         raise
     except BaseException:  # the parent makes the call again, to raise it
         result = (False, None)
@@ -257,25 +266,27 @@ def _send_result(sender: Connection, call: Callable[[], Any], parent: int) -> No
 _PR_SET_PDEATHSIG = 1
 
 
-def _end_with_parent(parent: int) -> None:
+def _end_with_parent(parent: int, folder: Path) -> None:
     """In a forked child: stop on the parent's death, cleanly on SIGTERM.
 
-    SIGTERM raises ``SystemExit`` (writers then remove their temporary files);
-    Ctrl-C is ignored, as the parent stops the child itself.
+    SIGTERM removes the child's temporary files in ``folder`` and exits at
+    once; Ctrl-C is ignored, as the parent stops the child itself.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, _exit_on_sigterm)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    signal.signal(signal.SIGTERM, functools.partial(_exit_on_sigterm, folder))
     try:
         libc = ctypes.CDLL(None, use_errno=True)
         libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
     except (OSError, AttributeError):  # not Linux: the parent's exit stops it
         pass
     if os.getppid() != parent:  # the parent died before prctl
-        raise SystemExit(0)
+        os._exit(0)
 
 
-def _exit_on_sigterm(signum: int, frame: FrameType | None) -> None:
-    raise SystemExit(128 + signum)
+def _exit_on_sigterm(folder: Path, signum: int, frame: FrameType | None) -> None:
+    remove_temporaries_of_process(folder, os.getpid())
+    os._exit(128 + signum)
 
 
 def format_fish_cutting(summary: dict[str, Any]) -> str:
@@ -374,7 +385,7 @@ def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, An
     # process meanwhile: on a first run most of the time goes to compiling
     # kernels, the planner's there and the closed form here (which the planner
     # then loads from the cache: see workbench._compiled).
-    with _InSecondProcess(_run_fish_cutting, out_dir, pages=plots) as fish:
+    with _InSecondProcess(out_dir, _run_fish_cutting, out_dir, pages=plots) as fish:
         rows = compare_table2(robot)
         table = format_table2(rows)
         write_text_atomic(

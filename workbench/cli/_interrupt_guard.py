@@ -1,0 +1,69 @@
+"""Ctrl-C waits while Numba holds its compiler lock (LLVM's signal handlers).
+
+While LLVM compiles or loads a kernel it may put its own SIGINT handler in
+place of Python's for a moment; a Ctrl-C then kills the process by the signal
+(exit -2, no cleanup) instead of raising ``KeyboardInterrupt``. Inside
+:func:`interrupts_wait_for_compiler`, SIGINT is blocked in the thread that
+holds Numba's compiler lock, and in the command's other threads always, so
+that a Ctrl-C stays pending until the lock is released; then it is Python's
+``KeyboardInterrupt`` as anywhere else.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+from collections.abc import Iterator
+
+
+class _BlockWhileLocked:
+    """Blocks SIGINT in the thread holding the compiler lock (nested: counted)."""
+
+    def __init__(self) -> None:
+        self._local = threading.local()
+
+    def start(self) -> None:
+        depth = getattr(self._local, "depth", 0)
+        if depth == 0:
+            self._local.mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        self._local.depth = depth + 1
+
+    def end(self) -> None:
+        depth = getattr(self._local, "depth", 0)
+        if depth == 0:  # registered while the lock was held
+            return
+        self._local.depth = depth - 1
+        if depth == 1:
+            signal.pthread_sigmask(signal.SIG_SETMASK, self._local.mask)
+
+
+def block_interrupts_in_this_thread() -> None:
+    """For a helper thread: leave SIGINT to the main thread (Python's handler)."""
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+
+
+@contextlib.contextmanager
+def interrupts_wait_for_compiler() -> Iterator[None]:
+    """Within the block, a Ctrl-C during a Numba compilation waits for its end."""
+    if not hasattr(signal, "pthread_sigmask"):  # Windows: no LLVM signal handlers
+        yield
+        return
+    from numba.core import event
+
+    guard = _BlockWhileLocked()
+
+    class _Listener(event.Listener):
+        def on_start(self, event: event.Event) -> None:
+            guard.start()
+
+        def on_end(self, event: event.Event) -> None:
+            guard.end()
+
+    listener = _Listener()
+    event.register("numba:compiler_lock", listener)
+    try:
+        yield
+    finally:
+        event.unregister("numba:compiler_lock", listener)
