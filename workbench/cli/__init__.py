@@ -23,7 +23,7 @@ import sys
 import threading
 import warnings
 from collections.abc import Iterator, Sequence
-from typing import NoReturn
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -65,7 +65,7 @@ class _Parser(argparse.ArgumentParser):
     Negative numbers in every notation are values (see :data:`_NUMBER`).
     """
 
-    def __init__(self, *args, **kwargs) -> None:  # type: ignore[no-untyped-def]
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = _NUMBER
 
@@ -157,12 +157,13 @@ def _main(argv: Sequence[str] | None) -> int:
             return _fail(err, EXIT_INTERNAL, prefix="internal error")
 
 
-def _too_large(err: BaseException) -> InputError:
+def _too_large(err: Exception) -> InputError:
     """The input asked for more than this machine can compute or hold."""
-    what = {
+    kinds: dict[type[Exception], str] = {
         MemoryError: "not enough memory",
         RecursionError: "input nested too deeply",
-    }.get(type(err), "a number too large")
+    }
+    what = kinds.get(type(err), "a number too large")
     return InputError(f"the request is too large ({what}: {err or type(err).__name__})")
 
 
