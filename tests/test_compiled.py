@@ -283,8 +283,8 @@ def test_an_edited_callee_or_constant_is_recompiled_not_loaded(tmp_path: Path) -
     assert solve() == before  # the first entries again
     _edit(
         ik / "_kernel_common.py",
-        "angles[slot] = math.atan2(y[slot], x[slot])",
-        "angles[slot] = -math.atan2(y[slot], x[slot])",
+        "math.atan2(y[slot], x[slot])",
+        "-math.atan2(y[slot], x[slot])",
     )
     after = solve()
     assert not any(after["wrist_singular"])
