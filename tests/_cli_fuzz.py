@@ -28,6 +28,10 @@ PLAN = [
     *("plan", "pick-place", "--robot", "puma560", "--pick-deg", *PICK),
     *("--place-deg", *PLACE, "--duration", "10"),
 ]
+REPORT = "report singularities --robot puma560".split()
+URSCRIPT = "export --format urscript --robot ur5 --trajectory traj.csv".split()
+#: ``ik`` of the identity orientation at a position still to append (3 numbers).
+IK_AT = "ik --robot ur5 --angeles7 0 0 0 1".split()
 DH_ROW = {"alpha": 1.5707963267948966, "a": 0.1, "d": 0.2}
 #: Contents of an existing output that a failed run must leave as it is.
 OLD = "old output, must survive a failed run\n"
@@ -73,49 +77,12 @@ SIZES = st.one_of(
     st.tuples(st.just([*PLAN, "--rate"]), _huge_float),
     st.tuples(st.just(PLAN[:-1]), _huge_float),  # --duration
     st.tuples(st.just([*PLAN, "--n-points"]), _huge_int),
-    st.tuples(
-        st.just(
-            [
-                "report",
-                "singularities",
-                "--robot",
-                "puma560",
-                "--out",
-                "r.html",
-                "--grid",
-            ]
-        ),
-        _huge_int,
+    *(
+        st.tuples(st.just([*REPORT, "--out", "r.html", option]), _huge_int)
+        for option in ("--grid", "--svd-grid")
     ),
     st.tuples(
-        st.just(
-            [
-                "report",
-                "singularities",
-                "--robot",
-                "puma560",
-                "--out",
-                "r.html",
-                "--svd-grid",
-            ]
-        ),
-        _huge_int,
-    ),
-    st.tuples(
-        st.just(
-            [
-                "export",
-                "--format",
-                "urscript",
-                "--robot",
-                "ur5",
-                "--trajectory",
-                "traj.csv",
-                "--out",
-                "o.script",
-                "--servo-rate",
-            ]
-        ),
+        st.just([*URSCRIPT, "--out", "o.script", "--servo-rate"]),
         st.one_of(
             st.floats(1e4 + 1, 1e308, allow_nan=False, allow_infinity=False).map(str),
             st.sampled_from(["0", "-5", "1e8"]),
@@ -127,7 +94,7 @@ SIZES = st.one_of(
     ),
     st.tuples(st.just(["fishcut", "--csv", "old.csv", "--servo-rate"]), _huge_float),
     st.tuples(
-        st.just(["ik", "--robot", "ur5", "--angeles7", "0", "0", "0", "1"]),
+        st.just(IK_AT),
         st.lists(st.floats(1e7, 1e308).map(str), min_size=3, max_size=3),
     ),
 ).map(lambda pair: [*pair[0], *([pair[1]] if isinstance(pair[1], str) else pair[1])])
@@ -147,13 +114,7 @@ OUTPUTS = st.one_of(
     ),
     _bad_outputs("traj.csv").map(
         lambda p: [
-            "report",
-            "singularities",
-            "--robot",
-            "puma560",
-            "--trajectory",
-            "traj.csv",
-            "--out",
+            *"report singularities --robot puma560 --trajectory traj.csv --out".split(),
             p,
         ]
     ),
@@ -162,29 +123,13 @@ OUTPUTS = st.one_of(
         lambda p: ["urdf", "srdf", "--robot", "robot.urdf", "--out", p]
     ),
     _bad_outputs("traj.csv").map(
-        lambda p: [
-            "export",
-            "--format",
-            "csv",
-            "--trajectory",
-            "traj.csv",
-            "--out",
-            p,
-        ]
+        lambda p: [*"export --format csv --trajectory traj.csv --out".split(), p]
     ),
     _bad_outputs("scene.json").map(
         lambda p: ["view", "--robot", "ur5", "--scene", "scene.json", "--html", p]
     ),
     _bad_outputs("scene.json").map(
-        lambda p: [
-            "fishcut",
-            "--scene",
-            "scene.json",
-            "--csv",
-            "old.csv",
-            "--html",
-            p,
-        ]
+        lambda p: [*"fishcut --scene scene.json --csv old.csv --html".split(), p]
     ),
     st.sampled_from(["old.txt", "t.json", "dir/../old.csv"]).map(
         lambda p: ["demo", "--out", p]
@@ -242,34 +187,9 @@ def _malformed(draw: st.DrawFn) -> tuple[list[str], bytes]:
                 ["urdf", "from-dh", "bad.in", "--out", "old.urdf"],
                 [*PLAN, "--scene", "bad.in", "--csv", "old.csv"],
                 ["view", "--robot", "ur5", "--scene", "bad.in", "--html", "old.html"],
-                [
-                    "view",
-                    "--robot",
-                    "ur5",
-                    "--trajectory",
-                    "bad.in",
-                    "--html",
-                    "old.html",
-                ],
-                [
-                    "export",
-                    "--format",
-                    "csv",
-                    "--trajectory",
-                    "bad.in",
-                    "--out",
-                    "old.csv",
-                ],
-                [
-                    "report",
-                    "singularities",
-                    "--robot",
-                    "puma560",
-                    "--trajectory",
-                    "bad.in",
-                    "--out",
-                    "old.html",
-                ],
+                "view --robot ur5 --trajectory bad.in --html old.html".split(),
+                "export --format csv --trajectory bad.in --out old.csv".split(),
+                [*REPORT, *"--trajectory bad.in --out old.html".split()],
             ]
         )
     ), data
@@ -290,26 +210,10 @@ FLAGS = st.sampled_from(
     [
         [*PLAN, "--scene", "scene.json", "--no-collision"],
         ["fishcut", "--scene", "scene.json", "--no-collision"],
+        "export --format csv --trajectory traj.csv --out o.csv --no-collision".split(),
         [
-            "export",
-            "--format",
-            "csv",
-            "--trajectory",
-            "traj.csv",
-            "--out",
-            "o.csv",
-            "--no-collision",
-        ],
-        [
-            "export",
-            "--format",
-            "csv",
-            "--pick-place",
-            "--scene",
-            "scene.json",
-            "--no-collision",
-            "--out",
-            "o.csv",
+            *"export --format csv --pick-place --scene scene.json".split(),
+            *"--no-collision --out o.csv".split(),
         ],
         ["view", "--robot", "ur5", "--deg", "--html", "o.html"],
         ["urdf", "srdf", "--robot", "ur5", "--json"],

@@ -23,6 +23,7 @@ from hypothesis import strategies as st
 
 from tests._cli_fuzz import (
     CLASSES,
+    IK_AT,
     OLD,
     PICK,
     PLACE,
@@ -79,23 +80,7 @@ def _run_in(tmp_path: Path, *argv: str) -> tuple[int, str, str]:
         ([*PLAN, "--rate", "1e9"], "at most 100000 Hz"),
         (["fishcut", "--seed", "-1"], "--seed: must be 0.."),
         ([*PLAN, "--scene", "scene.json", "--no-collision"], "contradict"),
-        (
-            [
-                "ik",
-                "--robot",
-                "ur5",
-                "--angeles7",
-                "0",
-                "0",
-                "0",
-                "1",
-                "1e308",
-                "1e308",
-                "1e308",
-                "--mm",
-            ],
-            "at most 1e+06 m",
-        ),
+        ([*IK_AT, "1e308", "1e308", "1e308", "--mm"], "at most 1e+06 m"),
     ],
 )
 def test_found_cases_exit_2(tmp_path: Path, argv: list[str], fragment: str) -> None:
@@ -184,23 +169,7 @@ def test_export_checks_what_plan_checks(tmp_path: Path) -> None:
     [
         (["fk", "--robot", "ur5", "--rad", "-1", "1", "0", "-1.25", "-1e-10", "0"], 0),
         (["urdf", "from-dh", "t.json", "--out", "t.json"], 2),
-        (
-            [
-                "ik",
-                "--robot",
-                "ur5",
-                "--angeles7",
-                "0",
-                "0",
-                "0",
-                "1",
-                "5",
-                "5",
-                "5",
-                "--json",
-            ],
-            3,
-        ),
+        ([*IK_AT, "5", "5", "5", "--json"], 3),
     ],
 )
 def test_as_a_process(tmp_path: Path, argv: list[str], code: int) -> None:
