@@ -40,7 +40,6 @@ singular and unreachable poses of every model); the rare poses it leaves
 from __future__ import annotations
 
 import math
-from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
@@ -56,8 +55,7 @@ from workbench.ik._kernel_common import IN_CYLINDER as IN_CYLINDER
 from workbench.ik._kernel_common import NOT_RIGID as NOT_RIGID
 from workbench.ik._kernel_common import OK as OK
 from workbench.ik._kernel_common import OUT_OF_REACH as OUT_OF_REACH
-from workbench.ik._puma import WRIST_SINGULAR_TOL, PumaGeometry, get_geometry
-from workbench.model.robot import Robot
+from workbench.ik._puma import WRIST_SINGULAR_TOL, PumaGeometry
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -79,7 +77,7 @@ GEOMETRY_DTYPE = np.dtype(
         ("d6", "f8"),
         ("cos_alpha6", "f8"),
         ("sin_alpha6", "f8"),
-        ("reach_low", "f8"),  # slack folded in, as check_reach
+        ("reach_low", "f8"),  # slack folded in (PumaGeometry.reach_test)
         ("reach_high", "f8"),
         ("cylinder2", "f8"),  # squared radius of the unreachable cylinder
         ("theta_offset", "f8", 6),
@@ -93,18 +91,6 @@ GEOMETRY_DTYPE = np.dtype(
     ],
     align=True,
 )
-
-
-@lru_cache(maxsize=16)
-def packed_geometry(robot: Robot) -> np.ndarray:
-    """The constants of a robot's closed form, a read-only (1,) record array.
-
-    Cached per robot object, like :func:`~workbench.ik._puma.get_geometry`.
-
-    Raises:
-        UnsupportedRobotError: If the robot has no PUMA-type DH table.
-    """
-    return pack_geometry(get_geometry(robot))
 
 
 def pack_geometry(geo: PumaGeometry) -> np.ndarray:

@@ -162,13 +162,9 @@ def numeric(
         packed, matrix, q_ref, states, row, tol2, max_iterations, guess, features,
         starts, True,
     )  # fmt: skip
-    if status == kernel.NOT_RIGID:
-        # The exact checks: raise, or accept a pose rigid within the tolerance.
-        matrix = np.ascontiguousarray(as_se3(target).homogeneous)
-        status, err2, position, rotation, steps = run(
-            packed, matrix, q_ref, states, row, tol2, max_iterations, guess,
-            features, starts, False,
-        )  # fmt: skip
+    if status == kernel.NOT_RIGID:  # the kernel's test is the exact one
+        as_se3(target)  # raises the error that says why
+        raise InputError("target is not a rigid transform")  # (as_se3 raised)
     restarts = 0
     if status == kernel.STALLED:
         # The clock only stops restarts: a run that converges is never cut

@@ -46,6 +46,16 @@ from workbench.errors import InputError
 from workbench.ik import _puma_kernel as opw_kernel
 from workbench.ik import _ur_kernel as ur_kernel
 from workbench.ik._atan2_kernel import atan2_into
+from workbench.ik._kernel_common import (
+    FLAG_COUNT,
+    FLAG_SHOULDER_SINGULAR,
+    FLAG_SOME_UNREACHED,
+    FLAG_WITHIN_LIMITS,
+    FLAG_WRIST_SINGULAR,
+    IN_CYLINDER,
+    NOT_RIGID,
+    OK,
+)
 from workbench.ik._puma import UnreachableError, UnsupportedRobotError, get_geometry
 from workbench.ik._refine_kernel import refine_batch, refine_pose, refinement_chain
 from workbench.ik._targets import as_targets, check_poses, pose_rows
@@ -71,15 +81,6 @@ UR_BRANCHES: tuple[str, ...] = tuple(
     for elbow in ("up", "down")
     for wrist in ("up", "down")
 )
-
-#: Slots of the kernels' flags array: within limits per branch (8), wrist
-#: singular per (arm, elbow) pair of branches 2·pair, 2·pair + 1 (4), shoulder
-#: singular, and "some branches do not reach" (their rows are NaN).
-FLAG_WITHIN_LIMITS = 0
-FLAG_WRIST_SINGULAR = 8
-FLAG_SHOULDER_SINGULAR = 12
-FLAG_SOME_UNREACHED = 13
-FLAG_COUNT = 14
 
 #: Poses per chunk of :meth:`ClosedFormSolver.solve_batch` (its three
 #: (N, N_ANGLES) buffers take 1.1–1.2 MB; chunks of 256 to 4096 poses were no
@@ -187,10 +188,10 @@ class ClosedFormSolver:
         q, flags = np.empty((8, 6)), np.empty(FLAG_COUNT, dtype=bool)
         kernel = self._kernel
         status = kernel.solve_pose(self.geometry, pose, q_previous, q, flags, True)
-        if status == kernel.NOT_RIGID:  # the exact checks raise, or accept it
-            pose_rows(pose)
-            status = kernel.solve_pose(self.geometry, pose, q_previous, q, flags, False)
-        if status != kernel.OK:
+        if status == NOT_RIGID:  # the kernel's test is the exact one
+            pose_rows(pose)  # raises the error that says why
+            raise InputError("target is not a rigid transform")  # (pose_rows raised)
+        if status != OK:
             self._explain(pose)
         if self._refine is not None and not refine_pose(self._refine, pose, q, flags):
             raise UnreachableError(0.0, (0.0, 0.0), "model")
@@ -242,7 +243,7 @@ class ClosedFormSolver:
     def _explain(self, pose: FloatArray) -> None:
         """Raise the :class:`UnreachableError` of a pose the arm cannot reach."""
         status, distance, low, high = self._kernel.diagnose(self.geometry, pose)
-        kind = "cylinder" if status == self._kernel.IN_CYLINDER else "reach"
+        kind = "cylinder" if status == IN_CYLINDER else "reach"
         raise UnreachableError(distance, (low, high), kind)
 
     # -- many poses -----------------------------------------------------------
