@@ -635,12 +635,12 @@ def test_continuing_branch_is_nearest_or_stays_on_the_twins(rng) -> None:
         solutions = analytic(robot, robot.fk(q), q_previous=prev)
         q_all = np.array([s.q for s in solutions])
         best = nearest(solutions, prev).index
-        assert kernel.continuing_branch(q_all, prev, best >> 1, 1.0) == best
+        assert kernel.common.continuing_branch(q_all, prev, best >> 1, 1.0) == best
         for pair in range(4):  # not near enough: the nearest of all eight
-            assert kernel.continuing_branch(q_all, prev, pair, 0.0) == best
+            assert kernel.common.continuing_branch(q_all, prev, pair, 0.0) == best
         step2 = ((q_all - prev) ** 2).sum(axis=1)
         twin = 2 * (best >> 1) ^ 2  # another pair, within a generous step
-        chosen = kernel.continuing_branch(q_all, prev, twin >> 1, 100.0)
+        chosen = kernel.common.continuing_branch(q_all, prev, twin >> 1, 100.0)
         assert chosen in (twin, twin + 1)
         assert step2[chosen] == step2[twin : twin + 2].min()
 

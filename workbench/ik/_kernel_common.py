@@ -19,7 +19,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from workbench._compiled import helper
+from workbench._compiled import entry_point, helper
 from workbench.poses import RIGIDITY_TOL
 
 FloatArray = npt.NDArray[np.float64]
@@ -386,3 +386,83 @@ __all__ = [
     "within_limits",
     "write_framed",
 ]
+
+
+@inline
+def _distance2(a: FloatArray, b: FloatArray) -> float:
+    d2 = 0.0
+    for j in range(a.shape[0]):
+        d = a[j] - b[j]
+        d2 += d * d
+    return d2
+
+
+@entry_point()
+def continuing_branch(
+    q: FloatArray, q_reference: FloatArray, pair: int, max_step2: float
+) -> int:
+    """The branch continuing a motion at ``q_reference`` (Kang's θ4 rule).
+
+    The nearer of the two wrist twins of ``pair`` (branches ``2 pair`` and
+    ``2 pair + 1``, the previous cycle's) if its squared distance is at most
+    ``max_step2``; else, after a shoulder or elbow singularity, the nearest of
+    all eight (the first on a tie). Distances are plain Euclidean: ``q`` holds
+    the representatives nearest ``q_reference`` (``solve_pose`` with it as
+    ``prev``), so they equal those of ``closed_form.nearest``.
+    """
+    twin = 2 * pair
+    d_a, d_b = _distance2(q[twin], q_reference), _distance2(q[twin + 1], q_reference)
+    if d_a <= d_b:
+        if d_a <= max_step2:
+            return twin
+    elif d_b <= max_step2:
+        return twin + 1
+    best, best_d2 = 0, math.inf
+    for b in range(8):
+        d2 = _distance2(q[b], q_reference)
+        if d2 < best_d2:
+            best, best_d2 = b, d2
+    return best
+
+
+@body
+def track_one(
+    geo,
+    pose: FloatArray,
+    q_predicted: FloatArray,
+    pair: int,
+    max_step2: float,
+    q_out: FloatArray,
+    angle_arguments,
+    assemble,
+    layout,
+) -> tuple[int, int, bool]:
+    """The body of a family's ``track``: solve, then keep the continuing branch.
+
+    Args:
+        geo: The arm's record.
+        pose: (4, 4) target pose of the tool frame in the base frame [m].
+        q_predicted: (6,) predicted configuration [rad]: every angle is the
+            representative nearest it (``solve_one``'s ``prev``).
+        pair: (Arm, elbow) pair of the last branch, ``index >> 1``.
+        max_step2: Largest squared joint step [rad²] that keeps the pair.
+        q_out: (6,) output, the configuration [rad] (undefined unless OK).
+        angle_arguments: As :func:`solve_one`.
+        assemble: As :func:`solve_one`.
+        layout: As :func:`solve_one`.
+
+    Returns:
+        ``(status, index, within)``: as :func:`solve_one`, then the branch
+        (:func:`continuing_branch`) and whether it is within the limits.
+    """
+    q = np.empty((8, 6))
+    flags = np.empty(FLAG_COUNT, dtype=np.bool_)
+    status = solve_one(
+        geo, pose, q_predicted, q, flags, True, angle_arguments, assemble, layout
+    )
+    if status != OK:
+        return status, -1, False
+    index = continuing_branch(q, q_predicted, pair, max_step2)
+    for j in range(6):
+        q_out[j] = q[index, j]
+    return status, index, flags[FLAG_WITHIN_LIMITS + index]

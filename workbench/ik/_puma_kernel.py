@@ -44,7 +44,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from workbench._compiled import entry_point, helper
+from workbench._compiled import entry_point
 from workbench.ik import _kernel_common as common
 from workbench.ik._kernel_common import FLAG_COUNT as FLAG_COUNT
 from workbench.ik._kernel_common import FLAG_SHOULDER_SINGULAR as FLAG_SHOULDER_SINGULAR
@@ -211,6 +211,8 @@ SHOULDER_SINGULAR_TOL = 1e-10
 #: an arm that cannot reach, per branch.
 _WRIST_BITS = (T4, T4 + 1, T4 + 2, T4 + 3)
 _DEAD_BITS = (DEAD, DEAD, DEAD, DEAD, DEAD + 1, DEAD + 1, DEAD + 1, DEAD + 1)
+#: The mask layout of :func:`solve_pose` (``_kernel_common.solve_one``).
+_LAYOUT = (N_ANGLES, _WRIST_BITS, SHOULDER, 3 << DEAD)
 
 
 @common.inline
@@ -449,11 +451,26 @@ def solve_pose(
         :data:`OK`, or :data:`NOT_RIGID`, :data:`OUT_OF_REACH`,
         :data:`IN_CYLINDER` (outputs then undefined).
     """
-    layout = (N_ANGLES, _WRIST_BITS, SHOULDER, 3 << DEAD)
     geo = geometry[0]
     return common.solve_one(
-        geo, pose, prev, q, flags, check, angle_arguments, assemble, layout
+        geo, pose, prev, q, flags, check, angle_arguments, assemble, _LAYOUT
     )
+
+
+@entry_point(outputs=("q_out",))
+def track(
+    geometry: np.ndarray,
+    pose: FloatArray,
+    q_predicted: FloatArray,
+    pair: int,
+    max_step2: float,
+    q_out: FloatArray,
+) -> tuple[int, int, bool]:
+    """The branch continuing a motion (``_kernel_common.track_one``)."""
+    return common.track_one(
+        geometry[0], pose, q_predicted, pair, max_step2, q_out,
+        angle_arguments, assemble, _LAYOUT,
+    )  # fmt: skip
 
 
 @common.inline
@@ -670,40 +687,3 @@ def batch_assemble(
     """
     geo = geometry[0]
     common.assemble_poses(geo, angles, y, status, exact, q, valid, assemble, _DEAD_BITS)
-
-
-@helper()
-def _distance2(a: FloatArray, b: FloatArray) -> float:
-    d2 = 0.0
-    for j in range(a.shape[0]):
-        d = a[j] - b[j]
-        d2 += d * d
-    return d2
-
-
-@entry_point()
-def continuing_branch(
-    q: FloatArray, q_reference: FloatArray, pair: int, max_step2: float
-) -> int:
-    """The branch continuing a motion at ``q_reference`` (Kang's θ4 rule).
-
-    The nearer of the two wrist twins of ``pair`` (branches ``2 pair`` and
-    ``2 pair + 1``, the previous cycle's) if its squared distance is at most
-    ``max_step2``; else, after a shoulder or elbow singularity, the nearest of
-    all eight (the first on a tie). Distances are plain Euclidean: ``q`` holds
-    the representatives nearest ``q_reference`` (``solve_pose`` with it as
-    ``prev``), so they equal those of ``closed_form.nearest``.
-    """
-    twin = 2 * pair
-    d_a, d_b = _distance2(q[twin], q_reference), _distance2(q[twin + 1], q_reference)
-    if d_a <= d_b:
-        if d_a <= max_step2:
-            return twin
-    elif d_b <= max_step2:
-        return twin + 1
-    best, best_d2 = 0, math.inf
-    for b in range(8):
-        d2 = _distance2(q[b], q_reference)
-        if d2 < best_d2:
-            best, best_d2 = b, d2
-    return best

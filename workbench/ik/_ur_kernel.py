@@ -108,6 +108,8 @@ REACH_MARGIN = 1e-12
 #: reach, per branch.
 _WRIST_BITS = (SINGULAR, SINGULAR, SINGULAR + 1, SINGULAR + 1)
 _DEAD_BITS = tuple(DEAD + 2 * (b >> 2) + (b & 1) for b in range(8))
+#: The mask layout of :func:`solve_pose` (``_kernel_common.solve_one``).
+_LAYOUT = (N_ANGLES, _WRIST_BITS, SHOULDER, 15 << DEAD)
 
 
 def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
@@ -456,11 +458,26 @@ def solve_pose(
     cannot reach; the wrist of the (shoulder, elbow) pair ``p`` (branches
     2·p, 2·p + 1) is singular with shoulder ``p >> 1``.
     """
-    layout = (N_ANGLES, _WRIST_BITS, SHOULDER, 15 << DEAD)
     geo = geometry[0]
     return common.solve_one(
-        geo, pose, prev, q, flags, check, angle_arguments, assemble, layout
+        geo, pose, prev, q, flags, check, angle_arguments, assemble, _LAYOUT
     )
+
+
+@entry_point(outputs=("q_out",))
+def track(
+    geometry: np.ndarray,
+    pose: FloatArray,
+    q_predicted: FloatArray,
+    pair: int,
+    max_step2: float,
+    q_out: FloatArray,
+) -> tuple[int, int, bool]:
+    """The branch continuing a motion, as ``_puma_kernel.track``."""
+    return common.track_one(
+        geometry[0], pose, q_predicted, pair, max_step2, q_out,
+        angle_arguments, assemble, _LAYOUT,
+    )  # fmt: skip
 
 
 @entry_point()

@@ -55,6 +55,7 @@ from workbench.ik._kernel_common import (
     IN_CYLINDER,
     NOT_RIGID,
     OK,
+    continuing_branch,
 )
 from workbench.ik._puma import UnreachableError, UnsupportedRobotError, get_geometry
 from workbench.ik._refine_kernel import refine_batch, refine_pose, refinement_chain
@@ -225,8 +226,15 @@ class ClosedFormSolver:
         Raises:
             UnreachableError, InputError: As :func:`workbench.ik.analytic`.
         """
-        q_all, flags = self.solve_arrays(pose, q_predicted)
-        index = opw_kernel.continuing_branch(q_all, q_predicted, pair, max_step2)
+        if self._refine is None:
+            q = np.empty(6)
+            status, index, within = self._kernel.track(
+                self.geometry, pose, q_predicted, pair, max_step2, q
+            )
+            if status == OK:
+                return q, index, within
+        q_all, flags = self.solve_arrays(pose, q_predicted)  # refined, or raises
+        index = continuing_branch(q_all, q_predicted, pair, max_step2)
         return q_all[index].copy(), index, bool(flags[FLAG_WITHIN_LIMITS + index])
 
     def _previous(self, q_previous: npt.ArrayLike) -> FloatArray:
