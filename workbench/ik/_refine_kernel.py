@@ -13,10 +13,13 @@ with the forward kinematics, Jacobian and error of ``_chain_kernel``:
 
 (J the LOCAL Jacobian of the tool; λ = |e|² is Levenberg–Marquardt's damping
 of Yamashita and Fukushima: Newton's quadratic convergence where J is regular,
-bounded steps where it is singular). A branch is kept when its FK residual,
+bounded steps where it is singular). Where the idealised arm has a
+one-parameter family of solutions (singular wrist, wrist centre on the base
+or shoulder axis) and Newton cannot follow the model's valley to its member,
+:func:`_valley_search` looks for it. A branch is kept when its FK residual,
 position :math:`|p(q) - p_T|` [m] and rotation :math:`|\log_3(R_T^T R(q))|`
-[rad], is within :data:`POSITION_TOL` and :data:`ROTATION_TOL` after at most
-:data:`REFINE_STEPS` steps; else it is reported as not reaching (its row NaN),
+[rad], is within :data:`ACCEPT` times :data:`POSITION_TOL` and
+:data:`ROTATION_TOL`; else it is reported as not reaching (its row NaN),
 never returned with a larger residual.
 
 Only robots whose model differs from the idealised structure are refined
