@@ -20,7 +20,7 @@ moved too: of its family only up to 1e-9; :func:`rounded_urdf`):
   configuration), and those for which a peer returns no exact answer.
 
 EAIK and ik-geo get the model's own joint axes, as in
-``bench_ik_closed_form.py`` (whose chain builders are used here); a missing
+``bench_ik_closed_form.py`` (whose chain and peer builders are used here); a missing
 peer is reported as such.
 """
 
@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from benchmarks.bench_ik_closed_form import _chain, _ik_geo_chain
+from benchmarks.bench_ik_closed_form import _chain, _ik_geo_peer
 from workbench import Robot, load_robot
 from workbench.ik import analytic, analytic_batch, get_structure
 
@@ -259,14 +259,7 @@ def ik_geo_solver(robot: Robot) -> Peer | str:
         ik_geo = importlib.import_module("ik_geo")
     except ImportError as err:
         return f"not importable ({err})"
-    family = get_structure(robot).family
-    directions, offsets, rotation0 = _ik_geo_chain(robot, family)
-    make = (
-        ik_geo.Robot.three_parallel_two_intersecting
-        if family == "ur"
-        else ik_geo.Robot.spherical_two_parallel
-    )
-    peer = make(directions, offsets)
+    peer, rotation0 = _ik_geo_peer(ik_geo, robot)
 
     def solve(target: np.ndarray) -> np.ndarray:
         rotation = (target[:3, :3] @ rotation0.T).T  # get_ik reads columns

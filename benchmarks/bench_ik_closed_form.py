@@ -211,12 +211,8 @@ def _ik_geo_chain(robot, family: str):
     return directions, np.diff(points, axis=0, prepend=0.0), rotation0
 
 
-def bench_ik_geo(name: str, poses: int, quick: bool) -> dict[str, float] | str:
-    try:
-        ik_geo = importlib.import_module("ik_geo")
-    except ImportError as err:
-        return f"not importable ({err})"
-    robot, targets = _problem(name)
+def _ik_geo_peer(ik_geo, robot):
+    """ik-geo's solver of the robot's chain (:func:`_ik_geo_chain`), rotation at 0."""
     from workbench.ik.structure import get_structure
 
     family = get_structure(robot).family
@@ -226,7 +222,16 @@ def bench_ik_geo(name: str, poses: int, quick: bool) -> dict[str, float] | str:
         if family == "ur"
         else ik_geo.Robot.spherical_two_parallel
     )
-    peer = make(directions, offsets)
+    return make(directions, offsets), rotation0
+
+
+def bench_ik_geo(name: str, poses: int, quick: bool) -> dict[str, float] | str:
+    try:
+        ik_geo = importlib.import_module("ik_geo")
+    except ImportError as err:
+        return f"not importable ({err})"
+    robot, targets = _problem(name)
+    peer, rotation0 = _ik_geo_peer(ik_geo, robot)
     # get_ik reads R[j] as column j (its bindings: rotation[(i, j)] = R[j][i])
     rotations = np.swapaxes(targets[:, :3, :3] @ rotation0.T, 1, 2).copy()
     translations = targets[:, :3, 3].copy()

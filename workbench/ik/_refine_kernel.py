@@ -70,6 +70,13 @@ STALL_STEPS = 20
 VALLEY_SCAN = 36
 VALLEY_INNER_STEPS = 8
 VALLEY_ROOT_STEPS = 40
+#: Added to the diagonal of JᵀJ in the valley search, so that an exactly
+#: singular J still gives a solvable system [1/m² ~ 1/rad²].
+GRAM_SHIFT = 1e-24
+#: The least squares of the other five joints stop at a step this short [rad];
+#: the root search at a bracket this narrow [rad].
+VALLEY_STEP_TOL = 1e-15
+VALLEY_ROOT_TOL = 1e-15
 #: A fitted structure whose FK differs from the model's by more than this
 #: [m, and rotation entries] (``KinematicStructure.residual``) is refined; the
 #: catalog's URDFs are within 6e-16.
@@ -139,6 +146,18 @@ def _refine_branch(chain: FloatArray, target: FloatArray, q: FloatArray, work) -
 
 
 @helper()
+def _gram(a: FloatArray, n: int, out: FloatArray) -> None:
+    """``out[:n, :n]`` = AᵀA + :data:`GRAM_SHIFT` I for the (6, n) matrix A."""
+    for i in range(n):
+        for k in range(n):
+            s = 0.0
+            for r in range(6):
+                s += a[r, i] * a[r, k]
+            out[i, k] = s
+        out[i, i] += GRAM_SHIFT
+
+
+@helper()
 def _inner(chain, target, x, j: int, work) -> float:
     """Gauss–Newton on the joints of ``x`` but ``j``; the residual's normal part.
 
@@ -162,24 +181,19 @@ def _inner(chain, target, x, j: int, work) -> float:
             size += e[r] * e[r]
         if step == VALLEY_INNER_STEPS:
             break
-        for a in range(5):  # normal equations J5ᵀ J5 d = J5ᵀ e
+        _gram(j5, 5, normal)  # normal equations J5ᵀ J5 d = J5ᵀ e
+        for a in range(5):
             s = 0.0
             for r in range(6):
                 s += j5[r, a] * e[r]
             dq[a] = s
-            for b in range(5):
-                s = 0.0
-                for r in range(6):
-                    s += j5[r, a] * j5[r, b]
-                normal[a, b] = s
-            normal[a, a] += 1e-30
         if not _solve(normal, dq, 5):
             break
         moved = 0.0
         for c in range(5):
             x[c if c < j else c + 1] -= dq[c]
             moved += dq[c] * dq[c]
-        if moved < 1e-30:
+        if moved < VALLEY_STEP_TOL * VALLEY_STEP_TOL:
             break
     return math.sqrt(size)
 
@@ -236,13 +250,7 @@ def _valley_search(chain, target, q, work) -> bool:
     _error(target, frames, e)
     _jacobian(chain, frames, jac)
     for _ in range(4):  # inverse iteration: J's right singular vector of least σ
-        for a in range(6):
-            for b in range(6):
-                s = 0.0
-                for r in range(6):
-                    s += jac[r, a] * jac[r, b]
-                normal[a, b] = s
-            normal[a, a] += 1e-24
+        _gram(jac, 6, normal)
         if not _solve(normal, v, 6):
             return False
         length = 0.0
@@ -285,7 +293,7 @@ def _valley_search(chain, target, q, work) -> bool:
             _inner(chain, target, x, j, work)
             gb = _normal_part(work, previous)
             for _ in range(VALLEY_ROOT_STEPS):
-                if ga == gb or abs(b - a) <= 1e-15:
+                if ga == gb or abs(b - a) <= VALLEY_ROOT_TOL:
                     break
                 t = b - gb * (b - a) / (gb - ga)
                 x[j] = t
