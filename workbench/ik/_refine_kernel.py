@@ -77,6 +77,7 @@ GRAM_SHIFT = 1e-24
 #: the root search at a bracket this narrow [rad].
 VALLEY_STEP_TOL = 1e-15
 VALLEY_ROOT_TOL = 1e-15
+_GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 #: A fitted structure whose FK differs from the model's by more than this
 #: [m, and rotation entries] (``KinematicStructure.residual``) is refined; the
 #: catalog's URDFs are within 6e-16.
@@ -281,13 +282,10 @@ def _valley_search(chain, target, q, work) -> bool:
                 continue
             for k in range(6):
                 x[k] = scanned[i, k]
-                previous[k] = e[k]  # (overwritten below)
             a, b = start[j] + i * width, start[j] + (i + 1) * width
-            ga, gb = parts[i], parts[i + 1]
-            _inner(chain, target, x, j, work)  # the normal at a, as reference
+            size = _inner(chain, target, x, j, work)  # the normal at a: e
             for r in range(6):
-                previous[r] = 0.0
-            previous[0] = 1.0
+                previous[r] = e[r] / size if size > 0.0 else 1.0
             ga = _normal_part(work, previous)
             x[j] = b
             _inner(chain, target, x, j, work)
@@ -308,6 +306,35 @@ def _valley_search(chain, target, q, work) -> bool:
                 for k in range(6):
                     q[k] = x[k]
                 return True
+        # no sign change that leads there: a double root (where the two arms
+        # or elbows meet, the normal part only touches 0), the least |e| by
+        # golden section around the scanned value of least |e|
+        i = np.argmin(np.abs(parts[:VALLEY_SCAN]))
+        for k in range(6):
+            x[k] = scanned[i, k]
+        a, b = start[j] + (i - 1) * width, start[j] + (i + 1) * width
+        c, d = b - _GOLDEN * (b - a), a + _GOLDEN * (b - a)
+        x[j] = c
+        size_c = _inner(chain, target, x, j, work)
+        x[j] = d
+        size_d = _inner(chain, target, x, j, work)
+        for _ in range(VALLEY_ROOT_STEPS):
+            if size_c < size_d:
+                b, d, size_d = d, c, size_c
+                c = b - _GOLDEN * (b - a)
+                x[j] = c
+                size_c = _inner(chain, target, x, j, work)
+            else:
+                a, c, size_c = c, d, size_d
+                d = a + _GOLDEN * (b - a)
+                x[j] = d
+                size_d = _inner(chain, target, x, j, work)
+        x[j] = c if size_c < size_d else d
+        _inner(chain, target, x, j, work)
+        if _refine_branch(chain, target, x, work):
+            for k in range(6):
+                q[k] = x[k]
+            return True
     return False
 
 
