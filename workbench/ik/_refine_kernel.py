@@ -43,6 +43,7 @@ from workbench.ik._chain_kernel import (
     _jacobian,
     _solve,
 )
+from workbench.ik._kernel_common import FLAG_SOME_UNREACHED, FLAG_WITHIN_LIMITS
 from workbench.ik._puma import LIMIT_TOL
 from workbench.ik.structure import get_structure
 from workbench.model.robot import Robot
@@ -82,9 +83,6 @@ _GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 #: [m, and rotation entries] (``KinematicStructure.residual``) is refined; the
 #: catalog's URDFs are within 6e-16.
 EXACT_STRUCTURE_TOL = 1e-13
-
-#: Slots of the flags of ``solve_pose`` that refine_pose updates.
-_WITHIN, _SOME_UNREACHED = 0, 13
 
 
 def refinement_chain(robot: Robot) -> FloatArray | None:
@@ -309,10 +307,10 @@ def _valley_search(chain, target, q, work) -> bool:
         # no sign change that leads there: a double root (where the two arms
         # or elbows meet, the normal part only touches 0), the least |e| by
         # golden section around the scanned value of least |e|
-        i = np.argmin(np.abs(parts[:VALLEY_SCAN]))
+        least = np.argmin(np.abs(parts[:VALLEY_SCAN]))
         for k in range(6):
-            x[k] = scanned[i, k]
-        a, b = start[j] + (i - 1) * width, start[j] + (i + 1) * width
+            x[k] = scanned[least, k]
+        a, b = start[j] + (least - 1) * width, start[j] + (least + 1) * width
         c, d = b - _GOLDEN * (b - a), a + _GOLDEN * (b - a)
         x[j] = c
         size_c = _inner(chain, target, x, j, work)
@@ -381,7 +379,7 @@ def refine_pose(
         pose: (4, 4) target pose of the tool frame in the base frame [m].
         q: (8, 6) branches of the closed form [rad], NaN rows for those that
             do not reach; refined in place, NaN where refinement fails.
-        flags: (14,) flags of ``solve_pose``: "within limits" (slots 0..7) and
+        flags: (FLAG_COUNT,) flags of ``solve_pose``: "within limits" and
             "some branches do not reach" (slot 13) are updated.
 
     Returns:
@@ -396,8 +394,8 @@ def refine_pose(
         within = alive
         for k in range(6):
             within &= chain[k, 16] - LIMIT_TOL <= q[b, k] <= chain[k, 17] + LIMIT_TOL
-        flags[_WITHIN + b] = within
-    flags[_SOME_UNREACHED] = count < 8
+        flags[FLAG_WITHIN_LIMITS + b] = within
+    flags[FLAG_SOME_UNREACHED] = count < 8
     return count
 
 
