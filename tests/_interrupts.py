@@ -58,6 +58,7 @@ class Tally:
     runs: int = 0
     files: Counter[str] = field(default_factory=Counter)  # absent/old/complete/...
     exits: Counter[int] = field(default_factory=Counter)
+    signals: Counter[str] = field(default_factory=Counter)  # SIGINT, SIGKILL sent
     tracebacks: int = 0
     stderr_lines_over_one: int = 0
     orphans: int = 0  # forked workers alive ORPHAN_GRACE s after the kill
@@ -109,6 +110,11 @@ def _alive(pid: int) -> bool:
     return state != "Z"
 
 
+def _take_sigint() -> None:
+    """In the child, before exec: SIGINT acts (not ignored as by ``nohup cmd &``)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def run_reference(name: str, folder: Path) -> dict[str, bytes]:
     """Run the command to its end once; the bytes of every output."""
     argv, outputs = COMMANDS[name]
@@ -152,6 +158,7 @@ def interrupt_once(
         cwd=folder,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
+        preexec_fn=_take_sigint,  # a background job (`cmd &`) inherits it ignored
     )
     delay = rng.uniform(min_delay, max_delay)
     time.sleep(delay)
@@ -181,6 +188,7 @@ def interrupt_once(
             tally.problems.append(f"{name}: temporary file of {rel} after SIGINT")
         for path, _ in temporaries:  # what the next write would remove
             path.unlink()
+    tally.signals[kill.name] += 1
     expected = {signal.SIGINT: (130, 0), signal.SIGKILL: (-9, 0)}[kill]
     if process.returncode not in expected:
         tally.problems.append(

@@ -97,12 +97,13 @@ def interrupts(count: int, startup: int, seed: int) -> None:
                 )  # fmt: skip
         label = name if low > 0 else f"{name} <{MIN_DELAY:g} s"
         exits = ", ".join(f"{code}: {n}" for code, n in sorted(tally.exits.items()))
+        sent = ", ".join(f"{sig} {n}" for sig, n in sorted(tally.signals.items()))
         files = tally.files
         print(
             f"{label:<16}{tally.runs:>6}{files['absent']:>8}{files['old']:>6}"
             f"{files['complete']:>10}{files['truncated']:>11}{tally.orphans:>9}"
             f"{tally.leftover_temporaries:>11}{tally.tracebacks:>11}  {exits}"
-            f"  ({time.perf_counter() - start:.0f} s)"
+            f"  ({sent}; {time.perf_counter() - start:.0f} s)"
         )
         for problem in tally.problems:
             print(f"  {problem}")

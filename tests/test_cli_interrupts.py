@@ -45,3 +45,4 @@ def test_interrupted_runs_leave_whole_files(name: str, tmp_path: Path) -> None:
     assert tally.files["truncated"] == 0 and tally.tracebacks == 0
     assert tally.orphans == 0 and tally.stderr_lines_over_one == 0
     assert set(tally.exits) <= {0, 130, -9}
+    assert tally.exits[130] + tally.exits[-9] > 0  # some runs were stopped midway

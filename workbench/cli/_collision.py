@@ -21,6 +21,7 @@ from workbench.errors import InputError
 from workbench.model.robot import Robot
 from workbench.tasks.fish_cutting import FishCuttingResult
 from workbench.tasks.fish_scene import get_fish_cutting_scene
+from workbench.trajectory.pick_and_place import JointTrajectory
 
 
 def add_collision_arguments(parser: argparse.ArgumentParser, default: str) -> None:
@@ -79,6 +80,26 @@ def get_pick_place_scene(robot: Robot) -> Scene:
     if robot.dh_table.name == "puma560":
         return get_angeles_scene(robot)
     return Scene("pedestal", (get_pedestal(robot),), "the pedestal under the base")
+
+
+def check_pick_and_place_path(
+    robot: Robot, traj: JointTrajectory, args: argparse.Namespace, rate: float
+) -> tuple[Scene | None, PathClearance | None]:
+    """The collision check of a pick-and-place (``plan``, ``export --pick-place``).
+
+    Args:
+        robot: The arm.
+        traj: The trajectory.
+        args: With ``scene`` and ``no_collision``.
+        rate: Samples per second [Hz] of the check (proven between samples).
+
+    Returns:
+        The scene (``--scene``, else :func:`get_pick_place_scene`; None with
+        ``--no-collision``) and the clearance (None when skipped).
+    """
+    scene = load_scene(args, lambda: get_pick_place_scene(robot))
+    checker = build_checker(robot, scene, explicit=args.scene is not None)
+    return scene, None if checker is None else traj.check_collisions(checker, rate)
 
 
 def check_fish_cutting_path(

@@ -10,10 +10,9 @@ import numpy as np
 from workbench.atomic_files import check_output
 from workbench.cli._collision import (
     add_collision_arguments,
-    build_checker,
     check_fish_cutting_path,
+    check_pick_and_place_path,
     get_collision_error,
-    get_pick_place_scene,
     load_scene,
 )
 from workbench.cli._common import (
@@ -125,10 +124,9 @@ def _samples(args: argparse.Namespace, robot: Robot) -> JointTrajectorySamples:
         violations = traj.check_limits()
         if violations:
             raise InfeasibleError(violations[0].message)
-        scene = load_scene(args, lambda: get_pick_place_scene(robot))
-        checker = build_checker(robot, scene, explicit=args.scene is not None)
-        if checker is not None:
-            _refuse_contact(traj.check_collisions(checker, PICK_PLACE_RATE_HZ))
+        _refuse_contact(
+            check_pick_and_place_path(robot, traj, args, PICK_PLACE_RATE_HZ)[1]
+        )
         return traj.sample_uniform(PICK_PLACE_RATE_HZ)
     from workbench.tasks import run_fish_cutting
 

@@ -11,10 +11,8 @@ import numpy as np
 from workbench.atomic_files import atomic_files, check_outputs
 from workbench.cli._collision import (
     add_collision_arguments,
-    build_checker,
+    check_pick_and_place_path,
     get_collision_keys,
-    get_pick_place_scene,
-    load_scene,
     print_collision_summary,
     report_collision_error,
 )
@@ -140,11 +138,7 @@ def run_pick_place(args: argparse.Namespace) -> int:
     traj = pick_and_place(robot, q_pick, q_place, args.duration, n_points=args.n_points)
     t_min = minimum_duration(robot, q_pick, q_place, n_points=args.n_points)
     violations = traj.check_limits()
-    scene = load_scene(args, lambda: get_pick_place_scene(robot))
-    checker = build_checker(robot, scene, explicit=args.scene is not None)
-    clearance = None
-    if checker is not None:
-        clearance = traj.check_collisions(checker, args.rate)
+    scene, clearance = check_pick_and_place_path(robot, traj, args, args.rate)
     samples = traj.sample_uniform(args.rate) if args.csv else None
     outputs = [p for p in (args.csv, args.plot) if p is not None]
     with atomic_files(*outputs) as temps:
