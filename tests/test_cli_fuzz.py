@@ -194,3 +194,13 @@ def test_negative_number_pattern(text: str) -> None:
     from workbench.cli import _NUMBER
 
     assert _NUMBER.match(text) and float(text) <= 0.0
+
+
+def test_fishcut_prints_json_when_the_run_fails(tmp_path: Path) -> None:
+    code, out, err = _run_in(
+        tmp_path, "fishcut", "--max-velocity", "0.6", "--csv", "old.csv", "--json"
+    )
+    result = json.loads(out)
+    assert code == 3 and result["command"] == "fishcut"
+    assert result["feasible"] is False and "velocity" in result["error"]
+    assert err.count("\n") == 1 and (tmp_path / "old.csv").read_text() == OLD
