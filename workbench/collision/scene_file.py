@@ -37,8 +37,8 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from workbench.collision.scene import SHAPES, Obstacle, Scene
 from workbench.atomic_files import write_text_atomic
+from workbench.collision.scene import SHAPES, Obstacle, Scene
 from workbench.errors import InputError, SceneFileError
 from workbench.validation import read_json_file
 

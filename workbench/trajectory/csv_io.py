@@ -126,9 +126,7 @@ def read_trajectory_csv(
             f"cannot read trajectory {path}: {err.strerror or err}"
         ) from err
     except UnicodeDecodeError as err:
-        raise TrajectoryFileError(
-            f"{path}: not UTF-8 text (byte {err.start})"
-        ) from err
+        raise TrajectoryFileError(f"{path}: not UTF-8 text (byte {err.start})") from err
     except csv.Error as err:  # e.g. a field longer than csv.field_size_limit()
         raise TrajectoryFileError(f"{path}: not a CSV file ({err})") from err
     if not rows:
