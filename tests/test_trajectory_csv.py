@@ -7,9 +7,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from workbench.errors import DimensionError, InputError
 from workbench.trajectory.csv_io import (
+    MAX_SAMPLES,
     JointTrajectorySamples,
     TrajectoryFileError,
+    check_sample_count,
     read_trajectory_csv,
     write_trajectory_csv,
 )
@@ -67,3 +70,36 @@ def test_wrong_joint_count_and_missing_file(tmp_path: Path, rng) -> None:
         read_trajectory_csv(tmp_path / "t.csv", nq=6)
     with pytest.raises(TrajectoryFileError, match="cannot read trajectory"):
         read_trajectory_csv(tmp_path / "none.csv")
+
+
+def test_line_2_states_the_count_and_a_lost_row_is_refused(tmp_path: Path, rng) -> None:
+    path = tmp_path / "t.csv"
+    write_trajectory_csv(path, _samples(rng, k=7))
+    lines = path.read_text().splitlines(keepends=True)
+    assert lines[1] == "# samples=7\n"
+    for cut in (len(lines) - 1, 3):  # a whole row lost; rows cut at a line end
+        path.write_text("".join(lines[:cut]))
+        with pytest.raises(TrajectoryFileError, match="line 2 states 7 samples"):
+            read_trajectory_csv(path)
+    path.write_text("".join(lines[:1] + lines[2:5]))  # no count line: read as is
+    assert read_trajectory_csv(path).t.size == 3
+    path.write_text("".join([lines[0], "# samples=seven\n", *lines[2:]]))
+    with pytest.raises(TrajectoryFileError, match="line 2: expected '# samples=K'"):
+        read_trajectory_csv(path)
+
+
+def test_a_failed_write_leaves_the_old_file(tmp_path: Path, rng) -> None:
+    path = tmp_path / "t.csv"
+    path.write_text("old")
+    bad = JointTrajectorySamples(
+        t=np.zeros(2), q=np.zeros((2, 6)), qd=np.zeros((3, 6)), qdd=np.zeros((2, 6))
+    )
+    with pytest.raises(DimensionError):
+        write_trajectory_csv(path, bad)
+    assert path.read_text() == "old" and sorted(tmp_path.iterdir()) == [path]
+
+
+def test_too_many_samples_are_refused() -> None:
+    check_sample_count(MAX_SAMPLES, "fine")
+    with pytest.raises(InputError, match=f"at most {MAX_SAMPLES}"):
+        check_sample_count(MAX_SAMPLES + 1, "--rate")
