@@ -43,7 +43,11 @@ from workbench.ik._chain_kernel import (
     _jacobian,
     _solve,
 )
-from workbench.ik._kernel_common import FLAG_SOME_UNREACHED, FLAG_WITHIN_LIMITS
+from workbench.ik._kernel_common import (
+    FLAG_SOME_UNREACHED,
+    FLAG_WITHIN_LIMITS,
+    remainder,
+)
 from workbench.ik._puma import LIMIT_TOL
 from workbench.ik.structure import get_structure
 from workbench.model.robot import Robot
@@ -137,8 +141,8 @@ def _refine_branch(chain: FloatArray, target: FloatArray, q: FloatArray, work) -
             damping += e[i] * e[i]
         _jacobian(chain, frames, jac)
         _damped_step(jac, 6, e, pull, no_pull, damping, normal, y, dq)
-        for k in range(6):
-            q[k] -= dq[k]
+        for k in range(6):  # (a turn of 2π or more is none: the angle stays near)
+            q[k] -= remainder(dq[k])
     for k in range(6):
         q[k] = best_q[k]
     return best <= ACCEPT
@@ -190,7 +194,7 @@ def _inner(chain, target, x, j: int, work) -> float:
             break
         moved = 0.0
         for c in range(5):
-            x[c if c < j else c + 1] -= dq[c]
+            x[c if c < j else c + 1] -= remainder(dq[c])
             moved += dq[c] * dq[c]
         if moved < VALLEY_STEP_TOL * VALLEY_STEP_TOL:
             break
@@ -301,8 +305,8 @@ def _valley_search(chain, target, q, work) -> bool:
                     a, ga = b, gb
                 b, gb = t, g
             if _refine_branch(chain, target, x, work):
-                for k in range(6):
-                    q[k] = x[k]
+                for k in range(6):  # the turn of each angle nearest the start
+                    q[k] = start[k] + remainder(x[k] - start[k])
                 return True
         # no sign change that leads there: a double root (where the two arms
         # or elbows meet, the normal part only touches 0), the least |e| by
@@ -331,7 +335,7 @@ def _valley_search(chain, target, q, work) -> bool:
         _inner(chain, target, x, j, work)
         if _refine_branch(chain, target, x, work):
             for k in range(6):
-                q[k] = x[k]
+                q[k] = start[k] + remainder(x[k] - start[k])
             return True
     return False
 
