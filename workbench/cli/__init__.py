@@ -28,7 +28,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 import workbench
-from workbench._sigint import EXIT_INTERRUPTED, exit_on_interrupt, is_workbench_command
+from workbench._sigint import EXIT_INTERRUPTED, is_workbench_command
 from workbench.cli import (
     demo,
     export,
@@ -109,8 +109,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code.
 
     Ctrl-C at any moment returns 130 (writers remove their temporary files
-    first); run as the ``workbench`` command, a Ctrl-C after this function
-    returned exits 130 too.
+    first). Run as the ``workbench`` command, a Ctrl-C after this function
+    returned is ignored: the command is done and its exit code decided (while
+    the interpreter shuts down, Python's handler is gone: the signal would kill
+    the process).
     """
     command = is_workbench_command()
     in_main_thread = threading.current_thread() is threading.main_thread()
@@ -121,8 +123,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         return EXIT_INTERRUPTED
     finally:
-        if command:  # from here to the exit: no traceback either
-            exit_on_interrupt()
+        if command and in_main_thread:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _main(argv: Sequence[str] | None) -> int:
