@@ -89,8 +89,7 @@ def read_json_file(path: str | Path, error: type[InputError], what: str) -> Any:
         return json.loads(text, parse_int=_json_int)
     except json.JSONDecodeError as err:
         raise error(
-            f"{path}: not valid JSON (line {err.lineno}, column {err.colno}: "
-            f"{err.msg})"
+            f"{path}: not valid JSON (line {err.lineno}, column {err.colno}: {err.msg})"
         ) from err
     except RecursionError as err:
         raise error(f"{path}: JSON nested too deeply to read") from err
