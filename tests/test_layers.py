@@ -149,7 +149,7 @@ def test_every_folder_has_a_layer() -> None:
 
 
 def _package(module: str) -> str:
-    """The folder below ``workbench`` a module is in (``ik`` for ``workbench.ik.numerical``).
+    """The folder below ``workbench`` a module is in (``ik`` for ``workbench.ik.x``).
 
     A top-level module (``workbench.errors``) is a package of its own.
     """
