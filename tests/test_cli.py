@@ -200,6 +200,29 @@ def test_ik_falls_back_to_numerical_ik_for_other_arms(capsys) -> None:
     assert solution["branch"] == "numeric" and solution["residual"] < 1e-9
 
 
+def test_ik_gives_one_angle_per_continuous_joint(capsys) -> None:
+    from workbench import load_robot
+
+    robot = load_robot("kinova")  # three continuous joints: nq 9, six joints
+    values = np.array([0.1, 2.0, 3.0, 0.4, 2.5, 0.6])
+    matrix = robot.fk(robot.q_from_joint_values(values)).homogeneous
+    code, out, _ = run(
+        capsys,
+        "ik",
+        "--robot",
+        "kinova",
+        "--matrix",
+        *map(str, matrix.ravel()),
+        "--json",
+    )
+    assert code == 0
+    (solution,) = json.loads(out)["solutions"]
+    assert len(solution["q"]) == robot.nq
+    joint_values = robot.joint_values_from_q(np.array(solution["q"]))
+    np.testing.assert_allclose(solution["joint_values"], joint_values, atol=1e-12)
+    np.testing.assert_allclose(solution["q_deg"], np.rad2deg(joint_values), atol=1e-9)
+
+
 def test_ik_numerical_out_of_reach_exits_3(capsys) -> None:
     far = [
         "1",

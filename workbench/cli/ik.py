@@ -160,7 +160,8 @@ def _numeric_row(robot: Robot, target: pin.SE3) -> dict[str, object]:
     return {
         "branch": "numeric",
         "q": result.q,
-        "q_deg": np.rad2deg(result.q),
+        "joint_values": robot.joint_values_from_q(result.q),
+        "q_deg": np.rad2deg(robot.joint_values_from_q(result.q)),
         "within_limits": True,
         "wrist_singular": False,
         "shoulder_singular": False,
@@ -239,6 +240,7 @@ def _solve(
         {
             "branch": s.branch,
             "q": s.q,
+            "joint_values": s.q,  # the closed-form arms' joints are all revolute
             "q_deg": np.rad2deg(s.q),
             "within_limits": s.within_limits,
             "wrist_singular": s.wrist_singular,
