@@ -22,7 +22,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import DimensionError, InputError
-from workbench.export.atomic_files import atomic_folder
+from workbench.atomic_files import atomic_folder
 from workbench.trajectory.csv_io import JointTrajectorySamples
 
 FloatArray = npt.NDArray[np.float64]
