@@ -21,8 +21,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from workbench.errors import DimensionError, InputError
 from workbench.atomic_files import atomic_folder
+from workbench.errors import DimensionError, InputError
 from workbench.trajectory.csv_io import JointTrajectorySamples
 
 FloatArray = npt.NDArray[np.float64]
