@@ -177,8 +177,12 @@ class Robot:
         leader, see :attr:`mimic_joints`) are left out: one name per joint
         value, ``n_joints`` names.
         """
+        return [self.model.names[j] for j in self._moving_joints()]
+
+    def _moving_joints(self) -> list[int]:
+        """Pinocchio indices of the joints with a coordinate of their own."""
         model = self.model
-        return [model.names[j] for j in range(1, model.njoints) if model.joints[j].nv]
+        return [j for j in range(1, model.njoints) if model.joints[j].nv]
 
     @property
     def n_joints(self) -> int:
@@ -197,11 +201,7 @@ class Robot:
         ``q_joint = multiplier * q_leader + offset``; FK and Jacobians apply it.
         """
         model = self.model
-        leaders = {
-            model.joints[j].idx_q: model.names[j]
-            for j in range(1, model.njoints)
-            if model.joints[j].nv
-        }
+        leaders = {model.joints[j].idx_q: model.names[j] for j in self._moving_joints()}
         found = []
         for j in range(1, model.njoints):
             joint = model.joints[j]
@@ -220,25 +220,24 @@ class Robot:
     def _value_slots(self) -> tuple[IndexArray, IndexArray, IndexArray]:
         """Where each joint value goes in q: plain slots and (cos, sin) pairs.
 
-        Returns ``(plain_q, continuous_q, continuous_value)``: q indices of the
-        one-coordinate joints (in joint order, so their value index is their
-        rank), the q index of the cosine of each continuous joint, and the
-        joint-value index of each continuous joint.
+        Returns ``(plain_q, continuous_q, plain_value)``: q indices of the
+        one-coordinate joints, the q index of the cosine of each continuous
+        joint, and a mask over the joint values, True for the one-coordinate
+        joints (in joint order both).
 
         Raises:
             InputError: If a joint has several degrees of freedom (planar,
                 spherical, floating): it has no single joint value.
         """
         model = self.model
-        plain, pairs, pair_values = [], [], []
-        moving = [j for j in range(1, model.njoints) if model.joints[j].nv]
-        for rank, j in enumerate(moving):
+        plain, pairs, plain_value = [], [], []
+        for j in self._moving_joints():
             joint = model.joints[j]
+            plain_value.append(joint.nq == 1)
             if joint.nv == 1 and joint.nq == 1:
                 plain.append(joint.idx_q)
             elif joint.nv == 1 and joint.nq == 2:
                 pairs.append(joint.idx_q)
-                pair_values.append(rank)
             else:
                 raise InputError(
                     f"joint {model.names[j]!r} ({joint.shortname()}) has "
@@ -248,7 +247,7 @@ class Robot:
         return (
             np.array(plain, dtype=np.intp),
             np.array(pairs, dtype=np.intp),
-            np.array(pair_values, dtype=np.intp),
+            np.array(plain_value, dtype=bool),
         )
 
     def q_from_joint_values(self, values: npt.ArrayLike) -> FloatArray:
@@ -269,13 +268,11 @@ class Robot:
             NonFiniteError: If an entry is NaN or infinite.
             InputError: If a joint has several degrees of freedom.
         """
-        plain, pairs, pair_values = self._value_slots()
-        values = as_vector(values, len(plain) + len(pairs), "joint values")
+        plain, pairs, plain_value = self._value_slots()
+        values = as_vector(values, plain_value.size, "joint values")
         q = np.empty(self.nq)
-        plain_values = np.ones(values.size, dtype=bool)
-        plain_values[pair_values] = False
-        q[plain] = values[plain_values]
-        angles = values[pair_values]
+        q[plain] = values[plain_value]
+        angles = values[~plain_value]
         q[pairs] = np.cos(angles)
         q[pairs + 1] = np.sin(angles)
         return q
@@ -297,13 +294,10 @@ class Robot:
             InputError: If a joint has several degrees of freedom.
         """
         q = as_vector(q, self.nq, "q")
-        plain, pairs, pair_values = self._value_slots()
-        values = np.empty(len(plain) + len(pairs))
-        plain_values = np.ones(values.size, dtype=bool)
-        plain_values[pair_values] = False
-        values[plain_values] = q[plain]
-        cos = q[pairs]
-        values[pair_values] = np.arctan2(q[pairs + 1], cos)
+        plain, pairs, plain_value = self._value_slots()
+        values = np.empty(plain_value.size)
+        values[plain_value] = q[plain]
+        values[~plain_value] = np.arctan2(q[pairs + 1], q[pairs])
         return values
 
     def as_configuration(self, values: npt.ArrayLike) -> FloatArray:
