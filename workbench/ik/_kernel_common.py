@@ -355,39 +355,6 @@ def assemble_poses(geo, angles, y, status, exact, q, valid, assemble, dead_bits)
             valid[i, b] = not (mask >> dead_bits[b] & 1)
 
 
-__all__ = [
-    "FLAG_COUNT",
-    "FLAG_SHOULDER_SINGULAR",
-    "FLAG_SOME_UNREACHED",
-    "FLAG_WITHIN_LIMITS",
-    "FLAG_WRIST_SINGULAR",
-    "IN_CYLINDER",
-    "NOT_RIGID",
-    "OK",
-    "OUT_OF_REACH",
-    "PI",
-    "TAU",
-    "assemble_poses",
-    "body",
-    "clamped_root",
-    "clip_unit",
-    "fallback_poses",
-    "flat_index",
-    "frame_rows",
-    "frames",
-    "inline",
-    "is_rigid",
-    "joint_value",
-    "matrix_row",
-    "pose_row",
-    "remainder",
-    "rigid_rows",
-    "solve_one",
-    "within_limits",
-    "write_framed",
-]
-
-
 @inline
 def _distance2(a: FloatArray, b: FloatArray) -> float:
     d2 = 0.0
@@ -466,3 +433,38 @@ def track_one(
     for j in range(6):
         q_out[j] = q[index, j]
     return status, index, flags[FLAG_WITHIN_LIMITS + index]
+
+
+__all__ = [
+    "FLAG_COUNT",
+    "FLAG_SHOULDER_SINGULAR",
+    "FLAG_SOME_UNREACHED",
+    "FLAG_WITHIN_LIMITS",
+    "FLAG_WRIST_SINGULAR",
+    "IN_CYLINDER",
+    "NOT_RIGID",
+    "OK",
+    "OUT_OF_REACH",
+    "PI",
+    "TAU",
+    "assemble_poses",
+    "body",
+    "clamped_root",
+    "clip_unit",
+    "continuing_branch",
+    "fallback_poses",
+    "flat_index",
+    "frame_rows",
+    "frames",
+    "inline",
+    "is_rigid",
+    "joint_value",
+    "matrix_row",
+    "pose_row",
+    "remainder",
+    "rigid_rows",
+    "solve_one",
+    "track_one",
+    "within_limits",
+    "write_framed",
+]

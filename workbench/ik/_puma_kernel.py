@@ -80,6 +80,7 @@ GEOMETRY_DTYPE = np.dtype(
         ("reach_low", "f8"),  # slack folded in (PumaGeometry.reach_test)
         ("reach_high", "f8"),
         ("cylinder2", "f8"),  # squared radius of the unreachable cylinder
+        ("reach", "f8", 2),  # PumaGeometry.reach, the bounds an error states
         ("theta_offset", "f8", 6),
         ("plain", "f8", 6),  # see PumaGeometry.plain (1.0 or 0.0)
         ("lower", "f8", 6),  # limits widened by LIMIT_TOL
@@ -150,17 +151,9 @@ def diagnose(geometry: np.ndarray, pose: FloatArray) -> tuple[int, float, float,
     px, py, pz = wrist_centre(geo, pose)
     r2 = px * px + py * py
     low, high = geo.reach_low, geo.reach_high  # the tests' bounds (slack in)
-    reach_low = abs(abs(geo.a2) - geo.forearm)
-    reach_high = abs(geo.a2) + geo.forearm
     distance = math.sqrt(r2 + pz * pz)
-    if geo.a1 == 0.0 and not (low <= distance <= high):  # in 3-D, offset included
-        offset = geo.offset
-        return (
-            OUT_OF_REACH,
-            distance,
-            math.hypot(reach_low, offset),
-            math.hypot(reach_high, offset),
-        )
+    if geo.a1 == 0.0 and not (low <= distance <= high):
+        return OUT_OF_REACH, distance, geo.reach[0], geo.reach[1]
     if r2 < geo.cylinder2:
         radius = abs(geo.offset)
         return IN_CYLINDER, math.sqrt(r2), radius, radius
@@ -172,7 +165,7 @@ def diagnose(geometry: np.ndarray, pose: FloatArray) -> tuple[int, float, float,
         else:
             distance = right
         if not (low <= distance <= high):
-            return OUT_OF_REACH, distance, reach_low, reach_high
+            return OUT_OF_REACH, distance, geo.reach[0], geo.reach[1]
     return OK, 0.0, 0.0, 0.0
 
 
