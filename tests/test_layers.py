@@ -32,6 +32,7 @@ LAYERS: dict[str, int] = {
     "planning": 6,
     "tasks": 7,
     "export": 7,
+    "workspace": 7,
     "plots": 8,
     "viz": 8,
     "reports": 9,
