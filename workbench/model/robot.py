@@ -160,6 +160,15 @@ class Robot:
         return f"Robot({self.name!r}, nq={self.nq}, tool_frame={self.tool_frame!r})"
 
     @property
+    def package_dirs(self) -> tuple[str, ...]:
+        """Folders searched for ``package://`` mesh URIs, in order (absolute).
+
+        ``load_robot(robot.name, package_dirs=robot.package_dirs)`` finds the
+        same meshes again (e.g. in another process of a cluster).
+        """
+        return tuple(self._package_dirs)
+
+    @property
     def nq(self) -> int:
         """Size of a configuration ``q``."""
         return int(self.model.nq)
