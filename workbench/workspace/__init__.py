@@ -1,0 +1,32 @@
+"""Workspace atlas: reachability and dexterity maps over a grid of tool poses.
+
+A :class:`PoseGrid` (voxel positions × tool orientations, :mod:`.grid`), the
+per-pose measures of a block of it in closed form (:mod:`.measures`) and the
+sampled maps of arms without a closed form (:mod:`.sampled`).
+"""
+
+from workbench.workspace.grid import (
+    PoseGrid,
+    cone_orientations,
+    default_bounds,
+    make_pose_grid,
+    uniform_orientations,
+)
+from workbench.workspace.measures import (
+    POSE_KEYS,
+    VOXEL_KEYS,
+    evaluate_block,
+    singularity_margin,
+)
+
+__all__ = [
+    "POSE_KEYS",
+    "VOXEL_KEYS",
+    "PoseGrid",
+    "cone_orientations",
+    "default_bounds",
+    "evaluate_block",
+    "make_pose_grid",
+    "singularity_margin",
+    "uniform_orientations",
+]

@@ -1,0 +1,286 @@
+"""The pose grid of a workspace map: voxel positions × a set of tool orientations.
+
+A :class:`PoseGrid` is a box of voxels (centres on multiples of the
+resolution, in the robot's base frame) times a set of orientations of the
+tool frame (:mod:`workbench.workspace.orientations`). Pose ``(v, o)`` is the
+tool frame at ``positions[v]`` with rotation ``orientations[o]``; the flat
+pose index of a map is ``v·O + o``. :func:`make_pose_grid` builds one around
+the arm's reach (:func:`default_bounds`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+
+from workbench.errors import InputError
+from workbench.model.robot import Robot
+from workbench.validation import as_finite_array, check_positive
+from workbench.workspace.orientations import (
+    cone_orientations,
+    rotations_from_quat_xyzw,
+    uniform_orientations,
+)
+
+FloatArray = npt.NDArray[np.float64]
+IndexArray = npt.NDArray[np.int64]
+
+#: Default voxel size [m].
+DEFAULT_RESOLUTION = 0.05
+#: Default number of orientations per voxel.
+DEFAULT_ORIENTATIONS = 512
+#: |axis_z| within this of 1: the first joint's axis is parallel to the base z axis.
+_VERTICAL_TOL = 1e-12
+#: Queries compared with all orientations at once in :meth:`PoseGrid.orientation_index`.
+_QUERY_CHUNK = 4096
+
+
+def _read_only(array: npt.ArrayLike) -> Any:
+    out: FloatArray = np.array(array, dtype=np.float64)
+    out.setflags(write=False)
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class PoseGrid:
+    """Voxel positions × tool orientations (immutable; arrays read-only).
+
+    Attributes:
+        positions: (V, 3) voxel centres [m] in the base frame, C order over
+            ``shape``: flat index ``(ix·ny + iy)·nz + iz``.
+        origin: (3,) centre of voxel (0, 0, 0) [m].
+        resolution: Voxel edge [m].
+        shape: ``(nx, ny, nz)`` voxels per axis.
+        bounds: (2, 3) the box the grid was built to cover, rows min and max
+            [m] (every point of it lies in a voxel).
+        orientations: (O, 4) unit quaternions x y z w, w >= 0: rotation of
+            the tool frame in the base frame.
+        orientation_set: The set's description (``construction``, ``count``,
+            ``covering_radius`` [rad], and for a cone ``axis``, ``half_angle``
+            [rad]).
+        rotations: (O, 3, 3) rotation matrices of ``orientations``.
+    """
+
+    positions: FloatArray
+    origin: FloatArray
+    resolution: float
+    shape: tuple[int, int, int]
+    bounds: FloatArray
+    orientations: FloatArray
+    orientation_set: dict[str, Any]
+    rotations: FloatArray = field(repr=False)
+
+    @property
+    def voxel_count(self) -> int:
+        """V, the number of voxels."""
+        return len(self.positions)
+
+    @property
+    def orientation_count(self) -> int:
+        """O, the number of orientations per voxel."""
+        return len(self.orientations)
+
+    @property
+    def pose_count(self) -> int:
+        """V · O."""
+        return self.voxel_count * self.orientation_count
+
+    def voxel_index(self, points: npt.ArrayLike) -> IndexArray:
+        """Flat index of the voxel containing each point, -1 outside the grid.
+
+        Args:
+            points: (N, 3) positions [m] in the base frame.
+
+        Returns:
+            (N,) int64.
+
+        Raises:
+            DimensionError, NonFiniteError: If ``points`` is not finite (N, 3).
+        """
+        p = np.asarray(points, dtype=np.float64)
+        p = as_finite_array(p, (p.shape[0] if p.ndim == 2 else -1, 3), "points")
+        cell = np.rint((p - self.origin) / self.resolution)
+        size = np.asarray(self.shape)
+        inside = np.all((cell >= 0) & (cell < size), axis=1)
+        ix, iy, iz = np.where(inside[:, None], cell, 0).astype(np.int64).T
+        flat = (ix * size[1] + iy) * size[2] + iz
+        return np.where(inside, flat, -1)
+
+    def orientation_index(self, quat_xyzw: npt.ArrayLike) -> IndexArray:
+        """Index of the orientation nearest (by rotation angle) each quaternion.
+
+        Args:
+            quat_xyzw: (N, 4) quaternions x y z w (either sign; normalised here).
+
+        Returns:
+            (N,) int64: argmax over the set of ``|q · orientation|``.
+
+        Raises:
+            DimensionError, NonFiniteError: If not finite (N, 4).
+            InputError: If a quaternion is zero.
+        """
+        q = np.asarray(quat_xyzw, dtype=np.float64)
+        q = as_finite_array(q, (q.shape[0] if q.ndim == 2 else -1, 4), "quat_xyzw")
+        norm = np.linalg.norm(q, axis=1)
+        if np.any(norm == 0.0):
+            raise InputError("quat_xyzw: a quaternion is zero")
+        q = q / norm[:, None]
+        out = np.empty(len(q), dtype=np.int64)
+        for start in range(0, len(q), _QUERY_CHUNK):
+            dots = np.abs(q[start : start + _QUERY_CHUNK] @ self.orientations.T)
+            out[start : start + _QUERY_CHUNK] = np.argmax(dots, axis=1)
+        return out
+
+    def pose(self, voxel: int, orientation: int) -> FloatArray:
+        """(4, 4) pose of the tool frame in the base frame [m] of grid pose ``(v, o)``.
+
+        Raises:
+            InputError: If an index is out of range.
+        """
+        for name, index, count in (
+            ("voxel", voxel, self.voxel_count),
+            ("orientation", orientation, self.orientation_count),
+        ):
+            if not 0 <= int(index) < count:
+                raise InputError(f"{name} index {index} outside [0, {count})")
+        out = np.eye(4)
+        out[:3, :3] = self.rotations[int(orientation)]
+        out[:3, 3] = self.positions[int(voxel)]
+        return out
+
+
+def _path_joints(robot: Robot) -> list[int]:
+    model = robot.model
+    frame = model.frames[robot.tool_frame_id]
+    return [j for j in model.supports[frame.parentJoint] if j > 0]
+
+
+def default_bounds(robot: Robot) -> FloatArray:
+    """A box (2, 3) [m] in the base frame that holds every reachable tool position.
+
+    From the model, for any serial arm, at the neutral configuration (whose
+    values do not matter: every joint turns through a full circle here). A
+    ball ``(c, r)`` holds the tool positions reachable by moving joints
+    ``k..n``: from the tool point (``r = 0``), each joint from the last to
+    the second turns the ball about its axis, which keeps it within the ball
+    centred on the projection ``c'`` of ``c`` onto the axis, of radius
+    ``r + |c − c'|`` (a prismatic joint adds its largest travel to ``r``).
+    The first joint turns that ball about its axis: when the axis is parallel
+    to the base z axis the box is ``axis ± (ρ + r)`` in x and y (``ρ`` the
+    ball centre's distance from the axis) and ``c_z ± r`` in z; otherwise the
+    cube of half-edge ``ρ + r`` around the centre's projection.
+    For the closed-form families this is the shoulder offset, the axis
+    height and the longest arm (tool point included), slightly widened.
+
+    Raises:
+        InputError: If the tool frame has no joint on its path.
+    """
+    model = robot.model
+    path = _path_joints(robot)
+    if not path:
+        raise InputError(f"{robot.name}: no joint between the base and the tool frame")
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, pin.neutral(model))
+    centre = data.oMf[robot.tool_frame_id].translation.copy()
+    radius = 0.0
+    for j in reversed(path):
+        point, axis = data.oMi[j].translation, _joint_axis(model, j, data.oMi[j])
+        if axis is None:  # prismatic (or any other joint): its travel
+            k = model.joints[j].idx_q
+            radius += float(max(abs(robot.lower[k]), abs(robot.upper[k])))
+            continue
+        foot = point + axis * float(np.dot(centre - point, axis))
+        rho = float(np.linalg.norm(centre - foot))
+        if j == path[0]:
+            if abs(abs(axis[2]) - 1.0) < _VERTICAL_TOL:
+                half = np.array([rho + radius, rho + radius, radius])
+                return np.stack([foot - half, foot + half])
+            return np.stack([foot - (rho + radius), foot + (rho + radius)])
+        centre, radius = foot, radius + rho
+    return np.stack([centre - radius, centre + radius])  # first joint prismatic
+
+
+def _joint_axis(model: pin.Model, joint: int, placement: pin.SE3) -> FloatArray | None:
+    """Unit axis in the base frame of a revolute joint, None for other joints."""
+    name = model.joints[joint].shortname()
+    if not name.startswith("JointModelR"):
+        return None
+    if "Unaligned" in name:
+        return placement.rotation @ np.asarray(model.joints[joint].extract().axis)
+    return placement.rotation @ np.eye(3)["XYZ".index(name[-1])]
+
+
+def _as_bounds(bounds: npt.ArrayLike) -> FloatArray:
+    box = as_finite_array(bounds, (2, 3), "bounds")
+    if np.any(box[1] < box[0]):
+        raise InputError(
+            f"bounds: max below min ({box[1].tolist()} < {box[0].tolist()})"
+        )
+    return box
+
+
+def make_pose_grid(
+    robot: Robot,
+    *,
+    resolution: float = DEFAULT_RESOLUTION,
+    orientations: int = DEFAULT_ORIENTATIONS,
+    cone: tuple[npt.ArrayLike, float] | None = None,
+    bounds: npt.ArrayLike | None = None,
+) -> PoseGrid:
+    """The pose grid of a robot: voxels over ``bounds`` × an orientation set.
+
+    Voxel centres lie on multiples of ``resolution`` (in the base frame),
+    from the one containing ``bounds[0]`` to the one containing ``bounds[1]``.
+
+    Args:
+        robot: The arm (its base frame is the grid's frame).
+        resolution: Voxel edge [m], > 0.
+        orientations: Orientations per voxel (>= 1).
+        cone: ``(axis (3,), half_angle [rad])`` for :func:`cone_orientations`;
+            None for :func:`uniform_orientations`.
+        bounds: (2, 3) box [m], rows min and max; default
+            :func:`default_bounds` of the robot.
+
+    Raises:
+        InputError: On a non-positive resolution or count, a bad cone or box.
+    """
+    check_positive(resolution, "resolution", strict=True)
+    res = float(resolution)
+    box = default_bounds(robot) if bounds is None else _as_bounds(bounds)
+    if cone is None:
+        quat, description = uniform_orientations(orientations)
+    else:
+        quat, description = cone_orientations(cone[0], cone[1], orientations)
+    low, high = np.rint(box[0] / res), np.rint(box[1] / res)
+    shape = tuple(int(n) for n in high - low + 1)
+    if math.prod(shape) > 2**31:
+        raise InputError(f"grid of {shape} voxels is too large; raise the resolution")
+    origin = low * res
+    axes = [origin[k] + res * np.arange(shape[k]) for k in range(3)]
+    positions = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    return PoseGrid(
+        positions=_read_only(positions),
+        origin=_read_only(origin),
+        resolution=res,
+        shape=(shape[0], shape[1], shape[2]),
+        bounds=_read_only(box),
+        orientations=quat,
+        orientation_set=dict(description),
+        rotations=_read_only(rotations_from_quat_xyzw(quat)),
+    )
+
+
+__all__ = [
+    "DEFAULT_ORIENTATIONS",
+    "DEFAULT_RESOLUTION",
+    "PoseGrid",
+    "cone_orientations",
+    "default_bounds",
+    "make_pose_grid",
+    "uniform_orientations",
+]
