@@ -150,27 +150,43 @@ def evaluate_block_reference(
     out["elbow"] = np.abs(pick(e)).astype(np.float32)
     out["wrist"] = np.abs(pick(w)).astype(np.float32)
     out["limit_margin"] = pick(margin).astype(np.float32)
-    for key in list(out):
-        out[key] = out[key].reshape(count, orientations)
-    has2 = has.reshape(count, orientations)
-    dex2 = dexterity.reshape(count, orientations)
-    sing2 = sing.reshape(count, orientations)
-    reached = has2.sum(axis=1)
-    out["reachability"] = (reached / orientations).astype(np.float32)
-    some = reached > 0
-    with np.errstate(invalid="ignore", divide="ignore"):
-        out["dexterity_best"] = np.where(
-            some, np.nanmax(np.where(has2, dex2, -np.inf), axis=1), np.nan
-        ).astype(np.float32)
-        near = ((sing2 < 1.0) & has2).sum(axis=1)
-        out["near_singular_fraction"] = np.where(
-            some, near / np.maximum(reached, 1), np.nan
-        ).astype(np.float32)
-    median = np.full(count, np.nan)
-    for v in np.nonzero(some)[0]:
-        median[v] = np.median(dex2[v][has2[v]])
-    out["dexterity_median"] = median.astype(np.float32)
+    shape = (count, orientations)
+    out = {key: value.reshape(shape) for key, value in out.items()}
+    out.update(summarise_voxels(dexterity.reshape(shape), sing.reshape(shape)))
     return out
+
+
+def summarise_voxels(
+    dexterity: FloatArray, margin: FloatArray
+) -> dict[str, np.ndarray]:
+    """The per-voxel measures of a block from its per-pose ones.
+
+    Args:
+        dexterity: (B, O) |det J| [m³] of each pose's best branch, NaN where
+            no branch is usable.
+        margin: (B, O) singularity margin [1] of that branch (NaN likewise).
+
+    Returns:
+        ``reachability``, ``dexterity_best``, ``dexterity_median``,
+        ``near_singular_fraction``, each (B,) float32 (``evaluate_block``).
+    """
+    has = ~np.isnan(dexterity)
+    reached = has.sum(axis=1)
+    some = reached > 0
+    near = (margin < 1.0).sum(axis=1)  # NaN compares False
+    best = np.full(len(has), np.nan)
+    median = np.full(len(has), np.nan)
+    if some.any():
+        best[some] = np.nanmax(dexterity[some], axis=1)
+        median[some] = np.nanmedian(dexterity[some], axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        fraction = np.where(some, near / np.maximum(reached, 1), np.nan)
+    return {
+        "reachability": (reached / has.shape[1]).astype(np.float32),
+        "dexterity_best": best.astype(np.float32),
+        "dexterity_median": median.astype(np.float32),
+        "near_singular_fraction": fraction.astype(np.float32),
+    }
 
 
 __all__ = [
@@ -179,4 +195,5 @@ __all__ = [
     "evaluate_block_reference",
     "limit_representatives",
     "singularity_margin",
+    "summarise_voxels",
 ]

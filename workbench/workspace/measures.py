@@ -35,15 +35,29 @@ import numpy as np
 
 from workbench.errors import InputError
 from workbench.ik import get_closed_form
+from workbench.ik._atan2_kernel import atan2_into
+from workbench.ik.solver import ClosedFormSolver
+from workbench.model.per_robot import per_robot
 from workbench.model.robot import Robot
+from workbench.singularities.conditions import (
+    ELBOW_TOL,
+    SHOULDER_TOL,
+    WRIST_TOL,
+    get_factorisation,
+)
+from workbench.workspace import _measure_kernel as kernel
 from workbench.workspace._reference import (
     evaluate_block_reference,
     singularity_margin,
+    summarise_voxels,
 )
 
 if TYPE_CHECKING:
     from workbench.collision.checker import CollisionChecker
     from workbench.workspace.grid import PoseGrid
+
+#: Poses per chunk of the compiled path (its work arrays stay in the cache).
+CHUNK_POSES = 1024
 
 #: Keys of :func:`evaluate_block` with one value per pose (B, O).
 POSE_KEYS = (
@@ -77,6 +91,89 @@ def _check_range(grid: PoseGrid, start: int, stop: int) -> tuple[int, int]:
     return int(start), int(stop)
 
 
+@per_robot
+def _constants(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
+    """The packed constants of :func:`kernel.measure_poses` for ``robot``."""
+    fac = get_factorisation(robot)
+    values = {
+        "ur": 1.0 if fac.family == "ur" else 0.0,
+        "constant": fac.constant,
+        "a1": fac.a1,
+        "a2": fac.a2,
+        "a3": fac.a3,
+        "d4": fac.d4,
+        "a4": fac.a4,
+        "sigma3d4": fac.sigma3 * fac.d4,
+        "sigma4d5": fac.sigma4 * fac.d5,
+        "forearm": fac.forearm,
+        "shoulder_tol": SHOULDER_TOL,
+        "elbow_tol": ELBOW_TOL,
+        "wrist_tol": WRIST_TOL,
+    }
+    factors = np.array([values[name] for name in kernel.FACTOR_SLOTS])
+    lower, upper = robot.lower, robot.upper
+    bounded = np.isfinite(lower) & np.isfinite(upper)
+    joints = np.stack(
+        [
+            np.asarray(fac.joint_sign, dtype=np.float64),
+            np.asarray(fac.theta_offset, dtype=np.float64),
+            lower,
+            upper,
+            np.where(bounded, 0.5 * (lower + upper), 0.0),
+            bounded.astype(np.float64),
+        ]
+    )
+    return factors, np.ascontiguousarray(joints)
+
+
+def _evaluate_compiled(
+    robot: Robot, solver: ClosedFormSolver, grid: PoseGrid, start: int, stop: int
+) -> dict[str, np.ndarray]:
+    """:func:`evaluate_block` through the compiled kernels (no scene)."""
+    factors, joints = _constants(robot)
+    family, geometry = solver._kernel, solver.geometry
+    positions = np.ascontiguousarray(grid.positions[start:stop])
+    rotations = np.ascontiguousarray(grid.rotations)
+    count, orientations = stop - start, grid.orientation_count
+    total = count * orientations
+    counts = np.empty((2, total), dtype=np.uint8)
+    measures = np.empty((5, total), dtype=np.float32)
+    dexterity = np.empty((2, total))
+    size = min(total, CHUNK_POSES)
+    poses = np.empty((size, 4, 4))
+    y, x, angles = np.empty((3, size, family.N_ANGLES))
+    status = np.empty(size, dtype=np.int8)
+    exact = np.empty(size, dtype=np.int64)
+    odd = np.empty(size, dtype=np.uint8)
+    q, valid = np.empty((size, 8, 6)), np.empty((size, 8), dtype=bool)
+    for first in range(0, total, CHUNK_POSES):
+        n = min(CHUNK_POSES, total - first)
+        kernel.fill_poses(positions, rotations, first, poses[:n])
+        codes = status[:n], exact[:n], odd[:n]
+        flat = poses[:n].reshape(-1), y[:n].reshape(-1), x[:n].reshape(-1)
+        if family.batch_arguments(geometry, *flat, *codes, False):
+            family.batch_fallback(geometry, poses[:n], y[:n], x[:n], *codes)
+        atan2_into(flat[1], flat[2], angles[:n].reshape(-1))
+        family.batch_assemble(
+            geometry, angles[:n], y[:n], status[:n], exact[:n], q[:n], valid[:n]
+        )
+        kernel.measure_poses(
+            factors, joints, q[:n], valid[:n], first, counts, measures, dexterity
+        )
+    shape = (count, orientations)
+    out: dict[str, np.ndarray] = {
+        "reached": counts[0].reshape(shape),
+        "branches": counts[1].reshape(shape),
+    }
+    for index, key in enumerate(("dexterity", "shoulder", "elbow", "wrist")):
+        out[key] = measures[index].reshape(shape)
+    out["limit_margin"] = measures[4].reshape(shape)
+    out.update(
+        summarise_voxels(dexterity[0].reshape(shape), dexterity[1].reshape(shape))
+    )
+    return out
+
+
 def evaluate_block(
     robot: Robot,
     grid: PoseGrid,
@@ -86,6 +183,12 @@ def evaluate_block(
     checker: CollisionChecker | None = None,
 ) -> dict[str, np.ndarray]:
     """Measures of every pose of voxels ``start:stop`` × all orientations.
+
+    Through the compiled kernels (:mod:`workbench.workspace._measure_kernel`);
+    with a ``checker``, or for a robot whose closed-form branches the solver
+    refines on the model (a URDF that is of the family only up to an error),
+    through the NumPy definition (:mod:`workbench.workspace._reference`),
+    much slower.
 
     Args:
         robot: An arm with a closed form (OPW or UR type).
@@ -103,8 +206,16 @@ def evaluate_block(
         InputError: If the voxel range is empty or outside the grid.
     """
     start, stop = _check_range(grid, start, stop)
-    get_closed_form(robot)  # raises UnsupportedRobotError
+    solver = get_closed_form(robot)  # raises UnsupportedRobotError
+    if checker is None and solver._refine is None:
+        return _evaluate_compiled(robot, solver, grid, start, stop)
     return evaluate_block_reference(robot, grid, start, stop, checker=checker)
 
 
-__all__ = ["POSE_KEYS", "VOXEL_KEYS", "evaluate_block", "singularity_margin"]
+__all__ = [
+    "CHUNK_POSES",
+    "POSE_KEYS",
+    "VOXEL_KEYS",
+    "evaluate_block",
+    "singularity_margin",
+]

@@ -1,0 +1,156 @@
+r"""Compiled per-pose measures of the workspace map, after the batch closed form.
+
+:func:`fill_poses` writes the (N, 4, 4) poses of a run of flat grid indices;
+the family kernel's batch stages (``batch_arguments``, ``atan2_into``,
+``batch_assemble``, as :meth:`ClosedFormSolver.solve_batch`) give every
+branch; :func:`measure_poses` then does, per pose, what
+:func:`~workbench.workspace._reference.evaluate_block_reference` does with
+NumPy, in the same arithmetic: the representative of each angle nearest the
+middle of its limits (in limits, margin), the analytic factors
+:math:`s, e, w` of :mod:`workbench.singularities.conditions` from
+:math:`\theta = s_i q_i + \theta_{0,i}` and :math:`|\det J| = |K s e w|`, the
+best branch, and the per-voxel sums of :func:`summarise_voxels`.
+
+The factor constants come packed in one float64 array (:data:`FACTOR_SLOTS`).
+Compiled with :mod:`workbench._compiled` (one signature per entry point, cache
+keyed on this module and what it imports).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+
+from workbench._compiled import entry_point
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Slots of the packed factor constants (see ``PumaFactorisation``).
+FACTOR_SLOTS = (
+    "ur", "constant", "a1", "a2", "a3", "d4", "a4", "sigma3d4", "sigma4d5",
+    "forearm", "shoulder_tol", "elbow_tol", "wrist_tol",
+)  # fmt: skip
+_UR, _K, _A1, _A2, _A3, _D4, _A4, _S3D4, _S4D5, _L3, _TS, _TE, _TW = range(13)
+#: Slots of the per-joint constants (rows): sign, theta offset, lower, upper,
+#: middle of the limits, bounded (1.0 or 0.0).
+JOINT_ROWS = 6
+_SIGN, _OFFSET, _LOWER, _UPPER, _MID, _BOUNDED = range(JOINT_ROWS)
+
+TAU = 2.0 * math.pi
+
+
+@entry_point(outputs=("poses",), contiguous=("positions", "rotations"))
+def fill_poses(
+    positions: FloatArray, rotations: FloatArray, first: int, poses: FloatArray
+) -> None:
+    """Poses of flat grid indices ``first .. first + N − 1``, voxel-major.
+
+    Args:
+        positions: (B, 3) voxel centres [m] of the block, base frame.
+        rotations: (O, 3, 3) orientation matrices.
+        first: Flat index (voxel·O + orientation within the block) of pose 0.
+        poses: (N, 4, 4) output, homogeneous poses of the tool frame.
+    """
+    count = rotations.shape[0]
+    for i in range(poses.shape[0]):
+        v, o = divmod(first + i, count)
+        for r in range(3):
+            for c in range(3):
+                poses[i, r, c] = rotations[o, r, c]
+            poses[i, r, 3] = positions[v, r]
+            poses[i, 3, r] = 0.0
+        poses[i, 3, 3] = 1.0
+
+
+@entry_point(
+    outputs=("counts", "measures", "dexterity"),
+    contiguous=("q", "valid", "factors", "joints"),
+)
+def measure_poses(
+    factors: FloatArray,
+    joints: FloatArray,
+    q: FloatArray,
+    valid: npt.NDArray[np.bool_],
+    first: int,
+    counts: npt.NDArray[np.uint8],
+    measures: npt.NDArray[np.float32],
+    dexterity: FloatArray,
+) -> None:
+    """Branch counts and best-branch measures of N solved poses.
+
+    Args:
+        factors: (len(FACTOR_SLOTS),) packed factor constants.
+        joints: (JOINT_ROWS, 6) per-joint constants (module slots).
+        q: (N, 8, 6) joint values [rad] of every branch (NaN rows unreached).
+        valid: (N, 8) branch reaches the pose.
+        first: Row of pose 0 in the outputs.
+        counts: (2, P) output rows reached, in-limit branches.
+        measures: (5, P) output rows dexterity [m³], |s| [m], |e|, |w|,
+            limit margin [rad] of the best branch (NaN if none), float32.
+        dexterity: (2, P) output float64 rows: the best branch's |det J|
+            (NaN if none) and its singularity margin [1].
+    """
+    ur = factors[_UR] != 0.0
+    k_det, a1, a2, a3 = factors[_K], factors[_A1], factors[_A2], factors[_A3]
+    a4, s3d4, s4d5, ell = factors[_A4], factors[_S3D4], factors[_S4D5], factors[_L3]
+    shoulder_tol, elbow_tol, wrist_tol = factors[_TS], factors[_TE], factors[_TW]
+    for i in range(q.shape[0]):
+        reached = 0
+        usable = 0
+        best_det = -1.0
+        best_margin = -math.inf
+        best_s = best_e = best_w = 0.0
+        for b in range(8):
+            if not valid[i, b]:
+                continue
+            reached += 1
+            within = True
+            margin = math.inf
+            for j in range(6):
+                value = q[i, b, j]
+                if joints[_BOUNDED, j] != 0.0:
+                    lo, hi = joints[_LOWER, j], joints[_UPPER, j]
+                    turns = np.rint((joints[_MID, j] - value) / TAU)
+                    shifted = value + turns * TAU
+                    within &= (shifted >= lo) & (shifted <= hi)
+                    margin = min(margin, min(shifted - lo, hi - shifted))
+            if not within:
+                continue
+            usable += 1
+            t2 = q[i, b, 1] * joints[_SIGN, 1] + joints[_OFFSET, 1]
+            t3 = q[i, b, 2] * joints[_SIGN, 2] + joints[_OFFSET, 2]
+            t5 = q[i, b, 4] * joints[_SIGN, 4] + joints[_OFFSET, 4]
+            t23 = t2 + t3
+            s = a1 + a2 * math.cos(t2) + a3 * math.cos(t23)
+            if ur:
+                t234 = t23 + (q[i, b, 3] * joints[_SIGN, 3] + joints[_OFFSET, 3])
+                s = s + a4 * math.cos(t234)
+                s = s + s4d5 * math.sin(t234)
+                e = math.sin(t3)
+            else:
+                s = s + s3d4 * math.sin(t23)
+                e = (a3 * math.sin(t3) - s3d4 * math.cos(t3)) / ell
+            w = math.sin(t5)
+            det = abs(k_det * s * e * w)
+            if det > best_det or (det == best_det and margin > best_margin):
+                best_det, best_margin = det, margin
+                best_s, best_e, best_w = s, e, w
+        row = first + i
+        counts[0, row] = reached
+        counts[1, row] = usable
+        if usable:
+            s, e, w = abs(best_s), abs(best_e), abs(best_w)
+            measures[0, row] = best_det
+            measures[1, row] = s
+            measures[2, row] = e
+            measures[3, row] = w
+            measures[4, row] = best_margin
+            dexterity[0, row] = best_det
+            dexterity[1, row] = min(min(s / shoulder_tol, e / elbow_tol), w / wrist_tol)
+        else:
+            for m in range(5):
+                measures[m, row] = np.nan
+            dexterity[0, row] = np.nan
+            dexterity[1, row] = np.nan
