@@ -173,13 +173,26 @@ def atomic_folder(path: str | Path) -> Iterator[Path]:
     tmp = parent / path.name
     try:
         yield tmp
-        for file in tmp.rglob("*"):
-            if file.is_file():
-                _sync(file)
-        tmp.rename(path)
-        _sync_folder(path.parent)
+        move_folder_into_place(tmp, path)
     finally:
         shutil.rmtree(parent, ignore_errors=True)
+
+
+def move_folder_into_place(folder: str | Path, path: str | Path) -> None:
+    """Flush every file of ``folder`` to disk, then rename ``folder`` to ``path``.
+
+    The rename is atomic: ``path`` appears whole or not at all. Both must be
+    on one file system; ``path`` must not exist (or be an empty folder).
+
+    Raises:
+        OSError: If a file cannot be flushed or the rename fails.
+    """
+    folder, path = Path(folder), Path(path)
+    for file in folder.rglob("*"):
+        if file.is_file():
+            _sync(file)
+    folder.rename(path)
+    _sync_folder(path.parent)
 
 
 def get_temporaries(path: str | Path) -> list[tuple[Path, int]]:

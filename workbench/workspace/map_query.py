@@ -1,0 +1,199 @@
+"""Look up tool poses in a workspace map: nearest grid pose and its measures, in bulk.
+
+:func:`query_map` snaps each pose to the voxel containing its position and to
+the nearest orientation of the set (smallest rotation angle), then reads the
+stored measures there (only the chunks those poses touch). The snapping
+errors are returned too: a pose is as reachable as the grid pose it snaps to
+only up to them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import zarr
+
+from workbench.errors import InputError
+from workbench.poses.rigid import RIGIDITY_TOL
+from workbench.validation import as_finite_array
+from workbench.workspace.grid import PoseGrid
+from workbench.workspace.measures import singularity_margin
+from workbench.workspace.orientations import rotation_angle_between
+
+FloatArray = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True, slots=True)
+class MapQuery:
+    """The map at N query poses (every field has shape (N,)).
+
+    Attributes:
+        voxel: Flat voxel index containing the position, -1 outside the grid.
+        orientation: Index of the nearest orientation of the set.
+        inside: Whether the position lies in the grid.
+        branches: Closed-form branches within the joint limits (uint8; 0
+            outside; of a sampled map: 1 where a sample landed, else 0).
+        reached: Branches reaching the pose, limits aside (uint8; 0 outside).
+        dexterity: Manipulability of the best branch [m³] (NaN: none).
+        singularity_margin: ``min(|s|/SHOULDER_TOL, |e|/ELBOW_TOL,
+            |w|/WRIST_TOL)`` of the best branch [1] (< 1: near-singular;
+            NaN where none, and in a sampled map).
+        limit_margin: Smallest distance of the best branch's joints to their
+            limits [rad] (NaN: none, and in a sampled map).
+        position_error: Distance from the position to the voxel centre [m]
+            (NaN outside).
+        orientation_error: Rotation angle from the orientation to the
+            nearest one of the set [rad].
+    """
+
+    voxel: npt.NDArray[np.int64]
+    orientation: npt.NDArray[np.int64]
+    inside: npt.NDArray[np.bool_]
+    branches: npt.NDArray[np.uint8]
+    reached: npt.NDArray[np.uint8]
+    dexterity: FloatArray
+    singularity_margin: FloatArray
+    limit_margin: FloatArray
+    position_error: FloatArray
+    orientation_error: FloatArray
+
+
+def split_poses(poses: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Positions (N, 3) [m] and unit quaternions (N, 4) x y z w of N poses.
+
+    Args:
+        poses: (N, 4, 4) homogeneous matrices, or (N, 7) rows ``x y z qx qy
+            qz qw`` [m, unit quaternion].
+
+    Raises:
+        NonFiniteError: If a value is not finite.
+        InputError: If the shape is neither, or a rotation is not orthonormal
+            (or a quaternion not of unit norm) within
+            :data:`~workbench.poses.rigid.RIGIDITY_TOL`.
+    """
+    array = np.asarray(poses, dtype=np.float64)
+    if array.ndim == 3 and array.shape[1:] == (4, 4):
+        array = as_finite_array(array, array.shape, "poses")
+        rotations = array[:, :3, :3]
+        gram = np.einsum("nji,njk->nik", rotations, rotations) - np.eye(3)
+        error = np.max(np.abs(gram), axis=(1, 2), initial=0.0)
+        row = np.max(np.abs(array[:, 3] - (0.0, 0.0, 0.0, 1.0)), axis=1, initial=0.0)
+        bad = np.flatnonzero(
+            (error > RIGIDITY_TOL)
+            | (row > RIGIDITY_TOL)
+            | (np.linalg.det(rotations) <= 0.0)
+        )
+        if bad.size:
+            raise InputError(
+                f"poses[{bad[0]}] is not a rigid transform (max |R^T R - I| = "
+                f"{error[bad[0]]:.3g}, bottom row {array[bad[0], 3].tolist()})"
+            )
+        return array[:, :3, 3].copy(), quat_xyzw_from_rotations(rotations)
+    if array.ndim == 2 and array.shape[1] == 7:
+        array = as_finite_array(array, array.shape, "poses")
+        norm = np.linalg.norm(array[:, 3:], axis=1)
+        bad = np.flatnonzero(np.abs(norm - 1.0) > RIGIDITY_TOL)
+        if bad.size:
+            raise InputError(
+                f"poses[{bad[0]}]: the quaternion qx qy qz qw must have unit "
+                f"norm, got {norm[bad[0]]:.9g}"
+            )
+        return array[:, :3].copy(), array[:, 3:] / norm[:, None]
+    raise InputError(
+        f"poses must have shape (N, 4, 4) or (N, 7), got shape {array.shape}"
+    )
+
+
+def quat_xyzw_from_rotations(rotations: npt.ArrayLike) -> FloatArray:
+    """Unit quaternions (N, 4) x y z w, ``w >= 0``, of rotations (N, 3, 3).
+
+    Shepperd's method, vectorised: each row is computed from the largest of
+    ``1 + tr R``, ``1 + 2 R_ii - tr R``, so it is exact to rounding at any
+    angle.
+    """
+    r = np.asarray(rotations, dtype=np.float64)
+    trace = r[:, 0, 0] + r[:, 1, 1] + r[:, 2, 2]
+    pivots = np.stack(
+        [1.0 + 2.0 * r[:, i, i] - trace for i in range(3)] + [1.0 + trace], axis=1
+    )
+    case = np.argmax(pivots, axis=1)
+    s = np.sqrt(np.maximum(pivots[np.arange(len(r)), case], 0.0))  # = 4 |q_case| / 2
+    out = np.empty((len(r), 4))
+    off = {  # (i, j): R_ij + R_ji and R_ij - R_ji
+        "xy": r[:, 0, 1] + r[:, 1, 0],
+        "xz": r[:, 0, 2] + r[:, 2, 0],
+        "yz": r[:, 1, 2] + r[:, 2, 1],
+        "x": r[:, 2, 1] - r[:, 1, 2],
+        "y": r[:, 0, 2] - r[:, 2, 0],
+        "z": r[:, 1, 0] - r[:, 0, 1],
+    }
+    rows = {
+        0: (s, off["xy"], off["xz"], off["x"]),
+        1: (off["xy"], s, off["yz"], off["y"]),
+        2: (off["xz"], off["yz"], s, off["z"]),
+        3: (off["x"], off["y"], off["z"], s),
+    }
+    for k, components in rows.items():
+        mask = case == k
+        if not mask.any():
+            continue
+        scale = 0.5 / s[mask]
+        for c, value in enumerate(components):
+            out[mask, c] = value[mask] * scale if c != k else 0.5 * s[mask]
+    out /= np.linalg.norm(out, axis=1, keepdims=True)
+    return np.where(out[:, 3:4] < 0.0, -out, out)
+
+
+def query_map(group: zarr.Group, grid: PoseGrid, poses: npt.ArrayLike) -> MapQuery:
+    """The map's measures at the grid poses nearest to ``poses`` (:class:`MapQuery`).
+
+    Args:
+        group: The map's Zarr group.
+        grid: Its pose grid.
+        poses: (N, 4, 4) or (N, 7) tool poses in the base frame (see
+            :func:`split_poses`).
+
+    Raises:
+        InputError: As :func:`split_poses`.
+    """
+    positions, quats = split_poses(poses)
+    voxel = grid.voxel_index(positions)
+    orientation = grid.orientation_index(quats)
+    inside = voxel >= 0
+    rows, cols = voxel[inside], orientation[inside]
+    names = set(group.array_keys())
+
+    def read(name: str, fill: Any, dtype: type) -> Any:
+        out: npt.NDArray[Any] = np.full(len(voxel), fill, dtype=dtype)
+        array = group[name] if name in names else None
+        if isinstance(array, zarr.Array) and rows.size:
+            out[inside] = array.vindex[rows, cols]
+        return out
+
+    nan = float("nan")
+    margin = np.full(len(voxel), nan)
+    if {"shoulder", "elbow", "wrist"} <= names:
+        margin = singularity_margin(
+            read("shoulder", nan, np.float64),
+            read("elbow", nan, np.float64),
+            read("wrist", nan, np.float64),
+        ).astype(np.float64)
+    position_error = np.full(len(voxel), nan)
+    position_error[inside] = np.linalg.norm(
+        positions[inside] - grid.positions[rows], axis=1
+    )
+    return MapQuery(
+        voxel=voxel,
+        orientation=orientation,
+        inside=inside,
+        branches=read("branches", 0, np.uint8),
+        reached=read("reached", 0, np.uint8),
+        dexterity=read("dexterity", nan, np.float64),
+        singularity_margin=margin,
+        limit_margin=read("limit_margin", nan, np.float64),
+        position_error=position_error,
+        orientation_error=rotation_angle_between(quats, grid.orientations[orientation]),
+    )
