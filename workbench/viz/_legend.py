@@ -95,26 +95,52 @@ def line(rgb: npt.ArrayLike, label: str) -> str:
     )
 
 
-def singularity_scale(gauge: SingularityGauge) -> str:
-    """The colour ramp of the arm's links and what its distance measures."""
-    stops = SingularityGauge.COLOR_STOPS
+def color_scale(
+    title: str,
+    what: str,
+    stops: Sequence[tuple[float, Sequence[float]]],
+    ticks: Sequence[tuple[float, str]],
+    ends: tuple[str, str] | None = None,
+) -> str:
+    """A colour ramp with its tick labels (and words at its two ends).
+
+    Args:
+        title: Bold heading, e.g. "Arm colour".
+        what: What the colour measures, with its unit.
+        stops: ``(position in [0, 1], RGB in [0, 1])``, increasing positions.
+        ticks: ``(position in [0, 1], label)`` under the ramp.
+        ends: Words under the two ends (e.g. "singular", "far"), if any.
+    """
     gradient = ", ".join(f"{_css(rgb)} {100 * x:g}%" for x, rgb in stops)
     if stops[-1][0] < 1.0:
         gradient += f", {_css(stops[-1][1])} 100%"
+    marks = "".join(
+        f'<span style="left: {100 * x:g}%">{html.escape(text)}</span>'
+        for x, text in ticks
+    )
+    words = ""
+    if ends is not None:
+        words = "".join(f"<span>{html.escape(word)}</span>" for word in ends)
+        words = f'<div class="ends">{words}</div>'
+    return (
+        f"<div><b>{html.escape(title)}</b>: {html.escape(what)}"
+        f'<div class="ramp" style="background: linear-gradient(to right, {gradient})">'
+        f'</div><div class="ticks">{marks}</div>{words}</div>'
+    )
+
+
+def singularity_scale(gauge: SingularityGauge) -> str:
+    """The colour ramp of the arm's links and what its distance measures."""
     if gauge.method == "analytic":
         measure = "min(|shoulder| / reach, |sin elbow|, |sin θ5|)"
     else:
         measure = "inverse condition number of J, scaled"
-    labels = ((0.0, "0"), (0.2, "0.2"), (0.5, "0.5"), (1.0, "1"))
-    ticks = "".join(
-        f'<span style="left: {100 * x:g}%">{text}</span>' for x, text in labels
-    )
-    return (
-        "<div><b>Arm colour</b>: distance to the nearest singularity, "
-        f"{html.escape(measure)}"
-        f'<div class="ramp" style="background: linear-gradient(to right, {gradient})">'
-        f'</div><div class="ticks">{ticks}</div>'
-        '<div class="ends"><span>singular</span><span>far</span></div></div>'
+    return color_scale(
+        "Arm colour",
+        f"distance to the nearest singularity, {measure}",
+        SingularityGauge.COLOR_STOPS,
+        ((0.0, "0"), (0.2, "0.2"), (0.5, "0.5"), (1.0, "1")),
+        ("singular", "far"),
     )
 
 

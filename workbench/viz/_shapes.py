@@ -63,6 +63,17 @@ def draw_marker(node: meshcat.Visualizer, radius: float, rgb: npt.ArrayLike) -> 
     node.set_object(mg.Sphere(radius), mg.MeshLambertMaterial(color=_rgb_int(rgb)))
 
 
+def draw_points(
+    node: meshcat.Visualizer, points: npt.ArrayLike, rgb: npt.ArrayLike, size: float
+) -> None:
+    """Unlit square points at ``points`` (N, 3) [m], colours ``rgb`` (N, 3) in 0..1."""
+    vertices = np.asarray(points, dtype=np.float32).T
+    colors = np.clip(np.asarray(rgb, dtype=np.float32), 0.0, 1.0).T
+    node.set_object(
+        mg.Points(mg.PointsGeometry(vertices, colors), mg.PointsMaterial(size=size))
+    )
+
+
 def draw_floor_grid(
     node: meshcat.Visualizer, half_extent: float, step: float, z: float
 ) -> None:

@@ -22,7 +22,7 @@ import pinocchio as pin
 
 from workbench.atomic_files import write_text_atomic
 from workbench.collision import CollisionChecker
-from workbench.errors import DimensionError, InputError
+from workbench.errors import DimensionError, InputError, NonFiniteError
 from workbench.model.robot import Robot
 from workbench.poses import as_se3
 from workbench.viz import _legend, _shapes
@@ -271,6 +271,48 @@ class Viewer:
         corners = [o.placement.translation for o in checker.scene.obstacles]
         if corners:
             self._extra_points["scene"] = np.array(corners)
+
+    def show_points(
+        self, name: str, points: npt.ArrayLike, rgb: npt.ArrayLike, *, size: float
+    ) -> None:
+        """Draw a cloud of coloured points, e.g. the voxels of a workspace map.
+
+        The points are unlit squares facing the camera, ``size`` wide [m] at
+        their own depth, so they show their colours exactly.
+
+        Args:
+            name: Scene node (``/`` separates nodes; the control panel can
+                hide each node and everything under it).
+            points: Shape (N, 3) [m], base frame.
+            rgb: Colours, shape (N, 3), in [0, 1].
+            size: Width of each point [m].
+
+        Raises:
+            DimensionError: If the shapes do not match.
+            NonFiniteError: If a point is NaN or infinite.
+        """
+        xyz = np.asarray(points, dtype=np.float64)
+        colors = np.asarray(rgb, dtype=np.float64)
+        if xyz.ndim != 2 or xyz.shape[1] != 3:
+            raise DimensionError(
+                "points", (xyz.shape[0] if xyz.ndim else 1, 3), xyz.shape
+            )
+        if colors.shape != xyz.shape:
+            raise DimensionError("rgb", xyz.shape, colors.shape)
+        if not np.all(np.isfinite(xyz)):
+            raise NonFiniteError(f"points of {name} contain NaN or infinite values")
+        _shapes.draw_points(self._scene[name], xyz, colors, size)
+        if len(xyz):
+            self._extra_points[f"points:{name}"] = xyz.copy()
+
+    def add_legend(self, section: str, entry: str) -> None:
+        """Add (or replace) a section of the legend drawn over the page.
+
+        Args:
+            section: Key of the section (a later call with it replaces it).
+            entry: HTML fragment, e.g. from ``workbench.viz._legend``.
+        """
+        self._legend[section] = entry
 
     def set_visible(self, name: str, visible: bool) -> None:
         """Show or hide a part of the scene (a node and everything under it).
