@@ -14,9 +14,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from workbench import InputError, Robot, load_robot
+from workbench import DimensionError, InputError, NonFiniteError, Robot, load_robot
 from workbench.ik import _chain_kernel as kernel
-from workbench.ik import numeric
+from workbench.ik import compute_jacobians_local, numeric
 from workbench.ik._chain import compiled_entry, get_chain
 
 ATOL_EXACT = 1e-12
@@ -88,6 +88,40 @@ def test_fk_and_jacobian_equal_pinocchio(robot: Robot) -> None:
         worst_jacobian = max(worst_jacobian, np.max(np.abs(jac - expected_jac)))
     assert worst_pose <= ATOL_EXACT
     assert worst_jacobian <= ATOL_EXACT
+
+
+def test_batch_jacobians_equal_pinocchios_local_jacobian(robot: Robot) -> None:
+    """compute_jacobians_local: Robot.jacobian_local of each configuration (N, 6, nv).
+
+    Including the continuous joint's (cos, sin) coordinates (nq = 7, nv = 6)
+    and the Panda's fingers, off the path to the tool (zero columns).
+    """
+    chain = get_chain(robot)
+    rng = np.random.default_rng(4)
+    values = chain.low + chain.span * rng.random((200, chain.n))
+    q = chain.to_configuration(values, chain.mid)
+    batch = compute_jacobians_local(robot, q)
+    assert batch.shape == (200, 6, robot.nv)
+    expected = np.stack([robot.jacobian_local(qi) for qi in q])
+    np.testing.assert_allclose(batch, expected, rtol=0, atol=ATOL_EXACT)
+    assert compute_jacobians_local(robot, q[:0]).shape == (0, 6, robot.nv)
+
+
+def test_batch_jacobians_refuse_bad_input(tmp_path) -> None:
+    ur5 = load_robot("ur5")
+    with pytest.raises(DimensionError, match="q"):
+        compute_jacobians_local(ur5, np.zeros((3, 5)))
+    with pytest.raises(DimensionError, match="q"):
+        compute_jacobians_local(ur5, np.zeros(6))
+    with pytest.raises(NonFiniteError, match="q must be finite"):
+        compute_jacobians_local(ur5, np.full((2, 6), np.nan))
+    text = ur5.urdf_path.read_text(encoding="utf-8")
+    end = text.index("</joint>", text.index('name="wrist_3_joint"'))
+    path = tmp_path / "mimic.urdf"
+    path.write_text(text[:end] + '<mimic joint="wrist_1_joint"/>' + text[end:])
+    mimic = load_robot(path, tool_frame=ur5.tool_frame)
+    with pytest.raises(InputError, match="mimic joints"):
+        compute_jacobians_local(mimic, np.zeros((1, mimic.nq)))
 
 
 def test_chain_coordinates_round_trip(robot: Robot) -> None:

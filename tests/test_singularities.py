@@ -10,8 +10,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import random_configurations
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 
 from workbench import InputError, NonFiniteError, Robot, generate_urdf, load_robot
+from workbench.model.catalog import get_own_urdf_dir
 from workbench.singularities.along_path import find_closest_approaches
 from workbench.singularities.conditions import (
     SINGULARITY_KINDS,
@@ -31,6 +35,7 @@ from workbench.singularities.measures import (
     compute_dh_jacobians,
     compute_joint_grid,
     compute_measures,
+    compute_singular_values,
     cross_check_det_j,
 )
 from workbench.trajectory.csv_io import (
@@ -353,6 +358,45 @@ def test_condition_number_is_inf_when_exactly_singular(puma) -> None:
     assert compute_measures_from_jacobians(jac).condition_number == np.inf
 
 
+@settings(max_examples=200)
+@given(
+    matrix=st.integers(1, 9).flatmap(
+        lambda n: arrays(
+            np.float64,
+            (6, n),
+            elements=st.floats(-10.0, 10.0, allow_nan=False, allow_subnormal=False),
+        )
+    ),
+    rank_drop=st.booleans(),
+)
+def test_compiled_singular_values_match_lapack(matrix, rank_drop) -> None:
+    """Jacobi SVD against np.linalg.svd: 6 × n, n < 6, = 6 or > 6, rank-deficient."""
+    if rank_drop and matrix.shape[1] > 1:
+        matrix[:, -1] = 0.5 * matrix[:, 0]  # two dependent columns: sigma_min = 0
+    expected = np.linalg.svd(matrix, compute_uv=False)
+    got = compute_singular_values(matrix)
+    scale = max(1.0, float(expected[0]))
+    np.testing.assert_allclose(got, expected, rtol=0, atol=ATOL_EXACT * scale)
+    batch = compute_singular_values(np.stack([matrix, 2.0 * matrix]))
+    np.testing.assert_array_equal(batch[0], got)  # one matrix, whatever the batch
+    np.testing.assert_allclose(batch[1], 2.0 * got, rtol=0, atol=ATOL_EXACT * scale)
+
+
+def test_compiled_sigma_min_vanishes_on_the_loci(any_puma, rng) -> None:
+    """On each locus, sigma_min of the singular Jacobian is at rounding level."""
+    for kind in ("shoulder", "elbow", "wrist"):
+        q = np.stack([_q_on_locus(any_puma, kind, rng) for _ in range(20)])
+        sigma = compute_singular_values(np.stack([any_puma.jacobian(qi) for qi in q]))
+        assert sigma[:, -1].max() <= ATOL_SINGULAR, kind
+
+
+def test_compiled_singular_values_refuse_other_shapes() -> None:
+    with pytest.raises(InputError, match=r"\(\.\.\., 6, nv\)"):
+        compute_singular_values(np.zeros((5, 6)))
+    with pytest.raises(InputError, match="got \\(6, 0\\)"):
+        compute_singular_values(np.zeros((6, 0)))
+
+
 def test_batched_dh_jacobian_matches_pinocchio(any_puma, rng) -> None:
     q = random_configurations(any_puma, rng, 50)
     batched = compute_dh_jacobians(any_puma.dh_table, q)
@@ -384,7 +428,7 @@ def test_svd_grid_matches_pinocchio(puma, rng) -> None:
     grid = compute_joint_grid(
         puma, axis, axis[:5], q_fixed=np.full(6, 0.4), quantity="svd"
     )
-    assert grid.method == "numpy DH"
+    assert grid.method == "compiled"
     q = grid.configurations().reshape(-1, 6)
     expected = compute_measures(puma, q).sigma_min.reshape(5, 7)
     np.testing.assert_allclose(
@@ -392,20 +436,36 @@ def test_svd_grid_matches_pinocchio(puma, rng) -> None:
     )
 
 
-def test_grid_of_a_robot_without_dh_table_uses_pinocchio() -> None:
+def test_grid_of_a_robot_without_dh_table_uses_pinocchio(tmp_path) -> None:
     ur5 = load_robot("ur5")  # a closed-form family: det J from its factors
     axis = np.linspace(-1, 1, 4)
     grid = compute_joint_grid(ur5, axis, axis, q_fixed=np.full(6, 0.5))
     assert grid.method == "analytic"
-    generic = load_robot("generic6r")  # no family: SVD of its DH Jacobians
+    generic = load_robot("generic6r")  # no family: SVD of compiled Jacobians
     grid = compute_joint_grid(generic, axis, axis, q_fixed=np.full(6, 0.5))
-    assert grid.method == "numpy DH"
+    assert grid.method == "compiled"
     from workbench import Robot
 
     plain = Robot("plain", generic.model, generic.urdf_path, "flange", package_dirs=[])
     grid = compute_joint_grid(plain, axis, axis, q_fixed=np.full(6, 0.5))
-    assert grid.method == "pinocchio"
+    assert grid.method == "compiled"
     assert set(grid.values) >= {"det_j", "sigma_min"}
+    # A mimic joint on the way to the tool: no compiled chain, one Pinocchio
+    # call per point, the same numbers.
+    text = (get_own_urdf_dir() / "puma560.urdf").read_text()
+    end = text.index("</joint>", text.index('<joint name="joint6"'))
+    path = tmp_path / "mimic.urdf"
+    path.write_text(text[:end] + '<mimic joint="joint4"/>' + text[end:])
+    mimic = load_robot(path)
+    grid = compute_joint_grid(
+        mimic, axis, axis, q_fixed=np.full(5, 0.5), quantity="svd"
+    )
+    assert grid.method == "pinocchio"
+    q = grid.configurations().reshape(-1, 5)
+    expected = [np.linalg.svd(mimic.jacobian(qi), compute_uv=False)[-1] for qi in q]
+    np.testing.assert_allclose(
+        grid.values["sigma_min"].ravel(), expected, rtol=0, atol=ATOL_EXACT
+    )
 
 
 def test_grid_errors(puma) -> None:

@@ -2,9 +2,11 @@
 
 Public entry points (see docs/interface.md): ``analytic``, ``analytic_batch``,
 ``numeric``, ``numeric_batch``, each robot's ``ClosedFormSolver``
-(``get_closed_form``), plus the damped-least-squares tools.
+(``get_closed_form``), plus the damped-least-squares tools and the compiled
+chain's batch of tool Jacobians (``compute_jacobians_local``).
 """
 
+from workbench.ik.batch_jacobians import compute_jacobians_local
 from workbench.ik.closed_form import (
     BRANCHES,
     UR_BRANCHES,
@@ -52,6 +54,7 @@ __all__ = [
     "UnsupportedRobotError",
     "analytic",
     "analytic_batch",
+    "compute_jacobians_local",
     "dls_inverse",
     "dls_step",
     "get_branches",

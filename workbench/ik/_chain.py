@@ -60,6 +60,8 @@ class Chain:
         robot: Weak reference to the robot the chain was read from.
         packed: (n + 1, CHAIN_WIDTH) read-only chain array (``_chain_kernel``).
         n: Number of joints on the path to the tool frame.
+        idx_q, idx_v: (n,) where each joint of the chain starts in ``q`` and
+            in the tangent vector (the Jacobian's columns).
         identity: True when chain coordinates are ``q`` itself (every joint
             is on the path and has one coordinate), so no mapping is needed.
         lower, upper: (nq,) limits of the robot when the chain was built.
@@ -91,6 +93,7 @@ class Chain:
         path = [j for j in model.supports[frame.parentJoint] if j > 0]
         self.n = n = len(path)
         self.idx_q = np.array([model.joints[j].idx_q for j in path], dtype=np.intp)
+        self.idx_v = np.array([model.joints[j].idx_v for j in path], dtype=np.intp)
         self.unbounded = np.array([model.joints[j].nq == 2 for j in path])
         self.identity = n == model.nq and np.array_equal(self.idx_q, np.arange(n))
         packed = np.zeros((n + 1, kernel.CHAIN_WIDTH))

@@ -3,8 +3,8 @@ r"""Compiled serial-chain kinematics and the Levenberg–Marquardt loop of ``num
 Everything here is compiled with Numba (``cache=True``: compiled once per
 machine on first use, then loaded from the cache, whose key covers the source
 of every module imported here: ``workbench._compiled``). Only :func:`run`,
-:func:`solve_batch` and :func:`chain_kinematics` are entry points; a target is
-checked finite and rigid with the closed forms' test
+:func:`solve_batch`, :func:`chain_kinematics` and :func:`chain_jacobians` are
+entry points; a target is checked finite and rigid with the closed forms' test
 (``_kernel_common.is_rigid``).
 
 Compile time matters (the first ``numeric`` call with an empty cache): no
@@ -608,3 +608,16 @@ def chain_kinematics(chain: FloatArray, q: FloatArray, jac: FloatArray) -> Float
             pose[i, j] = f[3 * i + j] if i < 3 else 0.0
         pose[i, 3] = f[9 + i] if i < 3 else 1.0
     return pose
+
+
+@entry_point(outputs=("jac",), contiguous=("chain", "q"))
+def chain_jacobians(chain: FloatArray, q: FloatArray, jac: FloatArray) -> None:
+    """LOCAL tool Jacobians at chain coordinates ``q`` (N, n) into ``jac`` (N, 6, n).
+
+    One pass of :func:`_forward` and :func:`_jacobian` per configuration.
+    """
+    n = chain.shape[0] - 1
+    frames = np.empty((n + 1, 12))
+    for b in range(q.shape[0]):
+        _forward(chain, q[b], frames)
+        _jacobian(chain, frames, jac[b])

@@ -5,8 +5,8 @@ Modules, in the order they build on each other:
 - ``conditions``: det J of an OPW (PUMA-type) or UR-type arm factorised into its
   shoulder, elbow and wrist conditions (Kang 2007, Section 3 for the PUMA), derived
   from the robot's kinematic structure;
-- ``measures``: SVD measures of any Jacobian, joint-space grids, the cross-check of the
-  analytic det J against Pinocchio;
+- ``measures``: SVD measures of any Jacobian (a compiled Jacobi SVD), joint-space
+  grids, the cross-check of the analytic det J against Pinocchio;
 - ``loci``: the elbow-singular θ3, the shoulder-singular θ2 and one configuration on
   each locus, in closed form for any OPW or UR-type arm;
 - ``directions``: the Cartesian direction a singular configuration cannot move in (the
@@ -50,6 +50,7 @@ from workbench.singularities.measures import (
     compute_joint_grid,
     compute_measures,
     compute_measures_from_jacobians,
+    compute_singular_values,
     cross_check_det_j,
 )
 
@@ -77,6 +78,7 @@ __all__ = [
     "compute_joint_grid",
     "compute_measures",
     "compute_measures_from_jacobians",
+    "compute_singular_values",
     "compute_wrist_center_jacobian",
     "compute_wrist_point",
     "cross_check_det_j",

@@ -10,10 +10,12 @@ singular values :math:`\sigma_1 \ge \dots \ge \sigma_6`:
 
 The rows of :math:`J` mix m/s and rad/s, so these numbers depend on the length
 unit (SI here); only their zeros do not. Everything here is vectorised over a
-leading batch axis; the (θ2, θ3) grids of a DH robot use a batched numpy
-Jacobian instead of a Python loop over Pinocchio, and the determinant of a
-PUMA-type arm uses the analytic factorisation of
-:mod:`workbench.singularities.conditions`.
+leading batch axis. The singular values come from a compiled one-sided Jacobi
+SVD (``_svd_kernel``, as accurate as ``np.linalg.svd`` and faster on batches
+of small matrices); the grids over joint values take their Jacobians from the
+compiled chain (:func:`workbench.ik.compute_jacobians_local`) instead of a
+Python loop over Pinocchio, and the determinant of an OPW or UR-type arm from
+the analytic factorisation of :mod:`workbench.singularities.conditions`.
 """
 
 from __future__ import annotations
@@ -26,8 +28,10 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
+from workbench.ik import compute_jacobians_local
 from workbench.model.dh import DHTable
 from workbench.model.robot import Robot
+from workbench.singularities import _svd_kernel
 from workbench.singularities.conditions import NotPumaTypeError, compute_det_j_analytic
 from workbench.validation import as_finite_array
 
@@ -60,12 +64,33 @@ class JacobianMeasures:
     det_j: FloatArray | None
 
 
-def compute_measures_from_jacobians(jacobians: npt.ArrayLike) -> JacobianMeasures:
-    """Measures of Jacobians of shape (..., 6, nv)."""
+def compute_singular_values(jacobians: npt.ArrayLike) -> FloatArray:
+    """Singular values of Jacobians (..., 6, nv), descending, shape (..., min(6, nv)).
+
+    Compiled one-sided Jacobi (``_svd_kernel``): each value within a few
+    units of roundoff times the largest of its matrix, as ``np.linalg.svd``.
+    The kernel runs without the GIL, so threads can share a large batch.
+
+    Raises:
+        InputError: If the shape is not (..., 6, nv) with nv ≥ 1.
+    """
     jac = np.asarray(jacobians, dtype=np.float64)
-    if jac.ndim < 2 or jac.shape[-2] != 6:
+    if jac.ndim < 2 or jac.shape[-2] != 6 or jac.shape[-1] < 1:
         raise InputError(f"Jacobians must have shape (..., 6, nv), got {jac.shape}")
-    sv = np.linalg.svd(jac, compute_uv=False).astype(np.float64, copy=False)
+    flat = np.ascontiguousarray(jac.reshape(-1, 6, jac.shape[-1]))
+    sv = np.empty((flat.shape[0], min(6, jac.shape[-1])))
+    _svd_kernel.singular_values(flat, sv)
+    return sv.reshape(*jac.shape[:-2], sv.shape[-1])
+
+
+def compute_measures_from_jacobians(jacobians: npt.ArrayLike) -> JacobianMeasures:
+    """Measures of Jacobians of shape (..., 6, nv).
+
+    Raises:
+        InputError: If the shape is not (..., 6, nv) with nv ≥ 1.
+    """
+    jac = np.asarray(jacobians, dtype=np.float64)
+    sv = compute_singular_values(jac)
     sigma_min = sv[..., -1]
     with np.errstate(divide="ignore"):
         condition = np.where(sigma_min > 0.0, sv[..., 0] / sigma_min, np.inf)
@@ -158,7 +183,7 @@ class JointGrid:
         y: Values of the second joint, shape (ny,) [rad].
         q_fixed: Configuration the other joints are taken from, (nq,) [rad].
         values: Dict name -> array of shape (ny, nx) (row = y, column = x).
-        method: How it was computed (``"analytic"``, ``"numpy DH"``,
+        method: How it was computed (``"analytic"``, ``"compiled"``,
             ``"pinocchio"``).
         seconds: Wall time of the computation [s].
     """
@@ -200,8 +225,10 @@ def compute_joint_grid(
     ``quantity="det_j"`` on a PUMA-type arm uses the analytic factorisation
     (a 1000 × 1000 grid takes well under a second); ``quantity="svd"`` gives
     ``sigma_min``, ``manipulability``, ``condition_number`` and ``det_j``
-    from batched numpy Jacobians of the DH table. Robots without a DH table
-    fall back to one Pinocchio call per point (slow: keep such grids small).
+    from the compiled chain's Jacobians (:func:`compute_jacobians_local`) and
+    the compiled SVD. A robot with a joint the chain does not model (a mimic
+    joint) falls back to one Pinocchio call per point (slow: keep such grids
+    small).
 
     Args:
         robot: Any robot.
@@ -248,11 +275,16 @@ def _grid_method(
             pass
         else:
             return "analytic", lambda q: {"det_j": compute_det_j_analytic(robot, q)}
-    table = robot.dh_table
+    try:
+        compute_jacobians_local(robot, np.zeros((0, robot.nq)))
+    except InputError:  # a joint the compiled chain does not model
+        compiled = False
+    else:
+        compiled = True
 
     def svd(q: FloatArray) -> dict[str, FloatArray]:
-        if table is not None:
-            jac = compute_dh_jacobians(table, q)
+        if compiled:
+            jac = compute_jacobians_local(robot, q)
         else:
             jac = np.stack([robot.jacobian(qi) for qi in q])
         m = compute_measures_from_jacobians(jac)
@@ -265,7 +297,7 @@ def _grid_method(
             out["det_j"] = m.det_j
         return out
 
-    return ("numpy DH" if table is not None else "pinocchio"), svd
+    return ("compiled" if compiled else "pinocchio"), svd
 
 
 @dataclass(frozen=True, slots=True)

@@ -2,7 +2,8 @@
 
 A :class:`PoseGrid` (voxel positions × tool orientations, :mod:`.grid`), the
 per-pose measures of a block of it in closed form (:mod:`.measures`) and the
-sampled maps of arms without a closed form (:mod:`.sampled`).
+sampled maps of arms without a closed form (:mod:`.sampled`); the joint-space
+singularity map (:mod:`.joint_space`).
 """
 
 from workbench.workspace.grid import (
@@ -12,6 +13,7 @@ from workbench.workspace.grid import (
     make_pose_grid,
     uniform_orientations,
 )
+from workbench.workspace.joint_space import JointSpaceMap, compute_joint_space_map
 from workbench.workspace.measures import (
     POSE_KEYS,
     VOXEL_KEYS,
@@ -22,7 +24,9 @@ from workbench.workspace.measures import (
 __all__ = [
     "POSE_KEYS",
     "VOXEL_KEYS",
+    "JointSpaceMap",
     "PoseGrid",
+    "compute_joint_space_map",
     "cone_orientations",
     "default_bounds",
     "evaluate_block",
