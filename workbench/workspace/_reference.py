@@ -68,7 +68,7 @@ def limit_representatives(
         when out of limits) and whether every joint is within its limits.
     """
     bounded = np.isfinite(lower) & np.isfinite(upper)
-    mid = np.where(bounded, 0.5 * (lower + upper), 0.0)
+    mid = 0.5 * (np.where(bounded, lower, 0.0) + np.where(bounded, upper, 0.0))
     turns = np.where(bounded, np.rint((mid - q) / TAU), 0.0)
     shifted = q + turns * TAU
     joint_margin = np.where(

@@ -119,7 +119,7 @@ def _constants(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
             np.asarray(fac.theta_offset, dtype=np.float64),
             lower,
             upper,
-            np.where(bounded, 0.5 * (lower + upper), 0.0),
+            0.5 * (np.where(bounded, lower, 0.0) + np.where(bounded, upper, 0.0)),
             bounded.astype(np.float64),
         ]
     )
