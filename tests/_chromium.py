@@ -72,6 +72,22 @@ class _DevTools:
     def __init__(self, connection: WebSocketClientConnection):
         self._connection = connection
         self._ids = itertools.count(1)
+        self.page_errors: list[str] = []  # console.error calls, uncaught exceptions
+
+    def _note(self, event: dict[str, Any]) -> None:
+        """Keep the page's errors from an event (once ``Runtime.enable`` ran)."""
+        method, params = event.get("method"), event.get("params", {})
+        if method == "Runtime.consoleAPICalled" and params.get("type") == "error":
+            texts = [
+                str(a.get("value", a.get("description", ""))) for a in params["args"]
+            ]
+            self.page_errors.append("console.error: " + " ".join(texts))
+        elif method == "Runtime.exceptionThrown":
+            details = params.get("exceptionDetails", {})
+            text = details.get("exception", {}).get("description") or details.get(
+                "text"
+            )
+            self.page_errors.append(f"uncaught: {text}")
 
     async def call(
         self, method: str, params: dict[str, Any] | None = None, session: str = ""
@@ -90,6 +106,7 @@ class _DevTools:
                 raise ChromiumError(f"{method}: the browser closed the connection")
             answer = json.loads(raw)
             if answer.get("id") != message_id:
+                self._note(answer)
                 continue
             if "error" in answer:
                 raise ChromiumError(f"{method}: {answer['error']}")
@@ -128,7 +145,7 @@ def _wait_for_port(profile: Path, process: subprocess.Popen[bytes], log: Path) -
 
 async def _capture(
     url: str, page_uri: str, width: int, height: int, script: str | None
-) -> bytes:
+) -> tuple[bytes, list[str]]:
     connection = await websocket_connect(url, max_message_size=64 * 2**20)
     devtools = _DevTools(connection)
     try:
@@ -142,6 +159,7 @@ async def _capture(
             {"width": width, "height": height, "deviceScaleFactor": 1, "mobile": False},
             session,
         )
+        await devtools.call("Runtime.enable", {}, session)  # console events
         await devtools.call("Page.navigate", {"url": page_uri}, session)
         deadline = time.monotonic() + STEP_TIMEOUT
         while await devtools.evaluate(session, "document.readyState") != "complete":
@@ -154,7 +172,7 @@ async def _capture(
         shot = await devtools.call("Page.captureScreenshot", {"format": "png"}, session)
         with contextlib.suppress(ChromiumError):  # the answer may not arrive
             await devtools.call("Browser.close")
-        return base64.b64decode(shot["data"])
+        return base64.b64decode(shot["data"]), devtools.page_errors
     finally:
         connection.close()
 
@@ -167,7 +185,7 @@ def take_screenshot(
     width: int,
     height: int,
     script: str | None = None,
-) -> None:
+) -> list[str]:
     """Render ``html`` at ``width`` x ``height`` [px] and save it as ``png``.
 
     Args:
@@ -178,6 +196,10 @@ def take_screenshot(
         height: Viewport height [px].
         script: JavaScript run once the page has loaded (may return a promise),
             before the frames are rendered and captured.
+
+    Returns:
+        The page's errors up to the capture: each ``console.error`` call and
+        uncaught exception, one line each (empty for a clean page).
 
     Raises:
         ChromiumError: If a step does not complete within ``STEP_TIMEOUT``.
@@ -195,7 +217,7 @@ def take_screenshot(
         )
     try:
         url = _wait_for_port(profile, process, log)
-        data = asyncio.run(_capture(url, html.as_uri(), width, height, script))
+        data, errors = asyncio.run(_capture(url, html.as_uri(), width, height, script))
         png.write_bytes(data)
         try:
             process.wait(timeout=STEP_TIMEOUT)
@@ -205,3 +227,4 @@ def take_screenshot(
         with contextlib.suppress(ProcessLookupError):
             os.killpg(process.pid, signal.SIGKILL)  # any helper left behind
         process.wait()
+    return errors

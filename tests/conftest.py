@@ -2,8 +2,13 @@
 
 from __future__ import annotations
 
+import fcntl
 import os
+import shutil
+import subprocess
 import sys
+import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -79,3 +84,44 @@ def run_cli(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, s
         code = int(exit_.code or 0)
     out, err = capsys.readouterr()
     return code, out, err
+
+
+def _apt_get(*args: str) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "DEBIAN_FRONTEND": "noninteractive"}
+    return subprocess.run(
+        ["apt-get", *args], env=env, capture_output=True, text=True, timeout=1200
+    )
+
+
+@pytest.fixture(scope="session")
+def chromium() -> str:
+    """Path of the chromium binary, installed with apt-get when missing (root).
+
+    Test workers (pytest -n) each run this fixture: a file lock lets one of them
+    install while the others wait, instead of racing for dpkg's own lock.
+    """
+    lock = Path(tempfile.gettempdir()) / "workbench-chromium-install.lock"
+    with lock.open("w") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        return _find_or_install_chromium()
+
+
+def _find_or_install_chromium() -> str:
+    found = shutil.which("chromium")
+    if found:
+        return found
+    if shutil.which("apt-get") is None:
+        pytest.skip("chromium is missing and there is no apt-get to install it")
+    if not hasattr(os, "geteuid") or os.geteuid() != 0:
+        pytest.skip(
+            "chromium is missing; installing it needs root: apt-get install -y chromium"
+        )
+    result = _apt_get("install", "-y", "chromium")
+    if result.returncode != 0:  # stale or empty package lists
+        _apt_get("update")
+        result = _apt_get("install", "-y", "chromium")
+    found = shutil.which("chromium")
+    if result.returncode != 0 or found is None:
+        reason = (result.stderr.strip().splitlines() or ["no output"])[-1]
+        pytest.skip(f"cannot install chromium with apt-get: {reason}")
+    return found

@@ -1,24 +1,19 @@
 """The exported page rendered offline in headless Chromium: the arm is drawn.
 
 Chromium comes from the system; when it is missing and we are root, the
-session fixture installs it (``apt-get install -y chromium``), else the tests
-skip and say why. WebGL runs on SwiftShader (software), no GPU needed.
-``tests/_chromium.py`` drives Chromium over the DevTools protocol, with a
-deadline on every step and no retry (see its docstring for why).
+session fixture ``chromium`` (``tests/conftest.py``) installs it (``apt-get
+install -y chromium``), else the tests skip and say why. WebGL runs on
+SwiftShader (software), no GPU needed. ``tests/_chromium.py`` drives Chromium
+over the DevTools protocol, with a deadline on every step and no retry (see its
+docstring for why).
 """
 
 from __future__ import annotations
 
-import fcntl
-import os
-import shutil
-import subprocess
-import tempfile
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
-import pytest
 from PIL import Image
 
 from tests._chromium import take_screenshot
@@ -29,47 +24,6 @@ WIDTH, HEIGHT = 800, 600
 PIXEL_CHANGED = 40  # max |RGB difference| above which a pixel counts as changed
 Q1_DEG = [0.0, -45.0, 180.0, 0.0, 45.0, 0.0]
 Q2_DEG = [60.0, -90.0, 160.0, 30.0, 30.0, 0.0]
-
-
-def _apt_get(*args: str) -> subprocess.CompletedProcess[str]:
-    env = {**os.environ, "DEBIAN_FRONTEND": "noninteractive"}
-    return subprocess.run(
-        ["apt-get", *args], env=env, capture_output=True, text=True, timeout=1200
-    )
-
-
-@pytest.fixture(scope="session")
-def chromium() -> str:
-    """Path of the chromium binary, installed with apt-get when missing (root).
-
-    Test workers (pytest -n) each run this fixture: a file lock lets one of them
-    install while the others wait, instead of racing for dpkg's own lock.
-    """
-    lock = Path(tempfile.gettempdir()) / "workbench-chromium-install.lock"
-    with lock.open("w") as handle:
-        fcntl.flock(handle, fcntl.LOCK_EX)
-        return _find_or_install_chromium()
-
-
-def _find_or_install_chromium() -> str:
-    found = shutil.which("chromium")
-    if found:
-        return found
-    if shutil.which("apt-get") is None:
-        pytest.skip("chromium is missing and there is no apt-get to install it")
-    if not hasattr(os, "geteuid") or os.geteuid() != 0:
-        pytest.skip(
-            "chromium is missing; installing it needs root: apt-get install -y chromium"
-        )
-    result = _apt_get("install", "-y", "chromium")
-    if result.returncode != 0:  # stale or empty package lists
-        _apt_get("update")
-        result = _apt_get("install", "-y", "chromium")
-    found = shutil.which("chromium")
-    if result.returncode != 0 or found is None:
-        reason = (result.stderr.strip().splitlines() or ["no output"])[-1]
-        pytest.skip(f"cannot install chromium with apt-get: {reason}")
-    return found
 
 
 def screenshot(

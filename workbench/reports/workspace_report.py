@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
@@ -23,6 +23,9 @@ from workbench.atomic_files import write_text_atomic
 from workbench.errors import InputError
 from workbench.plots.workspace import VoxelField, get_layer_coordinates
 from workbench.singularities.conditions import ELBOW_TOL, SHOULDER_TOL, WRIST_TOL
+
+if TYPE_CHECKING:
+    from workbench.workspace.store import WorkspaceMap
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -51,7 +54,7 @@ class WorkspaceReport:
     figures: dict[str, bytes]
 
 
-def get_array(workspace_map: Any, name: str) -> FloatArray | None:
+def get_array(workspace_map: WorkspaceMap, name: str) -> FloatArray | None:
     """One array of the map as float64, or None when the map does not hold it."""
     if name not in workspace_map.names:
         return None
@@ -79,7 +82,7 @@ def choose_heights(
 
 
 def compute_singular_distances(
-    workspace_map: Any, tolerances: dict[str, float]
+    workspace_map: WorkspaceMap, tolerances: dict[str, float]
 ) -> tuple[dict[str, FloatArray], dict[str, FloatArray]]:
     """Per voxel, how near each singularity the best branches are.
 
@@ -114,7 +117,9 @@ def compute_singular_distances(
     return medians, fractions
 
 
-def _summary(workspace_map: Any, fields: dict[str, FloatArray]) -> dict[str, Any]:
+def _summary(
+    workspace_map: WorkspaceMap, fields: dict[str, FloatArray]
+) -> dict[str, Any]:
     """The key numbers of the map (JSON-ready)."""
     attrs, grid = workspace_map.attrs, workspace_map.grid
     reach = np.nan_to_num(fields["reachability"])
@@ -178,7 +183,7 @@ def _field(
 
 
 def build_workspace_report(
-    workspace_map: Any, *, heights: list[float] | None = None
+    workspace_map: WorkspaceMap, *, heights: list[float] | None = None
 ) -> WorkspaceReport:
     """Compute the figures and key numbers of a map and render the HTML.
 
@@ -272,7 +277,7 @@ def build_workspace_report(
 
 
 def write_workspace_report(
-    workspace_map: Any, path: str | Path, **options: Any
+    workspace_map: WorkspaceMap, path: str | Path, **options: Any
 ) -> WorkspaceReport:
     """Build the report (see :func:`build_workspace_report`) and write it whole.
 

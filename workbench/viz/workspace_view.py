@@ -18,15 +18,18 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any, ClassVar, Literal
+from typing import TYPE_CHECKING, ClassVar, Literal
 
 import numpy as np
 import numpy.typing as npt
 
-from workbench.errors import InputError
+from workbench.errors import InputError, RobotNotFoundError
 from workbench.model.robot import Robot
 from workbench.viz import _legend
 from workbench.viz.viewer import Viewer
+
+if TYPE_CHECKING:
+    from workbench.workspace.store import WorkspaceMap
 
 FloatArray = npt.NDArray[np.float64]
 Measure = Literal["reachability", "dexterity"]
@@ -58,13 +61,17 @@ class _Scale:
             self.ticks = [(x, f"{x:g}") for x in (0.0, 0.25, 0.5, 0.75, 1.0)]
         else:
             self.shown = np.isfinite(values)
+            from matplotlib.ticker import MaxNLocator
+
             top = float(values[self.shown].max()) if self.shown.any() else 0.0
-            self.vmax = top if top > 0.0 else 1.0
+            top = top if top > 0.0 else 1.0
+            # The scale ends on the first round tick at or above the largest value.
+            steps = MaxNLocator(5, steps=[1, 2, 2.5, 5, 10]).tick_values(0.0, top)
+            self.vmax = float(steps[int(np.searchsorted(steps, top))])
             self.what = "best manipulability √det(J Jᵀ) over the orientations [m³]"
             self.ticks = [
-                (x, f"{x * self.vmax:.3g}") for x in (0.0, 0.25, 0.5, 0.75, 1.0)
+                (float(t / self.vmax), f"{t:g}") for t in steps if t <= self.vmax
             ]
-        self.values = values
 
     def colors(self, values: FloatArray) -> FloatArray:
         """RGB in [0, 1] of ``values`` (N,), shape (N, 3)."""
@@ -132,15 +139,43 @@ def _voxel_counts(scale: _Scale, total: int) -> str:
     )
 
 
-def _robot_of(workspace_map: Any) -> Robot:
+def get_map_robot(workspace_map: WorkspaceMap, robot: Robot | None = None) -> Robot:
+    """The robot a map was built for, checked against the map's URDF digest.
+
+    Args:
+        workspace_map: A :class:`~workbench.workspace.WorkspaceMap`.
+        robot: The robot, when its name is no catalog name (a URDF file);
+            default loaded from the map's ``robot`` and ``tool_frame``.
+
+    Raises:
+        InputError: If the map's robot is no catalog name and no robot is
+            given, or the robot's URDF is not the one the map was built from
+            (another SHA-256).
+    """
     from workbench.model.loading import load_robot
+    from workbench.workspace.robot_spec import compute_file_sha256
 
     attrs = workspace_map.attrs
-    return load_robot(attrs["robot"], tool_frame=attrs.get("tool_frame"))
+    name = str(attrs.get("robot"))
+    if robot is None:
+        try:
+            robot = load_robot(name, tool_frame=attrs.get("tool_frame"))
+        except RobotNotFoundError as err:
+            raise InputError(
+                f"the map's robot {name!r} is no catalog name: give its URDF "
+                "(robot=..., --robot FILE.urdf)"
+            ) from err
+    expected = attrs.get("urdf_sha256")
+    if expected is not None and compute_file_sha256(robot.urdf_path) != expected:
+        raise InputError(
+            f"{robot.urdf_path} is not the URDF the map was built from "
+            f"(sha256 {str(expected)[:12]}…)"
+        )
+    return robot
 
 
 def make_workspace_viewer(
-    workspace_map: Any,
+    workspace_map: WorkspaceMap,
     *,
     measure: Measure = "reachability",
     robot: Robot | None = None,
@@ -157,7 +192,7 @@ def make_workspace_viewer(
             reached, [1]) or ``"dexterity"`` (per voxel: best manipulability
             over the orientations, [m³]).
         robot: The map's robot; default loaded from the map's ``robot`` and
-            ``tool_frame`` attributes.
+            ``tool_frame`` attributes (:func:`get_map_robot`).
         q: The arm's reference configuration, shape (nq,) [rad]; default
             zeros clipped to the joint limits.
         cut_away: Start with the voxels at y > 0 hidden (the page's "cut away
@@ -170,14 +205,15 @@ def make_workspace_viewer(
 
     Raises:
         InputError: If ``measure`` is not one of :data:`MEASURES`.
-        RobotNotFoundError: If the map's robot cannot be loaded.
+        InputError: If the map's robot cannot be loaded or is not the one
+            the map was built for.
         DimensionError: If ``q`` has the wrong size.
     """
     if measure not in MEASURES:
         raise InputError(
             f"unknown measure {measure!r}; choose one of {', '.join(MEASURES)}"
         )
-    robot = robot if robot is not None else _robot_of(workspace_map)
+    robot = get_map_robot(workspace_map, robot)
     grid = workspace_map.grid
     values = np.asarray(workspace_map[_Scale.ARRAYS[measure]], dtype=np.float64)
     scale = _Scale(measure, values)
@@ -200,20 +236,23 @@ def make_workspace_viewer(
         chosen = scale.shown & (iz == k)
         if not chosen.any():
             continue
-        z = float(grid.origin[2]) + resolution * k
+        z = float(positions[chosen, 2][0])
         name = _layer_name(z)
         for half, side in (
             ("y<=0", positions[:, 1] <= 0.0),
             ("y>0", positions[:, 1] > 0.0),
         ):
             part = chosen & side
+            if not part.any():
+                continue
             viewer.show_points(
                 f"voxels/{name}/{half}",
                 positions[part],
                 scale.colors(values[part]),
                 size=point_size,
             )
-        viewer.set_visible(f"voxels/{name}/y>0", not cut_away)
+            if half == "y>0":
+                viewer.set_visible(f"voxels/{name}/{half}", not cut_away)
         layers.append(name)
         heights.append(z)
     entries = [scale.legend(), _voxel_counts(scale, positions.shape[0])]
@@ -226,7 +265,7 @@ def make_workspace_viewer(
 
 
 def write_workspace_view(
-    workspace_map: Any,
+    workspace_map: WorkspaceMap,
     path: str | Path,
     *,
     measure: Measure = "reachability",
@@ -258,4 +297,10 @@ def write_workspace_view(
     return viewer.save_html(path)
 
 
-__all__ = ["COLOR_MAP", "MEASURES", "make_workspace_viewer", "write_workspace_view"]
+__all__ = [
+    "COLOR_MAP",
+    "MEASURES",
+    "get_map_robot",
+    "make_workspace_viewer",
+    "write_workspace_view",
+]
