@@ -1,0 +1,205 @@
+"""``workbench workspace place``: where to put the arm's base for a task.
+
+Reads the task (``--targets`` pose CSV, or ``--trajectory`` joint CSV with its
+robot), ranks candidate base poses with
+:func:`workbench.workspace.placement.place_base` (screened against ``--map``
+or a map built in memory, the best verified exactly) and prints them. Exit 3
+when no placement reaches every pose. The ``workspace`` group
+(``workbench/cli/workspace.py``) calls :func:`register`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from workbench.cli._common import (
+    add_json_flag,
+    add_robot_argument,
+    bounded_float,
+    bounded_int,
+    finite_float,
+    load_robot_from_args,
+    print_json,
+)
+from workbench.collision import read_scene
+from workbench.model.robot import Robot
+from workbench.workspace.grid import default_bounds
+from workbench.workspace.placement import (
+    DEFAULT_RESOLUTION,
+    DEFAULT_YAW_STEP,
+    Placement,
+    place_base,
+)
+from workbench.workspace.task_poses import (
+    TaskPoses,
+    read_task_poses,
+    read_trajectory_task_poses,
+)
+
+#: Largest ``--top``.
+MAX_TOP = 10_000
+
+
+def register(commands: argparse._SubParsersAction) -> None:
+    """Add ``place`` to the ``workspace`` group's subcommands."""
+    parser = commands.add_parser(
+        "place",
+        help="rank base poses of the arm so that it reaches every task pose",
+        description="Rank candidate base poses (x, y on a lattice over --region "
+        "at --height, yaw in steps of --yaw-step) by: every task pose reached "
+        "within the joint limits (collision-free with --scene; for a "
+        "--trajectory, one IK branch along the whole path, no flip), then the "
+        "worst singularity margin and dexterity along the task. Candidates are "
+        "screened against a workspace map (--map, else one built in memory), "
+        "the best verified exactly in closed form. Exit 3 when none reaches "
+        "every pose.",
+    )
+    add_robot_argument(parser)
+    task = parser.add_mutually_exclusive_group(required=True)
+    task.add_argument(
+        "--targets",
+        type=Path,
+        metavar="FILE",
+        help="task poses, CSV with header x,y,z,qx,qy,qz,qw (world frame, m, "
+        "unit quaternion)",
+    )
+    task.add_argument(
+        "--trajectory",
+        type=Path,
+        metavar="FILE",
+        help="a joint trajectory CSV of --robot (t,q1..qn,...): the task is its "
+        "tool path, world frame = the base frame it was recorded in",
+    )
+    parser.add_argument(
+        "--map", type=Path, metavar="MAP.zarr", help="workspace map of --robot"
+    )
+    parser.add_argument(
+        "--region",
+        nargs=4,
+        type=finite_float,
+        metavar=("XMIN", "XMAX", "YMIN", "YMAX"),
+        help="where the base may go [m], world frame (default: the task's "
+        "extent widened by the arm's reach)",
+    )
+    parser.add_argument(
+        "--height",
+        type=finite_float,
+        default=0.0,
+        metavar="Z",
+        help="base height [m] in the world frame (default: 0)",
+    )
+    parser.add_argument(
+        "--resolution",
+        type=bounded_float(10.0, "m"),
+        default=DEFAULT_RESOLUTION,
+        metavar="M",
+        help=f"spacing of the candidate positions [m] (default: {DEFAULT_RESOLUTION})",
+    )
+    parser.add_argument(
+        "--yaw-step",
+        type=bounded_float(360.0, "degrees"),
+        default=math.degrees(DEFAULT_YAW_STEP),
+        metavar="DEG",
+        help=f"step of the candidate yaws [deg] (default: "
+        f"{math.degrees(DEFAULT_YAW_STEP):g})",
+    )
+    parser.add_argument(
+        "--scene",
+        type=Path,
+        metavar="FILE",
+        help="obstacles (scene JSON) in the world frame: branches must be "
+        "collision-free",
+    )
+    parser.add_argument(
+        "--top",
+        type=bounded_int(1, MAX_TOP),
+        default=10,
+        metavar="K",
+        help="placements to print (default: 10)",
+    )
+    add_json_flag(parser)
+    parser.set_defaults(run=run_place, progress_message="workspace place: ranking…")
+
+
+def run_place(args: argparse.Namespace) -> int:
+    """Rank the placements and print them; returns the exit code."""
+    robot = load_robot_from_args(args)
+    if args.targets is not None:
+        task = read_task_poses(args.targets)
+    else:
+        task = read_trajectory_task_poses(robot, args.trajectory)
+    scene = read_scene(args.scene) if args.scene is not None else None
+    region = args.region
+    if region is None:
+        region = default_region(robot, task, args.resolution)
+    started = time.perf_counter()
+    placements = place_base(
+        robot,
+        task,
+        region=region,
+        height=args.height,
+        yaw_step=math.radians(args.yaw_step),
+        resolution=args.resolution,
+        map=args.map,
+        scene=scene,
+        top=args.top,
+        progress=functools.partial(
+            args.progress.count, unit="steps", label="workspace place"
+        ),
+    )
+    seconds = time.perf_counter() - started
+    args.progress.finish()
+    summary: dict[str, Any] = {
+        "robot": robot.name,
+        "poses": len(task),
+        "path": task.ordered,
+        "region": [float(v) for v in region],
+        "height": args.height,
+        "seconds": seconds,
+        "placements": [p.as_dict() for p in placements],
+    }
+    if args.json:
+        print_json(summary)
+        return 0
+    _print_placements(summary, placements)
+    return 0
+
+
+def default_region(robot: Robot, task: TaskPoses, resolution: float) -> list[float]:
+    """``[xmin, xmax, ymin, ymax]`` [m]: the task's x, y extent widened by the reach.
+
+    The arm's horizontal reach is half the width of its
+    :func:`~workbench.workspace.grid.default_bounds`; the edges are rounded
+    outwards to multiples of ``resolution``, so the lattice holds the world
+    origin's multiples (a base at the origin is a candidate).
+    """
+    box = default_bounds(robot)
+    reach = 0.5 * float(np.max(box[1, :2] - box[0, :2]))
+    xy = task.poses[:, :2, 3]
+    low = np.floor((xy.min(axis=0) - reach) / resolution) * resolution
+    high = np.ceil((xy.max(axis=0) + reach) / resolution) * resolution
+    return [float(low[0]), float(high[0]), float(low[1]), float(high[1])]
+
+
+def _print_placements(summary: dict[str, Any], placements: list[Placement]) -> None:
+    xmin, xmax, ymin, ymax = summary["region"]
+    kind = "path samples" if summary["path"] else "poses"
+    print(
+        f"{summary['robot']}: {summary['poses']} task {kind}, base region "
+        f"x {xmin:g}..{xmax:g} m, y {ymin:g}..{ymax:g} m at z {summary['height']:g} m "
+        f"({summary['seconds']:.2f} s)"
+    )
+    print("   x [m]    y [m]    z [m]  yaw [deg]  min |det J| [m³]  margin  branch")
+    for p in placements:
+        print(
+            f"{p.x:8.3f} {p.y:8.3f} {p.z:8.3f} {math.degrees(p.yaw):10.1f} "
+            f"{p.min_dexterity:17.6g} {p.min_singularity_margin:7.3g}  "
+            f"{p.branch or '(per pose)'}"
+        )

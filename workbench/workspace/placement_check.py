@@ -1,0 +1,301 @@
+r"""Exact evaluation of candidate base poses for a task (closed form, limits, scene).
+
+A candidate base pose is :math:`B = \mathrm{Trans}(x, y, z)\, R_z(\psi)` in the
+world frame (:func:`base_transform`); task pose :math:`T` is then
+:math:`B^{-1} T` in the base frame. :class:`PlacementEvaluator` solves every
+:math:`B^{-1} T` of a batch of candidates in one closed-form call
+(:meth:`~workbench.ik.ClosedFormSolver.solve_batch`) and keeps, per pose, the
+*usable* branches: they reach the pose, some 2π representative of every angle
+is within its limits (the one nearest the middle of the limits, as the maps
+take it), and, with a scene, the configuration touches nothing (no distance
+<= 0 between the links or with an obstacle). The dexterity of a branch is
+:math:`|\det J| = |K s e w|` [m³] from the analytic factors
+(:func:`workbench.singularities.compute_conditions`), its singularity margin
+:func:`~workbench.workspace.measures.singularity_margin`; the best branch of a
+pose is its usable branch of largest dexterity.
+
+For a path (ordered poses), a branch must follow every sample without a jump
+(:func:`check_path_branch`): the same closed-form branch at every sample,
+within the limits along the whole continuous path.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+
+from workbench.collision import CollisionChecker, Scene
+from workbench.ik import get_closed_form
+from workbench.model.robot import Robot
+from workbench.singularities import compute_conditions, get_factorisation
+from workbench.workspace._reference import limit_representatives
+from workbench.workspace.measures import singularity_margin
+
+FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
+
+#: Largest step [rad] of any joint between consecutive samples of a path
+#: along one branch; a larger one is a jump (a flip, or a change of branch at
+#: a singularity), so the branch does not follow the path.
+PATH_STEP_MAX = math.pi / 4.0
+
+
+@dataclass(frozen=True, slots=True)
+class Placement:
+    """One base pose and how well it serves the task (exact values).
+
+    Attributes:
+        x, y, z: Base position in the world frame [m].
+        yaw: Base rotation about the world z axis [rad].
+        all_reachable: Every task pose has a usable branch (for a path: one
+            branch follows the whole path without a flip).
+        missed: Task poses without a usable branch.
+        min_dexterity: Smallest |det J| [m³] over the task (best usable branch
+            of each pose; for a path, along :attr:`branch`); NaN if none.
+        min_singularity_margin: Smallest singularity margin [1] likewise
+            (< 1: a pose is near-singular); NaN if none.
+        branch: Label of one branch usable at every pose (for a path:
+            following the whole path), the one of largest worst dexterity;
+            None if there is none.
+    """
+
+    x: float
+    y: float
+    z: float
+    yaw: float
+    all_reachable: bool
+    missed: int
+    min_dexterity: float
+    min_singularity_margin: float
+    branch: str | None
+
+    @property
+    def base_pose(self) -> FloatArray:
+        """(4, 4) pose B of the base in the world frame [m]."""
+        return base_transform(self.x, self.y, self.z, self.yaw)
+
+    def rank_key(self) -> tuple[bool, int, bool, float, float]:
+        """Sort key, smaller is better.
+
+        Every pose reached first, then fewer missed poses, then a worst
+        singularity margin >= 1 (no pose near-singular), then the larger worst
+        dexterity, then the larger worst margin.
+        """
+        dexterity = _or_inf(-self.min_dexterity)
+        margin = _or_inf(-self.min_singularity_margin)
+        clear = self.min_singularity_margin >= 1.0
+        return (not self.all_reachable, self.missed, not clear, dexterity, margin)
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready: the fields by name, NaN as None."""
+        return {
+            "x": self.x,
+            "y": self.y,
+            "z": self.z,
+            "yaw": self.yaw,
+            "all_reachable": self.all_reachable,
+            "missed": self.missed,
+            "min_dexterity": None
+            if math.isnan(self.min_dexterity)
+            else self.min_dexterity,
+            "min_singularity_margin": (
+                None
+                if math.isnan(self.min_singularity_margin)
+                else self.min_singularity_margin
+            ),
+            "branch": self.branch,
+        }
+
+
+def _or_inf(value: float) -> float:
+    return math.inf if math.isnan(value) else value
+
+
+def base_transform(x: float, y: float, z: float, yaw: float) -> FloatArray:
+    """(4, 4) ``Trans(x, y, z) · Rz(yaw)`` [m, rad]: a base pose in the world frame."""
+    out = np.eye(4)
+    c, s = math.cos(yaw), math.sin(yaw)
+    out[:2, :2] = [[c, -s], [s, c]]
+    out[:3, 3] = x, y, z
+    return out
+
+
+def check_path_branch(
+    q: FloatArray, lower: FloatArray, upper: FloatArray
+) -> FloatArray | None:
+    """One branch's joint path, made continuous and put within the limits.
+
+    Args:
+        q: (K, 6) configurations [rad] of one branch at the K samples of a
+            path (any 2π representatives).
+        lower: (6,) lower joint limits [rad].
+        upper: (6,) upper joint limits [rad].
+
+    Returns:
+        (K, 6): each joint unwrapped (consecutive samples differ by their
+        difference wrapped to [−π, π)) and shifted by the multiple of 2π that
+        puts it within the limits; None if a step exceeds
+        :data:`PATH_STEP_MAX` (a flip or a jump) or no shift fits a joint.
+    """
+    steps = np.remainder(np.diff(q, axis=0) + math.pi, 2.0 * math.pi) - math.pi
+    if steps.size and np.max(np.abs(steps)) > PATH_STEP_MAX:
+        return None
+    zero = np.zeros((1, q.shape[1]))
+    path = q[:1] + np.concatenate([zero, np.cumsum(steps, axis=0)])
+    low, high = path.min(axis=0), path.max(axis=0)
+    bounded = np.isfinite(lower) & np.isfinite(upper)
+    turns = np.where(bounded, np.ceil((lower - low) / (2.0 * math.pi)), 0.0)
+    if np.any(bounded & (high + 2.0 * math.pi * turns > upper)):
+        return None
+    return path + 2.0 * math.pi * turns
+
+
+class PlacementEvaluator:
+    """Exact :class:`Placement` of candidate base poses for one task.
+
+    Args:
+        robot: An OPW or UR-type arm.
+        task: (N, 4, 4) task poses of the tool frame in the world frame [m].
+        scene: Obstacles in the world frame, or None (no collision check).
+        ordered: The task is a path (one branch must follow it).
+
+    Raises:
+        UnsupportedRobotError: If the robot has no closed form.
+    """
+
+    def __init__(
+        self, robot: Robot, task: FloatArray, scene: Scene | None, ordered: bool
+    ):
+        self.robot = robot
+        self.solver = get_closed_form(robot)
+        self.constant = abs(get_factorisation(robot).constant)
+        self.task = np.asarray(task, dtype=np.float64)
+        self.scene = scene
+        self.ordered = ordered
+        self.lower = np.asarray(robot.lower, dtype=np.float64)
+        self.upper = np.asarray(robot.upper, dtype=np.float64)
+
+    def evaluate(self, rows: npt.ArrayLike) -> list[Placement]:
+        """Exact placements of candidate rows ``x, y, z, yaw`` (C, 4) [m, rad]."""
+        rows = np.asarray(rows, dtype=np.float64).reshape(-1, 4)
+        count, n = len(rows), len(self.task)
+        inverse = np.linalg.inv(np.array([base_transform(*r) for r in rows]))
+        targets = np.einsum("cij,njk->cnik", inverse, self.task).reshape(-1, 4, 4)
+        q, valid = self.solver.solve_batch(targets)
+        q, _, within = limit_representatives(q, self.lower, self.upper)
+        within &= valid
+        dexterity = np.full(valid.shape, np.nan)
+        margin = np.full(valid.shape, np.nan)
+        if valid.any():
+            c = compute_conditions(self.robot, q[valid])
+            dexterity[valid] = self.constant * np.abs(c.shoulder * c.elbow * c.wrist)
+            margin[valid] = singularity_margin(c.shoulder, c.elbow, c.wrist)
+        shape = (count, n, q.shape[1])
+        q = q.reshape(*shape, 6)
+        valid, within = valid.reshape(shape), within.reshape(shape)
+        dexterity, margin = dexterity.reshape(shape), margin.reshape(shape)
+        return [
+            self._placement(rows[i], q[i], valid[i], within[i], dexterity[i], margin[i])
+            for i in range(count)
+        ]
+
+    def _placement(
+        self,
+        row: FloatArray,
+        q: FloatArray,
+        valid: BoolArray,
+        within: BoolArray,
+        dexterity: FloatArray,
+        margin: FloatArray,
+    ) -> Placement:
+        checker = self._checker(row)
+        usable = within if checker is None else _collision_free(checker, q, within)
+        everywhere: BoolArray = (
+            self._path_branches(q, valid, checker)
+            if self.ordered
+            else np.all(usable, axis=0)
+        )
+        reached = usable.any(axis=1)
+        missed = int(np.count_nonzero(~reached))
+        best = np.argmax(np.where(usable, dexterity, -np.inf), axis=1)
+        index = np.arange(len(best))
+        min_dexterity = min_margin = math.nan
+        if reached.any():
+            min_dexterity = float(np.min(dexterity[index, best][reached]))
+            min_margin = float(np.min(margin[index, best][reached]))
+        branch = None
+        if everywhere.any():
+            worst = np.where(everywhere, np.min(dexterity, axis=0), -np.inf)
+            b = int(np.argmax(worst))
+            branch = self.solver.branches[b]
+            if self.ordered:
+                min_dexterity = float(np.min(dexterity[:, b]))
+                min_margin = float(np.min(margin[:, b]))
+        all_reachable = missed == 0 and (branch is not None or not self.ordered)
+        return Placement(
+            x=float(row[0]),
+            y=float(row[1]),
+            z=float(row[2]),
+            yaw=float(row[3]),
+            all_reachable=bool(all_reachable),
+            missed=missed,
+            min_dexterity=min_dexterity,
+            min_singularity_margin=min_margin,
+            branch=branch,
+        )
+
+    def _path_branches(
+        self, q: FloatArray, valid: BoolArray, checker: CollisionChecker | None
+    ) -> BoolArray:
+        """(8,) the branches that follow the whole path (collision-free too)."""
+        follows = np.zeros(q.shape[1], dtype=bool)
+        for b in range(q.shape[1]):
+            if not valid[:, b].all():
+                continue
+            path = check_path_branch(q[:, b], self.lower, self.upper)
+            if path is None:
+                continue
+            follows[b] = checker is None or all(
+                _touches_nothing(checker, x) for x in path
+            )
+        return follows
+
+    def _checker(self, row: FloatArray) -> CollisionChecker | None:
+        """A checker with the scene in the candidate's base frame; None without."""
+        if self.scene is None:
+            return None
+        world_to_base = pin.SE3(np.linalg.inv(base_transform(*row)))
+        obstacles = tuple(
+            replace(o, placement=world_to_base * o.placement)
+            for o in self.scene.obstacles
+        )
+        return CollisionChecker(self.robot, replace(self.scene, obstacles=obstacles))
+
+
+def _touches_nothing(checker: CollisionChecker, q: FloatArray) -> bool:
+    distances = checker.compute_raw_distances(np.ascontiguousarray(q))
+    return bool(distances.size == 0 or np.min(distances) > 0.0)
+
+
+def _collision_free(
+    checker: CollisionChecker, q: FloatArray, within: BoolArray
+) -> BoolArray:
+    """(N, 8): the in-limit branches whose configuration touches nothing."""
+    free = within.copy()
+    for pose, branch in zip(*np.nonzero(within), strict=True):
+        free[pose, branch] = _touches_nothing(checker, q[pose, branch])
+    return free
+
+
+__all__ = [
+    "PATH_STEP_MAX",
+    "Placement",
+    "PlacementEvaluator",
+    "base_transform",
+    "check_path_branch",
+]

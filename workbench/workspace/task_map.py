@@ -1,0 +1,117 @@
+"""A workspace map held in memory, over the heights a task needs.
+
+:func:`~workbench.workspace.placement.place_base` screens its candidates
+against a workspace map; without one it builds this one: the arm's reach in
+x and y, only the slab of base-frame heights the task poses lie at (the
+base height is fixed, so a task pose keeps its height in the base frame
+whatever the candidate), computed with
+:func:`~workbench.workspace.measures.evaluate_block`, block by block, on a
+thread per core (the closed-form kernels release the GIL).
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from workbench.model.robot import Robot
+from workbench.workspace.grid import PoseGrid, default_bounds, make_pose_grid
+from workbench.workspace.measures import evaluate_block
+
+#: Voxel edge [m] of the map :func:`build_task_map` builds by default.
+TASK_MAP_RESOLUTION = 0.05
+#: Orientations per voxel of that map (a uniform set).
+TASK_MAP_ORIENTATIONS = 512
+#: The per-pose arrays the placement reads.
+TASK_MAP_KEYS = ("branches", "dexterity", "shoulder", "elbow", "wrist")
+#: Voxels per block of :func:`build_task_map`.
+_BLOCK_VOXELS = 256
+
+
+@dataclass(frozen=True)
+class TaskMap:
+    """A workspace map held in memory (:func:`build_task_map`).
+
+    Attributes:
+        grid: Its pose grid (base frame).
+        arrays: The per-pose arrays :data:`TASK_MAP_KEYS` of
+            :func:`~workbench.workspace.measures.evaluate_block`, each (V, O).
+    """
+
+    grid: PoseGrid
+    arrays: dict[str, npt.NDArray[Any]]
+
+    def __getitem__(self, name: str) -> npt.NDArray[Any]:
+        """The array called ``name``, shape (V, O)."""
+        return self.arrays[name]
+
+
+def get_thread_count() -> int:
+    """The cores this process may run on (at least 1)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def build_task_map(
+    robot: Robot,
+    heights: npt.ArrayLike,
+    *,
+    resolution: float = TASK_MAP_RESOLUTION,
+    orientations: int = TASK_MAP_ORIENTATIONS,
+) -> TaskMap:
+    """The map of ``robot`` over the slab of base-frame heights a task needs.
+
+    Args:
+        robot: An arm with a closed form.
+        heights: (N,) heights of the task poses in the base frame [m] (their
+            world z minus the base height).
+        resolution: Voxel edge [m], > 0.
+        orientations: Orientations per voxel (uniform set), >= 1.
+
+    Returns:
+        The map over the arm's reach in x and y
+        (:func:`~workbench.workspace.grid.default_bounds`) and, in z, from the
+        lowest to the highest of ``heights`` within that reach (one layer at
+        its top when none is within: every pose is then missed).
+
+    Raises:
+        UnsupportedRobotError: If the robot has no closed form.
+        InputError: On a bad resolution or orientation count.
+    """
+    z = np.asarray(heights, dtype=np.float64).reshape(-1)
+    box = default_bounds(robot)
+    low = max(float(z.min()), float(box[0, 2]))
+    high = min(float(z.max()), float(box[1, 2]))
+    if low > high:
+        low = high = float(box[1, 2])
+    box[:, 2] = low, high
+    grid = make_pose_grid(
+        robot, resolution=resolution, orientations=orientations, bounds=box
+    )
+
+    def block(start: int) -> dict[str, npt.NDArray[Any]]:
+        stop = min(start + _BLOCK_VOXELS, grid.voxel_count)
+        return evaluate_block(robot, grid, start, stop)
+
+    starts = range(0, grid.voxel_count, _BLOCK_VOXELS)
+    with ThreadPoolExecutor(get_thread_count()) as pool:
+        blocks = list(pool.map(block, starts))
+    arrays = {k: np.concatenate([b[k] for b in blocks]) for k in TASK_MAP_KEYS}
+    return TaskMap(grid, arrays)
+
+
+__all__ = [
+    "TASK_MAP_KEYS",
+    "TASK_MAP_ORIENTATIONS",
+    "TASK_MAP_RESOLUTION",
+    "TaskMap",
+    "build_task_map",
+    "get_thread_count",
+]
