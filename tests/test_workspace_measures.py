@@ -15,7 +15,7 @@ from workbench import Robot, load_robot
 from workbench.collision import CollisionChecker
 from workbench.collision.scene import Obstacle, Scene
 from workbench.collision.scene_file import read_scene, write_scene
-from workbench.errors import InputError
+from workbench.errors import DimensionError, InputError
 from workbench.ik import (
     UnreachableError,
     UnsupportedRobotError,
@@ -308,6 +308,10 @@ def test_bad_requests() -> None:
             evaluate_block(robot, grid, start, stop)
     with pytest.raises(InputError, match="integer"):
         evaluate_block(robot, grid, 0.0, 3)  # type: ignore[arg-type]
+    solver = get_closed_form(robot)
+    poses = np.tile(np.eye(4), (3, 1, 1))
+    with pytest.raises(DimensionError, match="valid"):
+        solver.solve_batch_into(poses, np.empty((3, 8, 6)), np.empty((2, 8), bool))
     panda = load_robot("panda")
     with pytest.raises(UnsupportedRobotError):
         evaluate_block(

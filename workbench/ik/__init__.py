@@ -3,10 +3,12 @@
 Public entry points (see docs/interface.md): ``analytic``, ``analytic_batch``,
 ``numeric``, ``numeric_batch``, each robot's ``ClosedFormSolver``
 (``get_closed_form``), plus the damped-least-squares tools and the compiled
-chain's batch of tool Jacobians (``compute_jacobians_local``).
+chain's batch of tool Jacobians (``compute_jacobians_local``) and of tool
+poses with their manipulability (``compute_tool_poses``).
 """
 
 from workbench.ik.batch_jacobians import compute_jacobians_local
+from workbench.ik.batch_poses import compute_tool_poses
 from workbench.ik.closed_form import (
     BRANCHES,
     UR_BRANCHES,
@@ -55,6 +57,7 @@ __all__ = [
     "analytic",
     "analytic_batch",
     "compute_jacobians_local",
+    "compute_tool_poses",
     "dls_inverse",
     "dls_step",
     "get_branches",

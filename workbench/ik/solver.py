@@ -42,7 +42,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from workbench.errors import InputError
+from workbench.errors import DimensionError, InputError
 from workbench.ik import _puma_kernel as opw_kernel
 from workbench.ik import _ur_kernel as ur_kernel
 from workbench.ik._atan2_kernel import atan2_into
@@ -257,10 +257,36 @@ class ClosedFormSolver:
     # -- many poses -----------------------------------------------------------
     def solve_batch(self, targets: npt.ArrayLike) -> tuple[FloatArray, BoolArray]:
         """Every branch of N poses: see :func:`workbench.ik.analytic_batch`."""
-        kernel, geometry = self._kernel, self.geometry
         poses = as_targets(targets)
         count = len(poses)
         q, valid = np.empty((count, 8, 6)), np.empty((count, 8), dtype=bool)
+        self.solve_batch_into(poses, q, valid)
+        return q, valid
+
+    def solve_batch_into(
+        self, poses: FloatArray, q: FloatArray, valid: BoolArray
+    ) -> None:
+        """:meth:`solve_batch` into given arrays (no allocation of the results).
+
+        Args:
+            poses: (N, 4, 4) float64 C-contiguous poses of the tool frame in
+                the base frame [m]; each is checked finite and rigid.
+            q: (N, 8, 6) float64 output [rad], as :meth:`solve_batch`'s.
+            valid: (N, 8) bool output.
+
+        Raises:
+            DimensionError: If the shapes do not match.
+            NonFiniteError, InputError: As :func:`workbench.ik.analytic_batch`.
+        """
+        count = len(poses)
+        for name, array, shape in (
+            ("poses", poses, (count, 4, 4)),
+            ("q", q, (count, 8, 6)),
+            ("valid", valid, (count, 8)),
+        ):
+            if array.shape != shape:
+                raise DimensionError(name, shape, array.shape)
+        kernel, geometry = self._kernel, self.geometry
         size = min(count, BATCH_CHUNK)
         y, x, angles = np.empty((3, size, kernel.N_ANGLES))
         status = np.empty(size, dtype=np.int8)
@@ -285,7 +311,6 @@ class ClosedFormSolver:
             )  # fmt: skip
         if self._refine is not None:
             refine_batch(self._refine, poses, q, valid)
-        return q, valid
 
 
 def _family(robot: Robot) -> tuple[str, types.ModuleType, np.ndarray]:

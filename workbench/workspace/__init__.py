@@ -20,17 +20,20 @@ from workbench.workspace.measures import (
     evaluate_block,
     singularity_margin,
 )
+from workbench.workspace.sampled import accumulate, sample_block
 
 __all__ = [
     "POSE_KEYS",
     "VOXEL_KEYS",
     "JointSpaceMap",
     "PoseGrid",
+    "accumulate",
     "compute_joint_space_map",
     "cone_orientations",
     "default_bounds",
     "evaluate_block",
     "make_pose_grid",
+    "sample_block",
     "singularity_margin",
     "uniform_orientations",
 ]

@@ -10,6 +10,7 @@ the arm's reach (:func:`default_bounds`).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -17,6 +18,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
+from scipy.spatial import cKDTree
 
 from workbench.errors import InputError
 from workbench.model.robot import Robot
@@ -36,8 +38,6 @@ DEFAULT_RESOLUTION = 0.05
 DEFAULT_ORIENTATIONS = 512
 #: |axis_z| within this of 1: the first joint's axis is parallel to the base z axis.
 _VERTICAL_TOL = 1e-12
-#: Queries compared with all orientations at once in :meth:`PoseGrid.orientation_index`.
-_QUERY_CHUNK = 4096
 
 
 def _read_only(array: npt.ArrayLike) -> Any:
@@ -118,7 +118,8 @@ class PoseGrid:
             quat_xyzw: (N, 4) quaternions x y z w (either sign; normalised here).
 
         Returns:
-            (N,) int64: argmax over the set of ``|q · orientation|``.
+            (N,) int64: argmax over the set of ``|q · orientation|`` (found
+            as the nearest of ± the set in R⁴, by a KD-tree).
 
         Raises:
             DimensionError, NonFiniteError: If not finite (N, 4).
@@ -129,12 +130,13 @@ class PoseGrid:
         norm = np.linalg.norm(q, axis=1)
         if np.any(norm == 0.0):
             raise InputError("quat_xyzw: a quaternion is zero")
-        q = q / norm[:, None]
-        out = np.empty(len(q), dtype=np.int64)
-        for start in range(0, len(q), _QUERY_CHUNK):
-            dots = np.abs(q[start : start + _QUERY_CHUNK] @ self.orientations.T)
-            out[start : start + _QUERY_CHUNK] = np.argmax(dots, axis=1)
-        return out
+        _, index = self._orientation_tree.query(q / norm[:, None])
+        return np.asarray(index, dtype=np.int64) % self.orientation_count
+
+    @functools.cached_property
+    def _orientation_tree(self) -> cKDTree:
+        """KD-tree of ± the orientations (nearest by chord = nearest by angle)."""
+        return cKDTree(np.concatenate([self.orientations, -self.orientations]))
 
     def pose(self, voxel: int, orientation: int) -> FloatArray:
         """(4, 4) pose of the tool frame in the base frame [m] of grid pose ``(v, o)``.

@@ -34,9 +34,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from workbench.errors import InputError
-from workbench.ik import get_closed_form
-from workbench.ik._atan2_kernel import atan2_into
-from workbench.ik.solver import ClosedFormSolver
+from workbench.ik import ClosedFormSolver, get_closed_form
 from workbench.model.per_robot import per_robot
 from workbench.model.robot import Robot
 from workbench.singularities.conditions import (
@@ -131,7 +129,6 @@ def _evaluate_compiled(
 ) -> dict[str, np.ndarray]:
     """:func:`evaluate_block` through the compiled kernels (no scene)."""
     factors, joints = _constants(robot)
-    family, geometry = solver._kernel, solver.geometry
     positions = np.ascontiguousarray(grid.positions[start:stop])
     rotations = np.ascontiguousarray(grid.rotations)
     count, orientations = stop - start, grid.orientation_count
@@ -141,22 +138,11 @@ def _evaluate_compiled(
     dexterity = np.empty((2, total))
     size = min(total, CHUNK_POSES)
     poses = np.empty((size, 4, 4))
-    y, x, angles = np.empty((3, size, family.N_ANGLES))
-    status = np.empty(size, dtype=np.int8)
-    exact = np.empty(size, dtype=np.int64)
-    odd = np.empty(size, dtype=np.uint8)
     q, valid = np.empty((size, 8, 6)), np.empty((size, 8), dtype=bool)
     for first in range(0, total, CHUNK_POSES):
         n = min(CHUNK_POSES, total - first)
         kernel.fill_poses(positions, rotations, first, poses[:n])
-        codes = status[:n], exact[:n], odd[:n]
-        flat = poses[:n].reshape(-1), y[:n].reshape(-1), x[:n].reshape(-1)
-        if family.batch_arguments(geometry, *flat, *codes, False):
-            family.batch_fallback(geometry, poses[:n], y[:n], x[:n], *codes)
-        atan2_into(flat[1], flat[2], angles[:n].reshape(-1))
-        family.batch_assemble(
-            geometry, angles[:n], y[:n], status[:n], exact[:n], q[:n], valid[:n]
-        )
+        solver.solve_batch_into(poses[:n], q[:n], valid[:n])
         kernel.measure_poses(
             factors, joints, q[:n], valid[:n], first, counts, measures, dexterity
         )
@@ -184,11 +170,12 @@ def evaluate_block(
 ) -> dict[str, np.ndarray]:
     """Measures of every pose of voxels ``start:stop`` × all orientations.
 
-    Through the compiled kernels (:mod:`workbench.workspace._measure_kernel`);
-    with a ``checker``, or for a robot whose closed-form branches the solver
-    refines on the model (a URDF that is of the family only up to an error),
-    through the NumPy definition (:mod:`workbench.workspace._reference`),
-    much slower.
+    Through the compiled kernels (:mod:`workbench.workspace._measure_kernel`
+    after :meth:`ClosedFormSolver.solve_batch_into`, which also refines the
+    branches of a URDF that is of its family only up to an error); with a
+    ``checker``, through the NumPy definition
+    (:mod:`workbench.workspace._reference`), one collision query per in-limit
+    branch, much slower.
 
     Args:
         robot: An arm with a closed form (OPW or UR type).
@@ -207,7 +194,7 @@ def evaluate_block(
     """
     start, stop = _check_range(grid, start, stop)
     solver = get_closed_form(robot)  # raises UnsupportedRobotError
-    if checker is None and solver._refine is None:
+    if checker is None:
         return _evaluate_compiled(robot, solver, grid, start, stop)
     return evaluate_block_reference(robot, grid, start, stop, checker=checker)
 

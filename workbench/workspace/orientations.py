@@ -77,6 +77,55 @@ def rotations_from_quat_xyzw(quat_xyzw: FloatArray) -> FloatArray:
     return out
 
 
+def quat_xyzw_from_rotations(rotations: FloatArray) -> FloatArray:
+    """Unit quaternions x y z w (w >= 0) of rotation matrices, vectorised.
+
+    Shepperd's method: from the largest of the four squared components, so
+    accurate for every rotation (half turns too).
+
+    Args:
+        rotations: Shape (N, 3, 3) rotations (not checked).
+
+    Returns:
+        Shape (N, 4).
+    """
+    r = np.asarray(rotations, dtype=np.float64)
+    m00, m11, m22 = r[:, 0, 0], r[:, 1, 1], r[:, 2, 2]
+    squares = np.stack(
+        [
+            1 + m00 - m11 - m22,
+            1 - m00 + m11 - m22,
+            1 - m00 - m11 + m22,
+            1 + m00 + m11 + m22,
+        ],
+        axis=-1,
+    )  # 4 x², 4 y², 4 z², 4 w²
+    pick = np.argmax(squares, axis=1)
+    big = 0.5 * np.sqrt(np.take_along_axis(squares, pick[:, None], axis=1)[:, 0])
+    quarter = 0.25 / big
+    zy, xz, yx = (
+        r[:, 2, 1] - r[:, 1, 2],
+        r[:, 0, 2] - r[:, 2, 0],
+        r[:, 1, 0] - r[:, 0, 1],
+    )
+    yz, zx, xy = (
+        r[:, 2, 1] + r[:, 1, 2],
+        r[:, 0, 2] + r[:, 2, 0],
+        r[:, 1, 0] + r[:, 0, 1],
+    )
+    candidates = np.stack(
+        [
+            np.stack([big, xy * quarter, zx * quarter, zy * quarter], axis=-1),
+            np.stack([xy * quarter, big, yz * quarter, xz * quarter], axis=-1),
+            np.stack([zx * quarter, yz * quarter, big, yx * quarter], axis=-1),
+            np.stack([zy * quarter, xz * quarter, yx * quarter, big], axis=-1),
+        ],
+        axis=1,
+    )
+    quat = candidates[np.arange(len(r)), pick]
+    return np.where(quat[:, 3:4] < 0.0, -quat, quat)
+
+
 def quat_multiply_xyzw(a: FloatArray, b: FloatArray) -> FloatArray:
     """Hamilton product ``a ⊗ b`` of quaternions x y z w, shapes broadcast (..., 4)."""
     ax, ay, az, aw = np.moveaxis(np.asarray(a, dtype=np.float64), -1, 0)
@@ -350,6 +399,7 @@ __all__ = [
     "SUPER_FIBONACCI_PSI",
     "cone_orientations",
     "quat_multiply_xyzw",
+    "quat_xyzw_from_rotations",
     "rotation_angle_between",
     "rotations_from_quat_xyzw",
     "uniform_orientations",
