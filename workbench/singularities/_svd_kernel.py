@@ -15,8 +15,14 @@ configuration on a singular locus comes out at rounding level, not at
 The squared norms of the two columns of a pair are updated with the rotation
 (:math:`\alpha' = \alpha - t\gamma`, :math:`\beta' = \beta + t\gamma`) and
 computed afresh at the start of every sweep, so a sweep costs one dot
-product per pair besides the rotations. Only :func:`singular_values` is an
-entry point.
+product per pair besides the rotations.
+
+:data:`LANES` matrices go through the sweeps side by side (the innermost
+loops run over them, so that the compiler can use vector instructions), until
+all of them have converged. A matrix that has converged goes on with
+rotations by the angle 0 (cos 1, sin 0: its columns unchanged, exactly), so
+each matrix gets the bits it would get alone, whatever the batch around it.
+Only :func:`singular_values` is an entry point.
 """
 
 from __future__ import annotations
@@ -38,43 +44,58 @@ ORTHOGONALITY = 2.0**-51
 #: Sweeps over every pair after which the iteration stops in any case (a 6 × 6
 #: Jacobian converges in 6–9; the cap only bounds a matrix holding NaN).
 MAX_SWEEPS = 30
+#: Matrices swept side by side.
+LANES = 8
 
 _ORTHOGONALITY2 = ORTHOGONALITY**2  # the test squared: no square root per pair
 
 
-@helper()
-def _sweep(a: FloatArray, norms: FloatArray, k: int, m: int) -> bool:
-    """One sweep of rotations over the pairs of the first ``k`` columns of ``a``.
+@helper(forceinline=True)
+def _rotate_pair(a, norms, gamma, cos, sin, p, q, m) -> int:
+    """Rotate columns p and q of every lane of ``a`` (k, m, LANES) to orthogonal.
 
-    ``a`` (k, m): column c is the row ``a[c]``; ``norms`` (k,) gets their
-    squared norms. Returns whether any pair was rotated.
+    ``norms`` (k, LANES): squared column norms, updated; ``gamma``, ``cos``,
+    ``sin`` (LANES,): scratch. Returns how many lanes were rotated (by a
+    nonzero angle).
     """
+    for lane in range(LANES):
+        gamma[lane] = 0.0
+    for i in range(m):
+        for lane in range(LANES):
+            gamma[lane] += a[p, i, lane] * a[q, i, lane]
+    rotated = 0
+    for lane in range(LANES):
+        alpha, beta, g = norms[p, lane], norms[q, lane], gamma[lane]
+        rotate = g * g > _ORTHOGONALITY2 * (alpha * beta)  # False for NaN
+        zeta = (beta - alpha) / (2.0 * (g if rotate else 1.0))
+        t = 1.0 / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
+        t = (t if zeta >= 0.0 else -t) if rotate else 0.0
+        c = 1.0 / math.sqrt(1.0 + t * t)
+        cos[lane], sin[lane] = c, c * t
+        norms[p, lane] = alpha - t * g
+        norms[q, lane] = beta + t * g
+        rotated += 1 if rotate else 0
+    for i in range(m):
+        for lane in range(LANES):
+            x, y = a[p, i, lane], a[q, i, lane]
+            a[p, i, lane] = cos[lane] * x - sin[lane] * y
+            a[q, i, lane] = sin[lane] * x + cos[lane] * y
+    return rotated
+
+
+@helper(forceinline=True)
+def _sweep(a, norms, gamma, cos, sin, k, m) -> int:
+    """One sweep over the pairs of the first ``k`` columns; lanes rotated, summed."""
     for c in range(k):
-        s = 0.0
+        for lane in range(LANES):
+            norms[c, lane] = 0.0
         for i in range(m):
-            s += a[c, i] * a[c, i]
-        norms[c] = s
-    rotated = False
+            for lane in range(LANES):
+                norms[c, lane] += a[c, i, lane] * a[c, i, lane]
+    rotated = 0
     for p in range(k - 1):
         for q in range(p + 1, k):
-            gamma = 0.0
-            for i in range(m):
-                gamma += a[p, i] * a[q, i]
-            alpha, beta = norms[p], norms[q]
-            if not gamma * gamma > _ORTHOGONALITY2 * (alpha * beta):
-                continue  # orthogonal to working precision (or NaN: stop)
-            rotated = True
-            zeta = (beta - alpha) / (2.0 * gamma)
-            t = 1.0 / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
-            t = t if zeta >= 0.0 else -t
-            cos = 1.0 / math.sqrt(1.0 + t * t)
-            sin = cos * t
-            for i in range(m):
-                x, y = a[p, i], a[q, i]
-                a[p, i] = cos * x - sin * y
-                a[q, i] = sin * x + cos * y
-            norms[p] = alpha - t * gamma
-            norms[q] = beta + t * gamma
+            rotated += _rotate_pair(a, norms, gamma, cos, sin, p, q, m)
     return rotated
 
 
@@ -86,25 +107,31 @@ def singular_values(jacobians: FloatArray, out: FloatArray) -> None:
         jacobians: (N, 6, n) matrices [mixed units].
         out: (N, min(6, n)) output, written.
     """
-    n = jacobians.shape[2]
+    count, n = jacobians.shape[0], jacobians.shape[2]
     k, m = min(6, n), max(6, n)
-    a, norms = np.empty((k, m)), np.empty(k)
-    for b in range(jacobians.shape[0]):
-        jac = jacobians[b]
-        for c in range(k):  # columns of J (n <= 6) or of J^T (rows of J)
-            for i in range(m):
-                a[c, i] = jac[i, c] if n <= 6 else jac[c, i]
+    a, norms = np.empty((k, m, LANES)), np.empty((k, LANES))
+    gamma, cos, sin = np.empty(LANES), np.empty(LANES), np.empty(LANES)
+    for first in range(0, count, LANES):
+        for lane in range(LANES):  # columns of J (n <= 6) or of J^T; zeros past N
+            b = first + lane
+            for c in range(k):
+                for i in range(m):
+                    value = 0.0
+                    if b < count:
+                        value = jacobians[b, i, c] if n <= 6 else jacobians[b, c, i]
+                    a[c, i, lane] = value
         for _ in range(MAX_SWEEPS):
-            if not _sweep(a, norms, k, m):
+            if _sweep(a, norms, gamma, cos, sin, k, m) == 0:
                 break
-        row = out[b]
-        for c in range(k):  # norms of the columns, by insertion into the row
-            s = 0.0
-            for i in range(m):
-                s += a[c, i] * a[c, i]
-            value = math.sqrt(s)
-            j = c
-            while j > 0 and row[j - 1] < value:
-                row[j] = row[j - 1]
-                j -= 1
-            row[j] = value
+        for lane in range(min(LANES, count - first)):
+            row = out[first + lane]
+            for c in range(k):  # norms of the columns, by insertion into the row
+                s = 0.0
+                for i in range(m):
+                    s += a[c, i, lane] * a[c, i, lane]
+                value = math.sqrt(s)
+                j = c
+                while j > 0 and row[j - 1] < value:
+                    row[j] = row[j - 1]
+                    j -= 1
+                row[j] = value
