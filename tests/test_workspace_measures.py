@@ -11,6 +11,7 @@ import pinocchio as pin
 import pytest
 from conftest import random_configurations
 
+from benchmarks.bench_ik_agreement import rounded_urdf
 from workbench import Robot, load_robot
 from workbench.collision import CollisionChecker
 from workbench.collision.scene import Obstacle, Scene
@@ -22,6 +23,7 @@ from workbench.ik import (
     analytic,
     get_closed_form,
 )
+from workbench.ik._refine_kernel import refinement_chain
 from workbench.singularities.conditions import (
     ELBOW_TOL,
     SHOULDER_TOL,
@@ -317,3 +319,15 @@ def test_bad_requests() -> None:
         evaluate_block(
             panda, make_pose_grid(panda, resolution=0.3, orientations=2), 0, 2
         )
+
+
+@pytest.mark.parametrize(("name", "zeros"), [("kuka-kr6-r700", False), ("ur5", True)])
+def test_near_model_urdf_is_refined_and_equals_the_reference(
+    name: str, zeros: bool, tmp_path: Path
+) -> None:
+    robot = rounded_urdf(name, tmp_path, zeros=zeros)
+    assert refinement_chain(robot) is not None  # the solver refines its branches
+    grid = make_pose_grid(robot, resolution=0.2, orientations=16)
+    fast = evaluate_block(robot, grid, 0, grid.voxel_count)
+    _compare(fast, evaluate_block_reference(robot, grid, 0, grid.voxel_count))
+    assert np.nanmax(fast["reachability"]) > 0.5
