@@ -272,17 +272,27 @@ def bench_joint(robot: Robot, count: int) -> dict[int, tuple[Any, float]]:
 # --- peers ------------------------------------------------------------------------
 
 
+def _import_peer(*names: str) -> list[Any] | str:
+    """The modules of a peer, or why they do not import."""
+    try:
+        return [importlib.import_module(name) for name in names]
+    except ImportError as err:
+        return f"not importable ({err})"
+
+
 def _our_reachable_voxels(map_path: Path) -> np.ndarray:
     return np.asarray(open_map(map_path)["reachability"]) > 0
 
 
 def bench_skrobot(robot: Robot, grid: Any, map_path: Path, samples: int) -> Any:
-    try:
-        urdf = importlib.import_module("skrobot.models.urdf")
-        coords = importlib.import_module("skrobot.coordinates")
-        rmap_module = importlib.import_module("skrobot.kinematics.reachability_map")
-    except ImportError as err:
-        return f"not importable ({err})"
+    modules = _import_peer(
+        "skrobot.models.urdf",
+        "skrobot.coordinates",
+        "skrobot.kinematics.reachability_map",
+    )
+    if isinstance(modules, str):
+        return modules
+    urdf, coords, rmap_module = modules
     model = urdf.RobotModelFromURDF(urdf_file=str(robot.urdf_path))
     links = [j.child_link for j in model.joint_list if j.name in robot.joint_names]
     tool = coords.CascadedCoords(parent=getattr(model, robot.tool_frame), name="tool")
@@ -382,12 +392,12 @@ def bench_rm4d(
 def bench_compas_fab(robot: Robot, grid: Any, map_path: Path, count: int) -> Any:
     if robot.name != "ur5":
         return "its analytic solvers are for UR, ABB IRB4600, Stäubli arms: ur5 only"
-    try:
-        compas_geometry = importlib.import_module("compas.geometry")
-        robots = importlib.import_module("compas_fab.robots")
-        backends = importlib.import_module("compas_fab.backends")
-    except ImportError as err:
-        return f"not importable ({err})"
+    modules = _import_peer(
+        "compas.geometry", "compas_fab.robots", "compas_fab.backends"
+    )
+    if isinstance(modules, str):
+        return modules
+    compas_geometry, robots, backends = modules
     cell, state = robots.RobotCellLibrary.ur5(load_geometry=False)
     solver = backends.UR5Kinematics()
     planner = backends.AnalyticalKinematicsPlanner(solver)
