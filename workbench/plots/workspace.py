@@ -279,7 +279,7 @@ def plot_histograms(
     bins: int = 40,
     fig: Figure | None = None,
 ) -> Figure:
-    """Histogram of each field over the voxels that have a value.
+    """Histogram of each field over the voxels that have a value (log counts).
 
     Args:
         fields: One panel each; NaN values are left out, the x range is the
@@ -318,8 +318,9 @@ def plot_histograms(
             linewidth=0.4,
         )
         ax.set_xlim(field.vmin, field.vmax)
+        ax.set_yscale("log")  # a few bins (full reach, none singular) hold most
         ax.set_xlabel(field.label)
-        ax.set_ylabel("voxels")
+        ax.set_ylabel("voxels (log scale)")
         ax.set_title(f"{field.name} ({values.size} voxels)", fontsize=10)
     return _finish(fig, path)
 

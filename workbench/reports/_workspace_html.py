@@ -198,9 +198,9 @@ measures (a sampled map keeps the manipulability only).</p>"""
     means = ", ".join(f"{k} {_number(v)}" for k, v in by_kind.items())
     kinds = (
         f""" The other panels show, per voxel, the median over the reached
-orientations of the best branch's distance to each singularity: shoulder |s| [m]
-(the wrist centre's distance from the plane through the base axis parallel to the
-shoulder axis), elbow |e| and wrist |w| (sines, [1]); dark is near-singular. The
+orientations of the best branch's distance to each singularity, the analytic
+factors of det J (<code>workbench.singularities.conditions</code>): shoulder |s|
+[m], elbow |e| and wrist |w| [1]; dark is near-singular. The
 fractions of reached orientations below each tolerance, averaged over the
 reachable voxels, are {means}."""
         if by_kind

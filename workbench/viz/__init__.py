@@ -20,11 +20,14 @@ from workbench.viz.preview import write_trajectory_html
 from workbench.viz.singularity_gauge import SingularityGauge, get_singularity_color
 from workbench.viz.teach import TeachPanel
 from workbench.viz.viewer import Viewer
+from workbench.viz.workspace_view import make_workspace_viewer, write_workspace_view
 
 __all__ = [
     "SingularityGauge",
     "TeachPanel",
     "Viewer",
     "get_singularity_color",
+    "make_workspace_viewer",
     "write_trajectory_html",
+    "write_workspace_view",
 ]
