@@ -29,7 +29,10 @@ from workbench.workspace.orientations import (
 ATOL_EXACT = 1e-12
 #: Rotations checked against the covering radius in a test.
 CHECKED_ROTATIONS = 20_000
-ROBOTS = ("puma560", "puma560-kang", "ur5", "kuka-kr6-r700", "panda")
+ROBOTS = (
+    "puma560", "puma560-kang", "ur5", "kuka-kr6-r700", "abb-irb2400", "panda",
+    "generic6r",
+)  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -262,3 +265,15 @@ def test_bad_grid_input(puma_grid: PoseGrid) -> None:
         puma_grid.pose(0, puma_grid.orientation_count)
     with pytest.raises(InputError, match="voxel index"):
         puma_grid.pose(-1, 0)
+
+
+@pytest.mark.parametrize("name", ["puma560", "puma560-kang"])
+def test_puma_bounds_are_its_reach(name: str) -> None:
+    """The box is the PUMA's reach: √(D² + (a2 + L3)²) about the axis, ± (a2 + L3)."""
+    robot = load_robot(name)
+    joints = robot.dh_table.joints
+    offset = joints[1].d + joints[2].d
+    arm = abs(joints[1].a) + math.hypot(joints[2].a, joints[3].d)
+    radial = math.hypot(offset, arm)
+    expected = np.array([[-radial, -radial, -arm], [radial, radial, arm]])
+    np.testing.assert_allclose(default_bounds(robot), expected, rtol=0, atol=2e-9)

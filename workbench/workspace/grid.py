@@ -36,8 +36,11 @@ IndexArray = npt.NDArray[np.int64]
 DEFAULT_RESOLUTION = 0.05
 #: Default number of orientations per voxel.
 DEFAULT_ORIENTATIONS = 512
-#: |axis_z| within this of 1: the first joint's axis is parallel to the base z axis.
-_VERTICAL_TOL = 1e-12
+#: Widening [m] of :func:`default_bounds` for the rounding of the model's numbers.
+BOUNDS_SLACK = 1e-9
+#: |cos| within this of 1 (or |component| below it): axes taken as parallel
+#: (perpendicular) in :func:`default_bounds`.
+_AXIS_TOL = 1e-12
 
 
 def _read_only(array: npt.ArrayLike) -> Any:
@@ -166,18 +169,23 @@ def default_bounds(robot: Robot) -> FloatArray:
     """A box (2, 3) [m] in the base frame that holds every reachable tool position.
 
     From the model, for any serial arm, at the neutral configuration (whose
-    values do not matter: every joint turns through a full circle here). A
-    ball ``(c, r)`` holds the tool positions reachable by moving joints
-    ``k..n``: from the tool point (``r = 0``), each joint from the last to
-    the second turns the ball about its axis, which keeps it within the ball
-    centred on the projection ``c'`` of ``c`` onto the axis, of radius
-    ``r + |c − c'|`` (a prismatic joint adds its largest travel to ``r``).
-    The first joint turns that ball about its axis: when the axis is parallel
-    to the base z axis the box is ``axis ± (ρ + r)`` in x and y (``ρ`` the
-    ball centre's distance from the axis) and ``c_z ± r`` in z; otherwise the
-    cube of half-edge ``ρ + r`` around the centre's projection.
-    For the closed-form families this is the shoulder offset, the axis
-    height and the longest arm (tool point included), slightly widened.
+    values do not matter: every joint turns through a full circle here). The
+    tool positions reachable by moving joints ``k..n`` lie in a ball ``(c,
+    r)`` and within ``t`` of ``c`` along a direction ``u`` (a disc when ``t =
+    0``). From the tool point (``r = t = 0``), each joint from the last to the
+    second turns that set about its axis ``a``: it stays in the ball centred
+    on the projection ``c'`` of ``c`` onto the axis, of radius ``r + |c −
+    c'|``, and keeps its extent along ``a`` (``t`` if ``u`` is ``a``, else
+    ``r``), so ``u`` becomes ``a`` (a prismatic joint adds its largest travel
+    to ``r`` and ``t``). The first joint turns the set about its axis: when
+    that axis is the base z axis, the set's distance from it is at most
+    ``√((|d_u| + t)² + (|d_⊥| + r)²)`` for a horizontal ``u`` (``d`` the
+    horizontal offset of ``c`` from the axis, along ``u`` and across it),
+    else ``|d| + r``, and its height ``c_z ± r``; for another first axis the
+    box is the cube of half-edge ``|c − c'| + r`` around ``c'``. The box is
+    widened by :data:`BOUNDS_SLACK` for rounding. For the closed-form
+    families this is the shoulder offset, the axis height and the longest arm
+    (tool point included).
 
     Raises:
         InputError: If the tool frame has no joint on its path.
@@ -189,22 +197,59 @@ def default_bounds(robot: Robot) -> FloatArray:
     data = model.createData()
     pin.framesForwardKinematics(model, data, pin.neutral(model))
     centre = data.oMf[robot.tool_frame_id].translation.copy()
-    radius = 0.0
-    for j in reversed(path):
+    radius = thickness = 0.0
+    normal = np.zeros(3)  # u: no direction yet (t = r)
+    for j in reversed(path[1:]):
         point, axis = data.oMi[j].translation, _joint_axis(model, j, data.oMi[j])
         if axis is None:  # prismatic (or any other joint): its travel
             k = model.joints[j].idx_q
-            radius += float(max(abs(robot.lower[k]), abs(robot.upper[k])))
+            travel = float(max(abs(robot.lower[k]), abs(robot.upper[k])))
+            radius, thickness = radius + travel, thickness + travel
             continue
         foot = point + axis * float(np.dot(centre - point, axis))
-        rho = float(np.linalg.norm(centre - foot))
-        if j == path[0]:
-            if abs(abs(axis[2]) - 1.0) < _VERTICAL_TOL:
-                half = np.array([rho + radius, rho + radius, radius])
-                return np.stack([foot - half, foot + half])
-            return np.stack([foot - (rho + radius), foot + (rho + radius)])
-        centre, radius = foot, radius + rho
-    return np.stack([centre - radius, centre + radius])  # first joint prismatic
+        along = (
+            thickness
+            if abs(abs(float(np.dot(normal, axis))) - 1.0) < _AXIS_TOL
+            else radius
+        )
+        centre, radius = foot, radius + float(np.linalg.norm(centre - foot))
+        normal, thickness = axis, min(along, radius)
+    return _first_joint_box(robot, path[0], data, centre, radius, normal, thickness)
+
+
+def _first_joint_box(
+    robot: Robot,
+    joint: int,
+    data: pin.Data,
+    centre: FloatArray,
+    radius: float,
+    normal: FloatArray,
+    thickness: float,
+) -> FloatArray:
+    """The box of :func:`default_bounds` from the set of the joints after the first."""
+    model = robot.model
+    placement = data.oMi[joint]
+    axis = _joint_axis(model, joint, placement)
+    if axis is None:  # a prismatic first joint: its travel, any direction
+        k = model.joints[joint].idx_q
+        reach = radius + float(max(abs(robot.lower[k]), abs(robot.upper[k])))
+        low, high = centre - reach, centre + reach
+    else:
+        point = placement.translation
+        foot = point + axis * float(np.dot(centre - point, axis))
+        offset = centre - foot
+        rho = float(np.linalg.norm(offset))
+        if abs(abs(axis[2]) - 1.0) < _AXIS_TOL:
+            radial = rho + radius
+            if abs(normal[2]) < _AXIS_TOL and np.any(normal):
+                d_u = abs(float(np.dot(offset, normal)))
+                d_across = math.sqrt(max(rho * rho - d_u * d_u, 0.0))
+                radial = min(radial, math.hypot(d_u + thickness, d_across + radius))
+            extent = np.array([radial, radial, radius])
+        else:
+            extent = np.full(3, rho + radius)
+        low, high = foot - extent, foot + extent
+    return np.stack([low - BOUNDS_SLACK, high + BOUNDS_SLACK])
 
 
 def _joint_axis(model: pin.Model, joint: int, placement: pin.SE3) -> FloatArray | None:
@@ -278,6 +323,7 @@ def make_pose_grid(
 
 
 __all__ = [
+    "BOUNDS_SLACK",
     "DEFAULT_ORIENTATIONS",
     "DEFAULT_RESOLUTION",
     "PoseGrid",
