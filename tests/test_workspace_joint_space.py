@@ -21,6 +21,7 @@ from workbench.singularities.conditions import (
 from workbench.workspace.joint_space import (
     CHUNK,
     DEFAULT_SAMPLES,
+    MAX_CONFIGURATIONS,
     compute_joint_space_map,
 )
 from workbench.workspace.measures import singularity_margin
@@ -119,7 +120,7 @@ def test_a_grid_holds_the_limits_and_the_wrist_locus() -> None:
 
 def test_defaults_and_bad_input() -> None:
     ur5 = load_robot("ur5")
-    assert DEFAULT_SAMPLES == 1_000_000
+    assert DEFAULT_SAMPLES == 1_000_000 and MAX_CONFIGURATIONS == 20_000_000
     with pytest.raises(InputError, match="not both"):
         compute_joint_space_map(ur5, samples=10, points_per_joint=2)
     with pytest.raises(InputError, match="samples must be a positive integer"):
@@ -128,6 +129,10 @@ def test_defaults_and_bad_input() -> None:
         compute_joint_space_map(ur5, points_per_joint=2.5)  # type: ignore[arg-type]
     with pytest.raises(InputError, match="workers must be a positive integer"):
         compute_joint_space_map(ur5, samples=10, workers=0)
+    with pytest.raises(InputError, match="seed must be a non-negative integer"):
+        compute_joint_space_map(ur5, samples=10, seed=-1)
+    with pytest.raises(InputError, match="more than 20,000,000 in one map"):
+        compute_joint_space_map(ur5, points_per_joint=17)  # 24 million
     kinova = load_robot("kinova")  # continuous joints: (cos, sin) coordinates
     with pytest.raises(InputError, match="one coordinate per joint"):
         compute_joint_space_map(kinova, samples=10)

@@ -53,6 +53,8 @@ ProgressCallback = Callable[[int, int], None]
 CHUNK = 65_536
 #: Configurations of the default map.
 DEFAULT_SAMPLES = 1_000_000
+#: Most configurations of one map (its arrays take about 100 bytes each).
+MAX_CONFIGURATIONS = 20_000_000
 
 
 @dataclass(frozen=True, slots=True)
@@ -135,8 +137,9 @@ def compute_joint_space_map(
         The map (:class:`JointSpaceMap`).
 
     Raises:
-        InputError: If both or neither size is given validly (a count < 1, or
-            ``samples`` with ``points_per_joint``), ``workers`` < 1, the robot
+        InputError: If a count is not a positive integer (``seed``: not a
+            non-negative one), ``samples`` and ``points_per_joint`` are both
+            given, the map would exceed :data:`MAX_CONFIGURATIONS`, the robot
             has a joint of two coordinates (continuous) or an infinite limit,
             or a joint the compiled chain does not model.
     """
@@ -144,12 +147,17 @@ def compute_joint_space_map(
         raise InputError("give samples or points_per_joint, not both")
     if points_per_joint is None:
         samples = DEFAULT_SAMPLES if samples is None else samples
-        total = _positive_int(samples, "samples")
+        total = _count(samples, "samples")
     else:
-        points = _positive_int(points_per_joint, "points_per_joint")
+        points = _count(points_per_joint, "points_per_joint")
         total = points**robot.nq
+    if total > MAX_CONFIGURATIONS:
+        raise InputError(
+            f"{total:,} configurations is more than {MAX_CONFIGURATIONS:,} in one map"
+        )
+    seed = _count(seed, "seed", minimum=0)
     threads = (os.cpu_count() or 1) if workers is None else workers
-    threads = _positive_int(threads, "workers")
+    threads = _count(threads, "workers")
     if robot.nq != robot.nv:
         raise InputError(
             f"{robot.name}: the joint-space map needs one coordinate per joint "
@@ -209,9 +217,15 @@ def compute_joint_space_map(
     )
 
 
-def _positive_int(value: int, name: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
-        raise InputError(f"{name} must be a positive integer, got {value!r}")
+def _count(value: int, name: str, *, minimum: int = 1) -> int:
+    """``value`` as an int >= ``minimum``, else InputError."""
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, int | np.integer)
+        or value < minimum
+    ):
+        kind = "a positive" if minimum == 1 else "a non-negative"
+        raise InputError(f"{name} must be {kind} integer, got {value!r}")
     return int(value)
 
 
