@@ -318,9 +318,11 @@ def plot_histograms(
             linewidth=0.4,
         )
         ax.set_xlim(field.vmin, field.vmax)
-        ax.set_yscale("log")  # a few bins (full reach, none singular) hold most
         ax.set_xlabel(field.label)
-        ax.set_ylabel("voxels (log scale)")
+        ax.set_ylabel("voxels")
+        if counts.any():  # a few bins (full reach, none singular) hold most
+            ax.set_yscale("log")
+            ax.set_ylabel("voxels (log scale)")
         ax.set_title(f"{field.name} ({values.size} voxels)", fontsize=10)
     return _finish(fig, path)
 

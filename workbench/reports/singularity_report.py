@@ -24,6 +24,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.model.robot import Robot
+from workbench.reports.html_report import HtmlReport
 from workbench.singularities.along_path import find_closest_approaches
 from workbench.singularities.conditions import (
     NotPumaTypeError,
@@ -60,18 +61,8 @@ NUMERIC_MAPS = ("manipulability", "condition_number")
 
 
 @dataclass(frozen=True, slots=True)
-class SingularityReport:
-    """A built report.
-
-    Attributes:
-        html: The whole HTML document.
-        summary: JSON-ready key numbers (what ``--json`` prints).
-        figures: PNG images by name, as embedded in ``html``.
-    """
-
-    html: str
-    summary: dict[str, Any]
-    figures: dict[str, bytes]
+class SingularityReport(HtmlReport):
+    """A built singularity report (``html``, ``summary``, ``figures``)."""
 
 
 def build_singularity_report(

@@ -22,6 +22,7 @@ import numpy.typing as npt
 from workbench.atomic_files import write_text_atomic
 from workbench.errors import InputError
 from workbench.plots.workspace import VoxelField, get_layer_coordinates
+from workbench.reports.html_report import HtmlReport
 from workbench.singularities.conditions import ELBOW_TOL, SHOULDER_TOL, WRIST_TOL
 
 if TYPE_CHECKING:
@@ -40,18 +41,8 @@ VOXEL_ARRAYS = ("reachability", "dexterity_best")
 
 
 @dataclass(frozen=True, slots=True)
-class WorkspaceReport:
-    """A built report.
-
-    Attributes:
-        html: The whole HTML document.
-        summary: JSON-ready key numbers (what ``--json`` prints).
-        figures: PNG images by name, as embedded in ``html``.
-    """
-
-    html: str
-    summary: dict[str, Any]
-    figures: dict[str, bytes]
+class WorkspaceReport(HtmlReport):
+    """A built workspace report (``html``, ``summary``, ``figures``)."""
 
 
 def get_array(workspace_map: WorkspaceMap, name: str) -> FloatArray | None:
