@@ -21,7 +21,7 @@ from workbench.workspace._placement_screen import CandidateLattice, Screening
 from workbench.workspace.placement import (
     PlacementInfeasibleError,
     base_transform,
-    check_path_branch,
+    follow_path,
     place_base,
 )
 from workbench.workspace.placement_check import PATH_STEP_MAX, PlacementEvaluator
@@ -200,41 +200,57 @@ def _trajectory(q_start, q_end, count=60):
     return JointTrajectorySamples(np.linspace(0.0, 1.0, count), q, zeros, zeros)
 
 
-def test_trajectory_path_keeps_its_branch(puma):
+def _own_branch(robot, pose, q):
+    """Index of the closed-form branch of ``pose`` that is ``q``."""
+    (label,) = {
+        s.branch
+        for s in ik.analytic(robot, pose)
+        if np.allclose(s.q, q, atol=1e-9, rtol=0)
+    }
+    return ik.BRANCHES.index(label)
+
+
+def _chain_inputs(robot, task):
+    """q (K, 8, 6) within-limit representatives, usable (K, 8), |det J| (K, 8)."""
+    q, valid = ik.analytic_batch(robot, task.poses)
+    wraps = np.asarray(robot.upper) - np.asarray(robot.lower) >= 2 * math.pi
+    det = np.where(valid, 1.0, np.nan)
+    return np.where(valid[..., None], q, np.nan), valid, det, wraps
+
+
+def test_trajectory_path_is_followed_by_its_own_branch(puma):
     q_start = np.array([0.2, -0.6, 0.4, 0.3, 0.8, -0.2])
     q_end = np.array([0.9, -0.3, 0.7, -0.4, 1.2, 0.5])
     task = task_poses_from_trajectory(puma, _trajectory(q_start, q_end))
     assert task.ordered
     (found,) = place_base(puma, task, mounts=[(0.0, 0.0, 0.0, 0.0)])
-    expected = next(
-        s.branch
-        for s in ik.analytic(puma, puma.fk(q_start))
-        if np.allclose(s.q, q_start, atol=1e-9, rtol=0)
-    )
-    assert found.all_reachable and found.branch == expected
+    assert found.all_reachable and found.branch is not None
+    assert "->" not in found.branch  # no singularity on the way: one label
+    q, valid, det, wraps = _chain_inputs(puma, task)
+    own = _own_branch(puma, task.poses[0], q_start)
+    only_own = valid & (np.arange(8) == own)
+    result = follow_path(q, only_own, det, wraps)
+    assert result is not None and set(result[1].tolist()) == {own}
 
 
-def test_path_through_a_wrist_flip_needs_another_branch(puma):
-    """θ5 crosses 0: the path's own posture flips, so another branch must serve."""
+def test_path_through_a_wrist_singularity_changes_label_without_a_flip(puma):
+    """θ5 crosses 0: the motion goes from one wrist twin's label to the other's."""
     q_start = np.array([0.2, -0.6, 0.4, 0.3, 0.4, -0.2])
     q_end = np.array([0.4, -0.5, 0.5, 0.5, -0.4, 0.2])
     task = task_poses_from_trajectory(puma, _trajectory(q_start, q_end))
-    q, _ = ik.analytic_batch(puma, task.poses)
-    own = {
-        s.branch
-        for s in ik.analytic(puma, task.poses[0])
-        if np.allclose(s.q, q_start, atol=1e-9, rtol=0)
-    }
-    (label,) = own
-    index = ik.BRANCHES.index(label)
-    assert check_path_branch(q[:, index], puma.lower, puma.upper) is None
+    q, valid, det, wraps = _chain_inputs(puma, task)
+    own = _own_branch(puma, task.poses[0], q_start)
+    twins = valid & (np.arange(8) // 2 == own // 2)
+    result = follow_path(q, twins, det, wraps)
+    assert result is not None
+    labels = result[1]
+    assert labels[0] == own and labels[-1] == own ^ 1  # the other twin's label
+    along = q[np.arange(len(labels)), labels]
+    np.testing.assert_allclose(along, _trajectory(q_start, q_end).q, rtol=0, atol=1e-9)
+    # kept to one label, the arm would have to flip (θ4, θ6 by π): no chain
+    assert follow_path(q, valid & (np.arange(8) == own), det, wraps) is None
     (found,) = place_base(puma, task, mounts=[(0.0, 0.0, 0.0, 0.0)])
-    assert found.all_reachable and found.branch not in (None, label)
-    kept = check_path_branch(
-        q[:, ik.BRANCHES.index(found.branch)], puma.lower, puma.upper
-    )
-    assert kept is not None
-    assert np.max(np.abs(np.diff(kept, axis=0))) <= PATH_STEP_MAX
+    assert found.all_reachable
 
 
 def test_path_that_no_branch_follows_is_infeasible(puma):
@@ -255,19 +271,24 @@ def test_path_that_no_branch_follows_is_infeasible(puma):
     assert found.all_reachable
 
 
-def test_check_path_branch_unwraps_and_fits_limits():
-    lower, upper = np.full(6, -math.pi), np.full(6, math.pi)
-    q = np.zeros((5, 6))
-    q[:, 3] = [3.0, 3.1, -3.1, -3.0, -2.9]  # crosses ±π continuously
-    assert check_path_branch(q, lower, upper) is None  # 3.0 .. 3.38: beyond π
-    wide = np.full(6, 2.0 * math.pi)
-    path = check_path_branch(q, -wide, wide)
-    assert path is not None
-    np.testing.assert_allclose(np.diff(path[:, 3]), [0.1, 2 * math.pi - 6.2, 0.1, 0.1],
-                               rtol=0, atol=1e-12)  # fmt: skip
-    jump = np.zeros((2, 6))
-    jump[1, 0] = 1.01 * PATH_STEP_MAX
-    assert check_path_branch(jump, -wide, wide) is None
+def test_follow_path_steps_and_limits():
+    """A step beyond PATH_STEP_MAX breaks a chain; wrapping only where limits allow."""
+    q = np.zeros((4, 2, 6))
+    q[:, 0, 3] = [3.0, 3.1, -3.1, -3.0]  # crosses ±π
+    q[:, 1, 3] = [3.0, 3.1, 3.2, 3.3]  # the same motion, unwrapped
+    usable = np.ones((4, 2), dtype=bool)
+    dexterity = np.array([[1.0, 0.5]] * 4)
+    wraps = np.zeros(6, dtype=bool)
+    best, chain = follow_path(q, usable, dexterity, wraps)
+    assert chain.tolist() == [0, 0, 1, 1] and best == 0.5  # 3.1 -> 3.2 steps 0.1
+    usable[2:, 1] = False  # only the wrapped representatives remain
+    assert follow_path(q, usable, dexterity, wraps) is None
+    wraps[3] = True  # a joint free to turn past ±π
+    best, chain = follow_path(q, usable, dexterity, wraps)
+    assert chain.tolist() == [0, 0, 0, 0] and best == 1.0
+    jump = np.zeros((2, 1, 6))
+    jump[1, 0, 0] = 1.01 * PATH_STEP_MAX
+    assert follow_path(jump, np.ones((2, 1), bool), np.ones((2, 1)), wraps) is None
 
 
 # -- task-pose files ----------------------------------------------------------
@@ -382,4 +403,4 @@ def test_cli_place_trajectory(puma, tmp_path, capsys):
     assert code == 0
     out = json.loads(capsys.readouterr().out)
     assert out["path"] is True
-    assert all(p["branch"] is not None for p in out["placements"])
+    assert out["placements"] and all(p["branch"] for p in out["placements"])

@@ -40,6 +40,9 @@ Progress = Callable[[int, int], None]
 
 #: Most candidates of one region (yaws × positions).
 MAX_CANDIDATES = 50_000_000
+#: Decimals [m, rad] the lattice's coordinates are rounded to (no 1e-16 m
+#: where a coordinate is a multiple of the step).
+_LATTICE_DECIMALS = 12
 #: Slack [in steps] of the lattice's extent: a region whose width is a
 #: multiple of the step up to rounding includes its far edge.
 _EDGE_SLACK = 1e-9
@@ -92,8 +95,12 @@ class CandidateLattice:
                 f"{MAX_CANDIDATES}: raise the resolution or the yaw step"
             )
         return CandidateLattice(
-            xs=xmin + step * np.arange(nx, dtype=np.float64),
-            ys=ymin + step * np.arange(ny, dtype=np.float64),
+            xs=np.round(
+                xmin + step * np.arange(nx, dtype=np.float64), _LATTICE_DECIMALS
+            ),
+            ys=np.round(
+                ymin + step * np.arange(ny, dtype=np.float64), _LATTICE_DECIMALS
+            ),
             yaws=float(yaw_step) * np.arange(nyaw, dtype=np.float64),
             height=float(height),
         )
@@ -166,17 +173,24 @@ class Screening:
         self.task_layer = task_layer.astype(np.int64)
         nx, ny, nz = grid.shape
         count = grid.orientation_count
-        rows = np.maximum(layers, 0) if len(layers) else np.zeros(1, dtype=np.int64)
+        rows = layers if len(layers) else np.zeros(1, dtype=np.int64)
 
-        def planes(name: str) -> Float32Array:
+        def select(name: str) -> Float32Array:
+            """(nx, ny, L, U) the task's layers and orientations of an array."""
             values = np.asarray(read(name), dtype=np.float32)
-            values = values.reshape(nx, ny, nz, count)[:, :, rows][..., used]
+            values = values.reshape(nx, ny, nz, count)
+            if len(rows) < nz:
+                values = values[:, :, rows]
+            return values[..., used] if len(used) < count else values
+
+        def planes(values: Float32Array) -> Float32Array:
             return np.ascontiguousarray(values.transpose(3, 2, 0, 1))
 
-        self.dexterity = planes("dexterity")
-        self.margin = singularity_margin_f32(
-            planes("shoulder"), planes("elbow"), planes("wrist")
+        self.dexterity = planes(select("dexterity"))
+        margin = singularity_margin_f32(
+            select("shoulder"), select("elbow"), select("wrist")
         )
+        self.margin = planes(margin)
         self.origin = np.asarray(grid.origin[:2], dtype=np.float64)
         self.resolution = float(grid.resolution)
 

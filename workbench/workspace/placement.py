@@ -4,7 +4,7 @@ A candidate base pose is :math:`B = \mathrm{Trans}(x, y, z)\, R_z(\psi)` in the
 world frame; task pose :math:`T` is :math:`B^{-1} T` in the base frame.
 :func:`place_base` ranks candidates by :meth:`Placement.rank_key`: every task
 pose reached by a usable branch (within the limits, collision-free with the
-scene; for a path, one branch along the whole path without a flip), then the
+scene; for a path, a continuous chain of solutions along it, without a flip), then the
 worst singularity margin along the task at least 1, then the worst dexterity
 |det J|, then the worst margin.
 
@@ -50,7 +50,7 @@ from workbench.workspace.placement_check import (
     Placement,
     PlacementEvaluator,
     base_transform,
-    check_path_branch,
+    follow_path,
 )
 from workbench.workspace.task_map import build_task_map
 from workbench.workspace.task_poses import TaskPoses, matrices_from_xyz_quat_xyzw
@@ -281,6 +281,6 @@ __all__ = [
     "PlacementInfeasibleError",
     "WorkspaceMapLike",
     "base_transform",
-    "check_path_branch",
+    "follow_path",
     "place_base",
 ]

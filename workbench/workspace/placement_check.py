@@ -14,9 +14,13 @@ take it), and, with a scene, the configuration touches nothing (no distance
 :func:`~workbench.workspace.measures.singularity_margin`; the best branch of a
 pose is its usable branch of largest dexterity.
 
-For a path (ordered poses), a branch must follow every sample without a jump
-(:func:`check_path_branch`): the same closed-form branch at every sample,
-within the limits along the whole continuous path.
+For a path (ordered poses), the arm must follow every sample without a jump
+(:func:`follow_path`): a chain of usable solutions, one per sample, each
+joint moving by at most :data:`PATH_STEP_MAX` from one sample to the next. The
+branch label may change along the chain only where two branches meet (a
+singularity crossed in joint space, as a joint-space trajectory may); a wrist
+flip (θ4 and θ6 turning by π) or a change of arm or elbow posture is a jump.
+Of the chains, the one of largest worst dexterity is kept.
 """
 
 from __future__ import annotations
@@ -59,9 +63,10 @@ class Placement:
             of each pose; for a path, along :attr:`branch`); NaN if none.
         min_singularity_margin: Smallest singularity margin [1] likewise
             (< 1: a pose is near-singular); NaN if none.
-        branch: Label of one branch usable at every pose (for a path:
-            following the whole path), the one of largest worst dexterity;
-            None if there is none.
+        branch: Label of one branch usable at every pose, the one of largest
+            worst dexterity; for a path, the labels along the chain that
+            follows it (``"a -> b"`` where it crosses a singularity); None if
+            there is none.
     """
 
     x: float
@@ -125,34 +130,56 @@ def base_transform(x: float, y: float, z: float, yaw: float) -> FloatArray:
     return out
 
 
-def check_path_branch(
-    q: FloatArray, lower: FloatArray, upper: FloatArray
-) -> FloatArray | None:
-    """One branch's joint path, made continuous and put within the limits.
+def follow_path(
+    q: FloatArray,
+    usable: BoolArray,
+    dexterity: FloatArray,
+    wraps: BoolArray,
+) -> tuple[float, npt.NDArray[np.int64]] | None:
+    """The chain of solutions that follows a path with the largest worst dexterity.
 
     Args:
-        q: (K, 6) configurations [rad] of one branch at the K samples of a
-            path (any 2π representatives).
-        lower: (6,) lower joint limits [rad].
-        upper: (6,) upper joint limits [rad].
+        q: (K, S, n) the S solutions [rad] of each of the K samples, each
+            angle a representative within the limits where ``usable``.
+        usable: (K, S) the solutions the chain may use.
+        dexterity: (K, S) their dexterity (any measure, larger is better).
+        wraps: (n,) joints whose limits span 2π or more: their step is taken
+            modulo 2π (the joint may turn on past ±π); the others must step
+            between their representatives, inside their limits.
 
     Returns:
-        (K, 6): each joint unwrapped (consecutive samples differ by their
-        difference wrapped to [−π, π)) and shifted by the multiple of 2π that
-        puts it within the limits; None if a step exceeds
-        :data:`PATH_STEP_MAX` (a flip or a jump) or no shift fits a joint.
+        ``(worst dexterity along the chain, (K,) solution index per sample)``,
+        or None if no chain steps by at most :data:`PATH_STEP_MAX` in every
+        joint between consecutive samples.
     """
-    steps = np.remainder(np.diff(q, axis=0) + math.pi, 2.0 * math.pi) - math.pi
-    if steps.size and np.max(np.abs(steps)) > PATH_STEP_MAX:
+    count = q.shape[0]
+    value = np.where(usable[0], dexterity[0], -np.inf)
+    parent = np.zeros((count, q.shape[1]), dtype=np.int64)
+    for k in range(1, count):
+        raw = q[k][None, :, :] - q[k - 1][:, None, :]  # (from, to, n)
+        wrapped = np.remainder(raw + math.pi, 2.0 * math.pi) - math.pi
+        step = np.where(wraps, np.abs(wrapped), np.abs(raw))
+        joins = np.all(step <= PATH_STEP_MAX, axis=-1)  # NaN rows never join
+        reach = np.where(joins, np.minimum(value[:, None], dexterity[k][None]), -np.inf)
+        parent[k] = np.argmax(reach, axis=0)
+        value = np.where(usable[k], np.max(reach, axis=0), -np.inf)
+    last = int(np.argmax(value))
+    if value[last] == -np.inf:
         return None
-    zero = np.zeros((1, q.shape[1]))
-    path = q[:1] + np.concatenate([zero, np.cumsum(steps, axis=0)])
-    low, high = path.min(axis=0), path.max(axis=0)
-    bounded = np.isfinite(lower) & np.isfinite(upper)
-    turns = np.where(bounded, np.ceil((lower - low) / (2.0 * math.pi)), 0.0)
-    if np.any(bounded & (high + 2.0 * math.pi * turns > upper)):
-        return None
-    return path + 2.0 * math.pi * turns
+    chain = np.empty(count, dtype=np.int64)
+    chain[-1] = last
+    for k in range(count - 1, 0, -1):
+        chain[k - 1] = parent[k, chain[k]]
+    return float(value[last]), chain
+
+
+def _labels(branches: tuple[str, ...], chain: npt.NDArray[np.int64]) -> str:
+    """``"a -> b -> ..."``: the labels along a chain, each once per stretch."""
+    names = [branches[int(chain[0])]]
+    for index in chain[1:]:
+        if branches[int(index)] != names[-1]:
+            names.append(branches[int(index)])
+    return " -> ".join(names)
 
 
 class PlacementEvaluator:
@@ -179,6 +206,7 @@ class PlacementEvaluator:
         self.ordered = ordered
         self.lower = np.asarray(robot.lower, dtype=np.float64)
         self.upper = np.asarray(robot.upper, dtype=np.float64)
+        self.wraps = ~(self.upper - self.lower < 2.0 * math.pi)
 
     def evaluate(self, rows: npt.ArrayLike) -> list[Placement]:
         """Exact placements of candidate rows ``x, y, z, yaw`` (C, 4) [m, rad]."""
@@ -197,10 +225,10 @@ class PlacementEvaluator:
             margin[valid] = singularity_margin(c.shoulder, c.elbow, c.wrist)
         shape = (count, n, q.shape[1])
         q = q.reshape(*shape, 6)
-        valid, within = valid.reshape(shape), within.reshape(shape)
+        within = within.reshape(shape)
         dexterity, margin = dexterity.reshape(shape), margin.reshape(shape)
         return [
-            self._placement(rows[i], q[i], valid[i], within[i], dexterity[i], margin[i])
+            self._placement(rows[i], q[i], within[i], dexterity[i], margin[i])
             for i in range(count)
         ]
 
@@ -208,18 +236,12 @@ class PlacementEvaluator:
         self,
         row: FloatArray,
         q: FloatArray,
-        valid: BoolArray,
         within: BoolArray,
         dexterity: FloatArray,
         margin: FloatArray,
     ) -> Placement:
         checker = self._checker(row)
         usable = within if checker is None else _collision_free(checker, q, within)
-        everywhere: BoolArray = (
-            self._path_branches(q, valid, checker)
-            if self.ordered
-            else np.all(usable, axis=0)
-        )
         reached = usable.any(axis=1)
         missed = int(np.count_nonzero(~reached))
         best = np.argmax(np.where(usable, dexterity, -np.inf), axis=1)
@@ -229,13 +251,17 @@ class PlacementEvaluator:
             min_dexterity = float(np.min(dexterity[index, best][reached]))
             min_margin = float(np.min(margin[index, best][reached]))
         branch = None
-        if everywhere.any():
-            worst = np.where(everywhere, np.min(dexterity, axis=0), -np.inf)
-            b = int(np.argmax(worst))
-            branch = self.solver.branches[b]
-            if self.ordered:
-                min_dexterity = float(np.min(dexterity[:, b]))
-                min_margin = float(np.min(margin[:, b]))
+        if self.ordered:
+            found = None if missed else follow_path(q, usable, dexterity, self.wraps)
+            if found is not None:
+                min_dexterity = found[0]
+                min_margin = float(np.min(margin[index, found[1]]))
+                branch = _labels(self.solver.branches, found[1])
+        else:
+            everywhere = np.all(usable, axis=0)
+            if everywhere.any():
+                worst = np.where(everywhere, np.min(dexterity, axis=0), -np.inf)
+                branch = self.solver.branches[int(np.argmax(worst))]
         all_reachable = missed == 0 and (branch is not None or not self.ordered)
         return Placement(
             x=float(row[0]),
@@ -248,22 +274,6 @@ class PlacementEvaluator:
             min_singularity_margin=min_margin,
             branch=branch,
         )
-
-    def _path_branches(
-        self, q: FloatArray, valid: BoolArray, checker: CollisionChecker | None
-    ) -> BoolArray:
-        """(8,) the branches that follow the whole path (collision-free too)."""
-        follows = np.zeros(q.shape[1], dtype=bool)
-        for b in range(q.shape[1]):
-            if not valid[:, b].all():
-                continue
-            path = check_path_branch(q[:, b], self.lower, self.upper)
-            if path is None:
-                continue
-            follows[b] = checker is None or all(
-                _touches_nothing(checker, x) for x in path
-            )
-        return follows
 
     def _checker(self, row: FloatArray) -> CollisionChecker | None:
         """A checker with the scene in the candidate's base frame; None without."""
@@ -297,5 +307,5 @@ __all__ = [
     "Placement",
     "PlacementEvaluator",
     "base_transform",
-    "check_path_branch",
+    "follow_path",
 ]
