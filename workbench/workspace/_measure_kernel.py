@@ -39,6 +39,8 @@ JOINT_ROWS = 6
 _SIGN, _OFFSET, _LOWER, _UPPER, _MID, _BOUNDED = range(JOINT_ROWS)
 
 TAU = 2.0 * math.pi
+#: 1 / 2π, the turns of an angle (the reference multiplies by it too).
+INV_TAU = 1.0 / TAU
 
 
 @entry_point(outputs=("poses",), contiguous=("positions", "rotations"))
@@ -102,6 +104,8 @@ def measure_poses(
         best_det = -1.0
         best_margin = -math.inf
         best_s = best_e = best_w = 0.0
+        seen2 = seen3 = seen4 = math.nan  # the angles s and e were last computed at
+        s = e = 0.0
         for b in range(8):
             if not valid[i, b]:
                 continue
@@ -109,30 +113,33 @@ def measure_poses(
             within = True
             margin = math.inf
             for j in range(6):
-                value = q[i, b, j]
                 if joints[_BOUNDED, j] != 0.0:
+                    value = q[i, b, j]
                     lo, hi = joints[_LOWER, j], joints[_UPPER, j]
-                    turns = np.rint((joints[_MID, j] - value) / TAU)
+                    turns = np.rint((joints[_MID, j] - value) * INV_TAU)
                     shifted = value + turns * TAU
                     within &= (shifted >= lo) & (shifted <= hi)
                     margin = min(margin, min(shifted - lo, hi - shifted))
             if not within:
                 continue
             usable += 1
-            t2 = q[i, b, 1] * joints[_SIGN, 1] + joints[_OFFSET, 1]
-            t3 = q[i, b, 2] * joints[_SIGN, 2] + joints[_OFFSET, 2]
-            t5 = q[i, b, 4] * joints[_SIGN, 4] + joints[_OFFSET, 4]
-            t23 = t2 + t3
-            s = a1 + a2 * math.cos(t2) + a3 * math.cos(t23)
-            if ur:
-                t234 = t23 + (q[i, b, 3] * joints[_SIGN, 3] + joints[_OFFSET, 3])
-                s = s + a4 * math.cos(t234)
-                s = s + s4d5 * math.sin(t234)
-                e = math.sin(t3)
-            else:
-                s = s + s3d4 * math.sin(t23)
-                e = (a3 * math.sin(t3) - s3d4 * math.cos(t3)) / ell
-            w = math.sin(t5)
+            q2, q3, q4 = q[i, b, 1], q[i, b, 2], q[i, b, 3]
+            if not (q2 == seen2 and q3 == seen3 and (q4 == seen4 or not ur)):
+                # a new (arm, elbow) pair: OPW twins share q1..q3, so s and e
+                seen2, seen3, seen4 = q2, q3, q4
+                t2 = q2 * joints[_SIGN, 1] + joints[_OFFSET, 1]
+                t3 = q3 * joints[_SIGN, 2] + joints[_OFFSET, 2]
+                t23 = t2 + t3
+                s = a1 + a2 * math.cos(t2) + a3 * math.cos(t23)
+                if ur:
+                    t234 = t23 + (q4 * joints[_SIGN, 3] + joints[_OFFSET, 3])
+                    s = s + a4 * math.cos(t234)
+                    s = s + s4d5 * math.sin(t234)
+                    e = math.sin(t3)
+                else:
+                    s = s + s3d4 * math.sin(t23)
+                    e = (a3 * math.sin(t3) - s3d4 * math.cos(t3)) / ell
+            w = math.sin(q[i, b, 4] * joints[_SIGN, 4] + joints[_OFFSET, 4])
             det = abs(k_det * s * e * w)
             if det > best_det or (det == best_det and margin > best_margin):
                 best_det, best_margin = det, margin

@@ -34,6 +34,7 @@ FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 
 TAU = 2.0 * np.pi
+INV_TAU = 1.0 / TAU
 
 
 def block_poses(grid: PoseGrid, start: int, stop: int) -> FloatArray:
@@ -69,7 +70,7 @@ def limit_representatives(
     """
     bounded = np.isfinite(lower) & np.isfinite(upper)
     mid = 0.5 * (np.where(bounded, lower, 0.0) + np.where(bounded, upper, 0.0))
-    turns = np.where(bounded, np.rint((mid - q) / TAU), 0.0)
+    turns = np.where(bounded, np.rint((mid - q) * INV_TAU), 0.0)
     shifted = q + turns * TAU
     joint_margin = np.where(
         bounded, np.minimum(shifted - lower, upper - shifted), np.inf
