@@ -17,11 +17,15 @@ The squared norms of the two columns of a pair are updated with the rotation
 computed afresh at the start of every sweep, so a sweep costs one dot
 product per pair besides the rotations.
 
-:data:`LANES` matrices go through the sweeps side by side (the innermost
-loops run over them, so that the compiler can use vector instructions), until
-all of them have converged. A matrix that has converged goes on with
-rotations by the angle 0 (cos 1, sin 0: its columns unchanged, exactly), so
-each matrix gets the bits it would get alone, whatever the batch around it.
+:data:`LANES` matrices go through the sweeps side by side, until all of them
+have converged: the innermost loops run over them, and their count is read
+from the scratch array's shape (a number unknown when compiling: a loop of a
+constant 16 turns is unrolled into scalar code instead of being vectorised,
+which made it twice as slow), so the compiler uses vector instructions for
+the square roots and divisions of the rotations. A matrix that has converged
+goes on with rotations by the angle 0 (cos 1, sin 0: its columns unchanged,
+exactly), so each matrix gets the bits it would get alone, whatever the batch
+around it.
 Only :func:`singular_values` is an entry point.
 """
 
@@ -44,8 +48,8 @@ ORTHOGONALITY = 2.0**-51
 #: Sweeps over every pair after which the iteration stops in any case (a 6 × 6
 #: Jacobian converges in 6–9; the cap only bounds a matrix holding NaN).
 MAX_SWEEPS = 30
-#: Matrices swept side by side.
-LANES = 8
+#: Matrices swept side by side (16: four AVX2 registers of doubles per loop).
+LANES = 16
 
 _ORTHOGONALITY2 = ORTHOGONALITY**2  # the test squared: no square root per pair
 
@@ -58,13 +62,14 @@ def _rotate_pair(a, norms, gamma, cos, sin, p, q, m) -> int:
     ``sin`` (LANES,): scratch. Returns how many lanes were rotated (by a
     nonzero angle).
     """
-    for lane in range(LANES):
+    lanes = a.shape[2]
+    for lane in range(lanes):
         gamma[lane] = 0.0
     for i in range(m):
-        for lane in range(LANES):
+        for lane in range(lanes):
             gamma[lane] += a[p, i, lane] * a[q, i, lane]
     rotated = 0
-    for lane in range(LANES):
+    for lane in range(lanes):
         alpha, beta, g = norms[p, lane], norms[q, lane], gamma[lane]
         rotate = g * g > _ORTHOGONALITY2 * (alpha * beta)  # False for NaN
         zeta = (beta - alpha) / (2.0 * (g if rotate else 1.0))
@@ -76,7 +81,7 @@ def _rotate_pair(a, norms, gamma, cos, sin, p, q, m) -> int:
         norms[q, lane] = beta + t * g
         rotated += 1 if rotate else 0
     for i in range(m):
-        for lane in range(LANES):
+        for lane in range(lanes):
             x, y = a[p, i, lane], a[q, i, lane]
             a[p, i, lane] = cos[lane] * x - sin[lane] * y
             a[q, i, lane] = sin[lane] * x + cos[lane] * y
@@ -86,11 +91,12 @@ def _rotate_pair(a, norms, gamma, cos, sin, p, q, m) -> int:
 @helper(forceinline=True)
 def _sweep(a, norms, gamma, cos, sin, k, m) -> int:
     """One sweep over the pairs of the first ``k`` columns; lanes rotated, summed."""
+    lanes = a.shape[2]
     for c in range(k):
-        for lane in range(LANES):
+        for lane in range(lanes):
             norms[c, lane] = 0.0
         for i in range(m):
-            for lane in range(LANES):
+            for lane in range(lanes):
                 norms[c, lane] += a[c, i, lane] * a[c, i, lane]
     rotated = 0
     for p in range(k - 1):
@@ -99,7 +105,7 @@ def _sweep(a, norms, gamma, cos, sin, k, m) -> int:
     return rotated
 
 
-@entry_point(outputs=("out",), contiguous=("jacobians",))
+@entry_point(outputs=("out",), contiguous=("jacobians",), vectorize=True)
 def singular_values(jacobians: FloatArray, out: FloatArray) -> None:
     """Singular values of each Jacobian, in descending order.
 
@@ -111,8 +117,9 @@ def singular_values(jacobians: FloatArray, out: FloatArray) -> None:
     k, m = min(6, n), max(6, n)
     a, norms = np.empty((k, m, LANES)), np.empty((k, LANES))
     gamma, cos, sin = np.empty(LANES), np.empty(LANES), np.empty(LANES)
-    for first in range(0, count, LANES):
-        for lane in range(LANES):  # columns of J (n <= 6) or of J^T; zeros past N
+    lanes = a.shape[2]
+    for first in range(0, count, lanes):
+        for lane in range(lanes):  # columns of J (n <= 6) or of J^T; zeros past N
             b = first + lane
             for c in range(k):
                 for i in range(m):
@@ -123,7 +130,7 @@ def singular_values(jacobians: FloatArray, out: FloatArray) -> None:
         for _ in range(MAX_SWEEPS):
             if _sweep(a, norms, gamma, cos, sin, k, m) == 0:
                 break
-        for lane in range(min(LANES, count - first)):
+        for lane in range(min(lanes, count - first)):
             row = out[first + lane]
             for c in range(k):  # norms of the columns, by insertion into the row
                 s = 0.0
