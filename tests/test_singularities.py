@@ -382,6 +382,16 @@ def test_compiled_singular_values_match_lapack(matrix, rank_drop) -> None:
     np.testing.assert_allclose(batch[1], 2.0 * got, rtol=0, atol=ATOL_EXACT * scale)
 
 
+def test_compiled_singular_values_do_not_depend_on_the_batch(rng) -> None:
+    """Matrices swept side by side get the bits each gets alone (any lane, any N)."""
+    jacobians = rng.normal(size=(37, 6, 6))
+    jacobians[5, :, 2] = jacobians[5, :, 4]  # a singular one among them
+    batch = compute_singular_values(jacobians)
+    alone = np.stack([compute_singular_values(j) for j in jacobians])
+    np.testing.assert_array_equal(batch, alone)
+    np.testing.assert_array_equal(compute_singular_values(jacobians[3:20]), batch[3:20])
+
+
 def test_compiled_sigma_min_vanishes_on_the_loci(any_puma, rng) -> None:
     """On each locus, sigma_min of the singular Jacobian is at rounding level."""
     for kind in ("shoulder", "elbow", "wrist"):

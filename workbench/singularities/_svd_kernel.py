@@ -20,12 +20,12 @@ product per pair besides the rotations.
 :data:`LANES` matrices go through the sweeps side by side, until all of them
 have converged: the innermost loops run over them, and their count is read
 from the scratch array's shape (a number unknown when compiling: a loop of a
-constant 16 turns is unrolled into scalar code instead of being vectorised,
-which made it twice as slow), so the compiler uses vector instructions for
-the square roots and divisions of the rotations. A matrix that has converged
-goes on with rotations by the angle 0 (cos 1, sin 0: its columns unchanged,
-exactly), so each matrix gets the bits it would get alone, whatever the batch
-around it.
+constant 16 turns is unrolled into scalar code instead of being vectorised),
+so the compiler uses vector instructions for the square roots and divisions
+of the rotations. A matrix that has converged goes on with rotations by the
+angle 0 (cos 1, sin 0: its columns unchanged, exactly), so each matrix gets
+the bits it would get alone, whatever the batch around it.
+
 Only :func:`singular_values` is an entry point.
 """
 
