@@ -277,3 +277,15 @@ def test_puma_bounds_are_its_reach(name: str) -> None:
     radial = math.hypot(offset, arm)
     expected = np.array([[-radial, -radial, -arm], [radial, radial, arm]])
     np.testing.assert_allclose(default_bounds(robot), expected, rtol=0, atol=2e-9)
+
+
+@given(raw=st.lists(st.floats(-1, 1), min_size=4, max_size=4))
+def test_covering_radius_bounds_any_rotation(
+    puma_grid: PoseGrid, raw: list[float]
+) -> None:
+    q = np.array(raw)
+    if np.linalg.norm(q) < 1e-3:
+        return
+    q = q / np.linalg.norm(q)
+    nearest = _angles_by_matrix(q[None], puma_grid.orientations)[0].min()
+    assert nearest <= puma_grid.orientation_set["covering_radius"]
