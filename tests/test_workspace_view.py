@@ -23,6 +23,7 @@ from tests._chromium import take_screenshot
 from tests.conftest import run_cli
 from tests.test_viz_browser import changed
 from workbench import load_robot
+from workbench.collision import parse_scene
 from workbench.errors import DimensionError, InputError
 from workbench.plots.workspace import (
     VoxelField,
@@ -295,6 +296,19 @@ def test_view_input_errors(puma_map, map_path, tmp_path) -> None:
 def test_view_of_a_map_that_reaches_nothing(empty_map_path) -> None:
     page = make_workspace_viewer(open_map(empty_map_path)).render_html()
     assert "No voxel is reached" in page
+
+
+def test_view_draws_the_scene_of_a_map_built_with_one(tmp_path) -> None:
+    robot = load_robot("puma560")
+    table = {"name": "table", "shape": "box", "size": [0.6, 0.8, 0.05]}
+    scene = parse_scene({"objects": [table | {"position": [0.6, 0.0, -0.45]}]})
+    bounds = [[0.3, -0.2, -0.6], [0.7, 0.2, -0.2]]
+    grid = make_pose_grid(robot, resolution=RESOLUTION, orientations=8, bounds=bounds)
+    build_map(robot, grid, tmp_path / "cell.zarr", workers=1, scene=scene)
+    cell_map = open_map(tmp_path / "cell.zarr")
+    page = make_workspace_viewer(cell_map).render_html()
+    assert "<b>Collisions</b> with the scene (table)" in page
+    assert "Key numbers" in build_workspace_report(cell_map).html
 
 
 # -- pages in Chromium -----------------------------------------------------------

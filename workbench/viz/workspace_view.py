@@ -11,7 +11,9 @@ one. A slider in the legend box cuts the map from above: it shows the layers up
 to a height, or, with "only this layer", that layer alone; "cut away y > 0"
 hides the half of every layer in front of the base axis (nodes
 ``voxels/<layer>/y>0``), so the inside of the map and the arm show. The arm
-stands in a reference configuration, in its own colours.
+stands in a reference configuration, in its own colours; a map built with a
+scene shows its obstacles too (contacts of the arm in red, as in
+:meth:`~workbench.viz.Viewer.show_collisions`).
 """
 
 from __future__ import annotations
@@ -223,6 +225,12 @@ def make_workspace_viewer(
         f"{len(grid.orientations)} orientations"
     )
     viewer = Viewer(robot, q, title=title or default_title)
+    scene = workspace_map.attrs.get("scene")
+    if scene:  # the obstacles the map's branches had to miss
+        from workbench.collision import CollisionChecker, parse_scene
+
+        checker = CollisionChecker(robot, parse_scene(scene, source="the map's scene"))
+        viewer.show_collisions(checker)
     positions = np.asarray(grid.positions, dtype=np.float64)
     # On screen, three.js draws a point of size s at depth d s·H/(2d) pixels wide
     # (H: view height), and voxels res·H/(2d·tan(fov/2)) pixels apart.
