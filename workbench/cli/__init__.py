@@ -40,6 +40,7 @@ from workbench.cli import (
     singularities,
     urdf,
     view,
+    workspace,
 )
 from workbench.cli._common import print_json
 from workbench.cli._interrupt_guard import interrupts_wait_for_compiler
@@ -52,7 +53,19 @@ EXIT_BAD_INPUT = 2
 EXIT_INFEASIBLE = 3
 EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for `yes | head`
 
-_COMMANDS = (fk, ik, urdf, demo, singularities, report, plan, view, fishcut, export)
+_COMMANDS = (
+    fk,
+    ik,
+    urdf,
+    demo,
+    singularities,
+    report,
+    plan,
+    view,
+    fishcut,
+    export,
+    workspace,
+)
 
 #: A number, as typed: ``-1``, ``-.5``, ``-1e-10``, ``-2.5E+3`` are values, not
 #: options (argparse's own pattern misses exponents).

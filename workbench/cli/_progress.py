@@ -3,17 +3,23 @@
 A command that is still running after :data:`PROGRESS_DELAY` seconds prints
 one line saying what it is doing; the first Numba compilation of the process
 (a cold cache: the first run after an install or an upgrade) prints one line
-saying so as soon as it starts. ``-q`` silences both. Nothing is printed for a
-command that finishes quickly, so scripted output stays clean. A process forked
+saying so as soon as it starts. A command that counts its steps
+(:meth:`Progress.count`) adds a line with the steps done, the time elapsed
+and an estimate of the time left: on a terminal one line redrawn in place,
+elsewhere (a log) a new line every :data:`COUNT_INTERVAL` seconds. ``-q``
+silences them all. Nothing is printed for a command that finishes quickly, so
+scripted output stays clean. A process forked
 by the command (``workbench demo`` runs a section in one) prints nothing: the
 command's own process speaks for it.
 """
 
 from __future__ import annotations
 
+import math
 import os
 import sys
 import threading
+import time
 import weakref
 from types import TracebackType
 from typing import TextIO
@@ -21,6 +27,10 @@ from typing import TextIO
 from workbench.cli._interrupt_guard import block_interrupts_in_this_thread
 
 PROGRESS_DELAY = 1.0  # [s] before a running command prints its line
+#: Seconds between two count lines on a stream that is no terminal (a log file).
+COUNT_INTERVAL = 10.0
+#: Seconds between two redraws of the count line on a terminal.
+REDRAW_INTERVAL = 0.25
 COMPILING = "compiling the Numba kernels on first use (cached for later runs)…"
 #: The environment variable that turns progress lines off (``0``); set while a
 #: command runs, so that ``workbench._compiled`` leaves its compile line to it.
@@ -56,10 +66,15 @@ class Progress:
         self._said_compiling = False
         self._listener: object | None = None
         self._environ: str | None = None
+        self._started = time.monotonic()
+        self._first_count: tuple[float, int] | None = None  # (time [s], done)
+        self._last_count = -math.inf  # time [s] of the last count line
+        self._open_line = False  # a count line redrawn in place, not ended
         _LIVE.add(self)
 
     def __enter__(self) -> Progress:
         # the command speaks for compiles: the library's own line is off
+        self._started = time.monotonic()
         self._environ = os.environ.get(_ENVIRON)
         os.environ[_ENVIRON] = "0"
         if not self.enabled:
@@ -91,8 +106,65 @@ class Progress:
         """No more lines: the command is done or now waits on the user (a server)."""
         with self._lock:
             self._finished = True
+            if self._open_line:
+                self._write("\n")
         if self._timer is not None:
             self._timer.cancel()
+
+    def count(
+        self, done: int, total: int, *, unit: str = "steps", label: str = ""
+    ) -> None:
+        """``done`` of ``total`` steps finished: a line with the time elapsed and left.
+
+        Nothing within the first ``delay`` seconds. The estimate of the time
+        left extrapolates the rate of the steps done since the first call (a
+        resumed command starts with some already done).
+
+        Args:
+            done: Steps done so far.
+            total: Steps in all.
+            unit: What a step is, for the line (``"blocks"``).
+            label: What the command does, before the count (``"workspace
+                map"``).
+        """
+        now = time.monotonic()
+        with self._lock:
+            if self._first_count is None:
+                self._first_count = (now, done)
+            if not self.enabled or self._finished or now - self._started < self.delay:
+                return
+            stream = self._get_stream()
+            terminal = _is_terminal(stream)
+            interval = REDRAW_INTERVAL if terminal else COUNT_INTERVAL
+            last = done >= total
+            if now - self._last_count < interval and not (last and terminal):
+                return
+            self._last_count = now
+            percent = 100 * done // max(total, 1)
+            line = f"workbench: {label}{': ' if label else ''}{done}/{total} {unit}"
+            line += f" ({percent}%)"
+            line += f", {_format_seconds(now - self._started)} elapsed"
+            start, first = self._first_count
+            if done > first and not last:
+                left = (now - start) / (done - first) * (total - done)
+                line += f", about {_format_seconds(left)} left"
+            if terminal:
+                self._write(f"\r{line}\x1b[K" + ("\n" if last else ""))
+                self._open_line = not last
+            else:
+                self._write(line + "\n")
+
+    def _get_stream(self) -> TextIO:
+        return self._stream if self._stream is not None else sys.stderr
+
+    def _write(self, text: str) -> None:
+        """Write and flush (the lock held); a closed stream is ignored."""
+        try:
+            stream = self._get_stream()
+            stream.write(text)
+            stream.flush()
+        except (OSError, ValueError):  # stderr closed: progress is optional
+            pass
 
     def on_compile(self) -> None:
         """Numba started compiling: say so once per process run."""
@@ -106,12 +178,26 @@ class Progress:
         with self._lock:
             if check and self._finished:
                 return
-            stream = self._stream if self._stream is not None else sys.stderr
-            try:
-                stream.write(f"workbench: {text}\n")
-                stream.flush()
-            except (OSError, ValueError):  # stderr closed: progress is optional
-                pass
+            self._write(("\n" if self._open_line else "") + f"workbench: {text}\n")
+            self._open_line = False
+
+
+def _is_terminal(stream: TextIO) -> bool:
+    try:
+        return stream.isatty()
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
+def _format_seconds(seconds: float) -> str:
+    """``"8.1 s"``, ``"4 min 05 s"``, ``"2 h 03 min"``."""
+    if seconds < 60.0:
+        return f"{seconds:.1f} s"
+    minutes, rest = divmod(round(seconds), 60)
+    if minutes < 60:
+        return f"{minutes} min {rest:02d} s"
+    hours, minutes = divmod(minutes, 60)
+    return f"{hours} h {minutes:02d} min"
 
 
 class _Timer(threading.Timer):

@@ -72,18 +72,19 @@ def _run_threads(
 
     prefix = f"workspace-block-{uuid.uuid4().hex}"
     keys = {f"{prefix}-{i}": i for i in items}
+    results: dict[int, Any] = {}  # handed over, then dropped: none piles up
+
+    def run(i: int) -> None:
+        results[i] = task(shared, i)
 
     class _Finished(Callback):
         def _posttask(
             self, key: Any, result: Any, dsk: Any, state: Any, worker: Any
         ) -> None:
             if key in keys:
-                on_done(keys[key], result)
+                on_done(keys[key], results.pop(keys[key]))
 
-    tasks = [
-        dask.delayed(task, pure=False)(shared, i, dask_key_name=key)
-        for key, i in keys.items()
-    ]
+    tasks = [dask.delayed(run, pure=False)(i, dask_key_name=k) for k, i in keys.items()]
     with _Finished():
         dask.compute(*tasks, scheduler="threads", num_workers=workers)
 
@@ -116,7 +117,7 @@ def _run_cluster(
             for i in items
         }
         try:
-            for future in as_completed(futures):
+            for future in as_completed(futures, loop=client.loop):
                 on_done(futures[future], future.result())
         finally:
             client.cancel(list(futures))

@@ -1,48 +1,59 @@
-"""Build a workspace map: blocks of voxels computed as Dask tasks into a Zarr store.
+"""Build a workspace map: blocks computed as Dask tasks into a Zarr store.
 
-:func:`build_map` splits the grid into blocks of ``block_voxels`` voxels; each
-block is one Dask task that evaluates every pose of its voxels
-(:func:`~workbench.workspace.measures.evaluate_block`) and writes them into
-its own chunk of every array, then the block's ``done`` flag. A block's bits
-depend on the block only, so the map is bitwise the same on one worker, many
-workers or a cluster.
+:func:`build_map` splits the work into blocks. For an arm with a closed form,
+a block is ``block_voxels`` voxels × every orientation: one Dask task
+evaluates its poses (:func:`~workbench.workspace.measures.evaluate_block`) and
+writes them into its own chunk of every array, then the block's ``done`` flag.
+A block's bits depend on the block only, so the map is bitwise the same on one
+worker, many workers or a cluster.
+
+Arms without a closed form get a sampled map (:mod:`workbench.workspace.sampled`):
+a block is :data:`SAMPLES_PER_BLOCK` random configurations, drawn from
+``default_rng([seed, block])``; each task returns the grid poses its samples
+hit and their manipulability, which this process folds into the map (hit flag
+and maximum: the same bits in any order). The folded arrays are saved every
+:data:`SAVE_INTERVAL` seconds and at the end, then the ``done`` flags of the
+blocks they hold.
 
 Whole or nothing, and resumable: the map is written in ``MAP.zarr.partial``
-(:func:`~workbench.workspace.store.get_partial_path`) and renamed ``MAP.zarr``
-when every block is done. A build that stops (Ctrl-C, a crash, ``kill -9``)
-leaves the partial folder; the same call again finds it, checks that it is a
-build of the same map (robot, URDF, limits, grid, orientations, scene,
-blocks, versions) and computes only the blocks not marked done. A partial
-folder of another map is refused with a message saying so.
-
-Arms without a closed form get a sampled map (:mod:`workbench.workspace.sampled`).
+and renamed ``MAP.zarr`` when every block is done (:mod:`._partial`). A
+build that stops (Ctrl-C, an error, ``kill -9``) leaves the partial folder;
+the same call again checks that it is a build of the same map (robot, URDF,
+limits, grid, orientations, scene, blocks, sampling, versions) and computes
+only the blocks not marked done (a sampled map folds a block twice at worst,
+which a maximum ignores).
 """
 
 from __future__ import annotations
 
-import contextlib
-import fcntl
-import importlib.metadata
-import json
+import functools
 import logging
 import math
 import os
 import time
-from collections.abc import Callable, Iterator, Mapping
+import uuid
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-import workbench
-from workbench.atomic_files import check_output, move_folder_into_place
+from workbench.atomic_files import check_output
 from workbench.collision import Scene
-from workbench.errors import InputError, WorkbenchError
+from workbench.errors import InputError
 from workbench.ik import UnsupportedRobotError, get_closed_form
 from workbench.model.robot import Robot
 from workbench.singularities.conditions import ELBOW_TOL, SHOULDER_TOL, WRIST_TOL
 from workbench.workspace._block_runner import run_tasks
+from workbench.workspace._partial import (
+    as_json_attributes,
+    check_same_build,
+    finish,
+    get_versions,
+    locked,
+)
+from workbench.workspace._reference import summarise_voxels
 from workbench.workspace.grid import PoseGrid
 from workbench.workspace.measures import POSE_KEYS, VOXEL_KEYS, evaluate_block
 from workbench.workspace.robot_spec import (
@@ -52,29 +63,47 @@ from workbench.workspace.robot_spec import (
     load_spec_checker,
     load_spec_robot,
 )
+from workbench.workspace.sampled import accumulate, sample_block
 from workbench.workspace.store import (
+    DONE,
     FORMAT,
     FORMAT_VERSION,
+    BlockWriter,
     create_store,
-    get_attributes,
+    get_array,
     get_block_count,
     get_partial_path,
     open_group_checked,
     read_array,
-    read_done,
-    write_block,
 )
 
 logger = logging.getLogger(__name__)
 
 #: Voxels per block (one task, one chunk of every array): 256 voxels × 512
-#: orientations is 131,072 poses, a quarter second of one core.
+#: orientations is 131,072 poses.
 DEFAULT_BLOCK_VOXELS = 256
+#: Configurations of a sampled map when none is given.
+DEFAULT_SAMPLES = 10_000_000
+#: Configurations per block (one task) of a sampled map.
+SAMPLES_PER_BLOCK = 1 << 18
+#: Seed of a sampled map's generators (``default_rng([seed, block])``).
+SAMPLE_SEED = 0
+#: Seconds between two saves of a sampled map's folded arrays.
+SAVE_INTERVAL = 30.0
+#: The arrays of a sampled map: the hit flag (as ``reached``), the largest
+#: manipulability, and the per-voxel summaries of those.
+SAMPLED_KEYS = (
+    "reached",
+    "dexterity",
+    "reachability",
+    "dexterity_best",
+    "dexterity_median",
+)
+#: Voxels summarised at once at the end of a sampled build (bounds the memory).
+_SUMMARY_VOXELS = 4096
 #: ``progress(done, total)``: blocks done so far (those of an earlier run
 #: included) and in all.
 ProgressCallback = Callable[[int, int], None]
-
-_VERSIONED = ("workbench", "pinocchio", "numpy", "numba", "zarr", "dask")
 
 
 @dataclass(frozen=True, slots=True)
@@ -88,10 +117,11 @@ class MapSummary:
         poses: V · O.
         sampled: Whether the map was sampled (no closed form).
         samples: Configurations sampled (None for an exact map).
-        reachable_fraction: Fraction of the V · O poses with a usable branch.
+        reachable_fraction: Fraction of the V · O poses with a usable branch
+            (of a sampled map: hit by a sample).
         seconds: Wall time of the build [s].
-        poses_per_second: Poses (samples of a sampled map) computed by this
-            run per second [1/s].
+        poses_per_second: Poses (of a sampled map: samples) computed by this
+            run, per second [1/s].
         store: Path of the map folder.
         blocks: Blocks of the build.
         blocks_computed: Blocks computed by this run (fewer when resumed).
@@ -121,31 +151,45 @@ class _BlockJob:
 
     spec: RobotSpec
     grid: PoseGrid
-    scene_json: str | None
     path: str
+    token: str  # unique to one build_map call
     block_voxels: int
+    scene_json: str | None = None
+    samples: int = 0
 
 
-def _compute_block(job: _BlockJob, block: int) -> int:
-    """Evaluate block ``block`` and write it (data, then its flag); returns it."""
+def _compute_block(job: _BlockJob, block: int) -> None:
+    """Evaluate voxel block ``block`` and write it (data, then its flag)."""
     robot = load_spec_robot(job.spec)
-    checker = (
-        None if job.scene_json is None else load_spec_checker(job.spec, job.scene_json)
-    )
+    checker = None
+    if job.scene_json is not None:
+        checker = load_spec_checker(job.spec, job.scene_json)
     start = block * job.block_voxels
     stop = min(start + job.block_voxels, job.grid.voxel_count)
-    if not Path(job.path).is_dir():
+    data = evaluate_block(robot, job.grid, start, stop, checker=checker)
+    _get_writer(job.path, job.token).write(block, start, data)
+
+
+@functools.lru_cache(maxsize=4)
+def _get_writer(path: str, token: str) -> BlockWriter:
+    """The writer of a build's store, opened once per worker process.
+
+    Raises:
+        InputError: If the store is not there (a worker on another file system).
+    """
+    if not Path(path).is_dir():
         raise InputError(
-            f"a worker cannot see the map being built at {job.path}: the workers "
+            f"a worker cannot see the map being built at {path}: the workers "
             "of a cluster must share its file system, at the same path"
         )
-    write_block(
-        job.path,
-        block,
-        start,
-        evaluate_block(robot, job.grid, start, stop, checker=checker),
-    )
-    return block
+    return BlockWriter(path)
+
+
+def _sample(job: _BlockJob, block: int) -> tuple[np.ndarray, np.ndarray]:
+    """The grid poses hit by sample block ``block`` and their manipulability."""
+    count = min(SAMPLES_PER_BLOCK, job.samples - block * SAMPLES_PER_BLOCK)
+    robot = load_spec_robot(job.spec)
+    return sample_block(robot, job.grid, block, count, SAMPLE_SEED)
 
 
 def build_map(
@@ -171,11 +215,11 @@ def build_map(
             to compute on instead; ``path`` must be on a file system every
             worker shares, at the same path.
         scene: Obstacles: then ``collision_free`` is counted and the best
-            branch must be collision-free.
+            branch must be collision-free (exact maps only).
         samples: Sample this many configurations instead of solving in
             closed form (a sampled map); default: exact for arms with a
-            closed form, sampled otherwise.
-        block_voxels: Voxels per block (task and chunk).
+            closed form, :data:`DEFAULT_SAMPLES` for the others.
+        block_voxels: Voxels per block of an exact map, and per chunk.
         progress: Called with ``(done, total)`` blocks as they finish.
 
     Returns:
@@ -183,85 +227,175 @@ def build_map(
 
     Raises:
         InputError: On a bad argument, an existing ``path``, a partial build
-            of another map at ``path``'s partial folder, a partial folder in
-            use by another build, or an unreachable scheduler.
+            of another map in ``path``'s partial folder, a partial folder in
+            use by another build, an unreachable scheduler, a scene with a
+            sampled map.
     """
     begin = time.perf_counter()
     path = Path(path).absolute()
-    count = _check_arguments(workers, scheduler, samples, block_voxels)
+    threads = _check_arguments(workers, scheduler, samples, block_voxels)
     check_output(path, folder=True)
-    spec = get_robot_spec(robot)
-    scene_json = None if scene is None else get_scene_json(scene)
     family = _get_family(robot)
-    if samples is not None or family is None:
+    sampled = samples is not None or family is None
+    if sampled and scene is not None:
         raise InputError(
-            f"{robot.name} has no closed form: sampled maps are not available yet"
+            "a sampled map checks no collisions: a scene needs an exact map (an "
+            "arm with a closed form, without samples)"
         )
-    attrs = _map_attributes(robot, spec, grid, family, scene, block_voxels)
+    count = (samples or DEFAULT_SAMPLES) if sampled else 0
+    spec = get_robot_spec(robot)
+    attrs = _map_attributes(robot, spec, grid, family, scene, block_voxels, count)
+    if sampled:
+        names = list(SAMPLED_KEYS)
+        total = get_block_count(count, SAMPLES_PER_BLOCK)
+    else:
+        names = [k for k in (*POSE_KEYS, *VOXEL_KEYS) if k != "collision_free" or scene]
+        total = get_block_count(grid.voxel_count, block_voxels)
     partial = get_partial_path(path)
-    total = get_block_count(grid.voxel_count, block_voxels)
-    names = [k for k in (*POSE_KEYS, *VOXEL_KEYS) if k != "collision_free" or scene]
-    with _locked(partial):
+    with locked(partial):
         check_output(path, folder=True)  # not made by another build meanwhile
         if partial.exists():
-            _check_same_build(partial, attrs)
+            check_same_build(partial, attrs)
         else:
             create_store(
-                partial, grid, names=names, block_voxels=block_voxels, attrs=attrs
+                partial,
+                grid,
+                names=names,
+                block_voxels=block_voxels,
+                attrs=attrs,
+                blocks=total,
             )
-        done = read_done(partial)
-        todo = [int(b) for b in np.flatnonzero(~done)]
-        finished = total - len(todo)
-        if progress is not None:
-            progress(finished, total)
-
-        def on_done(block: int, result: Any) -> None:
-            nonlocal finished
-            finished += 1
-            if progress is not None:
-                progress(finished, total)
-
-        job = _BlockJob(spec, grid, scene_json, str(partial), block_voxels)
+        todo = [
+            int(b)
+            for b in np.flatnonzero(read_array(open_group_checked(partial), DONE) != 1)
+        ]
+        job = _BlockJob(
+            spec=spec,
+            grid=grid,
+            path=str(partial),
+            token=uuid.uuid4().hex,
+            block_voxels=block_voxels,
+            scene_json=None if scene is None else get_scene_json(scene),
+            samples=count,
+        )
+        counter = _Counter(total - len(todo), total, progress)
         try:
-            run_tasks(
-                _compute_block,
-                job,
-                todo,
-                on_done=on_done,
-                workers=count,
-                scheduler=scheduler,
-            )
+            if sampled:
+                _run_sampled(job, todo, counter, threads, scheduler)
+            else:
+                run_tasks(
+                    _compute_block,
+                    job,
+                    todo,
+                    on_done=counter.add,
+                    workers=threads,
+                    scheduler=scheduler,
+                )
         except BaseException:
+            done = int(np.sum(read_array(open_group_checked(partial), DONE) == 1))
             logger.warning(
                 "map build stopped with %d of %d blocks done; they are kept in %s "
                 "and the same command resumes the build",
-                int(read_done(partial).sum()),
+                done,
                 total,
                 partial,
             )
             raise
-        reachable = _finish(partial, path, total)
+        reachability = read_array(open_group_checked(partial), "reachability").astype(
+            np.float64
+        )
+        finish(partial, path)
     seconds = time.perf_counter() - begin
-    computed = len(todo)
-    poses = grid.pose_count
-    computed_poses = (
-        sum(min(block_voxels, grid.voxel_count - b * block_voxels) for b in todo)
-        * grid.orientation_count
-    )
+    if sampled:
+        computed = sum(
+            min(SAMPLES_PER_BLOCK, count - b * SAMPLES_PER_BLOCK) for b in todo
+        )
+    else:
+        voxels = sum(
+            min(block_voxels, grid.voxel_count - b * block_voxels) for b in todo
+        )
+        computed = voxels * grid.orientation_count
     return MapSummary(
         robot=robot.name,
         voxels=grid.voxel_count,
         orientations=grid.orientation_count,
-        poses=poses,
-        sampled=False,
-        samples=None,
-        reachable_fraction=reachable,
+        poses=grid.pose_count,
+        sampled=sampled,
+        samples=count if sampled else None,
+        reachable_fraction=float(np.sum(reachability) / reachability.size),
         seconds=seconds,
-        poses_per_second=computed_poses / seconds if seconds > 0 else math.inf,
+        poses_per_second=computed / seconds if seconds > 0 else math.inf,
         store=str(path),
         blocks=total,
-        blocks_computed=computed,
+        blocks_computed=len(todo),
     )
+
+
+class _Counter:
+    """Counts finished blocks and reports them to a progress callback."""
+
+    def __init__(self, done: int, total: int, progress: ProgressCallback | None):
+        self.done, self.total, self._progress = done, total, progress
+        self._report()
+
+    def add(self, block: int, result: Any = None) -> None:
+        self.done += 1
+        self._report()
+
+    def _report(self) -> None:
+        if self._progress is not None:
+            self._progress(self.done, self.total)
+
+
+def _run_sampled(
+    job: _BlockJob,
+    todo: list[int],
+    counter: _Counter,
+    threads: int,
+    scheduler: str | None,
+) -> None:
+    """Sample the blocks ``todo``, fold them in, save as they come; then summarise."""
+    group = open_group_checked(job.path, mode="r+")
+    hit = np.ascontiguousarray(read_array(group, "reached").reshape(-1))
+    dexterity = np.ascontiguousarray(read_array(group, "dexterity").reshape(-1))
+    folded: list[int] = []
+    saved = time.monotonic()
+
+    def save() -> None:
+        nonlocal saved
+        shape = (job.grid.voxel_count, job.grid.orientation_count)
+        get_array(group, "reached")[...] = hit.reshape(shape)
+        get_array(group, "dexterity")[...] = dexterity.reshape(shape)
+        flags = get_array(group, DONE)
+        for block in folded:
+            flags[block] = 1
+        folded.clear()
+        saved = time.monotonic()
+
+    def fold(block: int, result: tuple[np.ndarray, np.ndarray]) -> None:
+        accumulate(*result, hit, dexterity)
+        folded.append(block)
+        if time.monotonic() - saved > SAVE_INTERVAL:
+            save()
+        counter.add(block)
+
+    try:
+        run_tasks(
+            _sample, job, todo, on_done=fold, workers=threads, scheduler=scheduler
+        )
+    finally:
+        if folded:
+            save()
+    _save_summaries(group, dexterity.reshape(job.grid.voxel_count, -1))
+
+
+def _save_summaries(group: Any, dexterity: np.ndarray) -> None:
+    """The per-voxel arrays of a sampled map from its (V, O) dexterity."""
+    for start in range(0, len(dexterity), _SUMMARY_VOXELS):
+        part = dexterity[start : start + _SUMMARY_VOXELS].astype(np.float64)
+        summary = summarise_voxels(part, np.full(part.shape, np.nan))
+        for name in SAMPLED_KEYS[2:]:
+            get_array(group, name)[start : start + len(part)] = summary[name]
 
 
 def _check_arguments(
@@ -270,7 +404,7 @@ def _check_arguments(
     samples: int | None,
     block_voxels: int,
 ) -> int:
-    """Validate the options; returns the local thread count."""
+    """Validate the options; returns the number of local threads."""
     if workers is not None and scheduler is not None:
         raise InputError("give workers or a scheduler, not both")
     for name, value in (
@@ -305,34 +439,6 @@ def _get_family(robot: Robot) -> str | None:
         return None
 
 
-def _get_versions() -> dict[str, str]:
-    versions = {}
-    for name in _VERSIONED:
-        if name == "workbench":
-            versions[name] = workbench.__version__
-            continue
-        try:
-            versions[name] = importlib.metadata.version(
-                "pin" if name == "pinocchio" else name
-            )
-        except importlib.metadata.PackageNotFoundError:
-            versions[name] = "unknown"
-    return versions
-
-
-def _json_ready(value: Any) -> Any:
-    """NumPy values as builtins, exactly (no rounding), tuples as lists."""
-    if isinstance(value, Mapping):
-        return {str(k): _json_ready(v) for k, v in value.items()}
-    if isinstance(value, np.ndarray):
-        return _json_ready(value.tolist())
-    if isinstance(value, list | tuple):
-        return [_json_ready(v) for v in value]
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
-
-
 def _map_attributes(
     robot: Robot,
     spec: RobotSpec,
@@ -340,110 +446,40 @@ def _map_attributes(
     family: str | None,
     scene: Scene | None,
     block_voxels: int,
+    samples: int,
 ) -> dict[str, Any]:
     """The group attributes of a map (``docs/workspace.md`` lists them)."""
-    attrs = {
-        "format": FORMAT,
-        "format_version": FORMAT_VERSION,
-        "robot": robot.name,
-        "urdf_sha256": spec.urdf_sha256,
-        "tool_frame": robot.tool_frame,
-        "family": family,
-        "joint_limits": {"lower": spec.lower, "upper": spec.upper},
-        "sampled": False,
-        "samples": None,
-        "grid": {
-            "origin": grid.origin,
-            "resolution": grid.resolution,
-            "shape": grid.shape,
-            "bounds": grid.bounds,
-        },
-        "orientation_set": grid.orientation_set,
-        "block_voxels": block_voxels,
-        "tolerances": {
-            "shoulder": SHOULDER_TOL,
-            "elbow": ELBOW_TOL,
-            "wrist": WRIST_TOL,
-        },
-        "scene": None if scene is None else scene.to_dict(),
-        "versions": _get_versions(),
-    }
-    ready = _json_ready(attrs)
-    return json.loads(json.dumps(ready, allow_nan=False))
-
-
-def _check_same_build(partial: Path, attrs: Mapping[str, Any]) -> None:
-    """Raise unless the partial folder is a build of the map ``attrs`` describe."""
-    try:
-        stored = get_attributes(open_group_checked(partial, mode="r"))
-    except InputError as err:
-        raise InputError(
-            f"{partial} is in the way of this build and is not a partial map "
-            f"of it ({err}); remove it to start again"
-        ) from err
-    differ = [key for key in attrs if stored.get(key) != attrs[key]]
-    if differ:
-        raise InputError(
-            f"{partial} holds an unfinished build of another map ({', '.join(differ)} "
-            "differ); run the command that started it to finish it, or remove it "
-            "to start this one"
-        )
-
-
-@contextlib.contextmanager
-def _locked(partial: Path) -> Iterator[None]:
-    """Hold an exclusive lock on the parent folder's entry for ``partial``.
-
-    The lock is a ``flock`` on a hidden lock file beside the partial folder
-    (the operating system drops it when the process dies), so two builds of
-    one map never write the same partial folder.
-    """
-    lock = partial.with_name(f".{partial.name}.lock")
-    fd = _lock_file(lock, partial)
-    try:
-        yield
-        lock.unlink(missing_ok=True)
-    finally:
-        os.close(fd)
-
-
-def _lock_file(lock: Path, partial: Path) -> int:
-    """Open and ``flock`` the lock file; its descriptor (retried if replaced)."""
-    while True:
-        try:
-            fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
-        except OSError as err:
-            raise InputError(f"cannot write {lock}: {err.strerror or err}") from err
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError as err:
-            os.close(fd)
-            raise InputError(
-                f"{partial} is being built by another process; wait for it or stop it"
-            ) from err
-        try:
-            same = os.fstat(fd).st_ino == lock.stat().st_ino
-        except FileNotFoundError:  # its holder removed it as we took it
-            same = False
-        if same:
-            return fd
-        os.close(fd)
-
-
-def _finish(partial: Path, path: Path, total: int) -> float:
-    """Check every block is done, rename the partial folder; reachable fraction."""
-    group = open_group_checked(partial, mode="r")
-    done = read_array(group, "done")
-    if not np.all(done == 1):
-        raise WorkbenchError(
-            f"{partial}: {int(done.sum())} of {total} blocks done after the run"
-        )
-    reachability = read_array(group, "reachability").astype(np.float64)
-    reachable = float(np.nansum(reachability) / reachability.size)
-    if path.exists():
-        raise InputError(f"cannot write {path}: it appeared during the build")
-    try:
-        move_folder_into_place(partial, path)
-    except OSError as err:
-        raise InputError(f"cannot write {path}: {err.strerror or err}") from err
-    return reachable
+    sampled = samples > 0
+    return as_json_attributes(
+        {
+            "format": FORMAT,
+            "format_version": FORMAT_VERSION,
+            "robot": robot.name,
+            "urdf_sha256": spec.urdf_sha256,
+            "tool_frame": robot.tool_frame,
+            "family": family,
+            "joint_limits": {"lower": spec.lower, "upper": spec.upper},
+            "sampled": sampled,
+            "samples": samples if sampled else None,
+            "sampling": (
+                {"samples_per_block": SAMPLES_PER_BLOCK, "seed": SAMPLE_SEED}
+                if sampled
+                else None
+            ),
+            "grid": {
+                "origin": grid.origin,
+                "resolution": grid.resolution,
+                "shape": grid.shape,
+                "bounds": grid.bounds,
+            },
+            "orientation_set": grid.orientation_set,
+            "block_voxels": block_voxels,
+            "tolerances": {
+                "shoulder": SHOULDER_TOL,
+                "elbow": ELBOW_TOL,
+                "wrist": WRIST_TOL,
+            },
+            "scene": None if scene is None else scene.to_dict(),
+            "versions": get_versions(),
+        }
+    )

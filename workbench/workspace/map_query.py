@@ -21,7 +21,10 @@ from workbench.poses.rigid import RIGIDITY_TOL
 from workbench.validation import as_finite_array
 from workbench.workspace.grid import PoseGrid
 from workbench.workspace.measures import singularity_margin
-from workbench.workspace.orientations import rotation_angle_between
+from workbench.workspace.orientations import (
+    quat_xyzw_from_rotations,
+    rotation_angle_between,
+)
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -107,46 +110,6 @@ def split_poses(poses: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
     )
 
 
-def quat_xyzw_from_rotations(rotations: npt.ArrayLike) -> FloatArray:
-    """Unit quaternions (N, 4) x y z w, ``w >= 0``, of rotations (N, 3, 3).
-
-    Shepperd's method, vectorised: each row is computed from the largest of
-    ``1 + tr R``, ``1 + 2 R_ii - tr R``, so it is exact to rounding at any
-    angle.
-    """
-    r = np.asarray(rotations, dtype=np.float64)
-    trace = r[:, 0, 0] + r[:, 1, 1] + r[:, 2, 2]
-    pivots = np.stack(
-        [1.0 + 2.0 * r[:, i, i] - trace for i in range(3)] + [1.0 + trace], axis=1
-    )
-    case = np.argmax(pivots, axis=1)
-    s = np.sqrt(np.maximum(pivots[np.arange(len(r)), case], 0.0))  # = 4 |q_case| / 2
-    out = np.empty((len(r), 4))
-    off = {  # (i, j): R_ij + R_ji and R_ij - R_ji
-        "xy": r[:, 0, 1] + r[:, 1, 0],
-        "xz": r[:, 0, 2] + r[:, 2, 0],
-        "yz": r[:, 1, 2] + r[:, 2, 1],
-        "x": r[:, 2, 1] - r[:, 1, 2],
-        "y": r[:, 0, 2] - r[:, 2, 0],
-        "z": r[:, 1, 0] - r[:, 0, 1],
-    }
-    rows = {
-        0: (s, off["xy"], off["xz"], off["x"]),
-        1: (off["xy"], s, off["yz"], off["y"]),
-        2: (off["xz"], off["yz"], s, off["z"]),
-        3: (off["x"], off["y"], off["z"], s),
-    }
-    for k, components in rows.items():
-        mask = case == k
-        if not mask.any():
-            continue
-        scale = 0.5 / s[mask]
-        for c, value in enumerate(components):
-            out[mask, c] = value[mask] * scale if c != k else 0.5 * s[mask]
-    out /= np.linalg.norm(out, axis=1, keepdims=True)
-    return np.where(out[:, 3:4] < 0.0, -out, out)
-
-
 def query_map(group: zarr.Group, grid: PoseGrid, poses: npt.ArrayLike) -> MapQuery:
     """The map's measures at the grid poses nearest to ``poses`` (:class:`MapQuery`).
 
@@ -189,7 +152,7 @@ def query_map(group: zarr.Group, grid: PoseGrid, poses: npt.ArrayLike) -> MapQue
         voxel=voxel,
         orientation=orientation,
         inside=inside,
-        branches=read("branches", 0, np.uint8),
+        branches=read("branches" if "branches" in names else "reached", 0, np.uint8),
         reached=read("reached", 0, np.uint8),
         dexterity=read("dexterity", nan, np.float64),
         singularity_margin=margin,

@@ -21,6 +21,7 @@ value (NaN, 0: poses out of reach) are not written at all.
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -32,6 +33,7 @@ import numpy.typing as npt
 import zarr
 import zarr.errors
 from zarr.codecs import BloscCodec
+from zarr.core.sync import sync
 
 from workbench.atomic_files import atomic_folder
 from workbench.errors import InputError
@@ -224,21 +226,45 @@ def _create_arrays(
     )
 
 
-def write_block(
-    path: str | Path, block: int, start: int, data: Mapping[str, Any]
-) -> None:
-    """Write one block's arrays at voxels ``start:`` then its ``done`` flag.
+class BlockWriter:
+    """Writes blocks into a map being built (its arrays opened once).
 
     Args:
         path: The map folder (being built).
-        block: Block index (its flag in ``done``).
-        start: First voxel of the block (a multiple of the chunk length).
-        data: Arrays by name, (B, O) or (B,) each, B the block's voxel count.
+
+    Raises:
+        InputError: If ``path`` is not a map (:func:`open_group_checked`).
     """
-    group = zarr.open_group(path, mode="r+", zarr_format=3)
-    for name, values in data.items():
-        get_array(group, name)[start : start + len(values)] = values
-    get_array(group, DONE)[block] = 1
+
+    def __init__(self, path: str | Path):
+        group = open_group_checked(path, mode="r+")
+        self._arrays = {name: get_array(group, name) for name in get_array_names(group)}
+        self._done = get_array(group, DONE)
+
+    def write(self, block: int, start: int, data: Mapping[str, Any]) -> None:
+        """Write one block's arrays at voxels ``start:``, then its ``done`` flag.
+
+        The arrays are written concurrently (Zarr's I/O loop); the flag only
+        once every one of them is stored.
+
+        Args:
+            block: Block index (its flag in ``done``).
+            start: First voxel of the block (a multiple of the chunk length).
+            data: Arrays by name, (B, O) or (B,) each, B the block's voxels.
+        """
+
+        async def write_all() -> None:
+            await asyncio.gather(
+                *(
+                    self._arrays[name].async_array.setitem(
+                        slice(start, start + len(values)), values
+                    )
+                    for name, values in data.items()
+                )
+            )
+
+        sync(write_all())
+        self._done[block] = 1
 
 
 def read_done(path: str | Path) -> npt.NDArray[np.bool_]:

@@ -1,0 +1,165 @@
+"""The partial folder of a map build: its lock, its identity, its completion.
+
+A build of ``MAP.zarr`` writes ``MAP.zarr.partial``. :func:`locked` keeps two
+builds from writing one partial folder at a time (a ``flock`` on a hidden lock
+file beside it, which the operating system releases when the process dies);
+:func:`map_attributes` are the group attributes that say which map a partial
+folder is a build of, and :func:`check_same_build` refuses to resume a
+partial folder of another map; :func:`finish` renames a complete one onto the
+target.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import importlib.metadata
+import json
+import os
+from collections.abc import Iterator, Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import workbench
+from workbench.atomic_files import move_folder_into_place
+from workbench.errors import InputError, WorkbenchError
+from workbench.workspace.store import (
+    DONE,
+    get_attributes,
+    open_group_checked,
+    read_array,
+)
+
+#: Packages whose versions a map records (``attrs["versions"]``).
+VERSIONED = ("workbench", "pinocchio", "numpy", "numba", "zarr", "dask")
+
+
+def get_versions() -> dict[str, str]:
+    """The versions of :data:`VERSIONED` installed here."""
+    versions = {}
+    for name in VERSIONED:
+        if name == "workbench":
+            versions[name] = workbench.__version__
+            continue
+        try:
+            versions[name] = importlib.metadata.version(
+                "pin" if name == "pinocchio" else name
+            )
+        except importlib.metadata.PackageNotFoundError:
+            versions[name] = "unknown"
+    return versions
+
+
+def as_json_attributes(attrs: Mapping[str, Any]) -> dict[str, Any]:
+    """``attrs`` as stored (JSON): NumPy values as builtins, exactly; tuples as lists.
+
+    Raises:
+        ValueError: If a value is not finite.
+    """
+    ready = _json_ready(attrs)
+    loaded: dict[str, Any] = json.loads(json.dumps(ready, allow_nan=False))
+    return loaded
+
+
+def _json_ready(value: Any) -> Any:
+    """NumPy values as builtins, exactly (no rounding), tuples as lists."""
+    if isinstance(value, Mapping):
+        return {str(k): _json_ready(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return _json_ready(value.tolist())
+    if isinstance(value, list | tuple):
+        return [_json_ready(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def check_same_build(partial: Path, attrs: Mapping[str, Any]) -> None:
+    """Raise unless the partial folder is a build of the map ``attrs`` describe.
+
+    Every attribute must be equal, the versions of the packages included (a
+    map is bitwise reproducible with the versions it records).
+
+    Raises:
+        InputError: If ``partial`` is no map, or a build of another one.
+    """
+    try:
+        stored = get_attributes(open_group_checked(partial, mode="r"))
+    except InputError as err:
+        raise InputError(
+            f"{partial} is in the way of this build and is not a partial map "
+            f"of it ({err}); remove it to start again"
+        ) from err
+    differ = [key for key in attrs if stored.get(key) != attrs[key]]
+    if differ:
+        raise InputError(
+            f"{partial} holds an unfinished build of another map ({', '.join(differ)} "
+            "differ); run the command that started it to finish it, or remove it "
+            "to start this one"
+        )
+
+
+@contextlib.contextmanager
+def locked(partial: Path) -> Iterator[None]:
+    """Hold the exclusive right to write the partial folder ``partial``.
+
+    The lock is a ``flock`` on a hidden lock file beside the partial folder
+    (the operating system drops it when the process dies), so two builds of
+    one map never write the same partial folder.
+
+    Raises:
+        InputError: If another process holds it, or the folder is read-only.
+    """
+    lock = partial.with_name(f".{partial.name}.lock")
+    fd = _lock_file(lock, partial)
+    try:
+        yield
+        lock.unlink(missing_ok=True)
+    finally:
+        os.close(fd)
+
+
+def _lock_file(lock: Path, partial: Path) -> int:
+    """Open and ``flock`` the lock file; its descriptor (retried if replaced)."""
+    while True:
+        try:
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as err:
+            raise InputError(f"cannot write {lock}: {err.strerror or err}") from err
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as err:
+            os.close(fd)
+            raise InputError(
+                f"{partial} is being built by another process; wait for it or stop it"
+            ) from err
+        try:
+            same = os.fstat(fd).st_ino == lock.stat().st_ino
+        except FileNotFoundError:  # its holder removed it as we took it
+            same = False
+        if same:
+            return fd
+        os.close(fd)
+
+
+def finish(partial: Path, path: Path) -> None:
+    """Check that every block of ``partial`` is done, then rename it ``path``.
+
+    Raises:
+        WorkbenchError: If a block is not done.
+        InputError: If ``path`` exists or the rename fails.
+    """
+    done = read_array(open_group_checked(partial, mode="r"), DONE)
+    if not np.all(done == 1):
+        raise WorkbenchError(
+            f"{partial}: {int(np.sum(done == 1))} of {done.size} blocks done after "
+            "the run"
+        )
+    if path.exists():
+        raise InputError(f"cannot write {path}: it appeared during the build")
+    try:
+        move_folder_into_place(partial, path)
+    except OSError as err:
+        raise InputError(f"cannot write {path}: {err.strerror or err}") from err
