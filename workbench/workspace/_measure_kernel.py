@@ -1,19 +1,22 @@
 r"""Compiled per-pose measures of the workspace map, after the batch closed form.
 
 :func:`fill_poses` writes the (N, 4, 4) poses of a run of flat grid indices;
-the family kernel's batch stages (``batch_arguments``, ``atan2_into``,
-``batch_assemble``, as :meth:`ClosedFormSolver.solve_batch`) give every
-branch; :func:`measure_poses` then does, per pose, what
+:meth:`ClosedFormSolver.solve_batch_into` (the family kernel's batch stages)
+gives every branch; :func:`measure_poses` then does, per pose, what
 :func:`~workbench.workspace._reference.evaluate_block_reference` does with
-NumPy, in the same arithmetic: the representative of each angle nearest the
-middle of its limits (in limits, margin), the analytic factors
-:math:`s, e, w` of :mod:`workbench.singularities.conditions` from
-:math:`\theta = s_i q_i + \theta_{0,i}` and :math:`|\det J| = |K s e w|`, the
-best branch, and the per-voxel sums of :func:`summarise_voxels`.
+NumPy, in the same arithmetic (the results are bitwise equal, tested to
+1e-6): the representative of each angle nearest the middle of its limits
+(in limits, margin), the analytic factors :math:`s, e, w` of
+:mod:`workbench.singularities.conditions` from
+:math:`\theta = s_i q_i + \theta_{0,i}` and :math:`|\det J| = |K s e w|`
+(computed once per (arm, elbow) pair where the branches share
+:math:`q_1..q_3`, as OPW wrist twins do), and the best branch. The per-voxel
+measures follow in NumPy (``_reference.summarise_voxels``).
 
-The factor constants come packed in one float64 array (:data:`FACTOR_SLOTS`).
-Compiled with :mod:`workbench._compiled` (one signature per entry point, cache
-keyed on this module and what it imports).
+The factor constants come packed in one float64 array (:data:`FACTOR_SLOTS`),
+the joint constants in a (:data:`JOINT_ROWS`, 6) one. Compiled with
+:mod:`workbench._compiled` (one signature per entry point, cache keyed on this
+module and what it imports).
 """
 
 from __future__ import annotations
