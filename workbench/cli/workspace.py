@@ -10,12 +10,11 @@ from __future__ import annotations
 
 import argparse
 import functools
-import importlib
 import math
 from pathlib import Path
-from types import ModuleType
 
 from workbench.atomic_files import check_output
+from workbench.cli import _workspace_place, _workspace_view
 from workbench.cli._collision import build_checker
 from workbench.cli._common import (
     add_json_flag,
@@ -34,9 +33,6 @@ from workbench.workspace.grid import (
     DEFAULT_RESOLUTION,
     make_pose_grid,
 )
-
-#: The modules that add the other subcommands, each with ``register(subcommands)``.
-_SUBCOMMAND_MODULES = ("_workspace_place", "_workspace_view")
 
 #: Largest ``--orientations`` (a voxel's row of every per-pose array).
 MAX_ORIENTATIONS = 1_000_000
@@ -61,20 +57,8 @@ def register(commands: argparse._SubParsersAction) -> None:
         dest="workspace", metavar="SUBCOMMAND", required=True
     )
     _register_map(subcommands)
-    for module in _get_subcommand_modules():
-        module.register(subcommands)
-
-
-def _get_subcommand_modules() -> list[ModuleType]:
-    """The modules of ``place``, ``view`` and ``report`` that are installed."""
-    found = []
-    for name in _SUBCOMMAND_MODULES:
-        try:
-            found.append(importlib.import_module(f"workbench.cli.{name}"))
-        except ModuleNotFoundError as err:
-            if err.name != f"workbench.cli.{name}":
-                raise
-    return found
+    _workspace_place.register(subcommands)
+    _workspace_view.register(subcommands)
 
 
 def _register_map(subcommands: argparse._SubParsersAction) -> None:
