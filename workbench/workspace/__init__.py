@@ -3,7 +3,8 @@
 A :class:`PoseGrid` (voxel positions × tool orientations, :mod:`.grid`), the
 per-pose measures of a block of it in closed form (:mod:`.measures`) and the
 sampled maps of arms without a closed form (:mod:`.sampled`); the joint-space
-singularity map (:mod:`.joint_space`).
+singularity map (:mod:`.joint_space`); base placement for a task
+(:mod:`.placement`, task poses from :mod:`.task_poses`).
 """
 
 from workbench.workspace.grid import (
@@ -20,20 +21,36 @@ from workbench.workspace.measures import (
     evaluate_block,
     singularity_margin,
 )
+from workbench.workspace.placement import (
+    Placement,
+    PlacementInfeasibleError,
+    place_base,
+)
 from workbench.workspace.sampled import accumulate, sample_block
+from workbench.workspace.task_poses import (
+    TaskPoses,
+    read_task_poses,
+    task_poses_from_trajectory,
+)
 
 __all__ = [
     "POSE_KEYS",
     "VOXEL_KEYS",
     "JointSpaceMap",
+    "Placement",
+    "PlacementInfeasibleError",
     "PoseGrid",
+    "TaskPoses",
     "accumulate",
     "compute_joint_space_map",
     "cone_orientations",
     "default_bounds",
     "evaluate_block",
     "make_pose_grid",
+    "place_base",
+    "read_task_poses",
     "sample_block",
     "singularity_margin",
+    "task_poses_from_trajectory",
     "uniform_orientations",
 ]
