@@ -49,7 +49,7 @@ import numpy as np
 
 from benchmarks.bench_ik_closed_form import _reference_us
 from workbench import Robot, load_robot
-from workbench.ik import analytic_batch
+from workbench.ik import analytic_batch, compute_tool_poses
 from workbench.workspace import compute_joint_space_map, make_pose_grid
 from workbench.workspace.build import build_map
 from workbench.workspace.orientations import (
@@ -116,7 +116,11 @@ def exact_counts(robot: Robot, poses: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 
 def _fk_poses(robot: Robot, q: np.ndarray) -> np.ndarray:
-    return np.array([robot.fk(qi).homogeneous for qi in q])
+    """(N, 4, 4) tool poses in the base frame (compiled chain kinematics)."""
+    rotations, positions, _ = compute_tool_poses(robot, q)
+    poses = np.zeros((len(q), 4, 4))
+    poses[:, :3, :3], poses[:, :3, 3], poses[:, 3, 3] = rotations, positions, 1.0
+    return poses
 
 
 def held_out_poses(robot: Robot, grid: Any, count: int, seed: int) -> np.ndarray:
@@ -593,7 +597,7 @@ def main() -> None:
                             robot,
                             grid,
                             map_path,
-                            sizes["peer_samples"] // 10,
+                            sizes["peer_samples"],
                             args.rm4d,
                         ),
                     ),
