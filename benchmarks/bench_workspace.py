@@ -36,6 +36,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import math
+import os
 import sys
 import tempfile
 import time
@@ -456,7 +457,7 @@ def _print_map(name: str, grid: Any, summaries: dict[int, Any]) -> None:
         f"\n{name}: map build, {grid.resolution * 100:.0f} cm × "
         f"{grid.orientation_count} orientations = {grid.pose_count:,} poses "
         f"({grid.voxel_count:,} voxels), "
-        f"reachable fraction {two.reachable_fraction:.4f}"
+        f"reachable fraction {two.reachable_fraction:.4f}; {_load()}"
     )
     print(f"{'workers':>8s} {'seconds':>9s} {'poses/s':>14s} {'speed-up':>9s}")
     for workers, s in summaries.items():
@@ -542,6 +543,14 @@ def _print_peers(name: str, rows: list[tuple[str, Any]], ours: Any) -> None:
         )
 
 
+def _load() -> str:
+    """The machine's load (other processes share its cores: wall times suffer)."""
+    one, five, _ = os.getloadavg()
+    return (
+        f"load average {one:.2f} (1 min), {five:.2f} (5 min) on {os.cpu_count()} cores"
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
@@ -558,7 +567,10 @@ def main() -> None:
     args = parser.parse_args()
     parts = set(args.part or PARTS)
     sizes = _sizes(args.quick)
-    print(f"machine reference: sum(range(1000)) = {_reference_us():.1f} µs (CPU time)")
+    print(
+        f"machine reference: sum(range(1000)) = {_reference_us():.1f} µs (CPU time); "
+        f"{_load()}"
+    )
     with tempfile.TemporaryDirectory(prefix="bench-workspace-") as tmp:
         for name in args.robots.split(","):
             robot = load_robot(name)
@@ -607,7 +619,7 @@ def main() -> None:
                     ),
                 ]
                 _print_peers(name, rows, summaries[2])
-    print(f"\nmachine reference now: {_reference_us():.1f} µs")
+    print(f"\nmachine reference now: {_reference_us():.1f} µs; {_load()}")
 
 
 if __name__ == "__main__":
