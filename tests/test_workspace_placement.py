@@ -15,6 +15,7 @@ from hypothesis import strategies as st
 
 from workbench import ik
 from workbench.cli import main
+from workbench.collision import Obstacle, Scene
 from workbench.errors import InputError
 from workbench.trajectory.csv_io import JointTrajectorySamples, write_trajectory_csv
 from workbench.workspace._placement_screen import CandidateLattice, Screening
@@ -190,6 +191,41 @@ def test_map_of_another_robot_is_refused(puma, rng, coarse_map):
     task, _ = _task(puma, rng, count=2)
     with pytest.raises(InputError, match="map is of robot 'ur5'"):
         place_base(puma, task, region=REGION, map=Other())
+
+
+def test_scene_in_the_world_frame(puma, rng):
+    """An obstacle far away changes nothing; one enclosing the arm blocks every pose."""
+    task, _ = _task(puma, rng, count=4)
+    (free,) = place_base(puma, task, mounts=[BASE])
+    far = Scene(
+        "far",
+        (
+            Obstacle(
+                "far",
+                "box",
+                (0.2, 0.2, 0.2),
+                pin.SE3(np.eye(3), np.array([5.0, 5.0, 0.0])),
+            ),
+        ),
+    )
+    (same,) = place_base(puma, task, mounts=[BASE], scene=far)
+    assert same == free
+    world = pin.SE3(np.eye(3), np.array([BASE[0], BASE[1], 0.3]))
+    cage = Scene("cage", (Obstacle("cage", "box", (3.0, 3.0, 3.0), world),))
+    with pytest.raises(PlacementInfeasibleError, match="misses 4 of 4"):
+        place_base(puma, task, mounts=[BASE], scene=cage)
+    # a box at the world origin: around the arm's first links if it were in the
+    # base frame, 2 m from a base at x = 2 m in the world frame
+    at_origin = pin.SE3(np.eye(3), np.zeros(3))
+    box = Scene("box", (Obstacle("box", "box", (0.3, 0.3, 0.3), at_origin),))
+    away = (2.0, 0.0, 0.0, 0.0)
+    task, _ = _task(puma, rng, count=4, base=away)
+    (moved,) = place_base(puma, task, mounts=[away], scene=box)
+    assert moved.all_reachable
+    with pytest.raises(PlacementInfeasibleError, match="misses 4 of 4"):
+        # the same task seen from a base at the origin: the box is around it
+        shifted = np.linalg.inv(base_transform(*away)) @ task
+        place_base(puma, shifted, mounts=[(0.0, 0.0, 0.0, 0.0)], scene=box)
 
 
 # -- paths --------------------------------------------------------------------
