@@ -311,6 +311,24 @@ def test_view_draws_the_scene_of_a_map_built_with_one(tmp_path) -> None:
     assert "Key numbers" in build_workspace_report(cell_map).html
 
 
+def test_sampled_map_report_and_view(tmp_path) -> None:
+    """A 7-axis arm: a sampled map, manipulability only (no singularity factors)."""
+    robot = load_robot("panda")
+    grid = make_pose_grid(robot, resolution=0.2, orientations=8)
+    build_map(robot, grid, tmp_path / "panda.zarr", workers=1, samples=20_000)
+    panda_map = open_map(tmp_path / "panda.zarr")
+    report = build_workspace_report(panda_map)
+    assert report.summary["sampled"] and report.summary["samples"] == 20_000
+    assert report.summary["near_singular_by_kind"] == {}
+    assert "singular_regions" not in report.figures
+    assert "This map holds no singularity\nmeasures" in report.html
+    assert "A <b>sampled</b> map: 20000 random configurations" in report.html
+    reach = panda_map["reachability"]
+    assert report.summary["reachable_voxels"] == np.count_nonzero(reach > 0) > 0
+    page = make_workspace_viewer(panda_map, measure="dexterity").render_html()
+    assert len(_slider_data(page)["layers"]) > 1
+
+
 # -- pages in Chromium -----------------------------------------------------------
 
 

@@ -40,8 +40,8 @@ def render(
 <h1>Workspace of {robot}</h1>
 <p>{_kind(summary)} Positions in the robot's base frame (z up along the first
 joint axis for the arms here), lengths in metres, dexterity in m³
-(Yoshikawa's manipulability √det(J Jᵀ) of the best branch, |det J| for six
-joints).</p>""",
+(Yoshikawa's manipulability √det(J Jᵀ) of the best branch — of a sampled map, of
+the best sample binned to the pose — |det J| for six joints).</p>""",
         _key_numbers(summary),
         _metadata(attrs, summary),
         _slices(summary, uri),
