@@ -289,3 +289,27 @@ def test_covering_radius_bounds_any_rotation(
     q = q / np.linalg.norm(q)
     nearest = _angles_by_matrix(q[None], puma_grid.orientations)[0].min()
     assert nearest <= puma_grid.orientation_set["covering_radius"]
+
+
+@given(
+    resolution=st.floats(0.02, 0.5),
+    low=st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=3),
+    size=st.lists(st.floats(0.0, 0.6), min_size=3, max_size=3),
+    count=st.sampled_from([1, 8, 64]),
+)
+def test_grid_round_trips(
+    resolution: float, low: list[float], size: list[float], count: int
+) -> None:
+    robot = load_robot("puma560")
+    box = np.array([low, np.add(low, size)])
+    grid = make_pose_grid(robot, resolution=resolution, orientations=count, bounds=box)
+    np.testing.assert_array_equal(
+        grid.voxel_index(grid.positions), np.arange(grid.voxel_count)
+    )
+    np.testing.assert_array_equal(
+        grid.orientation_index(grid.orientations), np.arange(count)
+    )
+    corners = np.array(
+        [[x, y, z] for x in box[:, 0] for y in box[:, 1] for z in box[:, 2]]
+    )
+    assert np.all(grid.voxel_index(corners) >= 0)  # the box lies in the grid
