@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import csv
 import json
 import math
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -98,3 +100,39 @@ def read_json_file(path: str | Path, error: type[InputError], what: str) -> Any:
 def _json_int(text: str) -> int | float:
     digits = len(text.lstrip("-"))
     return int(text) if digits <= JSON_INT_DIGITS else float(text)
+
+
+def read_csv_file(
+    path: str | Path, error: type[InputError], what: str
+) -> list[list[str]]:
+    """The rows of a CSV file (header first), every failure an ``error`` with one line.
+
+    Args:
+        path: The file.
+        error: The error class to raise (e.g. ``TrajectoryFileError``).
+        what: What the file is, for the message (``"trajectory"``).
+
+    Raises:
+        InputError: (as ``error``) If the file cannot be read, is not UTF-8 or
+            is not CSV (e.g. a field longer than ``csv.field_size_limit()``).
+    """
+    path = Path(path)
+    try:
+        with path.open(newline="", encoding="utf-8") as stream:
+            return list(csv.reader(stream))
+    except OSError as err:
+        raise error(f"cannot read {what} {path}: {err.strerror or err}") from err
+    except UnicodeDecodeError as err:
+        raise error(f"{path}: not UTF-8 text (byte {err.start})") from err
+    except csv.Error as err:
+        raise error(f"{path}: not a CSV file ({err})") from err
+
+
+def iter_data_rows(rows: list[list[str]]) -> Iterator[tuple[int, list[str]]]:
+    """``(line, row)`` of the rows after the header; blank and ``#`` lines skipped."""
+    for line, row in enumerate(rows[1:], start=2):
+        if not row or all(not field.strip() for field in row):
+            continue
+        if row[0].lstrip().startswith("#"):
+            continue
+        yield line, row

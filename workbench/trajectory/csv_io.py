@@ -22,6 +22,7 @@ import numpy.typing as npt
 
 from workbench.atomic_files import atomic_file
 from workbench.errors import DimensionError, InputError
+from workbench.validation import iter_data_rows, read_csv_file
 
 #: Most samples (rows) of a trajectory the workbench writes or reads.
 MAX_SAMPLES = 1_000_000
@@ -118,17 +119,7 @@ def read_trajectory_csv(
             differs from the rows (a truncated file); the message names the line.
     """
     path = Path(path)
-    try:
-        with path.open(newline="", encoding="utf-8") as stream:
-            rows = list(csv.reader(stream))
-    except OSError as err:
-        raise TrajectoryFileError(
-            f"cannot read trajectory {path}: {err.strerror or err}"
-        ) from err
-    except UnicodeDecodeError as err:
-        raise TrajectoryFileError(f"{path}: not UTF-8 text (byte {err.start})") from err
-    except csv.Error as err:  # e.g. a field longer than csv.field_size_limit()
-        raise TrajectoryFileError(f"{path}: not a CSV file ({err})") from err
+    rows = read_csv_file(path, TrajectoryFileError, "trajectory")
     if not rows:
         raise TrajectoryFileError(f"{path}: empty file (expected a header line)")
     columns = [c.strip() for c in rows[0]]
@@ -144,11 +135,7 @@ def read_trajectory_csv(
         )
     stated = _stated_count(rows, path)
     values = []
-    for line, row in enumerate(rows[1:], start=2):
-        if not row or all(not field.strip() for field in row):
-            continue
-        if row[0].lstrip().startswith("#"):
-            continue
+    for line, row in iter_data_rows(rows):
         if len(row) != len(columns):
             raise TrajectoryFileError(
                 f"{path}, line {line}: {len(row)} fields, expected {len(columns)}"

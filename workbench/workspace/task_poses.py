@@ -16,7 +16,6 @@ Two sources give the poses of the tool frame that a base placement must reach
 
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,6 +26,7 @@ import numpy.typing as npt
 from workbench.errors import InputError
 from workbench.model.robot import Robot
 from workbench.trajectory.csv_io import JointTrajectorySamples, read_trajectory_csv
+from workbench.validation import iter_data_rows, read_csv_file
 from workbench.workspace.orientations import rotations_from_quat_xyzw
 
 FloatArray = npt.NDArray[np.float64]
@@ -102,17 +102,7 @@ def read_task_poses(path: str | Path) -> TaskPoses:
             :data:`MAX_TASK_POSES`; the message names the line.
     """
     path = Path(path)
-    try:
-        with path.open(newline="", encoding="utf-8") as stream:
-            rows = list(csv.reader(stream))
-    except OSError as err:
-        raise TaskPoseFileError(
-            f"cannot read task poses {path}: {err.strerror or err}"
-        ) from err
-    except UnicodeDecodeError as err:
-        raise TaskPoseFileError(f"{path}: not UTF-8 text (byte {err.start})") from err
-    except csv.Error as err:
-        raise TaskPoseFileError(f"{path}: not a CSV file ({err})") from err
+    rows = read_csv_file(path, TaskPoseFileError, "task poses")
     if not rows:
         raise TaskPoseFileError(
             f"{path}: empty file (expected the header x,y,z,qx,qy,qz,qw)"
@@ -124,11 +114,7 @@ def read_task_poses(path: str | Path) -> TaskPoses:
             f"got {','.join(columns)[:80]}"
         )
     values = []
-    for line, row in enumerate(rows[1:], start=2):
-        if not row or all(not field.strip() for field in row):
-            continue
-        if row[0].lstrip().startswith("#"):
-            continue
+    for line, row in iter_data_rows(rows):
         values.append(_parse_row(row, line, path))
         if len(values) > MAX_TASK_POSES:
             raise TaskPoseFileError(f"{path}: more than {MAX_TASK_POSES} task poses")
