@@ -6,7 +6,7 @@ dexterity (Yoshikawa manipulability of the best branch over the orientations,
 m³), on matplotlib's viridis scale (perceptually uniform); voxels that no
 orientation reaches are not drawn. Each z layer is its own scene node,
 ``voxels/z+0.350`` (z of the layer's voxel centres in metres), so Meshcat's
-control panel ("Open Controls" → Scene → voxels) shows or hides layers one by
+control panel ("Open Controls" → Scene → meshcat → voxels) shows or hides layers one by
 one. A slider in the legend box cuts the map from above: it shows the layers up
 to a height, or, with "only this layer", that layer alone; "cut away y > 0"
 hides the half of every layer in front of the base axis (nodes
@@ -95,7 +95,8 @@ class _Scale:
 
 
 def _layer_name(z: float) -> str:
-    return f"z{z:+.3f}"
+    """``z+0.350``: the layer's height [m] to the millimetre (never ``z-0.000``)."""
+    return f"z{round(z, 3) + 0.0:+.3f}"
 
 
 def _slice_controls(layers: list[str], heights: list[float], cut_away: bool) -> str:
@@ -118,7 +119,8 @@ cut away y &gt; 0</label></div>
   var label = document.getElementById("wb-slice-z");
   function update() {{
     var k = Number(slider.value);
-    label.textContent = (data.heights[k] >= 0 ? "+" : "") + data.heights[k].toFixed(3);
+    var z = Math.round(1000 * data.heights[k]) / 1000 + 0;  /* no "-0.000" */
+    label.textContent = (z >= 0 ? "+" : "") + z.toFixed(3);
     data.layers.forEach(function (name, i) {{
       var node = ["meshcat", "voxels", name];
       viewer.set_property(node, "visible", only.checked ? i === k : i <= k);
@@ -236,6 +238,8 @@ def make_workspace_viewer(
     # (H: view height), and voxels res·H/(2d·tan(fov/2)) pixels apart.
     fov = np.radians(viewer.get_camera().fov_deg)
     point_size = POINT_FILL * resolution / np.tan(fov / 2.0)
+    # The cut keeps the voxel layer through the base axis (centres at y = 0).
+    in_front = positions[:, 1] > 0.5 * resolution
     nz = int(grid.shape[2])
     iz = np.arange(positions.shape[0]) % nz
     layers: list[str] = []
@@ -247,8 +251,8 @@ def make_workspace_viewer(
         z = float(positions[chosen, 2][0])
         name = _layer_name(z)
         for half, side in (
-            ("y<=0", positions[:, 1] <= 0.0),
-            ("y>0", positions[:, 1] > 0.0),
+            ("y<=0", ~in_front),
+            ("y>0", in_front),
         ):
             part = chosen & side
             if not part.any():
