@@ -5,9 +5,9 @@ or sampled, counts, versions), its key numbers (reachable volume, dexterous
 volume, best dexterity, …), horizontal slices of reachability and best
 dexterity at several heights, a vertical section through the base axis,
 histograms, and where the arm is near a singularity: the fraction of each
-voxel's reached orientations whose best branch is near-singular, in all and
-by kind (shoulder, elbow, wrist distance below its tolerance). Figures are
-PNGs embedded in the page; matplotlib is imported only when a report is built.
+voxel's reached orientations whose best branch is near-singular, and the median
+shoulder, elbow and wrist distances of the best branches. Figures are PNGs
+embedded in the page; matplotlib is imported only when a report is built.
 """
 
 from __future__ import annotations
@@ -21,7 +21,12 @@ import numpy.typing as npt
 
 from workbench.atomic_files import write_text_atomic
 from workbench.errors import InputError
-from workbench.plots.workspace import VoxelField, get_layer_coordinates
+from workbench.plots.workspace import (
+    VoxelField,
+    VoxelGridLike,
+    get_layer_coordinates,
+    get_nearest_layer,
+)
 from workbench.reports.html_report import HtmlReport
 from workbench.singularities.conditions import ELBOW_TOL, SHOULDER_TOL, WRIST_TOL
 
@@ -36,6 +41,12 @@ SLICE_COUNT = 6
 SINGULAR_KINDS = ("shoulder", "elbow", "wrist")
 _SYMBOLS = {"shoulder": "|s|", "elbow": "|e|", "wrist": "|w|"}
 _UNITS = {"shoulder": "m", "elbow": "1", "wrist": "1"}
+#: The colour scale of a median singularity distance ends at this quantile of
+#: its values (a few far voxels would otherwise wash the near ones out).
+DISTANCE_SCALE_QUANTILE = 0.98
+#: Decimals of the slice heights in the summary [m]: drops the float noise of
+#: ``origin + k · resolution``.
+HEIGHT_DECIMALS = 9
 #: Per-voxel arrays every map holds.
 VOXEL_ARRAYS = ("reachability", "dexterity_best")
 
@@ -53,7 +64,7 @@ def get_array(workspace_map: WorkspaceMap, name: str) -> FloatArray | None:
 
 
 def choose_heights(
-    grid: Any, reachability: FloatArray, count: int = SLICE_COUNT
+    grid: VoxelGridLike, reachability: FloatArray, count: int = SLICE_COUNT
 ) -> list[float]:
     """Heights [m] of ``count`` layers spread evenly over the reached ones.
 
@@ -181,8 +192,10 @@ def build_workspace_report(
     Args:
         workspace_map: A :class:`~workbench.workspace.WorkspaceMap`
             (``open_map(path)``).
-        heights: z of the horizontal slices [m]; default :data:`SLICE_COUNT`
-            heights spread over the reached layers (:func:`choose_heights`).
+        heights: z of the horizontal slices [m], each drawn at its nearest
+            voxel layer (the summary's ``slice_heights_m``); default
+            :data:`SLICE_COUNT` heights spread over the reached layers
+            (:func:`choose_heights`).
 
     Raises:
         InputError: If the map lacks ``reachability`` or ``dexterity_best``.
@@ -212,7 +225,11 @@ def build_workspace_report(
         top,
         "viridis",
     )
-    heights = heights or choose_heights(grid, fields["reachability"])
+    if heights:
+        z = get_layer_coordinates(grid, 2)
+        heights = [float(z[get_nearest_layer(grid, 2, h)]) for h in heights]
+    else:
+        heights = choose_heights(grid, fields["reachability"])
     figures = {
         "reachability_slices": plots.plot_horizontal_slices(
             grid, reachability, heights
@@ -240,7 +257,9 @@ def build_workspace_report(
     medians, fractions = compute_singular_distances(workspace_map, tolerances)
     for kind, values in medians.items():
         finite = values[np.isfinite(values)]
-        top = float(np.quantile(finite, 0.98)) if finite.size else 1.0
+        top = (
+            float(np.quantile(finite, DISTANCE_SCALE_QUANTILE)) if finite.size else 1.0
+        )
         singular.append(
             _field(
                 f"median {_SYMBOLS[kind]}",
@@ -260,7 +279,7 @@ def build_workspace_report(
         kind: float(np.nanmean(v)) if np.isfinite(v).any() else None
         for kind, v in fractions.items()
     }
-    summary["slice_heights_m"] = [round(z, 9) for z in heights]
+    summary["slice_heights_m"] = [round(z, HEIGHT_DECIMALS) for z in heights]
     png = {name: png_bytes(fig) for name, fig in figures.items()}
     summary["figures"] = list(png)
     page = render(workspace_map.attrs, summary, png)
@@ -281,6 +300,8 @@ def write_workspace_report(
 
 
 __all__ = [
+    "DISTANCE_SCALE_QUANTILE",
+    "HEIGHT_DECIMALS",
     "SLICE_COUNT",
     "WorkspaceReport",
     "build_workspace_report",
