@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import zarr
 from PIL import Image
 
 from tests._chromium import take_screenshot
@@ -412,86 +413,67 @@ def test_report_page_loads_every_figure(chromium, puma_map, tmp_path) -> None:
 # -- command line ----------------------------------------------------------------
 
 
+def _workspace(capsys, command: str, map_path: Path, *options: object):
+    """``workbench workspace COMMAND MAP OPTIONS...`` in-process: (code, out, err)."""
+    return run_cli(capsys, "workspace", command, str(map_path), *map(str, options))
+
+
 def test_cli_view_and_report(capsys, map_path, tmp_path) -> None:
     html = tmp_path / "view.html"
-    code, out, err = run_cli(
-        capsys,
-        "workspace",
-        "view",
-        str(map_path),
-        "--html",
-        str(html),
-        "--measure",
-        "dexterity",
+    code, out, err = _workspace(
+        capsys, "view", map_path, "--html", html, "--measure", "dexterity"
     )
     assert (code, err) == (0, "")
     assert out.startswith(f"wrote {html}") and html.stat().st_size > 100_000
     assert "Voxel colour: dexterity" in html.read_text(encoding="utf-8")
 
-    out_html = tmp_path / "report.html"
-    code, out, err = run_cli(
-        capsys, "workspace", "report", str(map_path), "--out", str(out_html), "--json"
-    )
+    report = tmp_path / "report.html"
+    code, out, err = _workspace(capsys, "report", map_path, "--out", report, "--json")
     assert (code, err) == (0, "")
     summary = json.loads(out)
-    assert summary["out"] == str(out_html)
-    assert summary["reachable_voxels"] > 0 and out_html.is_file()
+    assert summary["out"] == str(report)
+    assert summary["reachable_voxels"] > 0 and report.is_file()
 
 
 def test_cli_report_heights(capsys, map_path, tmp_path) -> None:
-    out_html = tmp_path / "report.html"
-    code, out, _ = run_cli(
-        capsys,
-        "workspace",
-        "report",
-        str(map_path),
-        "--out",
-        str(out_html),
-        "--heights",
-        "0.2",
-        "-0.1",
-        "--json",
-    )
+    code, out, _ = _workspace(
+        capsys, "report", map_path, "--out", tmp_path / "r.html",
+        "--heights", "0.2", "-0.13", "--json",
+    )  # fmt: skip
     assert code == 0
-    assert json.loads(out)["slice_heights_m"] == [0.2, -0.1]
+    assert json.loads(out)["slice_heights_m"] == [0.2, -0.1]  # their voxel layers
 
 
 @pytest.mark.parametrize("command", ["view", "report"])
-def test_cli_bad_map_path(capsys, tmp_path, command) -> None:
-    flag = "--html" if command == "view" else "--out"
-    missing = tmp_path / "missing.zarr"
-    code, out, err = run_cli(
-        capsys, "workspace", command, str(missing), flag, str(tmp_path / "x.html")
-    )
-    assert code == 2 and out == ""
-    assert err.count("\n") == 1 and "no workspace map" in err
+def test_cli_bad_map_path(capsys, map_path, tmp_path, command) -> None:
+    flag, out_file = ("--html" if command == "view" else "--out"), tmp_path / "x.html"
     not_a_map = tmp_path / "folder.zarr"
     not_a_map.mkdir()
-    code, _, err = run_cli(
-        capsys, "workspace", command, str(not_a_map), flag, str(tmp_path / "x.html")
-    )
-    assert code == 2 and err.count("\n") == 1 and "is not a workspace map" in err
-    assert not (tmp_path / "x.html").exists()
+    unfinished = tmp_path / "unfinished.zarr"
+    shutil.copytree(map_path, unfinished)
+    zarr.open_group(unfinished, mode="r+")["done"][0] = 0
+    for path, message in (
+        (tmp_path / "missing.zarr", "no workspace map"),
+        (not_a_map, "is not a workspace map"),
+        (unfinished, "is an unfinished map build"),
+    ):
+        code, out, err = _workspace(capsys, command, path, flag, out_file)
+        assert (code, out) == (2, "")
+        assert err.count("\n") == 1 and message in err, err
+    assert not out_file.exists()
 
 
-def test_cli_bad_output_and_measure(capsys, map_path, tmp_path) -> None:
-    code, _, err = run_cli(
-        capsys,
-        "workspace",
-        "view",
-        str(map_path),
-        "--html",
-        str(tmp_path / "no" / "such" / "v.html"),
+def test_cli_bad_output_measure_and_robot(capsys, map_path, tmp_path) -> None:
+    code, _, err = _workspace(
+        capsys, "view", map_path, "--html", tmp_path / "no" / "such" / "v.html"
     )
     assert code == 2 and "does not exist" in err
-    code, _, err = run_cli(
-        capsys,
-        "workspace",
-        "view",
-        str(map_path),
-        "--html",
-        str(tmp_path / "v.html"),
-        "--measure",
-        "volume",
+    code, _, err = _workspace(
+        capsys, "view", map_path, "--html", tmp_path / "v.html", "--measure", "volume"
     )
     assert code == 2 and "invalid choice" in err
+    code, _, err = _workspace(
+        capsys, "view", map_path, "--html", tmp_path / "v.html", "--robot", "ur5"
+    )
+    assert code == 2 and "not the URDF the map was built from" in err
+    assert not (tmp_path / "v.html").exists()

@@ -91,11 +91,7 @@ def run_view(args: argparse.Namespace) -> int:
 
     check_outputs([args.html], [args.map])
     workspace_map = open_map(args.map)
-    robot = None
-    if args.robot is not None:
-        robot = load_robot_from_args(
-            args, tool_frame=workspace_map.attrs.get("tool_frame")
-        )
+    robot = load_robot_from_args(args) if args.robot is not None else None
     path = write_workspace_view(
         workspace_map,
         args.html,
