@@ -10,7 +10,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from workbench import ik, paper_data
 from workbench.atomic_files import atomic_file
+from workbench.demo.base_placement import (
+    FIGURE,
+    TOP,
+    format_base_placement,
+    run_base_placement_demo,
+)
 from workbench.demo.pick_and_place import (
     format_pick_and_place,
     run_pick_and_place_demo,
@@ -22,6 +29,7 @@ from workbench.demo.run import (
     round_for_json,
 )
 from workbench.errors import InputError
+from workbench.workspace.placement import base_transform
 
 ATOL_PRINTED = 1e-9
 
@@ -121,3 +129,22 @@ def test_second_process_ends_with_its_parent_and_leaves_no_file(
         time.sleep(0.5)  # the child is writing now
         raise InputError("stops the child: SIGTERM, its temporary file removed")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_base_placement_of_table3(puma, tmp_path) -> None:
+    """The demo's coarse map and placement: exact bases, none worse than the paper's."""
+    result = run_base_placement_demo(puma, tmp_path, plots=True)
+    assert result["candidates"] == 25 * 25 * 24
+    assert 1 <= len(result["placements"]) <= TOP
+    assert result["paper_base"]["all_reachable"] is True
+    best = result["placements"][0]
+    assert best["all_reachable"] and best["branch"] is not None
+    assert best["min_dexterity"] >= result["paper_base"]["min_dexterity"]
+    inverse = np.linalg.inv(base_transform(best["x"], best["y"], 0.0, best["yaw"]))
+    for q_deg in (paper_data.ANGELES_PICK_Q_DEG, paper_data.ANGELES_PLACE_Q_DEG):
+        pose = inverse @ puma.fk(np.deg2rad(q_deg)).homogeneous
+        usable = [s for s in ik.analytic(puma, pose) if s.within_limits]
+        assert best["branch"] in {s.branch for s in usable}
+    assert (tmp_path / FIGURE).read_bytes()[:4] == b"\x89PNG"
+    text = format_base_placement(result)
+    assert "candidate bases" in text and "the paper's base" in text

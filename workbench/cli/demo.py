@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from workbench.cli._common import add_json_flag, print_json
+from workbench.demo.base_placement import format_base_placement
 from workbench.demo.pick_and_place import format_pick_and_place
 from workbench.demo.run import format_fish_cutting, run_demo
 from workbench.model.loading import load_robot
@@ -58,6 +59,7 @@ def format_summary(summary: dict[str, Any], out: Path) -> str:
         format_pick_and_place(summary["pick_and_place"]),
         "",
         format_fish_cutting(summary["fish_cutting"]),
+        format_base_placement(summary["base_placement"]),
     ]
     pages = summary.get("pages", {})
     if pages:
