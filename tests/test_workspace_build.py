@@ -219,20 +219,25 @@ def test_sampled_map_is_bitwise_the_same_on_1_2_workers_and_a_cluster(
     assert summary.reachable_fraction == pytest.approx(hit.mean(), rel=1e-12)
 
 
+def _failing_after(function, count: int):
+    """``function`` for its first ``count`` calls, then a RuntimeError."""
+    calls = []
+
+    def failing(*args, **kwargs):
+        calls.append(None)
+        if len(calls) > count:
+            raise RuntimeError("injected failure")
+        return function(*args, **kwargs)
+
+    return failing
+
+
 def test_a_failed_build_resumes_with_the_missing_blocks_only(
     puma, grid, reference, tmp_path, monkeypatch, caplog
 ) -> None:
     path = tmp_path / "resumed.zarr"
     real = build_module.evaluate_block
-    calls = []
-
-    def failing(*args, **kwargs):
-        calls.append(args[2])
-        if len(calls) > 5:
-            raise RuntimeError("injected failure")
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(build_module, "evaluate_block", failing)
+    monkeypatch.setattr(build_module, "evaluate_block", _failing_after(real, 5))
     with pytest.raises(RuntimeError, match="injected"):
         build_map(puma, grid, path, workers=1, block_voxels=BLOCK_VOXELS)
     partial = get_partial_path(path)
@@ -262,16 +267,8 @@ def test_a_sampled_build_resumes_and_equals_the_uninterrupted_one(
     samples = SAMPLES_PER_BLOCK + 7  # 2 blocks, the last of 7 samples
     build_map(panda, panda_grid, tmp_path / "whole.zarr", samples=samples, workers=1)
     real = build_module.sample_block
-    calls = []
-
-    def failing(*args, **kwargs):
-        calls.append(args[2])
-        if len(calls) > 1:
-            raise RuntimeError("injected failure")
-        return real(*args, **kwargs)
-
     monkeypatch.setattr(build_module, "SAVE_INTERVAL", 0.0)  # save after each block
-    monkeypatch.setattr(build_module, "sample_block", failing)
+    monkeypatch.setattr(build_module, "sample_block", _failing_after(real, 1))
     path = tmp_path / "resumed.zarr"
     with pytest.raises(RuntimeError, match="injected"):
         build_map(panda, panda_grid, path, samples=samples, workers=1)
@@ -374,11 +371,7 @@ def test_a_partial_build_of_another_map_or_in_use_is_refused(
 ) -> None:
     path = tmp_path / "m.zarr"
     real = build_module.evaluate_block
-
-    def failing(*args, **kwargs):
-        raise RuntimeError("injected failure")
-
-    monkeypatch.setattr(build_module, "evaluate_block", failing)
+    monkeypatch.setattr(build_module, "evaluate_block", _failing_after(real, 0))
     with pytest.raises(RuntimeError):
         build_map(puma, grid, path, workers=1, block_voxels=BLOCK_VOXELS)
     monkeypatch.setattr(build_module, "evaluate_block", real)
