@@ -4,9 +4,11 @@ A :class:`PoseGrid` (voxel positions × tool orientations, :mod:`.grid`), the
 per-pose measures of a block of it in closed form (:mod:`.measures`) and the
 sampled maps of arms without a closed form (:mod:`.sampled`); the joint-space
 singularity map (:mod:`.joint_space`); base placement for a task
-(:mod:`.placement`, task poses from :mod:`.task_poses`).
+(:mod:`.placement`, task poses from :mod:`.task_poses`); maps built on Dask
+(:mod:`.build`) into a Zarr store, opened and queried (:mod:`.store`).
 """
 
+from workbench.workspace.build import MapSummary, build_map
 from workbench.workspace.grid import (
     PoseGrid,
     cone_orientations,
@@ -15,6 +17,7 @@ from workbench.workspace.grid import (
     uniform_orientations,
 )
 from workbench.workspace.joint_space import JointSpaceMap, compute_joint_space_map
+from workbench.workspace.map_query import MapQuery
 from workbench.workspace.measures import (
     POSE_KEYS,
     VOXEL_KEYS,
@@ -27,6 +30,7 @@ from workbench.workspace.placement import (
     place_base,
 )
 from workbench.workspace.sampled import accumulate, sample_block
+from workbench.workspace.store import WorkspaceMap, open_map
 from workbench.workspace.task_poses import (
     TaskPoses,
     read_task_poses,
@@ -37,16 +41,21 @@ __all__ = [
     "POSE_KEYS",
     "VOXEL_KEYS",
     "JointSpaceMap",
+    "MapQuery",
+    "MapSummary",
     "Placement",
     "PlacementInfeasibleError",
     "PoseGrid",
     "TaskPoses",
+    "WorkspaceMap",
     "accumulate",
+    "build_map",
     "compute_joint_space_map",
     "cone_orientations",
     "default_bounds",
     "evaluate_block",
     "make_pose_grid",
+    "open_map",
     "place_base",
     "read_task_poses",
     "sample_block",
