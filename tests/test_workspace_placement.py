@@ -19,6 +19,7 @@ from workbench.collision import Obstacle, Scene
 from workbench.errors import InputError
 from workbench.trajectory.csv_io import JointTrajectorySamples, write_trajectory_csv
 from workbench.workspace._placement_screen import CandidateLattice, Screening
+from workbench.workspace.measures import singularity_margin
 from workbench.workspace.placement import (
     PlacementInfeasibleError,
     base_transform,
@@ -37,6 +38,10 @@ from workbench.workspace.task_poses import (
 
 #: Agreement of the exact verification with an independent computation.
 RTOL_DET = 1e-9
+#: The map's margins are float32: the screening's and NumPy's differ by rounding.
+RTOL_FLOAT32 = 1e-6
+#: The map's singularity factors of the best branch.
+FACTORS = ("shoulder", "elbow", "wrist")
 ATOL_EXACT = 1e-12
 #: The known base pose the tasks are made from (on the test lattices).
 BASE = (0.3, -0.2, 0.0, math.radians(40.0))
@@ -141,6 +146,14 @@ def test_screening_matches_nearest_grid_lookup(puma, rng, coarse_map):
         assert screening.missed[k, rest] == np.count_nonzero(np.isnan(values))
         if not np.isnan(values).all():
             assert screening.worst_dexterity[k, rest] == np.nanmin(values)
+            factors = [coarse_map[n][voxel, orientation] for n in FACTORS]
+            margin = np.where(voxel >= 0, singularity_margin(*factors), np.nan)
+            np.testing.assert_allclose(
+                screening.worst_margin[k, rest],
+                np.nanmin(margin[~np.isnan(values)]),
+                rtol=RTOL_FLOAT32,
+                atol=0,
+            )
 
 
 def test_nothing_reaches_raises_infeasible(puma, rng, coarse_map):

@@ -126,4 +126,53 @@ def screen_candidates(
     return reached
 
 
-__all__ = ["screen_candidates"]
+@entry_point(
+    outputs=("dexterity_planes", "margin_planes"),
+    contiguous=("dexterity", "shoulder", "elbow", "wrist"),
+)
+def gather_planes(
+    dexterity: npt.NDArray[np.float32],
+    shoulder: npt.NDArray[np.float32],
+    elbow: npt.NDArray[np.float32],
+    wrist: npt.NDArray[np.float32],
+    grid_shape: npt.NDArray[np.int64],
+    orientation_count: int,
+    layers: npt.NDArray[np.int64],
+    used: npt.NDArray[np.int64],
+    inverse_tolerances: FloatArray,
+    dexterity_planes: npt.NDArray[np.float32],
+    margin_planes: npt.NDArray[np.float32],
+) -> None:
+    """The (orientation, layer) planes :func:`screen_candidates` reads, in one pass.
+
+    Args:
+        dexterity: (V·O,) the map's dexterity [m³], pose ``v·O + o``.
+        shoulder: (V·O,) the best branch's |s| [m].
+        elbow: (V·O,) its |e| [1].
+        wrist: (V·O,) its |w| [1].
+        grid_shape: (3,) ``(nx, ny, nz)``.
+        orientation_count: O.
+        layers: (L,) the z layers to gather.
+        used: (U,) the orientations to gather.
+        inverse_tolerances: (3,) ``1 / SHOULDER_TOL, 1 / ELBOW_TOL, 1 / WRIST_TOL``.
+        dexterity_planes: (U, L, nx, ny) output: ``dexterity`` of orientation
+            ``used[u]`` at voxel ``(ix, iy, layers[l])``.
+        margin_planes: (U, L, nx, ny) output: the singularity margin
+            ``min(|s|/SHOULDER_TOL, |e|/ELBOW_TOL, |w|/WRIST_TOL)`` there.
+    """
+    nx, ny, nz = grid_shape[0], grid_shape[1], grid_shape[2]
+    ks = np.float32(inverse_tolerances[0])
+    ke = np.float32(inverse_tolerances[1])
+    kw = np.float32(inverse_tolerances[2])
+    for ix in range(nx):
+        for iy in range(ny):
+            for lk in range(layers.shape[0]):
+                row = ((ix * ny + iy) * nz + layers[lk]) * orientation_count
+                for u in range(used.shape[0]):
+                    k = row + used[u]
+                    dexterity_planes[u, lk, ix, iy] = dexterity[k]
+                    m = min(abs(shoulder[k]) * ks, abs(elbow[k]) * ke)
+                    margin_planes[u, lk, ix, iy] = min(m, abs(wrist[k]) * kw)
+
+
+__all__ = ["gather_planes", "screen_candidates"]

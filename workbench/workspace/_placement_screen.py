@@ -28,13 +28,12 @@ import pinocchio as pin
 from workbench.errors import InputError
 from workbench.singularities.conditions import ELBOW_TOL, SHOULDER_TOL, WRIST_TOL
 from workbench.validation import as_finite_array, check_positive
-from workbench.workspace._placement_kernel import screen_candidates
+from workbench.workspace._placement_kernel import gather_planes, screen_candidates
 from workbench.workspace.grid import PoseGrid
 from workbench.workspace.orientations import quat_multiply_xyzw
 from workbench.workspace.task_map import get_thread_count
 
 FloatArray = npt.NDArray[np.float64]
-Float32Array = npt.NDArray[np.float32]
 IndexArray = npt.NDArray[np.int64]
 Progress = Callable[[int, int], None]
 
@@ -117,15 +116,6 @@ class CandidateLattice:
         return np.column_stack([self.xs[a], self.ys[b], height, self.yaws[k]])
 
 
-def singularity_margin_f32(
-    shoulder: Float32Array, elbow: Float32Array, wrist: Float32Array
-) -> Float32Array:
-    """The map's singularity margin [1] in float32 (``measures.singularity_margin``)."""
-    s = np.abs(shoulder) * np.float32(1.0 / SHOULDER_TOL)
-    e = np.abs(elbow) * np.float32(1.0 / ELBOW_TOL)
-    return np.minimum(np.minimum(s, e), np.abs(wrist) * np.float32(1.0 / WRIST_TOL))
-
-
 def quat_xyzw_of(rotations: FloatArray) -> FloatArray:
     """(N, 4) unit quaternions x y z w of (N, 3, 3) rotations."""
     quat = np.array([pin.Quaternion(r).coeffs() for r in rotations]).reshape(-1, 4)
@@ -171,26 +161,25 @@ class Screening:
         used, compact = np.unique(nearest, return_inverse=True)
         self.orientation = compact.reshape(len(yaws), -1).astype(np.int64)
         self.task_layer = task_layer.astype(np.int64)
-        nx, ny, nz = grid.shape
-        count = grid.orientation_count
         rows = layers if len(layers) else np.zeros(1, dtype=np.int64)
+        shape = (len(used), len(rows), grid.shape[0], grid.shape[1])
+        self.dexterity = np.empty(shape, dtype=np.float32)
+        self.margin = np.empty(shape, dtype=np.float32)
 
-        def select(name: str) -> Float32Array:
-            """(nx, ny, L, U) the task's layers and orientations of an array."""
-            values = np.asarray(read(name), dtype=np.float32)
-            values = values.reshape(nx, ny, nz, count)
-            if len(rows) < nz:
-                values = values[:, :, rows]
-            return values[..., used] if len(used) < count else values
-
-        def planes(values: Float32Array) -> Float32Array:
-            return np.ascontiguousarray(values.transpose(3, 2, 0, 1))
-
-        self.dexterity = planes(select("dexterity"))
-        margin = singularity_margin_f32(
-            select("shoulder"), select("elbow"), select("wrist")
+        arrays = [
+            np.ascontiguousarray(read(name), dtype=np.float32).reshape(-1)
+            for name in ("dexterity", "shoulder", "elbow", "wrist")
+        ]
+        gather_planes(
+            *arrays,
+            np.asarray(grid.shape, dtype=np.int64),
+            int(grid.orientation_count),
+            rows.astype(np.int64),
+            used.astype(np.int64),
+            1.0 / np.array([SHOULDER_TOL, ELBOW_TOL, WRIST_TOL]),
+            self.dexterity,
+            self.margin,
         )
-        self.margin = planes(margin)
         self.origin = np.asarray(grid.origin[:2], dtype=np.float64)
         self.resolution = float(grid.resolution)
 
@@ -240,5 +229,4 @@ __all__ = [
     "CandidateLattice",
     "Screening",
     "quat_xyzw_of",
-    "singularity_margin_f32",
 ]
