@@ -166,12 +166,15 @@ class Screening:
         self.dexterity = np.empty(shape, dtype=np.float32)
         self.margin = np.empty(shape, dtype=np.float32)
 
-        arrays = [
+        dexterity, shoulder, elbow, wrist = (
             np.ascontiguousarray(read(name), dtype=np.float32).reshape(-1)
             for name in ("dexterity", "shoulder", "elbow", "wrist")
-        ]
+        )
         gather_planes(
-            *arrays,
+            dexterity,
+            shoulder,
+            elbow,
+            wrist,
             np.asarray(grid.shape, dtype=np.int64),
             int(grid.orientation_count),
             rows.astype(np.int64),
