@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from pathlib import Path
@@ -338,6 +339,33 @@ def test_follow_path_steps_and_limits():
     jump = np.zeros((2, 1, 6))
     jump[1, 0, 0] = 1.01 * PATH_STEP_MAX
     assert follow_path(jump, np.ones((2, 1), bool), np.ones((2, 1)), wraps) is None
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**32 - 1))
+def test_follow_path_is_the_best_chain(seed):
+    """Against every chain of a small path (K = 4 samples, S = 3 solutions)."""
+    gen = np.random.default_rng(seed)
+    q = gen.uniform(-math.pi, math.pi, size=(4, 3, 2))
+    q[1:] = q[:-1] + gen.normal(0.0, 0.6, size=(3, 3, 2))  # some steps join
+    usable = gen.random((4, 3)) < 0.8
+    dexterity = gen.random((4, 3))
+    wraps = np.array([True, False])
+    best = -math.inf
+    for chain in itertools.product(range(3), repeat=4):
+        steps = np.diff(q[np.arange(4), chain], axis=0)
+        steps[:, 0] = np.remainder(steps[:, 0] + math.pi, 2 * math.pi) - math.pi
+        if all(usable[k, s] for k, s in enumerate(chain)) and np.all(
+            np.abs(steps) <= PATH_STEP_MAX
+        ):
+            best = max(best, min(dexterity[k, s] for k, s in enumerate(chain)))
+    found = follow_path(q, usable, dexterity, wraps)
+    if best == -math.inf:
+        assert found is None
+    else:
+        assert found is not None and found[0] == best
+        chain = found[1]
+        assert min(dexterity[k, s] for k, s in enumerate(chain)) == best
 
 
 # -- task-pose files ----------------------------------------------------------

@@ -28,6 +28,8 @@ from workbench._compiled import entry_point
 
 FloatArray = npt.NDArray[np.float64]
 
+TAU = 2.0 * math.pi
+
 
 @entry_point(
     outputs=("missed", "worst_dexterity", "worst_margin"),
@@ -175,4 +177,64 @@ def gather_planes(
                     margin_planes[u, lk, ix, iy] = min(m, abs(wrist[k]) * kw)
 
 
-__all__ = ["gather_planes", "screen_candidates"]
+@entry_point(outputs=("parent",))
+def chain_parents(
+    q: FloatArray,
+    usable: npt.NDArray[np.bool_],
+    dexterity: FloatArray,
+    wraps: npt.NDArray[np.bool_],
+    step_max: float,
+    parent: npt.NDArray[np.int64],
+) -> tuple[float, int]:
+    """The max–min chain of solutions along a path (``placement_check.follow_path``).
+
+    Args:
+        q: (K, S, n) the S solutions [rad] of each of the K samples.
+        usable: (K, S) the solutions a chain may use.
+        dexterity: (K, S) their dexterity (larger is better).
+        wraps: (n,) joints whose step is taken modulo 2π.
+        step_max: Largest step of a joint between consecutive samples [rad].
+        parent: (K, S) output: the solution at sample k − 1 that the best chain
+            ending at solution s of sample k comes from.
+
+    Returns:
+        ``(worst dexterity of the best chain, its solution at the last sample)``;
+        the worst dexterity is −inf when no chain follows the path.
+    """
+    count, width, joints = q.shape[0], q.shape[1], q.shape[2]
+    value = np.empty(width)
+    reach = np.empty(width)
+    for s in range(width):
+        value[s] = dexterity[0, s] if usable[0, s] else -np.inf
+        parent[0, s] = 0
+    for k in range(1, count):
+        for t in range(width):
+            best, origin = -np.inf, 0
+            if usable[k, t]:
+                for f in range(width):
+                    if value[f] == -np.inf:
+                        continue
+                    joins = True
+                    for j in range(joints):
+                        step = q[k, t, j] - q[k - 1, f, j]
+                        if wraps[j]:
+                            step -= TAU * np.round(step / TAU)
+                        if not abs(step) <= step_max:  # NaN: no step
+                            joins = False
+                            break
+                    if joins:
+                        v = min(value[f], dexterity[k, t])
+                        if v > best:
+                            best, origin = v, f
+            reach[t] = best
+            parent[k, t] = origin
+        for t in range(width):
+            value[t] = reach[t]
+    last = 0
+    for s in range(width):
+        if value[s] > value[last]:
+            last = s
+    return value[last], last
+
+
+__all__ = ["chain_parents", "gather_planes", "screen_candidates"]

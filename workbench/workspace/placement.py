@@ -65,8 +65,11 @@ DEFAULT_YAW_STEP = math.radians(10.0)
 #: Most candidates verified exactly while looking for ``top`` that reach
 #: every pose.
 MAX_VERIFIED = 512
-#: Candidates verified per batch (one closed-form call for all their poses).
+#: Candidates verified per batch (one closed-form call for all their poses)...
 VERIFY_BATCH = 16
+#: ... and at most this many task poses per batch (its solutions take 0.4 kB
+#: each), so a long task is verified a few candidates at a time.
+VERIFY_POSES = 200_000
 
 
 class PlacementInfeasibleError(InfeasibleError):
@@ -158,8 +161,9 @@ def place_base(
         rows = np.asarray(mounts, dtype=np.float64)
         rows = as_finite_array(rows, (len(rows) if rows.ndim == 2 else -1, 4), "mounts")
         placements = []
-        for start in range(0, len(rows), VERIFY_BATCH):
-            placements += evaluator.evaluate(rows[start : start + VERIFY_BATCH])
+        size = _batch_size(len(task))
+        for start in range(0, len(rows), size):
+            placements += evaluator.evaluate(rows[start : start + size])
         return _best(placements, top, len(task))
     if region is None:
         raise InputError("place_base needs a region (xmin, xmax, ymin, ymax) or mounts")
@@ -167,7 +171,7 @@ def place_base(
     the_map = _get_map(robot, map, task, lattice.height)
     screening = Screening(the_map.grid, the_map.__getitem__, task, lattice)
     verified: dict[int, Placement] = {}
-    for flat in _candidates(screening, top, progress):
+    for flat in _candidates(screening, top, _batch_size(len(task)), progress):
         batch = evaluator.evaluate(lattice.rows(flat))
         verified.update(zip(flat.tolist(), batch, strict=True))
         if progress is not None:
@@ -177,8 +181,13 @@ def place_base(
     return _best(list(verified.values()), top, len(task))
 
 
+def _batch_size(poses: int) -> int:
+    """Candidates per verification batch for a task of ``poses`` poses."""
+    return max(1, min(VERIFY_BATCH, VERIFY_POSES // poses))
+
+
 def _candidates(
-    screening: Screening, top: int, progress: Progress | None
+    screening: Screening, top: int, size: int, progress: Progress | None
 ) -> Iterator[npt.NDArray[np.int64]]:
     """Batches of candidates to verify, best screened first, up to MAX_VERIFIED.
 
@@ -195,8 +204,8 @@ def _candidates(
                 return
             order = screening.rank(prune=False, progress=progress)
             order = order[~given[order]]
-        for start in range(0, len(order), VERIFY_BATCH):
-            batch = order[start : start + min(VERIFY_BATCH, MAX_VERIFIED - count)]
+        for start in range(0, len(order), size):
+            batch = order[start : start + min(size, MAX_VERIFIED - count)]
             if not len(batch):
                 return
             given[batch] = True
@@ -277,6 +286,7 @@ __all__ = [
     "MAX_VERIFIED",
     "PATH_STEP_MAX",
     "VERIFY_BATCH",
+    "VERIFY_POSES",
     "Placement",
     "PlacementInfeasibleError",
     "WorkspaceMapLike",

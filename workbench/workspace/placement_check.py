@@ -37,6 +37,7 @@ from workbench.collision import CollisionChecker, Scene
 from workbench.ik import get_closed_form
 from workbench.model.robot import Robot
 from workbench.singularities import compute_conditions, get_factorisation
+from workbench.workspace._placement_kernel import chain_parents
 from workbench.workspace._reference import limit_representatives
 from workbench.workspace.measures import singularity_margin
 
@@ -150,27 +151,27 @@ def follow_path(
     Returns:
         ``(worst dexterity along the chain, (K,) solution index per sample)``,
         or None if no chain steps by at most :data:`PATH_STEP_MAX` in every
-        joint between consecutive samples.
+        joint between consecutive samples. Ties: the first solution.
+
+    The search (max–min over the S solutions of consecutive samples) is the
+    compiled :func:`~workbench.workspace._placement_kernel.chain_parents`.
     """
-    count = q.shape[0]
-    value = np.where(usable[0], dexterity[0], -np.inf)
-    parent = np.zeros((count, q.shape[1]), dtype=np.int64)
-    for k in range(1, count):
-        raw = q[k][None, :, :] - q[k - 1][:, None, :]  # (from, to, n)
-        wrapped = np.remainder(raw + math.pi, 2.0 * math.pi) - math.pi
-        step = np.where(wraps, np.abs(wrapped), np.abs(raw))
-        joins = np.all(step <= PATH_STEP_MAX, axis=-1)  # NaN rows never join
-        reach = np.where(joins, np.minimum(value[:, None], dexterity[k][None]), -np.inf)
-        parent[k] = np.argmax(reach, axis=0)
-        value = np.where(usable[k], np.max(reach, axis=0), -np.inf)
-    last = int(np.argmax(value))
-    if value[last] == -np.inf:
+    parent = np.empty(usable.shape, dtype=np.int64)
+    worst, last = chain_parents(
+        np.ascontiguousarray(q, dtype=np.float64),
+        np.ascontiguousarray(usable, dtype=np.bool_),
+        np.ascontiguousarray(dexterity, dtype=np.float64),
+        np.ascontiguousarray(wraps, dtype=np.bool_),
+        PATH_STEP_MAX,
+        parent,
+    )
+    if worst == -np.inf:
         return None
-    chain = np.empty(count, dtype=np.int64)
+    chain = np.empty(len(parent), dtype=np.int64)
     chain[-1] = last
-    for k in range(count - 1, 0, -1):
+    for k in range(len(parent) - 1, 0, -1):
         chain[k - 1] = parent[k, chain[k]]
-    return float(value[last]), chain
+    return float(worst), chain
 
 
 def _labels(branches: tuple[str, ...], chain: npt.NDArray[np.int64]) -> str:
