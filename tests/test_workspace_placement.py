@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from workbench import ik
+from workbench import ik, load_robot
 from workbench.cli import main
 from workbench.collision import Obstacle, Scene
 from workbench.errors import InputError
@@ -113,12 +113,14 @@ def _exact_reference(robot, task, row):
     return missed, worst
 
 
-def test_exact_verification_matches_analytic_per_pose(puma, rng):
-    task, _ = _task(puma, rng, count=10)
+@pytest.mark.parametrize("name", ["puma560", "ur5"])
+def test_exact_verification_matches_analytic_per_pose(name, rng):
+    robot = load_robot(name)
+    task, _ = _task(robot, rng, count=10)
     rows = np.array([BASE, (0.5, 0.1, 0.0, 1.0), (0.0, 0.0, 0.3, -2.0), (0.9, 0, 0, 0)])
-    placements = PlacementEvaluator(puma, task, None, False).evaluate(rows)
+    placements = PlacementEvaluator(robot, task, None, False).evaluate(rows)
     for row, placement in zip(rows, placements, strict=True):
-        missed, worst = _exact_reference(puma, task, row)
+        missed, worst = _exact_reference(robot, task, row)
         assert placement.missed == missed
         assert placement.all_reachable == (missed == 0)
         if math.isfinite(worst):
