@@ -116,8 +116,8 @@ def locked(partial: Path) -> Iterator[None]:
     fd = _lock_file(lock, partial)
     try:
         yield
-        lock.unlink(missing_ok=True)
     finally:
+        lock.unlink(missing_ok=True)  # still ours: the next build makes a new one
         os.close(fd)
 
 
