@@ -245,6 +245,9 @@ def test_a_failed_build_resumes_with_the_missing_blocks_only(
     assert "5 of" in caplog.text and "the same command resumes" in caplog.text
     with pytest.raises(InputError, match="unfinished map build"):
         open_map(partial)
+    stray = partial / "dexterity" / "c" / "0" / f"0.{'ab' * 16}.partial"
+    stray.parent.mkdir(parents=True, exist_ok=True)
+    stray.write_bytes(b"half a chunk")  # what a writer killed mid-chunk leaves
     monkeypatch.setattr(build_module, "evaluate_block", real)
     progress: list[tuple[int, int]] = []
     summary = build_map(
@@ -257,7 +260,7 @@ def test_a_failed_build_resumes_with_the_missing_blocks_only(
     )
     assert summary.blocks_computed == summary.blocks - 5
     assert progress[0] == (5, summary.blocks) and len(progress) == summary.blocks - 4
-    assert not partial.exists()
+    assert not partial.exists() and not list(path.rglob("*.partial"))
     _same_map(reference, path)
 
 
@@ -338,7 +341,7 @@ def test_a_killed_command_resumes_to_the_same_map(
     )
     summary = json.loads(again.stdout)
     assert summary["blocks_computed"] == summary["blocks"] - done
-    assert not get_partial_path(path).exists()
+    assert not get_partial_path(path).exists() and not list(path.rglob("*.partial"))
     _same_map(cli_reference, path)
 
 

@@ -16,6 +16,7 @@ import fcntl
 import importlib.metadata
 import json
 import os
+import re
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
@@ -32,6 +33,8 @@ from workbench.workspace.store import (
     read_array,
 )
 
+#: A chunk file Zarr was writing (``_atomic_write``): ``NAME.<uuid4 hex>.partial``.
+_STRAY_CHUNK = re.compile(r".+\.[0-9a-f]{32}\.partial")
 #: Packages whose versions a map records (``attrs["versions"]``).
 VERSIONED = ("workbench", "pinocchio", "numpy", "numba", "zarr", "dask")
 
@@ -159,7 +162,24 @@ def finish(partial: Path, path: Path) -> None:
         )
     if path.exists():
         raise InputError(f"cannot write {path}: it appeared during the build")
+    remove_stray_chunk_files(partial)
     try:
         move_folder_into_place(partial, path)
     except OSError as err:
         raise InputError(f"cannot write {path}: {err.strerror or err}") from err
+
+
+def remove_stray_chunk_files(folder: Path) -> int:
+    """Remove the half-written chunk files of stopped writers; returns how many.
+
+    Zarr writes a chunk to ``CHUNK.<32 hex digits>.partial`` and renames it
+    onto ``CHUNK``; a writer killed in between (``kill -9``, Ctrl-C) leaves
+    that file behind. Its block was not marked done, so it was written again
+    whole: the leftover is garbage.
+    """
+    removed = 0
+    for file in folder.rglob("*.partial"):
+        if _STRAY_CHUNK.fullmatch(file.name) and file.is_file():
+            file.unlink(missing_ok=True)
+            removed += 1
+    return removed
