@@ -23,6 +23,7 @@ import numpy as np
 import pytest
 import zarr
 
+from tests.conftest import run_cli
 from workbench import Robot, load_robot
 from workbench.collision import Obstacle, Scene
 from workbench.errors import InputError
@@ -187,6 +188,33 @@ def test_exact_map_is_bitwise_the_same_on_1_2_workers_and_a_cluster(
     assert on_cluster.poses == grid.pose_count
     assert 0.1 < on_cluster.reachable_fraction < 0.6
     assert not get_partial_path(tmp_path / "cluster.zarr").exists()
+
+
+def test_the_command_on_a_cluster_makes_the_same_map(
+    capsys, reference, cluster, tmp_path
+) -> None:
+    path = tmp_path / "cli.zarr"
+    code, out, err = run_cli(
+        capsys,
+        "workspace",
+        "map",
+        "--robot",
+        "puma560",
+        "--resolution",
+        str(RESOLUTION),
+        "--orientations",
+        str(ORIENTATIONS),
+        "--block-voxels",
+        str(BLOCK_VOXELS),
+        "--scheduler",
+        cluster,
+        "--out",
+        str(path),
+        "--json",
+    )
+    assert (code, err) == (0, "")
+    assert json.loads(out)["blocks_computed"] == json.loads(out)["blocks"]
+    _same_map(reference, path)
 
 
 def test_sampled_map_is_bitwise_the_same_on_1_2_workers_and_a_cluster(
