@@ -79,10 +79,10 @@ from workbench.workspace.store import (
 
 logger = logging.getLogger(__name__)
 
-#: Voxels per block (one task, one chunk of every array): 512 voxels × 512
-#: orientations is 262,144 poses, 2^20 bytes per float32 chunk; smaller blocks
-#: pay Zarr's fixed cost per chunk written more often (docs/workspace.md).
-DEFAULT_BLOCK_VOXELS = 512
+#: Voxels per block (one task, one chunk of every array): 1024 voxels × 512
+#: orientations is 524,288 poses, 2 MiB per float32 chunk; smaller blocks pay
+#: Zarr's fixed cost per chunk written more often (docs/workspace.md, "Speed").
+DEFAULT_BLOCK_VOXELS = 1024
 #: Configurations of a sampled map when none is given.
 DEFAULT_SAMPLES = 10_000_000
 #: Configurations per block (one task) of a sampled map.
