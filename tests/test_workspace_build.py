@@ -27,8 +27,12 @@ from tests.conftest import run_cli
 from workbench import Robot, load_robot
 from workbench.collision import Obstacle, Scene
 from workbench.errors import InputError
-from workbench.workspace import _block_runner, make_pose_grid
-from workbench.workspace import build as build_module
+from workbench.workspace import (
+    _block_runner,
+    _block_tasks,
+    _sampled_fold,
+    make_pose_grid,
+)
 from workbench.workspace.build import SAMPLES_PER_BLOCK, build_map
 from workbench.workspace.grid import PoseGrid
 from workbench.workspace.robot_spec import (
@@ -264,8 +268,8 @@ def test_a_failed_build_resumes_with_the_missing_blocks_only(
     puma, grid, reference, tmp_path, monkeypatch, caplog
 ) -> None:
     path = tmp_path / "resumed.zarr"
-    real = build_module.evaluate_block
-    monkeypatch.setattr(build_module, "evaluate_block", _failing_after(real, 5))
+    real = _block_tasks.evaluate_block
+    monkeypatch.setattr(_block_tasks, "evaluate_block", _failing_after(real, 5))
     with pytest.raises(RuntimeError, match="injected"):
         build_map(puma, grid, path, workers=1, block_voxels=BLOCK_VOXELS)
     partial = get_partial_path(path)
@@ -276,7 +280,7 @@ def test_a_failed_build_resumes_with_the_missing_blocks_only(
     stray = partial / "dexterity" / "c" / "0" / f"0.{'ab' * 16}.partial"
     stray.parent.mkdir(parents=True, exist_ok=True)
     stray.write_bytes(b"half a chunk")  # what a writer killed mid-chunk leaves
-    monkeypatch.setattr(build_module, "evaluate_block", real)
+    monkeypatch.setattr(_block_tasks, "evaluate_block", real)
     progress: list[tuple[int, int]] = []
     summary = build_map(
         puma,
@@ -297,15 +301,15 @@ def test_a_sampled_build_resumes_and_equals_the_uninterrupted_one(
 ) -> None:
     samples = SAMPLES_PER_BLOCK + 7  # 2 blocks, the last of 7 samples
     build_map(panda, panda_grid, tmp_path / "whole.zarr", samples=samples, workers=1)
-    real = build_module.sample_block
-    monkeypatch.setattr(build_module, "SAVE_INTERVAL", 0.0)  # save after each block
-    monkeypatch.setattr(build_module, "sample_block", _failing_after(real, 1))
+    real = _block_tasks.sample_block
+    monkeypatch.setattr(_sampled_fold, "SAVE_INTERVAL", 0.0)  # save after each block
+    monkeypatch.setattr(_block_tasks, "sample_block", _failing_after(real, 1))
     path = tmp_path / "resumed.zarr"
     with pytest.raises(RuntimeError, match="injected"):
         build_map(panda, panda_grid, path, samples=samples, workers=1)
     done = zarr.open_group(get_partial_path(path))["done"][...]
     assert sorted(done.tolist()) == [0, 1]  # the first block run was saved
-    monkeypatch.setattr(build_module, "sample_block", real)
+    monkeypatch.setattr(_block_tasks, "sample_block", real)
     summary = build_map(panda, panda_grid, path, samples=samples, workers=1)
     assert summary.blocks_computed == 1
     _same_map(tmp_path / "whole.zarr", path)
@@ -401,11 +405,11 @@ def test_a_partial_build_of_another_map_or_in_use_is_refused(
     puma, grid, tmp_path, monkeypatch
 ) -> None:
     path = tmp_path / "m.zarr"
-    real = build_module.evaluate_block
-    monkeypatch.setattr(build_module, "evaluate_block", _failing_after(real, 0))
+    real = _block_tasks.evaluate_block
+    monkeypatch.setattr(_block_tasks, "evaluate_block", _failing_after(real, 0))
     with pytest.raises(RuntimeError):
         build_map(puma, grid, path, workers=1, block_voxels=BLOCK_VOXELS)
-    monkeypatch.setattr(build_module, "evaluate_block", real)
+    monkeypatch.setattr(_block_tasks, "evaluate_block", real)
     other = make_pose_grid(puma, resolution=RESOLUTION, orientations=ORIENTATIONS + 1)
     with pytest.raises(InputError, match=r"another map \(orientation_set differ\)"):
         build_map(puma, other, path, workers=1, block_voxels=BLOCK_VOXELS)

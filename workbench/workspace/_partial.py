@@ -25,9 +25,17 @@ import numpy as np
 
 import workbench
 from workbench.atomic_files import move_folder_into_place
+from workbench.collision import Scene
 from workbench.errors import InputError, WorkbenchError
+from workbench.model.robot import Robot
+from workbench.singularities.conditions import ELBOW_TOL, SHOULDER_TOL, WRIST_TOL
+from workbench.workspace._block_tasks import SAMPLE_SEED, SAMPLES_PER_BLOCK
+from workbench.workspace.grid import PoseGrid
+from workbench.workspace.robot_spec import RobotSpec
 from workbench.workspace.store import (
     DONE,
+    FORMAT,
+    FORMAT_VERSION,
     get_attributes,
     open_group_checked,
     read_array,
@@ -183,3 +191,59 @@ def remove_stray_chunk_files(folder: Path) -> int:
             file.unlink(missing_ok=True)
             removed += 1
     return removed
+
+
+def map_attributes(
+    robot: Robot,
+    spec: RobotSpec,
+    grid: PoseGrid,
+    family: str | None,
+    scene: Scene | None,
+    block_voxels: int,
+    samples: int,
+) -> dict[str, Any]:
+    """The group attributes of a map (``docs/workspace.md`` lists them).
+
+    Args:
+        robot: The arm.
+        spec: Its spec (URDF digest, limits).
+        grid: The pose grid.
+        family: ``"opw"``, ``"ur"`` or None.
+        scene: The obstacles, or None.
+        block_voxels: Voxels per block and chunk.
+        samples: Configurations of a sampled map, 0 for an exact one.
+    """
+    sampled = samples > 0
+    return as_json_attributes(
+        {
+            "format": FORMAT,
+            "format_version": FORMAT_VERSION,
+            "robot": robot.name,
+            "urdf_sha256": spec.urdf_sha256,
+            "tool_frame": robot.tool_frame,
+            "family": family,
+            "joint_limits": {"lower": spec.lower, "upper": spec.upper},
+            "sampled": sampled,
+            "samples": samples if sampled else None,
+            "sampling": (
+                {"samples_per_block": SAMPLES_PER_BLOCK, "seed": SAMPLE_SEED}
+                if sampled
+                else None
+            ),
+            "grid": {
+                "origin": grid.origin,
+                "resolution": grid.resolution,
+                "shape": grid.shape,
+                "bounds": grid.bounds,
+            },
+            "orientation_set": grid.orientation_set,
+            "block_voxels": block_voxels,
+            "tolerances": {
+                "shoulder": SHOULDER_TOL,
+                "elbow": ELBOW_TOL,
+                "wrist": WRIST_TOL,
+            },
+            "scene": None if scene is None else scene.to_dict(),
+            "versions": get_versions(),
+        }
+    )

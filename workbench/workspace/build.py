@@ -11,9 +11,8 @@ Arms without a closed form get a sampled map (:mod:`workbench.workspace.sampled`
 a block is :data:`SAMPLES_PER_BLOCK` random configurations, drawn from
 ``default_rng([seed, block])``; each task returns the grid poses its samples
 hit and their manipulability, which this process folds into the map (hit flag
-and maximum: the same bits in any order). The folded arrays are saved every
-:data:`SAVE_INTERVAL` seconds and at the end, then the ``done`` flags of the
-blocks they hold.
+and maximum: the same bits in any order), saving it as it goes
+(:mod:`._sampled_fold`). Workers run :mod:`._block_tasks`.
 
 Whole or nothing, and resumable: the map is written in ``MAP.zarr.partial``
 and renamed ``MAP.zarr`` when every block is done (:mod:`._partial`). A
@@ -26,7 +25,6 @@ which a maximum ignores).
 
 from __future__ import annotations
 
-import functools
 import logging
 import math
 import os
@@ -44,33 +42,21 @@ from workbench.collision import Scene
 from workbench.errors import InputError
 from workbench.ik import UnsupportedRobotError, get_closed_form
 from workbench.model.robot import Robot
-from workbench.singularities.conditions import ELBOW_TOL, SHOULDER_TOL, WRIST_TOL
 from workbench.workspace._block_runner import run_tasks
+from workbench.workspace._block_tasks import SAMPLES_PER_BLOCK, BlockJob, compute_block
 from workbench.workspace._partial import (
-    as_json_attributes,
     check_same_build,
     finish,
-    get_versions,
     locked,
+    map_attributes,
 )
-from workbench.workspace._reference import summarise_voxels
+from workbench.workspace._sampled_fold import SAMPLED_KEYS, run_sampled
 from workbench.workspace.grid import PoseGrid
-from workbench.workspace.measures import POSE_KEYS, VOXEL_KEYS, evaluate_block
-from workbench.workspace.robot_spec import (
-    RobotSpec,
-    get_robot_spec,
-    get_scene_json,
-    load_spec_checker,
-    load_spec_robot,
-)
-from workbench.workspace.sampled import accumulate, sample_block
+from workbench.workspace.measures import POSE_KEYS, VOXEL_KEYS
+from workbench.workspace.robot_spec import get_robot_spec, get_scene_json
 from workbench.workspace.store import (
     DONE,
-    FORMAT,
-    FORMAT_VERSION,
-    BlockWriter,
     create_store,
-    get_array,
     get_block_count,
     get_partial_path,
     open_group_checked,
@@ -85,23 +71,6 @@ logger = logging.getLogger(__name__)
 DEFAULT_BLOCK_VOXELS = 1024
 #: Configurations of a sampled map when none is given.
 DEFAULT_SAMPLES = 10_000_000
-#: Configurations per block (one task) of a sampled map.
-SAMPLES_PER_BLOCK = 1 << 18
-#: Seed of a sampled map's generators (``default_rng([seed, block])``).
-SAMPLE_SEED = 0
-#: Seconds between two saves of a sampled map's folded arrays.
-SAVE_INTERVAL = 30.0
-#: The arrays of a sampled map: the hit flag (as ``reached``), the largest
-#: manipulability, and the per-voxel summaries of those.
-SAMPLED_KEYS = (
-    "reached",
-    "dexterity",
-    "reachability",
-    "dexterity_best",
-    "dexterity_median",
-)
-#: Voxels summarised at once at the end of a sampled build (bounds the memory).
-_SUMMARY_VOXELS = 4096
 #: ``progress(done, total)``: blocks done so far (those of an earlier run
 #: included) and in all.
 ProgressCallback = Callable[[int, int], None]
@@ -146,51 +115,20 @@ class MapSummary:
         return asdict(self)
 
 
-@dataclass(frozen=True, slots=True)
-class _BlockJob:
-    """What every block task needs (sent once to each worker)."""
+class _Counter:
+    """Counts finished blocks and reports them to a progress callback."""
 
-    spec: RobotSpec
-    grid: PoseGrid
-    path: str
-    token: str  # unique to one build_map call
-    block_voxels: int
-    scene_json: str | None = None
-    samples: int = 0
+    def __init__(self, done: int, total: int, progress: ProgressCallback | None):
+        self.done, self.total, self._progress = done, total, progress
+        self._report()
 
+    def add(self, block: int, result: Any = None) -> None:
+        self.done += 1
+        self._report()
 
-def _compute_block(job: _BlockJob, block: int) -> None:
-    """Evaluate voxel block ``block`` and write it (data, then its flag)."""
-    robot = load_spec_robot(job.spec)
-    checker = None
-    if job.scene_json is not None:
-        checker = load_spec_checker(job.spec, job.scene_json)
-    start = block * job.block_voxels
-    stop = min(start + job.block_voxels, job.grid.voxel_count)
-    data = evaluate_block(robot, job.grid, start, stop, checker=checker)
-    _get_writer(job.path, job.token).write(block, start, data)
-
-
-@functools.lru_cache(maxsize=4)
-def _get_writer(path: str, token: str) -> BlockWriter:
-    """The writer of a build's store, opened once per worker process.
-
-    Raises:
-        InputError: If the store is not there (a worker on another file system).
-    """
-    if not Path(path).is_dir():
-        raise InputError(
-            f"a worker cannot see the map being built at {path}: the workers "
-            "of a cluster must share its file system, at the same path"
-        )
-    return BlockWriter(path)
-
-
-def _sample(job: _BlockJob, block: int) -> tuple[np.ndarray, np.ndarray]:
-    """The grid poses hit by sample block ``block`` and their manipulability."""
-    count = min(SAMPLES_PER_BLOCK, job.samples - block * SAMPLES_PER_BLOCK)
-    robot = load_spec_robot(job.spec)
-    return sample_block(robot, job.grid, block, count, SAMPLE_SEED)
+    def _report(self) -> None:
+        if self._progress is not None:
+            self._progress(self.done, self.total)
 
 
 def build_map(
@@ -245,7 +183,7 @@ def build_map(
         )
     count = (samples or DEFAULT_SAMPLES) if sampled else 0
     spec = get_robot_spec(robot)
-    attrs = _map_attributes(robot, spec, grid, family, scene, block_voxels, count)
+    attrs = map_attributes(robot, spec, grid, family, scene, block_voxels, count)
     if sampled:
         names = list(SAMPLED_KEYS)
         total = get_block_count(count, SAMPLES_PER_BLOCK)
@@ -270,7 +208,7 @@ def build_map(
             int(b)
             for b in np.flatnonzero(read_array(open_group_checked(partial), DONE) != 1)
         ]
-        job = _BlockJob(
+        job = BlockJob(
             spec=spec,
             grid=grid,
             path=str(partial),
@@ -282,10 +220,10 @@ def build_map(
         counter = _Counter(total - len(todo), total, progress)
         try:
             if sampled:
-                _run_sampled(job, todo, counter, threads, scheduler)
+                run_sampled(job, todo, counter.add, threads, scheduler)
             else:
                 run_tasks(
-                    _compute_block,
+                    compute_block,
                     job,
                     todo,
                     on_done=counter.add,
@@ -332,73 +270,6 @@ def build_map(
     )
 
 
-class _Counter:
-    """Counts finished blocks and reports them to a progress callback."""
-
-    def __init__(self, done: int, total: int, progress: ProgressCallback | None):
-        self.done, self.total, self._progress = done, total, progress
-        self._report()
-
-    def add(self, block: int, result: Any = None) -> None:
-        self.done += 1
-        self._report()
-
-    def _report(self) -> None:
-        if self._progress is not None:
-            self._progress(self.done, self.total)
-
-
-def _run_sampled(
-    job: _BlockJob,
-    todo: list[int],
-    counter: _Counter,
-    threads: int,
-    scheduler: str | None,
-) -> None:
-    """Sample the blocks ``todo``, fold them in, save as they come; then summarise."""
-    group = open_group_checked(job.path, mode="r+")
-    hit = np.ascontiguousarray(read_array(group, "reached").reshape(-1))
-    dexterity = np.ascontiguousarray(read_array(group, "dexterity").reshape(-1))
-    folded: list[int] = []
-    saved = time.monotonic()
-
-    def save() -> None:
-        nonlocal saved
-        shape = (job.grid.voxel_count, job.grid.orientation_count)
-        get_array(group, "reached")[...] = hit.reshape(shape)
-        get_array(group, "dexterity")[...] = dexterity.reshape(shape)
-        flags = get_array(group, DONE)
-        for block in folded:
-            flags[block] = 1
-        folded.clear()
-        saved = time.monotonic()
-
-    def fold(block: int, result: tuple[np.ndarray, np.ndarray]) -> None:
-        accumulate(*result, hit, dexterity)
-        folded.append(block)
-        if time.monotonic() - saved > SAVE_INTERVAL:
-            save()
-        counter.add(block)
-
-    try:
-        run_tasks(
-            _sample, job, todo, on_done=fold, workers=threads, scheduler=scheduler
-        )
-    finally:
-        if folded:
-            save()
-    _save_summaries(group, dexterity.reshape(job.grid.voxel_count, -1))
-
-
-def _save_summaries(group: Any, dexterity: np.ndarray) -> None:
-    """The per-voxel arrays of a sampled map from its (V, O) dexterity."""
-    for start in range(0, len(dexterity), _SUMMARY_VOXELS):
-        part = dexterity[start : start + _SUMMARY_VOXELS].astype(np.float64)
-        summary = summarise_voxels(part, np.full(part.shape, np.nan))
-        for name in SAMPLED_KEYS[2:]:
-            get_array(group, name)[start : start + len(part)] = summary[name]
-
-
 def _check_arguments(
     workers: int | None,
     scheduler: str | None,
@@ -438,49 +309,3 @@ def _get_family(robot: Robot) -> str | None:
         return get_closed_form(robot).family
     except UnsupportedRobotError:
         return None
-
-
-def _map_attributes(
-    robot: Robot,
-    spec: RobotSpec,
-    grid: PoseGrid,
-    family: str | None,
-    scene: Scene | None,
-    block_voxels: int,
-    samples: int,
-) -> dict[str, Any]:
-    """The group attributes of a map (``docs/workspace.md`` lists them)."""
-    sampled = samples > 0
-    return as_json_attributes(
-        {
-            "format": FORMAT,
-            "format_version": FORMAT_VERSION,
-            "robot": robot.name,
-            "urdf_sha256": spec.urdf_sha256,
-            "tool_frame": robot.tool_frame,
-            "family": family,
-            "joint_limits": {"lower": spec.lower, "upper": spec.upper},
-            "sampled": sampled,
-            "samples": samples if sampled else None,
-            "sampling": (
-                {"samples_per_block": SAMPLES_PER_BLOCK, "seed": SAMPLE_SEED}
-                if sampled
-                else None
-            ),
-            "grid": {
-                "origin": grid.origin,
-                "resolution": grid.resolution,
-                "shape": grid.shape,
-                "bounds": grid.bounds,
-            },
-            "orientation_set": grid.orientation_set,
-            "block_voxels": block_voxels,
-            "tolerances": {
-                "shoulder": SHOULDER_TOL,
-                "elbow": ELBOW_TOL,
-                "wrist": WRIST_TOL,
-            },
-            "scene": None if scene is None else scene.to_dict(),
-            "versions": get_versions(),
-        }
-    )
