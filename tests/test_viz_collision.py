@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tests.test_viz_browser import chromium, screenshot, seek  # noqa: F401
+from tests.test_viz_browser import screenshot, seek
 from workbench import paper_data
 from workbench.collision import CollisionChecker, get_angeles_scene
 from workbench.tasks import run_fish_cutting
@@ -45,7 +45,7 @@ def test_overlay_colours_follow_the_contacts(puma) -> None:
     assert np.linalg.norm(a - b) > 0.0
 
 
-def test_pick_pose_shows_the_contact_in_red(chromium, puma, tmp_path) -> None:  # noqa: F811
+def test_pick_pose_shows_the_contact_in_red(chromium, puma, tmp_path) -> None:
     checker = CollisionChecker(puma, get_angeles_scene(puma))
     viewer = Viewer(puma, Q_PICK)
     viewer.show_collisions(checker)
@@ -61,7 +61,7 @@ def test_pick_pose_shows_the_contact_in_red(chromium, puma, tmp_path) -> None:  
     assert red(free) < 0.001
 
 
-def test_animation_highlights_contacts_over_time(chromium, puma, tmp_path) -> None:  # noqa: F811
+def test_animation_highlights_contacts_over_time(chromium, puma, tmp_path) -> None:
     traj = pick_and_place(puma, Q_PICK, Q_PLACE, paper_data.ANGELES_DURATION)
     samples = traj.sample_uniform(20.0)
     checker = CollisionChecker(puma, get_angeles_scene(puma))
@@ -73,7 +73,7 @@ def test_animation_highlights_contacts_over_time(chromium, puma, tmp_path) -> No
     assert red(late) < 0.0005  # clear near the place
 
 
-def test_fishcut_page_shows_fish_and_table(chromium, puma_kang, tmp_path) -> None:  # noqa: F811
+def test_fishcut_page_shows_fish_and_table(chromium, puma_kang, tmp_path) -> None:
     result = run_fish_cutting(puma_kang)
     scene = get_fish_cutting_scene(puma_kang, result.fish, result.setup)
     checker = CollisionChecker(puma_kang, scene)
