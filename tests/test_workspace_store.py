@@ -28,9 +28,14 @@ from workbench.workspace.orientations import (
 )
 from workbench.workspace.store import (
     ARRAYS,
+    DONE,
     FORMAT,
     FORMAT_VERSION,
+    BlockWriter,
     WorkspaceMap,
+    create_store,
+    get_array_names,
+    get_attributes,
     get_partial_path,
     open_map,
 )
@@ -86,6 +91,69 @@ def test_layout_arrays_chunks_and_flags(puma_map) -> None:
     assert np.all(done[...] == 1)
     assert group["positions"].shape == (voxels, 3)
     assert group["orientations"].shape == (orientations, 4)
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    return {
+        str(f.relative_to(folder)): f.read_bytes()
+        for f in sorted(folder.rglob("*"))
+        if f.is_file()
+    }
+
+
+def test_block_writer_stores_what_zarr_stores(puma_map, tmp_path, monkeypatch) -> None:
+    """Chunks encoded and written by the block writer are Zarr's own, bitwise."""
+    robot, grid, path = puma_map
+    group = zarr.open_group(path, mode="r")
+    names = get_array_names(group)
+    blocks = -(-grid.voxel_count // BLOCK_VOXELS)
+    assert grid.voxel_count % BLOCK_VOXELS  # the last chunk is cut by the array's end
+    reference = tmp_path / "zarr.zarr"
+    create_store(
+        reference,
+        grid,
+        names=names,
+        block_voxels=BLOCK_VOXELS,
+        attrs=get_attributes(group),
+        blocks=blocks,
+    )
+    plain = zarr.open_group(reference, mode="r+")  # Zarr's own setitem
+    for block in range(blocks):
+        start = block * BLOCK_VOXELS
+        stop = min(start + BLOCK_VOXELS, grid.voxel_count)
+        data = evaluate_block(robot, grid, start, stop)
+        for name in names:
+            plain[name][start:stop] = data[name]
+        plain[DONE][block] = 1
+    built = _files(path)
+    assert built == _files(reference)
+    assert len([k for k in built if "/c/" in k]) < blocks * (len(names) + 1)
+    # a block of fill values only: its chunk files are removed, as Zarr does
+    copy = tmp_path / "copy.zarr"
+    shutil.copytree(path, copy)
+    block = next(b for b in range(blocks) if (copy / f"reached/c/{b}/0").is_file())
+    start = block * BLOCK_VOXELS
+    for name in names:
+        plain[name][start : start + BLOCK_VOXELS] = ARRAYS[name].fill_value
+    voxels = (BLOCK_VOXELS, grid.orientation_count)
+    empty = {
+        name: np.full(
+            voxels if ARRAYS[name].per_pose else voxels[:1],
+            ARRAYS[name].fill_value,
+            dtype=ARRAYS[name].dtype,
+        )
+        for name in names
+    }
+    BlockWriter(copy).write(block, start, empty)
+    assert not (copy / f"reached/c/{block}/0").exists()
+    assert _files(copy) == _files(reference)
+    assert not any(k.endswith(".partial") for k in _files(copy))
+    # where the store is not a local folder, the writer goes through Zarr
+    monkeypatch.setattr(zarr.storage, "LocalStore", type("OtherStore", (), {}))
+    through_zarr = tmp_path / "through_zarr.zarr"
+    shutil.copytree(path, through_zarr)
+    BlockWriter(through_zarr).write(block, start, empty)
+    assert _files(through_zarr) == _files(reference)
 
 
 def test_attributes_say_what_the_map_is(puma_map) -> None:

@@ -21,7 +21,8 @@ value (NaN, 0: poses out of reach) are not written at all.
 
 from __future__ import annotations
 
-import asyncio
+import os
+import uuid
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -32,8 +33,10 @@ import numpy as np
 import numpy.typing as npt
 import zarr
 import zarr.errors
+import zarr.storage
+from zarr.abc.codec import ArrayArrayCodec, SupportsSyncCodec
 from zarr.codecs import BloscCodec
-from zarr.core.sync import sync
+from zarr.core.buffer import default_buffer_prototype
 
 from workbench.atomic_files import atomic_folder
 from workbench.errors import InputError
@@ -229,6 +232,10 @@ def _create_arrays(
 class BlockWriter:
     """Writes blocks into a map being built (its arrays opened once).
 
+    Each chunk is encoded and written by the calling thread
+    (:class:`_ChunkWriter`): the blocks of a build are written by as many
+    threads as compute them, not by Zarr's one I/O thread.
+
     Args:
         path: The map folder (being built).
 
@@ -238,33 +245,109 @@ class BlockWriter:
 
     def __init__(self, path: str | Path):
         group = open_group_checked(path, mode="r+")
-        self._arrays = {name: get_array(group, name) for name in get_array_names(group)}
-        self._done = get_array(group, DONE)
+        self._arrays = {
+            name: _ChunkWriter(get_array(group, name))
+            for name in get_array_names(group)
+        }
+        self._done = _ChunkWriter(get_array(group, DONE))
 
     def write(self, block: int, start: int, data: Mapping[str, Any]) -> None:
         """Write one block's arrays at voxels ``start:``, then its ``done`` flag.
 
-        The arrays are written concurrently (Zarr's I/O loop); the flag only
-        once every one of them is stored.
+        The flag is written only once every array of the block is stored.
 
         Args:
             block: Block index (its flag in ``done``).
             start: First voxel of the block (a multiple of the chunk length).
             data: Arrays by name, (B, O) or (B,) each, B the block's voxels.
         """
+        for name, values in data.items():
+            self._arrays[name].write(start, np.asarray(values))
+        self._done.write(block, _DONE_FLAG)
 
-        async def write_all() -> None:
-            await asyncio.gather(
-                *(
-                    self._arrays[name].async_array.setitem(
-                        slice(start, start + len(values)), values
-                    )
-                    for name, values in data.items()
-                )
+
+#: The value of a block's ``done`` chunk.
+_DONE_FLAG = np.ones(1, dtype=np.uint8)
+
+
+class _ChunkWriter:
+    """Writes whole chunks of one array in the calling thread.
+
+    What Zarr's ``array[start:stop] = values`` stores for a selection that is
+    one whole chunk (the last one padded with the fill value; nothing, and
+    any older file removed, for a chunk of fill values only), bitwise: the
+    chunk goes through the array's own codecs (their synchronous
+    ``_encode_sync``) and is written like Zarr's local store does
+    (``NAME.<uuid4 hex>.partial``, then renamed), and flushed to disk
+    first, so that a block's ``done`` flag never outlives its data in a
+    crash (and the final flush of the map finds little left). Zarr's own ``setitem``
+    sends every chunk through its single I/O event-loop thread, which made
+    storing the serial part of a build on several threads. Arrays whose
+    store or codecs do not allow it (another store, an asynchronous-only
+    codec) are written through Zarr.
+
+    Args:
+        array: A Zarr v3 array chunked along its first axis only.
+    """
+
+    def __init__(self, array: zarr.Array):
+        self._array = array
+        metadata = array.metadata
+        store = array.store_path.store
+        codecs = getattr(metadata, "codecs", ())
+        self._folder: Path | None = None
+        if (
+            isinstance(store, zarr.storage.LocalStore)
+            and codecs
+            and all(isinstance(codec, SupportsSyncCodec) for codec in codecs)
+            and not any(isinstance(codec, ArrayArrayCodec) for codec in codecs)
+        ):
+            self._folder = Path(store.root) / array.store_path.path
+        self._codecs = codecs
+        self._length = array.chunks[0]
+        self._spec = (
+            None
+            if self._folder is None
+            else metadata.get_chunk_spec(
+                (0,) * array.ndim, array.async_array.config, default_buffer_prototype()
             )
+        )
 
-        sync(write_all())
-        self._done[block] = 1
+    def write(self, start: int, values: np.ndarray) -> None:
+        """Store ``values`` at rows ``start:`` (one whole chunk, or the last)."""
+        array, length = self._array, self._length
+        if start % length or len(values) > length:
+            raise ValueError(f"rows {start}:+{len(values)} are not one chunk")
+        if self._folder is None or self._spec is None:
+            array[start : start + len(values)] = values
+            return
+        spec = self._spec
+        chunk = np.asarray(values, dtype=array.dtype)
+        if chunk.shape != spec.shape:  # the last chunk, cut by the array's end
+            padded = np.full(spec.shape, spec.fill_value, dtype=array.dtype)
+            padded[: len(chunk)] = chunk
+            chunk = padded
+        coords = (start // length,) + (0,) * (array.ndim - 1)
+        path = self._folder / array.metadata.encode_chunk_key(coords)
+        encoded: Any = spec.prototype.nd_buffer.from_numpy_array(
+            np.ascontiguousarray(chunk)
+        )
+        if not spec.config.write_empty_chunks and encoded.all_equal(spec.fill_value):
+            path.unlink(missing_ok=True)
+            return
+        for codec in self._codecs:
+            encoded = codec._encode_sync(encoded, spec)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f"{path.name}.{uuid.uuid4().hex}.partial")
+        try:
+            with tmp.open("wb") as file:
+                file.write(encoded.as_buffer_like())
+                file.flush()
+                os.fsync(file.fileno())  # on disk before the block's done flag
+            tmp.replace(path)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
 
 
 def read_done(path: str | Path) -> npt.NDArray[np.bool_]:
