@@ -247,6 +247,25 @@ def test_blocks_are_deterministic_and_independent_of_the_split() -> None:
     assert set(whole) == (set(POSE_KEYS) - {"collision_free"}) | set(VOXEL_KEYS)
 
 
+def test_reused_buffers_give_the_same_bits_and_are_the_threads() -> None:
+    """``reuse=True``: the same arrays, in this thread's buffers (next call's)."""
+    robot = load_robot("puma560")
+    grid = make_pose_grid(robot, resolution=0.1, orientations=64)
+    start = grid.voxel_count // 2
+    fresh = evaluate_block(robot, grid, start, start + 30)
+    reused = evaluate_block(robot, grid, start, start + 30, reuse=True)
+    for key in fresh:
+        assert np.array_equal(fresh[key], reused[key], equal_nan=True), key
+    kept = {key: values.copy() for key, values in reused.items()}
+    smaller = evaluate_block(robot, grid, start + 30, start + 41, reuse=True)
+    for key in ("reached", "dexterity"):  # first rows of the buffers: written over
+        assert np.shares_memory(smaller[key], reused[key]), key
+        assert not np.shares_memory(smaller[key], fresh[key]), key
+    again = evaluate_block(robot, grid, start, start + 30, reuse=True)
+    for key in kept:
+        assert np.array_equal(kept[key], again[key], equal_nan=True), key
+
+
 def test_voxel_summaries() -> None:
     robot = load_robot("ur5")
     grid = make_pose_grid(robot, resolution=0.1, orientations=32)

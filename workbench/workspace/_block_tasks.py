@@ -54,7 +54,8 @@ def compute_block(job: BlockJob, block: int) -> None:
         checker = load_spec_checker(job.spec, job.scene_json)
     start = block * job.block_voxels
     stop = min(start + job.block_voxels, job.grid.voxel_count)
-    data = evaluate_block(robot, job.grid, start, stop, checker=checker)
+    # the per-pose arrays are this thread's buffers: stored before its next block
+    data = evaluate_block(robot, job.grid, start, stop, checker=checker, reuse=True)
     _get_writer(job.path, job.token).write(block, start, data)
 
 

@@ -137,34 +137,49 @@ class _Work(threading.local):
         self.poses = np.empty((CHUNK_POSES, 4, 4))
         self.q = np.empty((CHUNK_POSES, 8, 6))
         self.valid = np.empty((CHUNK_POSES, 8), dtype=bool)
-        self.dexterity = np.empty(0)  # grown to 2 × the poses of the largest block
+        # grown to fit the largest block: float64 (2, P), uint8 (2, P), float32 (5, P)
+        self.dexterity = np.empty(0)
+        self.counts = np.empty(0, dtype=np.uint8)
+        self.measures = np.empty(0, dtype=np.float32)
 
-    def get_dexterity(self, total: int) -> np.ndarray:
-        """A (2, total) float64 view of this thread's buffer."""
-        if self.dexterity.size < 2 * total:
-            self.dexterity = np.empty(2 * total)
-        return self.dexterity[: 2 * total].reshape(2, total)
+    def get(self, name: str, rows: int, total: int) -> np.ndarray:
+        """A (rows, total) view of this thread's buffer ``name``, grown if needed."""
+        buffer = getattr(self, name)
+        if buffer.size < rows * total:
+            buffer = np.empty(rows * total, dtype=buffer.dtype)
+            setattr(self, name, buffer)
+        view: np.ndarray = buffer[: rows * total].reshape(rows, total)
+        return view
 
 
 _work = _Work()
 
 
 def _evaluate_compiled(
-    robot: Robot, solver: ClosedFormSolver, grid: PoseGrid, start: int, stop: int
+    robot: Robot,
+    solver: ClosedFormSolver,
+    grid: PoseGrid,
+    start: int,
+    stop: int,
+    reuse: bool,
 ) -> dict[str, np.ndarray]:
     """:func:`evaluate_block` through the compiled kernels (no scene).
 
-    Allocates its outputs only: the work arrays are the thread's (:class:`_Work`).
+    The work arrays are the thread's (:class:`_Work`); so are the per-pose
+    outputs with ``reuse``, else they are new arrays.
     """
     factors, joints = _constants(robot)
     positions = np.ascontiguousarray(grid.positions[start:stop])
     rotations = np.ascontiguousarray(grid.rotations)
     count, orientations = stop - start, grid.orientation_count
     total = count * orientations
-    counts = np.empty((2, total), dtype=np.uint8)
-    measures = np.empty((5, total), dtype=np.float32)
     work = _work
-    dexterity = work.get_dexterity(total)
+    if reuse:
+        counts, measures = work.get("counts", 2, total), work.get("measures", 5, total)
+    else:
+        counts = np.empty((2, total), dtype=np.uint8)
+        measures = np.empty((5, total), dtype=np.float32)
+    dexterity = work.get("dexterity", 2, total)
     poses, q, valid = work.poses, work.q, work.valid
     for first in range(0, total, CHUNK_POSES):
         n = min(CHUNK_POSES, total - first)
@@ -194,6 +209,7 @@ def evaluate_block(
     stop: int,
     *,
     checker: CollisionChecker | None = None,
+    reuse: bool = False,
 ) -> dict[str, np.ndarray]:
     """Measures of every pose of voxels ``start:stop`` × all orientations.
 
@@ -210,6 +226,10 @@ def evaluate_block(
         start: First voxel of the block, ``0 <= start < stop``.
         stop: One past its last voxel, ``<= V``.
         checker: Optional collision checker of the robot and a scene.
+        reuse: Return the per-pose arrays in this thread's buffers (compiled
+            path), which its next call with ``reuse`` overwrites: for a
+            caller that stores the block at once (a map build), sparing the
+            allocation and first touch of ~11 MB per block of 1024 × 512.
 
     Returns:
         Arrays keyed as in the module docstring: :data:`POSE_KEYS` (B, O)
@@ -222,7 +242,7 @@ def evaluate_block(
     start, stop = _check_range(grid, start, stop)
     solver = get_closed_form(robot)  # raises UnsupportedRobotError
     if checker is None:
-        return _evaluate_compiled(robot, solver, grid, start, stop)
+        return _evaluate_compiled(robot, solver, grid, start, stop, reuse)
     return evaluate_block_reference(robot, grid, start, stop, checker=checker)
 
 
