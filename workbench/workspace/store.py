@@ -270,6 +270,21 @@ class BlockWriter:
 _DONE_FLAG = np.ones(1, dtype=np.uint8)
 
 
+def _only_fill(chunk: np.ndarray, fill: Any) -> bool:
+    """Whether ``chunk`` holds only ``fill`` (Zarr's ``NDBuffer.all_equal``).
+
+    NaN: every value NaN; 0 of an integer array: no value set. Other fills
+    go through Zarr's comparison (a float 0 compares bit patterns there).
+    """
+    fill = np.asarray(fill)
+    if fill.dtype.kind == "f" and np.isnan(fill):
+        return bool(np.isnan(chunk).all())
+    if chunk.dtype.kind in "iub" and fill == 0:
+        return not chunk.any()
+    buffer = default_buffer_prototype().nd_buffer.from_numpy_array(chunk)
+    return bool(buffer.all_equal(fill))
+
+
 class _ChunkWriter:
     """Writes whole chunks of one array in the calling thread.
 
@@ -332,7 +347,7 @@ class _ChunkWriter:
         encoded: Any = spec.prototype.nd_buffer.from_numpy_array(
             np.ascontiguousarray(chunk)
         )
-        if not spec.config.write_empty_chunks and encoded.all_equal(spec.fill_value):
+        if not spec.config.write_empty_chunks and _only_fill(chunk, spec.fill_value):
             path.unlink(missing_ok=True)
             return
         for codec in self._codecs:
