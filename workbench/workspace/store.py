@@ -233,7 +233,7 @@ class BlockWriter:
     """Writes blocks into a map being built (its arrays opened once).
 
     Each chunk is encoded and written by the calling thread
-    (:class:`_ChunkWriter`): the blocks of a build are written by as many
+    (``_ChunkWriter``): the blocks of a build are written by as many
     threads as compute them, not by Zarr's one I/O thread.
 
     Args:
