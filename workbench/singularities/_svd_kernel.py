@@ -105,7 +105,7 @@ def _sweep(a, norms, gamma, cos, sin, k, m) -> int:
     return rotated
 
 
-@entry_point(outputs=("out",), contiguous=("jacobians",), vectorize=True)
+@entry_point(outputs=("out",), contiguous=("jacobians",))
 def singular_values(jacobians: FloatArray, out: FloatArray) -> None:
     """Singular values of each Jacobian, in descending order.
 
