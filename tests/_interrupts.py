@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -48,7 +49,26 @@ COMMANDS: dict[str, tuple[list[str], tuple[str, ...]]] = {
         [*PLAN, "--rate", "20000", "--csv", "out/big.csv", "--no-collision"],
         ("out/big.csv",),
     ),
+    "workspace view": (
+        ["workspace", "view", "map.zarr", "--html", "out/v.html"],
+        ("out/v.html",),
+    ),
+    "workspace report": (
+        ["workspace", "report", "map.zarr", "--out", "out/r.html"],
+        ("out/r.html",),
+    ),
 }
+#: ``workspace map`` of a coarse grid in many small blocks (a few seconds on
+#: one thread): stopped midway, it leaves ``out/m.zarr.partial``.
+WORKSPACE_MAP = [
+    *"workspace map --robot puma560 --resolution 0.15 --orientations 8".split(),
+    *("--block-voxels", "16", "--workers", "1", "--out", "out/m.zarr"),
+]
+#: ``workspace map`` of a small map, for the view and report (``map.zarr``).
+SMALL_MAP = [
+    *"workspace map --robot puma560 --resolution 0.4 --orientations 8".split(),
+    *("--workers", "1", "--out"),
+]
 
 
 @dataclass
@@ -74,6 +94,8 @@ def _is_complete(path: Path, reference: bytes) -> bool:
         except InputError:
             return False
         return data.split(b"\n", 2)[1].startswith(b"# samples=")
+    if path.suffix == ".html":  # a page ends with its closing tag
+        return data.rstrip().endswith(b"</html>")
     if path.suffix == ".json":
         try:
             json.loads(data)
@@ -119,6 +141,8 @@ def run_reference(name: str, folder: Path) -> dict[str, bytes]:
     """Run the command to its end once; the bytes of every output."""
     argv, outputs = COMMANDS[name]
     (folder / "out").mkdir(parents=True, exist_ok=True)
+    if name.startswith("workspace") and not (folder / "map.zarr").exists():
+        _run_to_end([*SMALL_MAP, "map.zarr"], folder)
     subprocess.run(
         [sys.executable, "-m", "workbench", "-q", *argv],
         cwd=folder,
@@ -195,4 +219,112 @@ def interrupt_once(
             f"{name}: exit {process.returncode} after {kill.name} at {delay:.3f} s: "
             f"{stderr[-200:]}"
         )
+    return delay
+
+
+def _run_to_end(argv: list[str], folder: Path) -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "workbench", "-q", *argv],
+        cwd=folder,
+        capture_output=True,
+        check=False,
+    )
+    if done.returncode != 0:
+        raise RuntimeError(f"{argv}: exit {done.returncode}: {done.stderr[-300:]!r}")
+
+
+def read_map(path: Path) -> dict[str, bytes]:
+    """The bytes of every array of the finished map at ``path`` and its attributes.
+
+    Raises:
+        InputError: If ``path`` is no finished map (:func:`open_map`).
+    """
+    from workbench.workspace.store import open_map
+
+    workspace_map = open_map(path)
+    arrays = {
+        name: workspace_map[name].tobytes()
+        for name in (*workspace_map.names, "positions", "orientations", "done")
+    }
+    attrs = {k: v for k, v in workspace_map.attrs.items() if k != "versions"}
+    return {**arrays, "attrs": json.dumps(attrs, sort_keys=True).encode()}
+
+
+def map_reference(folder: Path) -> dict[str, bytes]:
+    """Build the map of :data:`WORKSPACE_MAP` uninterrupted once; :func:`read_map`."""
+    (folder / "out").mkdir(parents=True, exist_ok=True)
+    _run_to_end([*WORKSPACE_MAP[:-1], "ref.zarr"], folder)
+    return read_map(folder / "ref.zarr")
+
+
+def interrupt_map_once(
+    folder: Path,
+    reference: dict[str, bytes],
+    rng: np.random.Generator,
+    tally: Tally,
+    *,
+    max_delay: float,
+    min_delay: float = 0.0,
+    kill: signal.Signals | None = None,
+) -> float:
+    """Stop ``workspace map`` once (SIGINT or SIGKILL), then resume it to the end.
+
+    The map is then absent (only ``out/m.zarr.partial``, possibly left by an
+    earlier interrupt too) or complete and equal to ``reference``; the run
+    that resumes it ends with a map bitwise equal to ``reference``. ``kill``
+    None: SIGINT or SIGKILL drawn.
+
+    Returns:
+        The delay [s] between the start and the signal.
+    """
+    from workbench.errors import InputError
+
+    out = folder / "out"
+    out.mkdir(parents=True, exist_ok=True)
+    target = out / "m.zarr"
+    if target.exists():  # finished by the previous run: start again
+        shutil.rmtree(target)
+    if kill is None:
+        kill = signal.SIGKILL if rng.random() < 0.5 else signal.SIGINT
+    process = subprocess.Popen(
+        [sys.executable, "-m", "workbench", "-q", *WORKSPACE_MAP],
+        cwd=folder,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        preexec_fn=_take_sigint,
+    )
+    delay = rng.uniform(min_delay, max_delay)
+    time.sleep(delay)
+    process.send_signal(kill)
+    _, err = process.communicate()
+    stderr = err.decode(errors="replace")
+    tally.runs += 1
+    tally.signals[kill.name] += 1
+    tally.exits[process.returncode] += 1
+    tally.tracebacks += "Traceback" in stderr
+    tally.stderr_lines_over_one += len(stderr.splitlines()) > 1
+    expected = {signal.SIGINT: (130, 0), signal.SIGKILL: (-9, 0)}[kill]
+    if process.returncode not in expected:
+        tally.problems.append(
+            f"workspace map: exit {process.returncode} after {kill.name} at "
+            f"{delay:.3f} s: {stderr[-200:]}"
+        )
+    if not target.exists():
+        tally.files["absent"] += 1
+    else:
+        try:
+            same = read_map(target) == reference
+        except InputError:
+            same = False
+        tally.files["complete" if same else "truncated"] += 1
+        if not same:
+            tally.problems.append(f"workspace map: {target} half-written ({kill.name})")
+        shutil.rmtree(target)  # resume from the partial folder if any
+    _run_to_end(WORKSPACE_MAP, folder)
+    resumed = read_map(target) == reference
+    tally.files["resumed equal" if resumed else "resumed different"] += 1
+    if not resumed:
+        tally.problems.append(f"workspace map: resumed after {kill.name} differs")
+    if any(out.glob("*.partial")):
+        tally.problems.append("workspace map: partial folder left after resuming")
     return delay

@@ -1,26 +1,41 @@
 """Ctrl-C and kill -9 at random moments never leave a half-written file.
 
-``workbench demo`` and ``workbench plan --csv`` run as processes and are
-stopped by SIGINT or SIGKILL after a random delay, with some outputs existing
-beforehand: every output is then absent, the old one or complete, SIGINT exits
-130 without a traceback, and the demo's forked worker ends with it.
+``workbench demo``, ``workbench plan --csv``, ``workspace view`` and
+``workspace report`` run as processes and are stopped by SIGINT or SIGKILL
+after a random delay, with some outputs existing beforehand: every output is
+then absent, the old one or complete, SIGINT exits 130 without a traceback, and
+the demo's forked worker ends with it. ``workspace map`` stopped by SIGINT
+leaves no map (or the whole one) and a partial folder that the same command
+resumes to a map bitwise equal to an uninterrupted build.
 ``python -m tests.run_cli_robustness`` runs hundreds of interrupts per command.
 """
 
 from __future__ import annotations
 
+import signal
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from tests._interrupts import Tally, interrupt_once, run_reference
+from tests._interrupts import (
+    Tally,
+    interrupt_map_once,
+    interrupt_once,
+    map_reference,
+    run_reference,
+)
 
 INTERRUPTS = 10  # per command: the suite stays fast
 MAX_DELAY = 2.0  # [s] the commands take 3-6 s; most runs are stopped midway
 #: [s] Python's own start (interpreter, site) precedes any workbench code: a
 #: SIGINT there is Python's KeyboardInterrupt (docs/interface.md, exit codes).
 MIN_DELAY = 0.15
+#: Per workspace command: each interrupt of ``workspace map`` is followed by
+#: the run that resumes it (about 4 s in all).
+WORKSPACE_INTERRUPTS = 2
+#: [s] ``view`` and ``report`` of a small map take 1.5-3 s, ``map`` 3.5 s.
+WORKSPACE_MAX_DELAY = {"workspace view": 1.8, "workspace report": 2.5, "map": 3.0}
 
 
 @pytest.mark.parametrize("name", ["demo", "plan"])
@@ -46,3 +61,47 @@ def test_interrupted_runs_leave_whole_files(name: str, tmp_path: Path) -> None:
     assert tally.orphans == 0 and tally.stderr_lines_over_one == 0
     assert set(tally.exits) <= {0, 130, -9}
     assert tally.exits[130] + tally.exits[-9] > 0  # some runs were stopped midway
+
+
+@pytest.mark.parametrize("name", ["workspace view", "workspace report"])
+def test_interrupted_workspace_pages_are_whole_or_old(
+    name: str, tmp_path: Path
+) -> None:
+    reference = run_reference(name, tmp_path)
+    rng = np.random.default_rng(11)
+    tally = Tally()
+    for _ in range(WORKSPACE_INTERRUPTS):
+        interrupt_once(
+            name,
+            tmp_path,
+            reference,
+            rng,
+            tally,
+            max_delay=WORKSPACE_MAX_DELAY[name],
+            min_delay=MIN_DELAY,
+        )
+    assert tally.problems == []
+    assert tally.files["truncated"] == 0 and tally.tracebacks == 0
+    assert tally.stderr_lines_over_one == 0
+    assert set(tally.exits) <= {0, 130, -9}
+
+
+def test_interrupted_map_resumes_to_the_same_bits(tmp_path: Path) -> None:
+    reference = map_reference(tmp_path)
+    rng = np.random.default_rng(5)
+    tally = Tally()
+    for _ in range(WORKSPACE_INTERRUPTS):
+        interrupt_map_once(
+            tmp_path,
+            reference,
+            rng,
+            tally,
+            max_delay=WORKSPACE_MAX_DELAY["map"],
+            min_delay=MIN_DELAY,
+            kill=signal.SIGINT,
+        )
+    assert tally.problems == []
+    assert tally.files["truncated"] == 0 and tally.tracebacks == 0
+    assert tally.stderr_lines_over_one == 0
+    assert tally.files["resumed equal"] == WORKSPACE_INTERRUPTS
+    assert set(tally.exits) <= {0, 130} and tally.exits[130] > 0
