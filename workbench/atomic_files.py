@@ -42,7 +42,7 @@ def check_output(
     Raises:
         InputError: If the parent folder is missing or not writable, ``path`` is
             a folder (for a file), already exists (for a folder), or is one of
-            ``inputs``.
+            ``inputs`` or inside one of them (an input folder, e.g. a map).
     """
     path = Path(path)
     parent = path.parent
@@ -57,6 +57,11 @@ def check_output(
     for source in inputs:
         if source is not None and is_same_file(path, source):
             raise InputError(f"cannot write {path}: it is also an input ({source})")
+        if source is not None and Path(source).is_dir():
+            if Path(source).resolve() in path.resolve().parents:
+                raise InputError(
+                    f"cannot write {path}: it is inside the input folder {source}"
+                )
 
 
 def check_outputs(

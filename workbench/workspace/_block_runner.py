@@ -20,8 +20,11 @@ from workbench.errors import InputError
 
 logger = logging.getLogger(__name__)
 
-#: Seconds to wait for a scheduler to answer, and for its first worker.
-CONNECT_TIMEOUT = 30.0
+#: Seconds to wait for a scheduler to answer (an address with no scheduler
+#: fails after this long: Dask retries the connection until then).
+CONNECT_TIMEOUT = 10.0
+#: Seconds to wait for the first worker of a scheduler that answered.
+WORKER_TIMEOUT = 30.0
 
 #: ``task(shared, index)`` computes and stores item ``index``; ``shared`` is the
 #: large read-only argument (the grid), sent once to each worker.
@@ -104,11 +107,11 @@ def _run_cluster(
         ) from err
     with client:
         try:
-            client.wait_for_workers(1, timeout=CONNECT_TIMEOUT)
+            client.wait_for_workers(1, timeout=WORKER_TIMEOUT)
         except TimeoutError as err:
             raise InputError(
                 f"the Dask scheduler at {address} has no worker "
-                f"(waited {CONNECT_TIMEOUT:g} s)"
+                f"(waited {WORKER_TIMEOUT:g} s)"
             ) from err
         handle = client.scatter(shared, broadcast=True, hash=False)
         prefix = f"workspace-block-{uuid.uuid4().hex}"

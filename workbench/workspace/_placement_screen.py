@@ -90,7 +90,7 @@ class CandidateLattice:
         nyaw = max(1, math.ceil(2.0 * math.pi / float(yaw_step) - _EDGE_SLACK))
         if nx * ny * nyaw > MAX_CANDIDATES:
             raise InputError(
-                f"{nx * ny * nyaw} candidates (x {nx}, y {ny}, yaw {nyaw}), at most "
+                f"{nx:.3g} × {ny:.3g} × {nyaw:.3g} candidates (x, y, yaw), at most "
                 f"{MAX_CANDIDATES}: raise the resolution or the yaw step"
             )
         return CandidateLattice(

@@ -29,6 +29,18 @@ from workbench.workspace.orientations import (
 FloatArray = npt.NDArray[np.float64]
 
 
+#: What Zarr raises on chunks that cannot be read (truncated or corrupt files).
+READ_ERRORS = (RuntimeError, ValueError, OSError, zarr.errors.BaseZarrError)
+
+
+def damaged_array(group: zarr.Group, name: str, err: Exception) -> InputError:
+    """The error for array ``name`` of a map whose chunks cannot be read."""
+    message = " ".join(str(err).split()) or type(err).__name__
+    return InputError(
+        f"{group.store_path} is a damaged workspace map (array {name!r}: {message})"
+    )
+
+
 @dataclass(frozen=True, slots=True)
 class MapQuery:
     """The map at N query poses (every field has shape (N,)).
@@ -133,7 +145,10 @@ def query_map(group: zarr.Group, grid: PoseGrid, poses: npt.ArrayLike) -> MapQue
         out: npt.NDArray[Any] = np.full(len(voxel), fill, dtype=dtype)
         array = group[name] if name in names else None
         if isinstance(array, zarr.Array) and rows.size:
-            out[inside] = array.vindex[rows, cols]
+            try:
+                out[inside] = array.vindex[rows, cols]
+            except READ_ERRORS as err:
+                raise damaged_array(group, name, err) from err
         return out
 
     nan = float("nan")

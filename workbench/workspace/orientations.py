@@ -237,9 +237,11 @@ def _cone_quaternions(
 
 def _as_cone(axis: npt.ArrayLike, half_angle: float) -> tuple[FloatArray, float]:
     direction = as_finite_array(axis, (3,), "cone axis")
-    norm = float(np.linalg.norm(direction))
-    if norm == 0.0:
+    scale = float(np.max(np.abs(direction)))
+    if scale == 0.0:
         raise InputError("cone axis must be a nonzero vector")
+    direction = direction / scale  # no overflow (1e308) or underflow (1e-320)
+    norm = float(np.linalg.norm(direction))
     half = float(as_finite_array(half_angle, (), "cone half_angle"))
     if not 0.0 < half <= math.pi:
         raise InputError(f"cone half_angle must be in (0, π] rad, got {half!r}")

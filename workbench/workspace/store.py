@@ -41,7 +41,12 @@ from zarr.core.buffer import default_buffer_prototype
 from workbench.atomic_files import atomic_folder
 from workbench.errors import InputError
 from workbench.workspace.grid import PoseGrid
-from workbench.workspace.map_query import MapQuery, query_map
+from workbench.workspace.map_query import (
+    READ_ERRORS,
+    MapQuery,
+    damaged_array,
+    query_map,
+)
 from workbench.workspace.orientations import rotations_from_quat_xyzw
 
 #: The ``format`` attribute of every map.
@@ -390,9 +395,14 @@ def read_array(group: zarr.Group, name: str) -> npt.NDArray[Any]:
     """The whole array ``name`` of a map's group, as NumPy.
 
     Raises:
-        InputError: If there is no such array.
+        InputError: If there is no such array, or its chunks cannot be read
+            (truncated, corrupt).
     """
-    return np.asarray(get_array(group, name)[...])
+    array = get_array(group, name)
+    try:
+        return np.asarray(array[...])
+    except READ_ERRORS as err:
+        raise damaged_array(group, name, err) from err
 
 
 def get_attributes(group: zarr.Group) -> dict[str, Any]:
