@@ -9,11 +9,14 @@ against: the exit code, stdout, stderr and the files that changed.
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import hashlib
 import io
 import json
 import os
+import shutil
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -37,8 +40,14 @@ DH_ROW = {"alpha": 1.5707963267948966, "a": 0.1, "d": 0.2}
 OLD = "old output, must survive a failed run\n"
 
 
-def write_inputs(folder: Path) -> None:
-    """The files the cases read and the existing outputs they must not change."""
+def write_inputs(folder: Path, *, workspace: bool = False) -> None:
+    """The files the cases read and the existing outputs they must not change.
+
+    ``workspace``: also the maps and task poses of the ``workspace`` cases
+    (:func:`write_workspace_inputs`).
+    """
+    if workspace:
+        write_workspace_inputs(folder)
     (folder / "t.json").write_text(json.dumps({"name": "t", "joints": [DH_ROW] * 6}))
     (folder / "scene.json").write_text(
         json.dumps(
@@ -62,6 +71,61 @@ def write_inputs(folder: Path) -> None:
     (folder / "dir").mkdir(exist_ok=True)
     for name in ("old.csv", "old.png", "old.html", "old.urdf", "old.srdf", "old.txt"):
         (folder / name).write_text(OLD)
+
+
+# --- workspace inputs --------------------------------------------------------
+#: ``workspace map`` of a small coarse map (125 voxels × 8 orientations, < 1 s);
+#: the output path follows.
+SMALL_MAP = [
+    *"workspace map --robot puma560 --resolution 0.4 --orientations 8".split(),
+    *("--workers", "1", "--out"),
+]
+#: ``workspace place`` of a small search (8 candidates) against ``map.zarr``;
+#: the task follows.
+PLACE_ON_MAP = [
+    *"workspace place --robot puma560 --map map.zarr --region 0 0.4 0 0.4".split(),
+    *"--resolution 0.2 --yaw-step 90 --top 2".split(),
+]
+TASK_HEADER = "x,y,z,qx,qy,qz,qw"
+#: Damaged or wrong maps: ``notmap.zarr`` a Zarr group of no map, ``nodone.zarr``
+#: without its ``done`` flags, ``trunc.zarr`` with truncated chunks,
+#: ``m.zarr.partial`` an unfinished build, ``empty.zarr`` an empty folder.
+BAD_MAPS = (
+    "missing.zarr", "notmap.zarr", "nodone.zarr", "trunc.zarr", "m.zarr.partial",
+    "empty.zarr", "dir", "task.csv", "map.zarr/zarr.json",
+)  # fmt: skip
+_workspace_template: list[Path] = []  # built once per process
+
+
+def _build_workspace_template() -> Path:
+    """A folder with ``map.zarr``, the damaged maps and ``task.csv`` (once)."""
+    if _workspace_template:
+        return _workspace_template[0]
+    folder = Path(tempfile.mkdtemp(prefix="workbench-fuzz-maps-"))
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    with contextlib.redirect_stdout(io.StringIO()):
+        code = main(["-q", *SMALL_MAP, str(folder / "map.zarr")])
+    if code != 0:
+        raise RuntimeError(f"building the fuzz map failed (exit {code})")
+    good = folder / "map.zarr"
+    for name in ("notmap.zarr", "nodone.zarr", "trunc.zarr", "m.zarr.partial"):
+        shutil.copytree(good, folder / name)
+    group = json.loads((good / "zarr.json").read_text())
+    group["attributes"] = {}
+    (folder / "notmap.zarr" / "zarr.json").write_text(json.dumps(group))
+    shutil.rmtree(folder / "nodone.zarr" / "done")
+    for chunk in (folder / "trunc.zarr").glob("*/c/**/*"):
+        if chunk.is_file():
+            chunk.write_bytes(chunk.read_bytes()[:3])
+    (folder / "empty.zarr").mkdir()
+    (folder / "task.csv").write_text(f"{TASK_HEADER}\n0.5,0.1,0.3,0,0,0,1\n")
+    _workspace_template.append(folder)
+    return folder
+
+
+def write_workspace_inputs(folder: Path) -> None:
+    """Copy the small map, the damaged maps and ``task.csv`` into ``folder``."""
+    shutil.copytree(_build_workspace_template(), folder, dirs_exist_ok=True)
 
 
 # --- input classes -----------------------------------------------------------
@@ -224,6 +288,177 @@ FLAGS = st.sampled_from(
 def _no_file(argv: list[str]) -> tuple[list[str], bytes]:
     return argv, b""
 
+
+# --- workspace input classes ------------------------------------------------
+def _above(limit: int) -> st.SearchStrategy[str]:
+    """Integers outside 1..limit (and one beyond any float), as text."""
+    return st.one_of(
+        st.integers(limit + 1, 10**30), st.integers(-(10**12), 0), st.just(10**400)
+    ).map(str)
+
+
+#: The small map at ``x.zarr``; an option appended overrides (the last wins).
+_SMALL = [*SMALL_MAP, "x.zarr"]
+_not_positive = st.sampled_from(["0", "-0.0", "-1", "-1e-300", "nan", "inf", "-inf"])
+WORKSPACE_SIZES = st.one_of(
+    st.tuples(
+        st.just([*_SMALL, "--resolution"]),
+        st.one_of(_not_positive, st.sampled_from(["10.000001", "1e308", "1e-5"])),
+    ),
+    st.tuples(st.just([*_SMALL, "--orientations"]), _above(1_000_000)),
+    st.tuples(st.just([*_SMALL, "--samples"]), _above(10**12)),
+    st.tuples(st.just([*_SMALL, "--workers"]), _above(4096)),
+    st.tuples(st.just([*_SMALL, "--block-voxels"]), _above(1 << 20)),
+    st.tuples(
+        st.just([*_SMALL, "--cone", "0", "0", "-1"]),
+        st.sampled_from(["0", "-30", "180.0001", "1e308", "nan"]),
+    ),
+    st.tuples(
+        st.just([*PLACE_ON_MAP, "--targets", "task.csv", "--top"]), _above(10_000)
+    ),
+    st.tuples(
+        st.just([*PLACE_ON_MAP, "--targets", "task.csv", "--yaw-step"]),
+        st.one_of(_not_positive, st.sampled_from(["360.5", "1e308"])),
+    ),
+    st.tuples(
+        st.just([*PLACE_ON_MAP, "--targets", "task.csv", "--resolution"]),
+        st.one_of(_not_positive, st.sampled_from(["10.5", "1e-300", "1e-9"])),
+    ),
+    st.tuples(
+        st.just([*PLACE_ON_MAP, "--targets", "task.csv", "--height"]),
+        st.sampled_from(["nan", "inf", "-1e308", "1e300"]),
+    ),
+    st.tuples(
+        st.just([*PLACE_ON_MAP, "--targets", "task.csv", "--region"]),
+        st.lists(
+            st.one_of(
+                st.floats(-1e308, 1e308, allow_nan=False).map(repr),
+                st.sampled_from(["nan", "inf", "1e400"]),
+            ),
+            min_size=4,
+            max_size=4,
+        ),
+    ),
+).map(lambda pair: [*pair[0], *([pair[1]] if isinstance(pair[1], str) else pair[1])])
+
+WORKSPACE_OUTPUTS = st.one_of(
+    st.sampled_from(
+        ["old.csv", "dir", "nodir/m.zarr", "map.zarr", "scene.json", "map.zarr/x.zarr"]
+    ).map(lambda p: [*SMALL_MAP, p, "--scene", "scene.json"]),
+    st.sampled_from(
+        [
+            "dir",
+            "nodir/v.html",
+            "map.zarr",
+            "map.zarr/zarr.json",
+            "map.zarr/reached/zarr.json",
+            "map.zarr/../map.zarr/done/zarr.json",
+        ]
+    ).map(lambda p: ["workspace", "view", "map.zarr", "--html", p]),
+    st.sampled_from(
+        ["dir", "nodir/r.html", "map.zarr", "map.zarr/zarr.json", "map.zarr/new.html"]
+    ).map(lambda p: ["workspace", "report", "map.zarr", "--out", p]),
+)
+
+
+@st.composite
+def _task_csv(draw: st.DrawFn) -> bytes:
+    """Bytes of a broken (or valid) task pose CSV."""
+    kind = draw(st.sampled_from(["rows", "header", "empty", "huge", "long", "utf8"]))
+    if kind == "empty":
+        return draw(st.sampled_from([b"", b"\n", f"{TASK_HEADER}\n".encode()]))
+    if kind == "utf8":
+        return f"{TASK_HEADER}\n".encode() + b"\xff\xfe,0,0,0,0,0,1\n"
+    if kind == "huge":
+        rows = draw(st.sampled_from([100_001, 400_000]))
+        return (f"{TASK_HEADER}\n" + "0.5,0.1,0.3,0,0,0,1\n" * rows).encode()
+    if kind == "long":
+        field = "1" * draw(st.integers(131_073, 300_000))
+        return f"{TASK_HEADER}\n{field},0,0,0,0,0,1\n".encode()
+    header = TASK_HEADER
+    if kind == "header":
+        header = draw(
+            st.sampled_from(["x,y,z,qw,qx,qy,qz", "x,y,z", "", "x;y;z;qx;qy;qz;qw",
+                             TASK_HEADER + ",extra", "X,Y,Z,QX,QY,QZ,QW"])
+        )  # fmt: skip
+    number = st.one_of(
+        st.floats(-2.0, 2.0, allow_nan=False).map(repr),
+        st.sampled_from(["nan", "inf", "-inf", "1e400", "", "x", "0x1p0", "1,5"]),
+    )
+    rows = draw(st.lists(st.lists(number, min_size=5, max_size=8), max_size=4))
+    body = "".join(",".join(row) + "\n" for row in rows)
+    return f"{header}\n{body}".encode()
+
+
+@st.composite
+def _workspace_malformed(draw: st.DrawFn) -> tuple[list[str], bytes]:
+    if draw(st.booleans()):  # a task CSV
+        return [*PLACE_ON_MAP, "--targets", "bad.in"], draw(_task_csv())
+    bad_map = draw(st.sampled_from([*BAD_MAPS, "bad.in"]))
+    argv = draw(
+        st.sampled_from(
+            [
+                ["workspace", "view", bad_map, "--html", "old.html"],
+                ["workspace", "report", bad_map, "--out", "old.html"],
+                [*PLACE_ON_MAP, "--map", bad_map,
+                 "--targets", "task.csv"],
+                [*_SMALL, "--scene", "bad.in"],
+            ]
+        )
+    )  # fmt: skip
+    return argv, draw(_malformed_file())
+
+
+WORKSPACE_FLAGS = st.sampled_from(
+    [
+        [*_SMALL, "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"],
+        [*_SMALL, "--scheduler", "no-port"],
+        [*_SMALL, "--scheduler", ""],
+        [*_SMALL, "--cone", "0", "0", "0", "30"],
+        [*_SMALL, "--cone", "0", "0", "1e-320", "30"],
+        [*_SMALL, "--cone", "nan", "0", "1", "30"],
+        [*_SMALL, "--samples", "10", "--scene", "scene.json"],
+        [*PLACE_ON_MAP, "--targets", "task.csv", "--trajectory", "traj.csv"],
+        [*PLACE_ON_MAP, "--targets", "task.csv", "--region", "1", "0", "0", "1"],
+        [*PLACE_ON_MAP, "--targets", "task.csv", "--region", "0", "1", "1", "0"],
+        [
+            "workspace",
+            "place",
+            "--robot",
+            "ur5",
+            "--map",
+            "map.zarr",
+            "--targets",
+            "task.csv",
+        ],
+        ["workspace", "view", "map.zarr", "--html", "v.html", "--robot", "ur5"],
+        ["workspace", "report", "map.zarr", "--out", "r.html", "--heights"],
+        ["workspace", "view", "map.zarr", "--html", "v.html", "--measure", "x"],
+        [
+            "workspace",
+            "map",
+            "--robot",
+            "puma560",
+            "--out",
+            "x.zarr",
+            "--json",
+            "--orientations",
+            "8",
+            "--cone",
+            "0",
+            "0",
+            "1",
+        ],
+    ]
+)
+
+#: The ``workspace`` input classes (their cases need :func:`write_workspace_inputs`).
+WORKSPACE_CLASSES: dict[str, st.SearchStrategy[tuple[list[str], bytes]]] = {
+    "workspace output paths": WORKSPACE_OUTPUTS.map(lambda a: (a, b"")),
+    "workspace malformed files": _workspace_malformed(),
+    "workspace sizes": WORKSPACE_SIZES.map(lambda a: (a, b"")),
+    "workspace flags": WORKSPACE_FLAGS.map(lambda a: (a, b"")),
+}
 
 #: The input classes, by name: each draws (argv, bytes of ``bad.in``).
 CLASSES: dict[str, st.SearchStrategy[tuple[list[str], bytes]]] = {

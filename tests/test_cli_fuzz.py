@@ -27,13 +27,19 @@ from tests._cli_fuzz import (
     OLD,
     PICK,
     PLACE,
+    PLACE_ON_MAP,
     PLAN,
+    SMALL_MAP,
+    WORKSPACE_CLASSES,
     contract_violations,
     run_case,
     write_inputs,
 )
+from workbench.workspace import _block_runner
 
 EXAMPLES_PER_CLASS = 8
+#: Per ``workspace`` class: each case copies a small map (a few ms).
+WORKSPACE_EXAMPLES_PER_CLASS = 12
 ATOL_IK = 1e-9  # [m, rad] FK residual of the IK of an FK pose printed with repr()
 
 
@@ -54,8 +60,28 @@ def test_bad_input_keeps_the_contract(name: str) -> None:
     check()
 
 
-def _run_in(tmp_path: Path, *argv: str) -> tuple[int, str, str]:
-    write_inputs(tmp_path)
+@pytest.mark.parametrize("name", sorted(WORKSPACE_CLASSES))
+def test_bad_workspace_input_keeps_the_contract(name: str) -> None:
+    @settings(
+        max_examples=WORKSPACE_EXAMPLES_PER_CLASS,
+        suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+        deadline=None,
+    )
+    @given(case=WORKSPACE_CLASSES[name])
+    def check(case: tuple[list[str], bytes]) -> None:
+        argv, bad = case
+        with tempfile.TemporaryDirectory() as folder:
+            write_inputs(Path(folder), workspace=True)
+            outcome = run_case(argv, Path(folder), bad)
+        assert contract_violations(outcome) == [], (argv, outcome)
+
+    check()
+
+
+def _run_in(
+    tmp_path: Path, *argv: str, workspace: bool = False
+) -> tuple[int, str, str]:
+    write_inputs(tmp_path, workspace=workspace)
     outcome = run_case(list(argv), tmp_path)
     assert contract_violations(outcome) == [], outcome
     return outcome.code, outcome.stdout, outcome.stderr
@@ -204,3 +230,91 @@ def test_fishcut_prints_json_when_the_run_fails(tmp_path: Path) -> None:
     assert code == 3 and result["command"] == "fishcut"
     assert result["feasible"] is False and "velocity" in result["error"]
     assert err.count("\n") == 1 and (tmp_path / "old.csv").read_text() == OLD
+
+
+_VIEW = ["workspace", "view", "map.zarr", "--html"]
+_REPORT = ["workspace", "report", "map.zarr", "--out"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "fragment"),
+    [
+        ([*_REPORT, "map.zarr/zarr.json"], "inside the input folder map.zarr"),
+        ([*_VIEW, "map.zarr/reached/zarr.json"], "inside the input folder"),
+        ([*_REPORT, "map.zarr"], "is a folder"),
+        (["workspace", "view", "trunc.zarr", "--html", "v.html"], "damaged"),
+        (["workspace", "report", "trunc.zarr", "--out", "r.html"], "damaged"),
+        ([*PLACE_ON_MAP, "--map", "trunc.zarr", "--targets", "task.csv"], "damaged"),
+        (["workspace", "view", "nodone.zarr", "--html", "v.html"], "no array 'done'"),
+        (["workspace", "report", "m.zarr.partial", "--out", "r.html"], "unfinished"),
+        ([*SMALL_MAP, "old.csv"], "already exists"),
+        ([*SMALL_MAP, "nodir/m.zarr"], "does not exist"),
+        ([*SMALL_MAP, "x.zarr", "--cone", "0", "0", "0", "30"], "nonzero vector"),
+        (
+            [
+                *PLACE_ON_MAP,
+                "--targets",
+                "task.csv",
+                "--region",
+                "0",
+                "1e300",
+                "0",
+                "1e300",
+                "--resolution",
+                "0.001",
+            ],
+            "1e+303 × 1e+303 × 4 candidates",
+        ),
+    ],
+)
+def test_found_workspace_cases_exit_2(
+    tmp_path: Path, argv: list[str], fragment: str
+) -> None:
+    code, out, err = _run_in(tmp_path, *argv, workspace=True)
+    assert (code, out) == (2, "") and fragment in err, err
+    assert (tmp_path / "map.zarr" / "zarr.json").read_text().startswith("{")
+
+
+def test_found_workspace_truncated_chunks_of_a_queried_array(tmp_path: Path) -> None:
+    write_inputs(tmp_path, workspace=True)
+    for chunk in (tmp_path / "map.zarr" / "dexterity").rglob("c/**/*"):
+        if chunk.is_file():
+            chunk.write_bytes(b"\0")
+    outcome = run_case([*PLACE_ON_MAP, "--targets", "task.csv"], tmp_path)
+    assert contract_violations(outcome) == []
+    assert outcome.code == 2 and "array 'dexterity'" in outcome.stderr
+
+
+def test_cone_axis_of_huge_components_is_a_direction(tmp_path: Path) -> None:
+    code, _, err = _run_in(
+        tmp_path, *SMALL_MAP, "x.zarr", "--cone", "1e308", "1e308", "0", "30",
+        workspace=True,
+    )  # fmt: skip
+    assert code == 0, err
+    attrs = json.loads((tmp_path / "x.zarr" / "zarr.json").read_text())["attributes"]
+    half = np.sqrt(0.5)
+    assert attrs["orientation_set"]["axis"] == pytest.approx([half, half, 0.0])
+
+
+def test_unreachable_scheduler_exits_2_after_the_timeout(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(_block_runner, "CONNECT_TIMEOUT", 1.0)
+    code, out, err = _run_in(
+        tmp_path, *SMALL_MAP[:-3], "--scheduler", "tcp://127.0.0.1:1", "--out",
+        "x.zarr", workspace=True,
+    )  # fmt: skip
+    assert (code, out) == (2, "") and "cannot reach the Dask scheduler" in err
+    assert "after 1 s" in err
+    assert not (tmp_path / "x.zarr").exists()
+
+
+def test_infeasible_placement_prints_its_json(tmp_path: Path) -> None:
+    code, out, err = _run_in(
+        tmp_path, *PLACE_ON_MAP, "--targets", "task.csv", "--region", "5", "6", "5",
+        "6", "--json", workspace=True,
+    )  # fmt: skip
+    result = json.loads(out)
+    assert code == 3 and result["feasible"] is False
+    assert "no base placement reaches all 1 task poses" in result["error"]
+    assert err.count("\n") == 1
