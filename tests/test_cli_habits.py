@@ -147,3 +147,26 @@ def test_numba_compilation_is_announced_once() -> None:
         pass
     numba.njit(lambda x: x - 2)(1)  # the listener is gone
     assert after.getvalue() == ""
+
+
+@pytest.mark.parametrize("command", ["map", "place", "report"])
+def test_workspace_closed_pipe_in_process(
+    command: str, capsys, monkeypatch, tmp_path
+) -> None:
+    from tests._cli_fuzz import PLACE_ON_MAP, SMALL_MAP, write_inputs
+
+    class _Closed(io.StringIO):
+        def write(self, text: str) -> int:
+            raise BrokenPipeError(32, "Broken pipe")
+
+    write_inputs(tmp_path, workspace=True)
+    monkeypatch.chdir(tmp_path)
+    argv = {
+        "map": [*SMALL_MAP, "x.zarr", "--json"],
+        "place": [*PLACE_ON_MAP, "--targets", "task.csv", "--json"],
+        "report": ["workspace", "report", "map.zarr", "--out", "r.html"],
+    }[command]
+    monkeypatch.setattr(sys, "stdout", _Closed())
+    code = workbench.cli.main(["-q", *argv])
+    assert code == EXIT_BROKEN_PIPE
+    assert capsys.readouterr().err == ""
