@@ -303,6 +303,8 @@ def interrupt_map_once(
     tally.exits[process.returncode] += 1
     tally.tracebacks += "Traceback" in stderr
     tally.stderr_lines_over_one += len(stderr.splitlines()) > 1
+    if "Traceback" in stderr or len(stderr.splitlines()) > 1:
+        tally.problems.append(f"workspace map: {kill.name}: stderr {stderr[:300]}")
     expected = {signal.SIGINT: (130, 0), signal.SIGKILL: (-9, 0)}[kill]
     if process.returncode not in expected:
         tally.problems.append(

@@ -13,6 +13,8 @@ resumes to a map bitwise equal to an uninterrupted build.
 from __future__ import annotations
 
 import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -105,3 +107,38 @@ def test_interrupted_map_resumes_to_the_same_bits(tmp_path: Path) -> None:
     assert tally.stderr_lines_over_one == 0
     assert tally.files["resumed equal"] == WORKSPACE_INTERRUPTS
     assert set(tally.exits) <= {0, 130} and tally.exits[130] > 0
+
+
+#: A ``workbench`` command whose run is interrupted while Zarr's event loop has
+#: tasks pending (as a ``workspace`` command reading or writing a map).
+_PENDING_ZARR_TASKS = """
+import asyncio
+import sys
+
+import zarr.core.sync
+
+from workbench.cli import fk, main
+
+
+async def pending() -> None:
+    await asyncio.sleep(3600)
+
+
+def interrupted(args) -> int:
+    for _ in range(20):
+        asyncio.run_coroutine_threadsafe(pending(), zarr.core.sync._get_loop())
+    raise KeyboardInterrupt
+
+
+fk.run = interrupted
+sys.exit(main(["fk", "--robot", "puma560", "--rad", "0"]))
+"""
+
+
+def test_interrupt_with_pending_zarr_tasks_prints_nothing(tmp_path: Path) -> None:
+    script = tmp_path / "workbench"  # the name makes it the workbench command
+    script.write_text(_PENDING_ZARR_TASKS)
+    done = subprocess.run(
+        [sys.executable, str(script)], capture_output=True, text=True, check=False
+    )
+    assert (done.returncode, done.stderr) == (130, "")

@@ -122,7 +122,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code.
 
     Ctrl-C at any moment returns 130 (writers remove their temporary files
-    first). Run as the ``workbench`` command, a Ctrl-C after this function
+    first); run as the ``workbench`` command, the process then ends at once
+    with 130 (no shutdown: background threads cut short would print their
+    tracebacks). Run as the ``workbench`` command, a Ctrl-C after this function
     returned is ignored: the command is done and its exit code decided (while
     the interpreter shuts down, Python's handler is gone: the signal would kill
     the process).
@@ -134,6 +136,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return _main(argv)
     except KeyboardInterrupt:
+        if command:  # end here: at the interpreter's shutdown, the tasks of
+            # background event loops (Zarr's) cut short would print tracebacks
+            for stream in (sys.stdout, sys.stderr):
+                with contextlib.suppress(OSError, ValueError):
+                    stream.flush()
+            os._exit(EXIT_INTERRUPTED)
         return EXIT_INTERRUPTED
     finally:
         if command and in_main_thread:
