@@ -317,4 +317,6 @@ def test_infeasible_placement_prints_its_json(tmp_path: Path) -> None:
     result = json.loads(out)
     assert code == 3 and result["feasible"] is False
     assert "no base placement reaches all 1 task poses" in result["error"]
-    assert err.count("\n") == 1
+    assert result["robot"] == "puma560" and result["poses"] == 1
+    assert all(not p["all_reachable"] for p in result["placements"])
+    assert err.count("\n") == 1 and result["error"] in err

@@ -4,7 +4,9 @@ Reads the task (``--targets`` pose CSV, or ``--trajectory`` joint CSV with its
 robot), ranks candidate base poses with
 :func:`workbench.workspace.placement.place_base` (screened against ``--map``
 or a map built in memory, the best verified exactly) and prints them. Exit 3
-when no placement reaches every pose. The ``workspace`` group
+when no placement reaches every pose; with ``--json`` the JSON is printed all
+the same (``feasible`` false, ``placements`` the best candidate verified, if
+any). The ``workspace`` group
 (``workbench/cli/workspace.py``) calls :func:`register`.
 """
 
@@ -13,6 +15,7 @@ from __future__ import annotations
 import argparse
 import functools
 import math
+import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -35,6 +38,7 @@ from workbench.workspace.placement import (
     DEFAULT_RESOLUTION,
     DEFAULT_YAW_STEP,
     Placement,
+    PlacementInfeasibleError,
     place_base,
 )
 from workbench.workspace.task_poses import (
@@ -45,6 +49,8 @@ from workbench.workspace.task_poses import (
 
 #: Largest ``--top``.
 MAX_TOP = 10_000
+#: Exit code of a task no candidate reaches whole (as every command's).
+EXIT_INFEASIBLE = 3
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -140,20 +146,27 @@ def run_place(args: argparse.Namespace) -> int:
     if region is None:
         region = default_region(robot, task, args.resolution)
     started = time.perf_counter()
-    placements = place_base(
-        robot,
-        task,
-        region=region,
-        height=args.height,
-        yaw_step=math.radians(args.yaw_step),
-        resolution=args.resolution,
-        map=args.map,
-        scene=scene,
-        top=args.top,
-        progress=functools.partial(
-            args.progress.count, unit="steps", label="workspace place"
-        ),
-    )
+    try:
+        placements = place_base(
+            robot,
+            task,
+            region=region,
+            height=args.height,
+            yaw_step=math.radians(args.yaw_step),
+            resolution=args.resolution,
+            map=args.map,
+            scene=scene,
+            top=args.top,
+            progress=functools.partial(
+                args.progress.count, unit="steps", label="workspace place"
+            ),
+        )
+        infeasible = None
+    except PlacementInfeasibleError as err:
+        if not args.json:
+            raise  # one line on stderr, exit 3
+        infeasible = err
+        placements = [] if err.best is None else [err.best]
     seconds = time.perf_counter() - started
     args.progress.finish()
     summary: dict[str, Any] = {
@@ -163,10 +176,16 @@ def run_place(args: argparse.Namespace) -> int:
         "region": [float(v) for v in region],
         "height": args.height,
         "seconds": seconds,
+        "feasible": infeasible is None,
         "placements": [p.as_dict() for p in placements],
     }
+    if infeasible is not None:
+        summary["error"] = " ".join(str(infeasible).split())
     if args.json:
         print_json(summary)
+        if infeasible is not None:
+            print(f"workbench: error: {summary['error']}", file=sys.stderr)
+            return EXIT_INFEASIBLE
         return 0
     _print_placements(summary, placements)
     return 0
