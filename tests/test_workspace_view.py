@@ -477,3 +477,13 @@ def test_cli_bad_output_measure_and_robot(capsys, map_path, tmp_path) -> None:
     )
     assert code == 2 and "not the URDF the map was built from" in err
     assert not (tmp_path / "v.html").exists()
+
+
+def test_cli_report_refuses_a_height_outside_the_map(capsys, map_path, tmp_path):
+    out_file = tmp_path / "r.html"
+    code, out, err = _workspace(
+        capsys, "report", map_path, "--out", out_file, "--heights", "0.2", "1e300"
+    )
+    assert (code, out) == (2, "") and err.count("\n") == 1
+    assert "slice height 1e+300 m is outside the map's z range" in err
+    assert not out_file.exists()

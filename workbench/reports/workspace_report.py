@@ -198,7 +198,8 @@ def build_workspace_report(
             (:func:`choose_heights`).
 
     Raises:
-        InputError: If the map lacks ``reachability`` or ``dexterity_best``.
+        InputError: If the map lacks ``reachability`` or ``dexterity_best``, or
+            a height lies outside the map's voxel layers.
     """
     from workbench.plots import workspace as plots
     from workbench.reports._singularity_figures import png_bytes
@@ -227,6 +228,13 @@ def build_workspace_report(
     )
     if heights:
         z = get_layer_coordinates(grid, 2)
+        low, high = z[0] - 0.5 * grid.resolution, z[-1] + 0.5 * grid.resolution
+        for h in heights:
+            if not low <= h <= high:
+                raise InputError(
+                    f"slice height {h:g} m is outside the map's z range "
+                    f"[{low:.3f}, {high:.3f}] m"
+                )
         heights = [float(z[get_nearest_layer(grid, 2, h)]) for h in heights]
     else:
         heights = choose_heights(grid, fields["reachability"])
