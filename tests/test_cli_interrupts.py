@@ -46,22 +46,8 @@ def test_interrupted_runs_leave_whole_files(name: str, tmp_path: Path) -> None:
         reference = run_reference(name, tmp_path)
     else:  # a trajectory CSV is checked by its reader, not against a reference
         reference = {"out/big.csv": b""}
-    rng = np.random.default_rng(7)
-    tally = Tally()
-    for _ in range(INTERRUPTS):
-        interrupt_once(
-            name,
-            tmp_path,
-            reference,
-            rng,
-            tally,
-            max_delay=MAX_DELAY,
-            min_delay=MIN_DELAY,
-        )
-    assert tally.problems == []
-    assert tally.files["truncated"] == 0 and tally.tracebacks == 0
-    assert tally.orphans == 0 and tally.stderr_lines_over_one == 0
-    assert set(tally.exits) <= {0, 130, -9}
+    tally = _interrupt_repeatedly(name, tmp_path, reference, 7, INTERRUPTS, MAX_DELAY)
+    assert tally.orphans == 0
     assert tally.exits[130] + tally.exits[-9] > 0  # some runs were stopped midway
 
 
@@ -70,22 +56,31 @@ def test_interrupted_workspace_pages_are_whole_or_old(
     name: str, tmp_path: Path
 ) -> None:
     reference = run_reference(name, tmp_path)
-    rng = np.random.default_rng(11)
+    delay = WORKSPACE_MAX_DELAY[name]
+    _interrupt_repeatedly(name, tmp_path, reference, 11, WORKSPACE_INTERRUPTS, delay)
+
+
+def _interrupt_repeatedly(
+    name: str,
+    tmp_path: Path,
+    reference: dict[str, bytes],
+    seed: int,
+    count: int,
+    max_delay: float,
+) -> Tally:
+    """Interrupt ``count`` runs of ``name``: no half file, no traceback."""
+    rng = np.random.default_rng(seed)
     tally = Tally()
-    for _ in range(WORKSPACE_INTERRUPTS):
+    for _ in range(count):
         interrupt_once(
-            name,
-            tmp_path,
-            reference,
-            rng,
-            tally,
-            max_delay=WORKSPACE_MAX_DELAY[name],
+            name, tmp_path, reference, rng, tally, max_delay=max_delay,
             min_delay=MIN_DELAY,
-        )
+        )  # fmt: skip
     assert tally.problems == []
     assert tally.files["truncated"] == 0 and tally.tracebacks == 0
     assert tally.stderr_lines_over_one == 0
     assert set(tally.exits) <= {0, 130, -9}
+    return tally
 
 
 def test_interrupted_map_resumes_to_the_same_bits(tmp_path: Path) -> None:
