@@ -13,7 +13,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import DimensionError, InputError, NonFiniteError
-from workbench.poses import RIGIDITY_TOL, check_rigid_rows
+from workbench.poses import RIGIDITY_TOL, check_rigid_rows, compute_rigidity_errors
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -71,27 +71,13 @@ def check_poses(poses: FloatArray, start: int) -> None:
     The exact checks of :func:`pose_rows`, vectorised; ``start`` is the index
     of ``poses[0]`` in the caller's batch, for the message.
     """
-    tt = poses.reshape(len(poses), 16).T  # row 4 i + j: entry (i, j) of each pose
-    finite = np.isfinite(tt).all(axis=0)
+    finite = np.isfinite(poses.reshape(len(poses), 16)).all(axis=1)
     if not finite.all():
         raise NonFiniteError(
             f"targets must be finite: pose {start + int(np.argmin(finite))} has "
             "NaN or inf"
         )
-    c0, c1, c2 = tt[0:12:4], tt[1:12:4], tt[2:12:4]  # columns of R, (3, n)
-    err = np.abs(tt[15] - 1.0)
-    for k in (12, 13, 14):
-        np.maximum(err, np.abs(tt[k]), out=err)
-    for u, v, unit in (
-        (c0, c0, 1.0), (c1, c1, 1.0), (c2, c2, 1.0), (c0, c1, 0.0), (c0, c2, 0.0),
-        (c1, c2, 0.0),
-    ):  # fmt: skip
-        np.maximum(err, np.abs(u[0] * v[0] + u[1] * v[1] + u[2] * v[2] - unit), out=err)
-    det = (
-        c2[0] * (c0[1] * c1[2] - c0[2] * c1[1])
-        + c2[1] * (c0[2] * c1[0] - c0[0] * c1[2])
-        + c2[2] * (c0[0] * c1[1] - c0[1] * c1[0])
-    )
+    err, det = compute_rigidity_errors(poses)
     bad = (err > RIGIDITY_TOL) | (det <= 0.0)
     if bad.any():
         i = int(np.argmax(bad))

@@ -24,6 +24,7 @@ from workbench.poses.rigid import (
     as_rotation,
     as_se3,
     check_rigid_rows,
+    compute_rigidity_errors,
     se3_from_matrix,
 )
 from workbench.poses.rotations import (
@@ -46,6 +47,7 @@ __all__ = [
     "as_se3",
     "axis_angle_from_rotation",
     "check_rigid_rows",
+    "compute_rigidity_errors",
     "quat_wxyz_from_rotation",
     "quat_xyzw_from_rotation",
     "rotation_from_angeles4",

@@ -143,3 +143,36 @@ def check_rigid_rows(
         raise InputError(
             f"{name} has det = {det:.6g} (a reflection); a rotation needs det = +1"
         )
+
+
+def compute_rigidity_errors(poses: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """How far N finite homogeneous matrices are from rigid, vectorised.
+
+    The quantities :func:`check_rigid_rows` tests, for many poses at once.
+
+    Args:
+        poses: Shape (N, 4, 4), finite (not checked).
+
+    Returns:
+        ``(error, det)``, each (N,): ``max |R^T R - I|`` together with the
+        bottom row's distance from ``[0, 0, 0, 1]`` (a pose is rigid when
+        ``error <= RIGIDITY_TOL`` and ``det > 0``), and ``det R``.
+    """
+    tt = poses.reshape(len(poses), 16).T  # row 4 i + j: entry (i, j) of each pose
+    c0, c1, c2 = tt[0:12:4], tt[1:12:4], tt[2:12:4]  # columns of R, (3, n)
+    error = np.abs(tt[15] - 1.0)
+    for k in (12, 13, 14):
+        np.maximum(error, np.abs(tt[k]), out=error)
+    for u, v, unit in (
+        (c0, c0, 1.0), (c1, c1, 1.0), (c2, c2, 1.0), (c0, c1, 0.0), (c0, c2, 0.0),
+        (c1, c2, 0.0),
+    ):  # fmt: skip
+        np.maximum(
+            error, np.abs(u[0] * v[0] + u[1] * v[1] + u[2] * v[2] - unit), out=error
+        )
+    det = (
+        c2[0] * (c0[1] * c1[2] - c0[2] * c1[1])
+        + c2[1] * (c0[2] * c1[0] - c0[0] * c1[2])
+        + c2[2] * (c0[0] * c1[1] - c0[1] * c1[0])
+    )
+    return error, det

@@ -23,14 +23,16 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-import pinocchio as pin
 
 from workbench.errors import InputError
 from workbench.singularities.conditions import ELBOW_TOL, SHOULDER_TOL, WRIST_TOL
 from workbench.validation import as_finite_array, check_positive
 from workbench.workspace._placement_kernel import gather_planes, screen_candidates
 from workbench.workspace.grid import PoseGrid
-from workbench.workspace.orientations import quat_multiply_xyzw
+from workbench.workspace.orientations import (
+    quat_multiply_xyzw,
+    quat_xyzw_from_rotations,
+)
 from workbench.workspace.task_map import get_thread_count
 
 FloatArray = npt.NDArray[np.float64]
@@ -116,12 +118,6 @@ class CandidateLattice:
         return np.column_stack([self.xs[a], self.ys[b], height, self.yaws[k]])
 
 
-def quat_xyzw_of(rotations: FloatArray) -> FloatArray:
-    """(N, 4) unit quaternions x y z w of (N, 3, 3) rotations."""
-    quat = np.array([pin.Quaternion(r).coeffs() for r in rotations]).reshape(-1, 4)
-    return quat / np.linalg.norm(quat, axis=1, keepdims=True)
-
-
 class Screening:
     """The screening of one task over one lattice (see the module docstring).
 
@@ -156,7 +152,9 @@ class Screening:
         self.task_xy = np.stack([c * px + s * py, -s * px + c * py], axis=-1)
         half = -0.5 * yaws
         turn = np.column_stack([np.zeros((len(yaws), 2)), np.sin(half), np.cos(half)])
-        in_base = quat_multiply_xyzw(turn[:, None, :], quat_xyzw_of(task[:, :3, :3]))
+        in_base = quat_multiply_xyzw(
+            turn[:, None, :], quat_xyzw_from_rotations(task[:, :3, :3])
+        )
         nearest = grid.orientation_index(in_base.reshape(-1, 4))
         used, compact = np.unique(nearest, return_inverse=True)
         self.orientation = compact.reshape(len(yaws), -1).astype(np.int64)
@@ -231,5 +229,4 @@ __all__ = [
     "MAX_CANDIDATES",
     "CandidateLattice",
     "Screening",
-    "quat_xyzw_of",
 ]

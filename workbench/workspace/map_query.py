@@ -17,7 +17,7 @@ import numpy.typing as npt
 import zarr
 
 from workbench.errors import InputError
-from workbench.poses.rigid import RIGIDITY_TOL
+from workbench.poses import RIGIDITY_TOL, compute_rigidity_errors
 from workbench.validation import as_finite_array
 from workbench.workspace.grid import PoseGrid
 from workbench.workspace.measures import singularity_margin
@@ -92,21 +92,14 @@ def split_poses(poses: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
     array = np.asarray(poses, dtype=np.float64)
     if array.ndim == 3 and array.shape[1:] == (4, 4):
         array = as_finite_array(array, array.shape, "poses")
-        rotations = array[:, :3, :3]
-        gram = np.einsum("nji,njk->nik", rotations, rotations) - np.eye(3)
-        error = np.max(np.abs(gram), axis=(1, 2), initial=0.0)
-        row = np.max(np.abs(array[:, 3] - (0.0, 0.0, 0.0, 1.0)), axis=1, initial=0.0)
-        bad = np.flatnonzero(
-            (error > RIGIDITY_TOL)
-            | (row > RIGIDITY_TOL)
-            | (np.linalg.det(rotations) <= 0.0)
-        )
+        error, det = compute_rigidity_errors(np.ascontiguousarray(array))
+        bad = np.flatnonzero((error > RIGIDITY_TOL) | (det <= 0.0))
         if bad.size:
             raise InputError(
-                f"poses[{bad[0]}] is not a rigid transform (max |R^T R - I| = "
-                f"{error[bad[0]]:.3g}, bottom row {array[bad[0], 3].tolist()})"
+                f"poses[{bad[0]}] is not a rigid transform (max |R^T R - I| or "
+                f"bottom-row error {error[bad[0]]:.3g}, det R = {det[bad[0]]:.6g})"
             )
-        return array[:, :3, 3].copy(), quat_xyzw_from_rotations(rotations)
+        return array[:, :3, 3].copy(), quat_xyzw_from_rotations(array[:, :3, :3])
     if array.ndim == 2 and array.shape[1] == 7:
         array = as_finite_array(array, array.shape, "poses")
         norm = np.linalg.norm(array[:, 3:], axis=1)
