@@ -31,7 +31,6 @@ FloatArray = npt.NDArray[np.float64]
 EMPTY_COLOR = "#e4e4e4"
 #: Colour of the base axis marker.
 BASE_COLOR = "#d62728"
-_DPI = 110
 
 
 class VoxelGridLike(Protocol):
@@ -118,8 +117,11 @@ def _figure(fig: Figure | None, figsize: tuple[float, float]) -> Figure:
 
 
 def _finish(fig: Figure, path: str | Path | None) -> Figure:
+    """Write ``fig`` whole (``plots.trajectory.save_figure``) when a path is given."""
     if path is not None:
-        fig.savefig(Path(path), format="png", dpi=_DPI)
+        from workbench.plots.trajectory import save_figure  # imports matplotlib
+
+        save_figure(fig, path)
     return fig
 
 
