@@ -29,11 +29,11 @@ from workbench.singularities.conditions import ELBOW_TOL, SHOULDER_TOL, WRIST_TO
 from workbench.validation import as_finite_array, check_positive
 from workbench.workspace._placement_kernel import gather_planes, screen_candidates
 from workbench.workspace.grid import PoseGrid
+from workbench.workspace.measures import get_core_count
 from workbench.workspace.orientations import (
     quat_multiply_xyzw,
     quat_xyzw_from_rotations,
 )
-from workbench.workspace.task_map import get_thread_count
 
 FloatArray = npt.NDArray[np.float64]
 IndexArray = npt.NDArray[np.int64]
@@ -214,7 +214,7 @@ class Screening:
                 progress(done[0], count_yaw)
             return int(reached)
 
-        with ThreadPoolExecutor(get_thread_count()) as pool:
+        with ThreadPoolExecutor(get_core_count()) as pool:
             self.reached = sum(pool.map(run, range(count_yaw)))
         self.missed, self.worst_dexterity = missed, worst_dexterity
         self.worst_margin = worst_margin

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import logging
 import math
-import os
 import time
 import uuid
 from collections.abc import Callable
@@ -52,7 +51,7 @@ from workbench.workspace._partial import (
 )
 from workbench.workspace._sampled_fold import SAMPLED_KEYS, run_sampled
 from workbench.workspace.grid import PoseGrid
-from workbench.workspace.measures import POSE_KEYS, VOXEL_KEYS
+from workbench.workspace.measures import POSE_KEYS, VOXEL_KEYS, get_core_count
 from workbench.workspace.robot_spec import get_robot_spec, get_scene_json
 from workbench.workspace.store import (
     DONE,
@@ -293,14 +292,6 @@ def _check_arguments(
     if scheduler is not None and not isinstance(scheduler, str):
         raise InputError(f"scheduler must be an address string, got {scheduler!r}")
     return int(workers) if workers is not None else get_core_count()
-
-
-def get_core_count() -> int:
-    """Cores this process may run on (the default number of local workers)."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        return os.cpu_count() or 1
 
 
 def _get_family(robot: Robot) -> str | None:

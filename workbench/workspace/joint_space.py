@@ -23,7 +23,6 @@ without the GIL: ``workers`` threads share the chunks), bit for bit.
 from __future__ import annotations
 
 import math
-import os
 import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor, as_completed
@@ -42,7 +41,7 @@ from workbench.singularities.conditions import (
     get_factorisation,
 )
 from workbench.singularities.measures import compute_singular_values
-from workbench.workspace.measures import singularity_margin
+from workbench.workspace.measures import get_core_count, singularity_margin
 
 FloatArray = npt.NDArray[np.float64]
 #: ``progress(done, total)`` in configurations, after each chunk.
@@ -156,7 +155,7 @@ def compute_joint_space_map(
             f"{total:,} configurations is more than {MAX_CONFIGURATIONS:,} in one map"
         )
     seed = _count(seed, "seed", minimum=0)
-    threads = (os.cpu_count() or 1) if workers is None else workers
+    threads = get_core_count() if workers is None else workers
     threads = _count(threads, "workers")
     if robot.nq != robot.nv:
         raise InputError(

@@ -29,6 +29,7 @@ The function is pure: the same inputs give the same bits on any worker.
 
 from __future__ import annotations
 
+import os
 import threading
 from typing import TYPE_CHECKING
 
@@ -125,6 +126,18 @@ def _constants(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
         ]
     )
     return factors, np.ascontiguousarray(joints)
+
+
+def get_core_count() -> int:
+    """Cores this process may run on (at least 1): the default thread count.
+
+    The threads of a map build, of the placement screening and of the
+    joint-space map each run compiled kernels that release the GIL.
+    """
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not Linux
+        return max(1, os.cpu_count() or 1)
 
 
 class _Work(threading.local):
@@ -253,5 +266,6 @@ __all__ = [
     "POSE_KEYS",
     "VOXEL_KEYS",
     "evaluate_block",
+    "get_core_count",
     "singularity_margin",
 ]

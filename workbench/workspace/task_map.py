@@ -11,7 +11,6 @@ thread per core (the closed-form kernels release the GIL).
 
 from __future__ import annotations
 
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
@@ -21,7 +20,7 @@ import numpy.typing as npt
 
 from workbench.model.robot import Robot
 from workbench.workspace.grid import PoseGrid, default_bounds, make_pose_grid
-from workbench.workspace.measures import evaluate_block
+from workbench.workspace.measures import evaluate_block, get_core_count
 
 #: Voxel edge [m] of the map :func:`build_task_map` builds by default.
 TASK_MAP_RESOLUTION = 0.05
@@ -49,14 +48,6 @@ class TaskMap:
     def __getitem__(self, name: str) -> npt.NDArray[Any]:
         """The array called ``name``, shape (V, O)."""
         return self.arrays[name]
-
-
-def get_thread_count() -> int:
-    """The cores this process may run on (at least 1)."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # not Linux
-        return max(1, os.cpu_count() or 1)
 
 
 def build_task_map(
@@ -101,7 +92,7 @@ def build_task_map(
         return evaluate_block(robot, grid, start, stop)
 
     starts = range(0, grid.voxel_count, _BLOCK_VOXELS)
-    with ThreadPoolExecutor(get_thread_count()) as pool:
+    with ThreadPoolExecutor(get_core_count()) as pool:
         blocks = list(pool.map(block, starts))
     arrays = {k: np.concatenate([b[k] for b in blocks]) for k in TASK_MAP_KEYS}
     return TaskMap(grid, arrays)
@@ -113,5 +104,4 @@ __all__ = [
     "TASK_MAP_RESOLUTION",
     "TaskMap",
     "build_task_map",
-    "get_thread_count",
 ]
