@@ -21,7 +21,7 @@ SAMPLES = 300
 
 
 @pytest.mark.parametrize(
-    "name", [*PUMA_NAMES, "kuka-kr6-r700", "abb-irb2400", "generic6r"]
+    "name", [*PUMA_NAMES, "kuka-kr6-r700", "abb-irb2400", "generic6r", "iiwa14"]
 )
 def test_committed_urdf_equals_fresh_generation(name: str) -> None:
     folder = get_own_urdf_dir()

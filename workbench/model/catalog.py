@@ -83,6 +83,7 @@ CATALOG: dict[str, CatalogEntry] = {
     "kuka-kr6-r700": CatalogEntry("kuka-kr6-r700.urdf", "flange", own=True),
     "abb-irb2400": CatalogEntry("abb-irb2400.urdf", "flange", own=True),
     "generic6r": CatalogEntry("generic6r.urdf", "flange", own=True),
+    "iiwa14": CatalogEntry("iiwa14.urdf", "flange", own=True),
     "a1": CatalogEntry("a1_description/urdf/a1.urdf"),
     "alex_nub_hands": CatalogEntry("alex_description/urdf/alex_nub_hands.urdf"),
     "alex_psyonic_hands": CatalogEntry(
