@@ -58,6 +58,8 @@ SUBGRID_STRIDE = 50
 MAP_HALF_WIDTH = np.radians(200.0)
 #: Maps drawn from the σmin grid for robots without an analytic factorisation.
 NUMERIC_MAPS = ("manipulability", "condition_number")
+#: Families whose det J the report factorises (6R closed forms).
+SIX_AXIS_FAMILIES = ("opw", "ur")
 
 
 @dataclass(frozen=True, slots=True)
@@ -188,9 +190,13 @@ def _family_data(
     For an OPW or UR-type arm without a PUMA DH table (``ur5``, the KUKA and
     ABB models); None for an arm of neither family.
     """
+    if robot.nv != 6:  # a seven-axis family has no 6R factorisation of det J
+        return None
     try:
         fac = get_factorisation(robot)
     except NotPumaTypeError:
+        return None
+    if fac.family not in SIX_AXIS_FAMILIES:
         return None
     rng = np.random.default_rng(seed)
     q = rng.uniform(robot.lower, robot.upper, (samples, 6))
