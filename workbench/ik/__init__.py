@@ -26,6 +26,7 @@ from workbench.ik.damped import (
     DLS_LAMBDA_MAX,
     dls_inverse,
     dls_step,
+    solve_null_space_velocity,
     solve_velocity,
 )
 from workbench.ik.numerical import IKResult, numeric
@@ -67,5 +68,6 @@ __all__ = [
     "numeric",
     "numeric_batch",
     "qp_step",
+    "solve_null_space_velocity",
     "solve_velocity",
 ]

@@ -220,7 +220,7 @@ def damped_solve(
     lambda_max: float,
     qd_reference: FloatArray,
     qd: FloatArray,
-) -> None:
+) -> float:
     r"""DLS solution about a reference: :math:`\dot q_r + J^\#(\dot x - J\dot q_r)`.
 
     :math:`J^\#` as :func:`workbench.ik.dls_inverse`, with the damping law of
@@ -238,6 +238,9 @@ def damped_solve(
         lambda_max: Damping at a singularity, >= 0.
         qd_reference: (nv,) [rad/s], the velocity damped towards.
         qd: (nv,) output [rad/s].
+
+    Returns:
+        The damping :math:`\lambda^2` used (0 outside the singular region).
     """
     # Loops rather than array expressions (``@``, ``.copy()``, ``np.eye``,
     # ``qd[:] = ...``): each of those compiles as a function of its own, seconds
@@ -280,6 +283,7 @@ def damped_solve(
             gain = _dot(x[k], residual) / denominator
             for i in range(cols):
                 qd[i] += y[k, i] * gain
+    return lambda2
 
 
 def solve_velocity(
@@ -323,4 +327,49 @@ def solve_velocity(
     return qd, True
 
 
-__all__ = ["BLOCK_TOL", "dls_damping", "dls_gains", "solve_velocity"]
+def solve_null_space_velocity(
+    jacobian: FloatArray,
+    twist: FloatArray,
+    epsilon: float,
+    lambda_max: float,
+    qd_null: FloatArray,
+) -> tuple[FloatArray, bool]:
+    r"""Joint velocity of a redundant arm: a particular solution plus a null motion.
+
+    For a wide Jacobian (6 × nv, nv > 6),
+
+    .. math:: \dot q = J^\# \dot x + (I - J^\# J)\, \dot q_n
+              = \dot q_n + J^\# (\dot x - J \dot q_n),
+
+    with :math:`J^\#` of :func:`workbench.ik.dls_inverse`. Outside the singular
+    region :math:`J^\# = J^+` and this is the minimum-norm solution plus
+    :math:`\dot q_n` projected on the null space of J (the self-motion; J
+    :math:`\dot q = \dot x` exactly); inside it the damped solution about
+    :math:`\dot q_n` (:func:`solve_velocity`). ``epsilon`` and ``lambda_max``
+    are taken as valid (checked by the caller once).
+
+    Args:
+        jacobian: Shape (6, nv), LOCAL_WORLD_ALIGNED, tool frame, finite.
+        twist: Shape (6,) [m/s, rad/s], linear first, base axes.
+        epsilon: DLS singular-region size.
+        lambda_max: DLS damping at a singularity.
+        qd_null: Shape (nv,) [rad/s], the joint velocity whose null-space part
+            is kept (e.g. the gradient of a criterion, or the rate of the
+            joint position commands).
+
+    Returns:
+        ``(qd, damped)``: shape (nv,) [rad/s], and True if the damping was
+        non-zero (:math:`\sigma_\min < \varepsilon`).
+    """
+    qd = np.empty(jacobian.shape[1])
+    lambda2 = damped_solve(jacobian, twist, epsilon, lambda_max, qd_null, qd)
+    return qd, lambda2 > 0.0
+
+
+__all__ = [
+    "BLOCK_TOL",
+    "dls_damping",
+    "dls_gains",
+    "solve_null_space_velocity",
+    "solve_velocity",
+]

@@ -32,7 +32,12 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import DimensionError, InputError
-from workbench.ik._velocity_kernel import dls_damping, dls_gains, solve_velocity
+from workbench.ik._velocity_kernel import (
+    dls_damping,
+    dls_gains,
+    solve_null_space_velocity,
+    solve_velocity,
+)
 from workbench.model.robot import Robot
 from workbench.poses import as_se3
 from workbench.validation import as_finite_array, as_vector, check_positive
@@ -144,5 +149,6 @@ __all__ = [
     "dls_gains",
     "dls_inverse",
     "dls_step",
+    "solve_null_space_velocity",
     "solve_velocity",
 ]
