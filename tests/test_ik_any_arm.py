@@ -366,8 +366,8 @@ def test_no_family_is_refused_naming_the_axes() -> None:
         assert "not OPW" in message and "not UR" in message
         assert "axes 2 and 3 are not parallel (off by 0.524 rad)" in message
         assert "axes 5 and 6 do not meet (off by 0.03 m)" in message
-    with pytest.raises(UnsupportedRobotError, match="7 joint variables"):
-        get_structure(load_robot("panda"))
+    with pytest.raises(UnsupportedRobotError, match="9 joint variables"):
+        get_structure(load_robot("kinova"))
 
 
 # -- any tool frame -------------------------------------------------------------------

@@ -347,6 +347,12 @@ def _family(robot: Robot) -> tuple[str, types.ModuleType, np.ndarray]:
         except UnsupportedRobotError:  # the table is not PUMA-type: the axes
             pass
     structure = get_structure(robot)
+    if structure.table.nq != 6:
+        raise UnsupportedRobotError(
+            f"robot {robot.name!r} is a seven-axis arm ({structure.family.upper()} "
+            "family): its closed form takes a redundancy parameter, use "
+            "ik.get_redundant_solver(robot) or ik.analytic(..., redundancy=...)"
+        )
     if structure.family == "ur":
         packed = ur_kernel.pack_geometry(structure, robot.lower, robot.upper)
         return "ur", ur_kernel, packed

@@ -1,35 +1,49 @@
-r"""Kinematic structure of a 6R arm read from its Pinocchio model.
+r"""Kinematic structure of a 6R or 7R arm read from its Pinocchio model.
 
-The joint axes of any serial chain of six revolute joints are read at
-``q = 0`` (Pinocchio's joint Jacobian gives each axis as a line: direction and
-a point), and a standard DH table is fitted to those lines:
+The joint axes of any serial chain of n = 6 (or 7) revolute joints are read
+at ``q = 0`` (Pinocchio's joint Jacobian gives each axis as a line: direction
+and a point), and a standard DH table is fitted to those lines:
 
 * frame 0 has z0 on axis 1, its origin at the foot of the perpendicular from
   the base origin, x0 along the base x axis projected on the plane ⊥ z0;
-* frame k (k = 1..5) has z_k on axis k + 1, x_k along the common normal of
+* frame k (k = 1..n-1) has z_k on axis k + 1, x_k along the common normal of
   axes k and k + 1 (through the previous origin when they are parallel,
   along ±z_{k-1} × z_k when they meet, the sign with x_k · x_{k-1} >= 0 at
   q = 0, so that the theta offset is within ±90°: the wrist labels then
   refer to the robot's own zero, as the DH tables of the PUMA models do);
-* frame 6 is frame 5 turned by θ6 (its row is all zero).
+* 6R: frame 6 is frame 5 turned by θ6 (its row is all zero);
+* 7R: frame 7 is frame 6 turned by θ7 and moved along axis 7 to the foot of
+  the tool origin (``d7``), its x along the tool's x projected on the plane ⊥
+  axis 7 (``theta_offset`` of row 7): the flange row of published 7R tables
+  (the iiwa's ``d7 = 0.126 m``), so that ``tool`` is the identity when the
+  tool frame is DH frame 7.
 
 Each axis direction is the joint's positive direction times a sign
 ``joint_sign`` (θ_k = s_k q_k + θ_{0,k}), chosen so that z0 points up (z0 ·
 base z >= 0) and parallel axes of a family point the same way. The constant
-base-to-frame-0 transform and the frame-6-to-tool transform are kept, so that
+base-to-frame-0 transform and the frame-n-to-tool transform are kept, so that
 FK(q) = base · DH(q) · tool exactly for the fitted chain.
 
-Two families have a closed form, each a conjunction of geometric tests on the
-lines (angles in rad, distances in m, each within :data:`STRUCTURE_TOL`):
+Four families have a closed form (two of 6R arms, two of 7R arms), each a
+conjunction of geometric tests on the lines (angles in rad, distances in m,
+each within :data:`STRUCTURE_TOL`):
 
 * ``"opw"`` (ortho-parallel shoulder, spherical wrist: PUMA, KUKA KR, ABB
   IRB, Fanuc, Stäubli): axes 1 ⊥ 2, 2 ∥ 3, 3 ⊥ 4, 4 ⊥ 5, 5 ⊥ 6, and axes 4, 5, 6
   meet in one point;
 * ``"ur"`` (Universal Robots and its clones): axes 1 ⊥ 2, 2 ∥ 3 ∥ 4, 4 ⊥ 5,
-  5 ⊥ 6, and axes 5 and 6 meet.
+  5 ⊥ 6, and axes 5 and 6 meet;
+* ``"srs"`` (7R, spherical shoulder, elbow and wrist: KUKA LBR iiwa): axes
+  1 ⊥ 2, 2 ⊥ 3 and axes 1, 2, 3 meet in one point (the shoulder S); 3 ⊥ 4,
+  4 ⊥ 5 and axes 3, 4, 5 meet in one point (the elbow E); 5 ⊥ 6, 6 ⊥ 7 and
+  axes 5, 6, 7 meet in one point (the wrist W); S ≠ E ≠ W;
+* ``"franka"`` (7R, the Franka Panda and FR3 geometry): axes 1 ⊥ 2, 2 ⊥ 3 and
+  axes 1, 2, 3 meet in one point (S); 3 ⊥ 4 and 4 ⊥ 5 with non-zero common
+  normals (the elbow offsets a3, a4); 5 ⊥ 6, meeting; 6 ⊥ 7 with a non-zero
+  common normal (a6); any lengths of this pattern.
 
-A chain that fits neither raises :class:`UnsupportedRobotError` naming each
-failed test of each family.
+A chain that fits none of the families of its joint count raises
+:class:`UnsupportedRobotError` naming each failed test of each family.
 """
 
 from __future__ import annotations
@@ -57,22 +71,26 @@ STRUCTURE_TOL = 1e-6
 #: Lengths below this [m] count as zero when choosing a common normal.
 _TINY = 1e-12
 
+#: Joint counts of the chains with a closed form: 6R arms (OPW, UR) and 7R
+#: arms (SRS, Franka), whose seventh joint is the redundancy.
+JOINT_COUNTS = (6, 7)
+
 
 class UnsupportedRobotError(InputError):
-    """The robot has no closed-form IK (not a 6R arm of a supported family)."""
+    """The robot has no closed-form IK (not a 6R or 7R arm of a supported family)."""
 
 
 @dataclass(frozen=True, slots=True)
 class KinematicStructure:
-    """A 6R arm as base · standard DH chain · tool, and its family.
+    """A 6R or 7R arm as base · standard DH chain · tool, and its family.
 
     Attributes:
-        family: ``"opw"`` or ``"ur"``.
-        table: Fitted standard DH table; rows are exact (±π/2, 0) where the
-            family requires it.
-        joint_sign: (6,) ±1.0: DH angle θ_k = s_k q_k + θ_{0,k}.
+        family: ``"opw"`` or ``"ur"`` (6R), ``"srs"`` or ``"franka"`` (7R).
+        table: Fitted standard DH table, n = 6 or 7 rows; rows are exact
+            (±π/2, 0) where the family requires it.
+        joint_sign: (n,) ±1.0: DH angle θ_k = s_k q_k + θ_{0,k}.
         base: (4, 4) pose of DH frame 0 in the robot's base frame [m].
-        tool: (4, 4) pose of the tool frame in DH frame 6 [m].
+        tool: (4, 4) pose of the tool frame in DH frame n [m].
         deviation: Largest departure of the model from the idealised
             structure [rad or m], at most ``tol``.
         residual: Largest FK difference [m, rad] between the model and
@@ -89,44 +107,45 @@ class KinematicStructure:
 
 
 def axis_lines(robot: Robot) -> tuple[FloatArray, FloatArray]:
-    """Joint axes of a 6R chain at q = 0 as lines in the base frame.
+    """Joint axes of a 6R or 7R chain at q = 0 as lines in the base frame.
 
     Returns:
-        ``(directions, points)``, each (6, 3): unit direction of positive
-        rotation and the point of the axis nearest the base origin [m].
+        ``(directions, points)``, each (n, 3), n = 6 or 7: unit direction of
+        positive rotation and the point of the axis nearest the base origin [m].
 
     Raises:
-        UnsupportedRobotError: If the model is not a serial chain of six
-            one-degree-of-freedom revolute joints carrying the tool frame.
+        UnsupportedRobotError: If the model is not a serial chain of six or
+            seven one-degree-of-freedom revolute joints carrying the tool frame.
     """
     model = robot.model
     name = robot.name
+    n = model.nq
     if robot.mimic_joints:
         followers = ", ".join(map(str, robot.mimic_joints))
         raise UnsupportedRobotError(
             f"robot {name!r} has mimic joints ({followers}), closed-form IK needs "
-            "6 independent revolute joints"
+            "6 (or 7) independent revolute joints"
         )
-    if model.nq != 6 or model.nv != 6 or model.njoints != 7:
+    if n not in JOINT_COUNTS or model.nv != n or model.njoints != n + 1:
         raise UnsupportedRobotError(
             f"robot {name!r} has {model.nq} joint variables, closed-form IK needs "
-            "a chain of 6 revolute joints"
+            "a chain of 6 (or 7) revolute joints"
         )
-    if list(model.parents) != [0, 0, 1, 2, 3, 4, 5]:
+    if list(model.parents) != [0, *range(n)]:
         raise UnsupportedRobotError(f"robot {name!r} is not a serial chain")
-    if model.frames[robot.tool_frame_id].parentJoint != 6:
+    if model.frames[robot.tool_frame_id].parentJoint != n:
         raise UnsupportedRobotError(
             f"tool frame {robot.tool_frame!r} of robot {name!r} is not carried by "
-            "joint 6"
+            f"joint {n}"
         )
     data = model.createData()
-    jac = pin.computeJointJacobians(model, data, np.zeros(6))
+    jac = pin.computeJointJacobians(model, data, np.zeros(n))
     linear, angular = jac[:3].T, jac[3:].T
     norms = np.linalg.norm(angular, axis=1)
-    bad = [k + 1 for k in range(6) if abs(norms[k] - 1.0) > 1e-12]
+    bad = [k + 1 for k in range(n) if abs(norms[k] - 1.0) > 1e-12]
     if bad:
         raise UnsupportedRobotError(
-            f"robot {name!r}: joints {bad} are not revolute, closed-form IK needs 6R"
+            f"robot {name!r}: joints {bad} are not revolute, closed-form IK needs {n}R"
         )
     # column (v, w) of a revolute joint about the line (p, w): v = p × w
     points = np.cross(angular, linear)
@@ -162,15 +181,16 @@ def fit_dh(
     """Standard DH rows ``(theta_offset, d, a, alpha)`` fitted to the axes.
 
     Args:
-        robot: A 6R chain (see :func:`axis_lines`).
-        signs: (6,) ±1, multiplying each joint's axis direction.
+        robot: A 6R or 7R chain (see :func:`axis_lines`).
+        signs: (n,) ±1, multiplying each joint's axis direction.
         tol: Axes closer than this to parallel [rad] count as parallel.
 
     Returns:
-        The six rows, the base pose of DH frame 0 and the tool pose in frame 6,
+        The n rows, the base pose of DH frame 0 and the tool pose in frame n,
         (4, 4) each.
     """
     w, p = axis_lines(robot)
+    joints = len(w)
     z = w * np.asarray(signs)[:, None]
     o_prev, z_prev = p[0], z[0]
     x_prev = np.array([1.0, 0.0, 0.0]) - z_prev * z_prev[0]
@@ -181,7 +201,7 @@ def fit_dh(
     base[:3, :3] = np.column_stack([x_prev, np.cross(z_prev, x_prev), z_prev])
     base[:3, 3] = o_prev
     rows = []
-    for k in range(1, 6):
+    for k in range(1, joints):
         f, g, sn, parallel = _common_normal(o_prev, z_prev, p[k], z[k], tol)
         n = g - f
         length = float(np.linalg.norm(n))
@@ -204,21 +224,35 @@ def fit_dh(
             )
         )
         o_prev, z_prev, x_prev = g, z[k], x
-    rows.append((0.0, 0.0, 0.0, 0.0))
-    frame6 = np.eye(4)
-    frame6[:3, :3] = np.column_stack([x_prev, np.cross(z_prev, x_prev), z_prev])
-    frame6[:3, 3] = o_prev
     data = robot.model.createData()
-    pin.framesForwardKinematics(robot.model, data, np.zeros(6))
+    pin.framesForwardKinematics(robot.model, data, np.zeros(joints))
     tool_at_zero = data.oMf[robot.tool_frame_id].homogeneous
-    tool = np.asarray(np.linalg.solve(frame6, tool_at_zero), dtype=np.float64)
+    if joints == 6:
+        rows.append((0.0, 0.0, 0.0, 0.0))
+    else:  # the flange row: d7 to the foot of the tool origin, x along the tool's
+        d = float((tool_at_zero[:3, 3] - o_prev) @ z_prev)
+        x = tool_at_zero[:3, 0] - z_prev * float(tool_at_zero[:3, 0] @ z_prev)
+        if np.linalg.norm(x) > 1e-6:
+            x /= np.linalg.norm(x)
+        else:  # the tool's x along axis 7: keep frame 6's
+            x = x_prev
+        rows.append((_signed_angle(x_prev, x, z_prev), d, 0.0, 0.0))
+        o_prev, x_prev = o_prev + d * z_prev, x
+    last = np.eye(4)
+    last[:3, :3] = np.column_stack([x_prev, np.cross(z_prev, x_prev), z_prev])
+    last[:3, 3] = o_prev
+    tool = np.asarray(np.linalg.solve(last, tool_at_zero), dtype=np.float64)
     return rows, base, tool
 
 
 def _tests(w: FloatArray, p: FloatArray) -> dict[str, tuple[str, float, str]]:
-    """Every structure test a family may use: name -> (what fails, deviation, unit)."""
-    c = {(i, j): float(np.linalg.norm(np.cross(w[i], w[j]))) for i in range(6)
-         for j in range(i + 1, 6)}  # fmt: skip
+    """Every structure test a family may use: name -> (what fails, deviation, unit).
+
+    Only the tests of the chain's joint count n = len(w) are computed.
+    """
+    n = len(w)
+    c = {(i, j): float(np.linalg.norm(np.cross(w[i], w[j]))) for i in range(n)
+         for j in range(i + 1, n)}  # fmt: skip
 
     def perpendicular(i: int, j: int) -> tuple[str, float, str]:
         dev = abs(math.asin(min(1.0, abs(float(w[i] @ w[j])))))
@@ -235,24 +269,41 @@ def _tests(w: FloatArray, p: FloatArray) -> dict[str, tuple[str, float, str]]:
             gap = abs(float((p[j] - p[i]) @ np.cross(w[i], w[j]))) / c[i, j]
         return f"axes {i + 1} and {j + 1} do not meet", gap, "m"
 
-    def concurrent() -> tuple[str, float, str]:
-        if min(c[3, 4], c[4, 5]) <= _TINY:
-            return "axes 4, 5, 6 do not meet in one point", math.inf, "m"
-        f45 = _common_normal(p[3], w[3], p[4], w[4], 0.0)[1]
-        f56 = _common_normal(p[4], w[4], p[5], w[5], 0.0)[0]
-        gap = float(np.linalg.norm(f45 - f56))
-        return "axes 4, 5, 6 do not meet in one point", gap, "m"
+    def concurrent(i: int, pairs: bool) -> tuple[str, float, str]:
+        """Axes i, i+1, i+2 through one point (``pairs``: each pair meets too)."""
+        what = f"axes {i + 1}, {i + 2}, {i + 3} do not meet in one point"
+        if min(c[i, i + 1], c[i + 1, i + 2]) <= _TINY:
+            return what, math.inf, "m"
+        f_first = _common_normal(p[i], w[i], p[i + 1], w[i + 1], 0.0)[1]
+        f_second = _common_normal(p[i + 1], w[i + 1], p[i + 2], w[i + 2], 0.0)[0]
+        gap = float(np.linalg.norm(f_first - f_second))
+        if pairs:
+            gap = max(gap, meet(i, i + 1)[1], meet(i + 1, i + 2)[1])
+        return what, gap, "m"
 
+    if n == 6:
+        return {
+            "1⊥2": perpendicular(0, 1),
+            "2∥3": parallel(1, 2),
+            "3∥4": parallel(2, 3),
+            "3⊥4": perpendicular(2, 3),
+            "4⊥5": perpendicular(3, 4),
+            "5⊥6": perpendicular(4, 5),
+            "4,5 meet": meet(3, 4),
+            "5,6 meet": meet(4, 5),
+            "4,5,6 meet": concurrent(3, pairs=False),
+        }
     return {
         "1⊥2": perpendicular(0, 1),
-        "2∥3": parallel(1, 2),
-        "3∥4": parallel(2, 3),
+        "2⊥3": perpendicular(1, 2),
         "3⊥4": perpendicular(2, 3),
         "4⊥5": perpendicular(3, 4),
         "5⊥6": perpendicular(4, 5),
-        "4,5 meet": meet(3, 4),
+        "6⊥7": perpendicular(5, 6),
         "5,6 meet": meet(4, 5),
-        "4,5,6 meet": concurrent(),
+        "1,2,3 meet": concurrent(0, pairs=True),
+        "3,4,5 meet": concurrent(2, pairs=True),
+        "5,6,7 meet": concurrent(4, pairs=True),
     }
 
 
@@ -260,17 +311,34 @@ def _tests(w: FloatArray, p: FloatArray) -> dict[str, tuple[str, float, str]]:
 FAMILIES: dict[str, tuple[str, ...]] = {
     "opw": ("1⊥2", "2∥3", "3⊥4", "4⊥5", "5⊥6", "4,5 meet", "5,6 meet", "4,5,6 meet"),
     "ur": ("1⊥2", "2∥3", "3∥4", "4⊥5", "5⊥6", "5,6 meet"),
-}
+    "srs": ("1⊥2", "2⊥3", "1,2,3 meet", "3⊥4", "4⊥5", "3,4,5 meet", "5⊥6", "6⊥7",
+            "5,6,7 meet"),
+    "franka": ("1⊥2", "2⊥3", "1,2,3 meet", "3⊥4", "4⊥5", "5⊥6", "5,6 meet", "6⊥7"),
+}  # fmt: skip
+
+#: Joint count of each family's chains.
+FAMILY_JOINTS: dict[str, int] = {"opw": 6, "ur": 6, "srs": 7, "franka": 7}
 
 _FAMILY_NAMES = {
     "opw": "OPW (ortho-parallel shoulder, spherical wrist)",
     "ur": "UR (axes 2, 3, 4 parallel)",
+    "srs": "SRS (spherical shoulder, elbow and wrist)",
+    "franka": "Franka (spherical shoulder, offset elbow, offset wrist)",
+}
+
+#: Rows (0-based) of each family's idealised DH table: with α = ±π/2 (the
+#: others α = 0), with a = 0, with d = 0.
+_IDEAL: dict[str, tuple[frozenset[int], frozenset[int], frozenset[int]]] = {
+    "opw": (frozenset({0, 2, 3, 4}), frozenset({3, 4, 5}), frozenset({4})),
+    "ur": (frozenset({0, 3, 4}), frozenset({4, 5}), frozenset()),
+    "srs": (frozenset(range(6)), frozenset(range(7)), frozenset({1, 3, 5})),
+    "franka": (frozenset(range(6)), frozenset({0, 1, 4, 6}), frozenset({1})),
 }
 
 
 def _signs(family: str, w: FloatArray) -> tuple[float, ...]:
     """Axis signs: z0 up, the parallel axes of the family pointing alike."""
-    signs = [1.0] * 6
+    signs = [1.0] * len(w)
     signs[0] = -1.0 if w[0][2] < 0.0 else 1.0
     for k in (2, 3) if family == "ur" else (2,):
         signs[k] = -1.0 if float(w[1] @ w[k]) < 0.0 else 1.0
@@ -286,17 +354,13 @@ def _ideal_rows(
     1e-32 m must not decide which arm is the right one.
     """
     half = math.pi / 2.0
-    right = {0, 2, 3, 4} if family == "opw" else {0, 3, 4}
-    zero_a = {3, 4} if family == "opw" else {4}
+    right, zero_a, zero_d = _IDEAL[family]
     out = []
     for k, (theta, d, a, alpha) in enumerate(rows):
-        if k in right:
-            alpha = math.copysign(half, alpha)
-        elif k < 5:
-            alpha = 0.0
-        if k in zero_a or k == 5:
+        alpha = math.copysign(half, alpha) if k in right else 0.0
+        if k in zero_a:
             a = 0.0
-        if family == "opw" and k == 4:
+        if k in zero_d:
             d = 0.0
         d = 0.0 if abs(d) <= tol else d
         a = 0.0 if abs(a) <= tol else a
@@ -311,7 +375,8 @@ def _residual(robot: Robot, structure_rows: list, signs, base, tool) -> float:
     )
     rng = np.random.default_rng(0)
     worst = 0.0
-    for q in (np.zeros(6), *rng.uniform(-np.pi, np.pi, size=(8, 6))):
+    n = len(structure_rows)
+    for q in (np.zeros(n), *rng.uniform(-np.pi, np.pi, size=(8, n))):
         fitted = base @ table.forward_kinematics(q * np.asarray(signs)) @ tool
         model = robot.fk(q).homogeneous
         worst = max(worst, float(np.abs(fitted[:3] - model[:3]).max()))
@@ -328,21 +393,42 @@ def get_structure(robot: Robot) -> KinematicStructure:
     return compute_structure(robot)
 
 
+def _zero_lengths(
+    family: str, rows: list[tuple[float, float, float, float]], tol: float
+) -> str | None:
+    """What a family needs non-zero and the fitted rows have zero, or None."""
+    arm: tuple[float, ...]
+    if family == "opw":
+        arm = (rows[1][2],)
+    elif family == "ur":
+        arm = (rows[1][2], rows[2][2])
+    else:  # S to E, E to W (SRS) or elbow to wrist (Franka)
+        arm = (rows[2][1], rows[4][1])
+    if min(map(abs, arm)) <= tol:
+        return "the upper arm or forearm has zero length"
+    if family == "franka" and min(abs(rows[k][2]) for k in (2, 3, 5)) <= tol:
+        return "an elbow offset (a3, a4) or the wrist offset (a6) is zero"
+    return None
+
+
 def compute_structure(robot: Robot, tol: float = STRUCTURE_TOL) -> KinematicStructure:
-    """Recognise the family of a 6R arm and fit its DH chain.
+    """Recognise the family of a 6R or 7R arm and fit its DH chain.
 
     Args:
         robot: Any robot; its tool frame is folded into ``tool``.
         tol: Tolerance of every structure test [rad or m].
 
     Raises:
-        UnsupportedRobotError: If the robot is not a 6R chain, or fits neither
-            family; the message names every failed test with its deviation.
+        UnsupportedRobotError: If the robot is not a 6R or 7R chain, or fits
+            none of the families of its joint count; the message names every
+            failed test with its deviation.
     """
     w, p = axis_lines(robot)
     tests = _tests(w, p)
     failures = {}
     for family, names in FAMILIES.items():
+        if FAMILY_JOINTS[family] != len(w):
+            continue
         failed = [tests[n] for n in names if not tests[n][1] <= tol]
         if failed:
             failures[family] = failed
@@ -350,8 +436,9 @@ def compute_structure(robot: Robot, tol: float = STRUCTURE_TOL) -> KinematicStru
         signs = _signs(family, w)
         rows, base, tool = fit_dh(robot, signs, tol)
         rows = _ideal_rows(family, rows, tol)
-        if abs(rows[1][2]) <= tol or (family == "ur" and abs(rows[2][2]) <= tol):
-            failures[family] = [("the upper arm or forearm has zero length", 0.0, "m")]
+        zero = _zero_lengths(family, rows, tol)
+        if zero is not None:
+            failures[family] = [(zero, 0.0, "m")]
             continue
         limits = zip(robot.lower, robot.upper, strict=True)
         table = DHTable(

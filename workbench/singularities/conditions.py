@@ -224,6 +224,11 @@ def get_factorisation(robot: Robot | DHTable) -> PumaFactorisation:
         structure = get_structure(robot)
     except UnsupportedRobotError as err:
         raise NotPumaTypeError(str(err)) from err
+    if structure.family not in ("opw", "ur"):
+        raise NotPumaTypeError(
+            f"robot {robot.name!r} is a seven-axis arm ({structure.family.upper()} "
+            "family), not a 6R arm with a PUMA-type factorisation"
+        )
     j = structure.table.joints
     sigma = [math.copysign(1.0, joint.alpha) for joint in j]
     signs = structure.joint_sign
