@@ -423,12 +423,6 @@ def test_cli_ik_branches(tmp_path, capsys) -> None:
     out = tmp_path / "branches.html"
     argv = ["view", "--robot", "puma560", "--deg", *map(str, Q_DEG), "--ik-branches"]
     code, _, err = run_cli(capsys, *argv, "--html", str(out))
-    try:
-        from workbench.ik import analytic  # noqa: F401
-    except ImportError:
-        assert code == EXIT_BAD_INPUT
-        assert "closed-form IK" in err
-        return
     assert (code, err) == (0, "")
     objects = by_path(page_commands(out.read_text()), "set_object")
     assert (

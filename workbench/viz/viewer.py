@@ -215,6 +215,8 @@ class Viewer:
         *,
         labels: list[str] | None = None,
         opacity: float = 0.3,
+        colors: npt.ArrayLike | None = None,
+        legend: str | None = None,
     ) -> None:
         """Draw translucent copies of the arm, e.g. every IK branch of one pose.
 
@@ -227,26 +229,38 @@ class Viewer:
             labels: One name per ghost (e.g. the IK branch); default
                 ``ghost0``, ``ghost1``, ….
             opacity: In (0, 1].
+            colors: RGB in [0, 1] per ghost, shape (M, 3) (e.g. a colour
+                scale of a value); default :data:`GHOST_COLORS`, cycled.
+            legend: HTML of the legend's ghost section (e.g. the colour
+                scale); default one row per label.
 
         Raises:
-            DimensionError: If the configurations are not (M, nq).
+            DimensionError: If the configurations are not (M, nq), or the
+                colours not (M, 3).
             InputError: If the labels do not match them one to one.
         """
         qs = as_configurations(self.robot, configurations, "configurations")
         labels = labels or [f"ghost{i}" for i in range(len(qs))]
         if len(labels) != len(qs):
             raise InputError(f"{len(labels)} labels for {len(qs)} ghost configurations")
+        if colors is None:
+            rgb = np.array(
+                [GHOST_COLORS[i % len(GHOST_COLORS)] for i in range(len(qs))]
+            )
+        else:
+            rgb = np.clip(np.asarray(colors, dtype=np.float64), 0.0, 1.0)
+            if rgb.shape != (len(qs), 3):
+                raise DimensionError("colors", (len(qs), 3), rgb.shape)
         self._scene["ghosts"].delete()
         points = [np.zeros((0, 3))]
         for i, (qk, label) in enumerate(zip(qs, labels, strict=True)):
-            rgba = [*GHOST_COLORS[i % len(GHOST_COLORS)], float(opacity)]
+            rgba = [*(float(c) for c in rgb[i]), float(opacity)]
             root = f"ghosts/{to_node_name(label)}"
             ghost = Arm(self.robot, self._scene, root, rgba, with_base=False)
             ghost.draw(self._scene, qk)
             points.append(ghost.compute_points(qk))
         self._extra_points["ghosts"] = np.vstack(points)
-        colors = [GHOST_COLORS[i % len(GHOST_COLORS)] for i in range(len(qs))]
-        self._legend["ghosts"] = _legend.ghosts(labels, colors)
+        self._legend["ghosts"] = legend or _legend.ghosts(labels, rgb.tolist())
 
     def show_collisions(self, checker: CollisionChecker) -> None:
         """Draw the checker's scene; colour contacts and the closest pair from now on.
