@@ -1,10 +1,13 @@
-"""Inverse kinematics: closed form for OPW and UR-type arms, numerical for any arm.
+"""Inverse kinematics: closed form for OPW, UR, SRS and Franka arms, numerical for any.
 
 Public entry points (see docs/interface.md): ``analytic``, ``analytic_batch``,
 ``numeric``, ``numeric_batch``, each robot's ``ClosedFormSolver``
-(``get_closed_form``), plus the damped-least-squares tools and the compiled
-chain's batch of tool Jacobians (``compute_jacobians_local``) and of tool
-poses with their manipulability (``compute_tool_poses``).
+(``get_closed_form``) or, for seven-axis arms, ``RedundantSolver``
+(``get_redundant_solver``) with the redundancy tools (``redundancy_parameter``,
+``feasible_redundancy``, ``choose_redundancy``), plus the damped-least-squares
+tools and the compiled chain's batch of tool Jacobians
+(``compute_jacobians_local``) and of tool poses with their manipulability
+(``compute_tool_poses``).
 """
 
 from workbench.ik.batch_jacobians import compute_jacobians_local
@@ -32,6 +35,20 @@ from workbench.ik.damped import (
 from workbench.ik.numerical import IKResult, numeric
 from workbench.ik.numerical_batch import IKBatchResult, numeric_batch
 from workbench.ik.qp import QP_DAMPING, DifferentialIKError, qp_step
+from workbench.ik.redundancy import (
+    RedundancyChoice,
+    choose_redundancy,
+    feasible_redundancy,
+    redundancy_parameter,
+)
+from workbench.ik.redundant import (
+    FRANKA_BRANCHES,
+    SRS_BRANCHES,
+    FeasibleRedundancy,
+    RedundantIKSolution,
+    RedundantSolver,
+    get_redundant_solver,
+)
 from workbench.ik.solver import ClosedFormSolver, get_closed_form
 from workbench.ik.structure import (
     STRUCTURE_TOL,
@@ -43,31 +60,41 @@ __all__ = [
     "BRANCHES",
     "DLS_EPSILON",
     "DLS_LAMBDA_MAX",
+    "FRANKA_BRANCHES",
     "QP_DAMPING",
+    "SRS_BRANCHES",
     "STRUCTURE_TOL",
     "UR_BRANCHES",
     "WRIST_SINGULAR_TOL",
     "ClosedFormSolver",
     "DifferentialIKError",
+    "FeasibleRedundancy",
     "IKBatchResult",
     "IKResult",
     "IKSolution",
     "KinematicStructure",
+    "RedundancyChoice",
+    "RedundantIKSolution",
+    "RedundantSolver",
     "UnreachableError",
     "UnsupportedRobotError",
     "analytic",
     "analytic_batch",
+    "choose_redundancy",
     "compute_jacobians_local",
     "compute_tool_poses",
     "dls_inverse",
     "dls_step",
+    "feasible_redundancy",
     "get_branches",
     "get_closed_form",
+    "get_redundant_solver",
     "get_structure",
     "nearest",
     "numeric",
     "numeric_batch",
     "qp_step",
+    "redundancy_parameter",
     "solve_null_space_velocity",
     "solve_velocity",
 ]

@@ -76,13 +76,24 @@ class UnreachableError(InfeasibleError):
             its family only up to rounding reaches less than its idealised
             structure: no branch refines onto the pose; distance and bounds
             then 0).
+
+    A seven-axis arm's solver (:mod:`workbench.ik.redundant`) words its own
+    ``message`` (the redundancy parameter's value and the values that reach).
     """
 
-    def __init__(self, distance: float, bounds: tuple[float, float], kind: str):
+    def __init__(
+        self,
+        distance: float,
+        bounds: tuple[float, float],
+        kind: str,
+        message: str | None = None,
+    ):
         self.distance = distance
         self.bounds = bounds
         self.kind = kind
-        if kind == "model":
+        if message is not None:
+            pass
+        elif kind == "model":
             message = (
                 "out of reach: the pose is at the edge of the reach of the "
                 "idealised arm, and no branch reaches it on the robot's own model"

@@ -1,4 +1,4 @@
-r"""Closed-form inverse kinematics of OPW (PUMA-type) and UR-type arms.
+r"""Closed-form inverse kinematics of OPW (PUMA-type), UR-type and seven-axis arms.
 
 The solution is derived from the robot's own DH table when it has one (the
 PUMA models, see :mod:`workbench.ik._puma` for which tables qualify), else from
@@ -13,11 +13,19 @@ The functions here are the front door for one call; each robot's
 the work, and holds the branch labels (physical, defined in
 :mod:`workbench.ik.solver`): :data:`BRANCHES` for OPW arms, bits
 ``4·left + 2·down + flip``; :data:`UR_BRANCHES` for UR-type arms.
+
+A seven-axis arm (SRS or Franka family, :mod:`workbench.ik.redundant`) has
+a one-parameter family of solutions per branch: :func:`analytic` and
+:func:`analytic_batch` take the redundancy parameter (``redundancy=``: the
+arm angle ψ or q7 [rad]) and solve through the arm's
+:class:`~workbench.ik.redundant.RedundantSolver` (:func:`get_redundant_solver`);
+:mod:`workbench.ik.redundancy` chooses a value.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -30,6 +38,11 @@ from workbench.ik._puma import (
     UnreachableError,
     UnsupportedRobotError,
 )
+from workbench.ik.redundant import (
+    RedundantIKSolution,
+    check_six_axis,
+    get_redundant_solver,
+)
 from workbench.ik.solver import (
     BRANCHES,
     UR_BRANCHES,
@@ -40,11 +53,24 @@ from workbench.model.robot import Robot
 from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]
+#: A closed-form solution of a 6R or a 7R arm.
+Solution = TypeVar("Solution", bound=IKSolution | RedundantIKSolution)
 
 
 def get_branches(robot: Robot) -> tuple[str, ...]:
-    """Branch labels of a robot's closed form (:data:`BRANCHES` or UR's)."""
+    """Branch labels of a robot's closed form (:data:`BRANCHES`, UR's, 7R's)."""
+    if robot.model.nq == 7:
+        return get_redundant_solver(robot).branches
     return get_closed_form(robot).branches
+
+
+def _missing_redundancy(robot: Robot, parameter: str) -> InputError:
+    return InputError(
+        f"robot {robot.name!r} is a seven-axis arm: give redundancy= (the "
+        f"{parameter} [rad]; ik.choose_redundancy(robot, target) chooses one, "
+        "ik.redundancy_parameter(robot, q) reads it from a configuration), or "
+        "q_previous= to keep its value"
+    )
 
 
 def analytic(
@@ -52,18 +78,24 @@ def analytic(
     target: pin.SE3 | npt.ArrayLike,
     *,
     q_previous: npt.ArrayLike | None = None,
-) -> list[IKSolution]:
-    """Every closed-form IK branch of an OPW (PUMA-type) or UR-type arm.
+    redundancy: float | None = None,
+) -> list[IKSolution] | list[RedundantIKSolution]:
+    """Every closed-form IK branch of a 6R (OPW, UR) or 7R (SRS, Franka) arm.
 
     Args:
         robot: A 6R arm of either family (see :mod:`workbench.ik.structure`):
-            ``puma560``, ``puma560-kang``, ``ur5``, a KUKA/ABB/Fanuc URDF, ...
+            ``puma560``, ``puma560-kang``, ``ur5``, a KUKA/ABB/Fanuc URDF, ...;
+            or a seven-axis arm of the SRS (``iiwa14``) or Franka (``panda``)
+            family.
         target: Pose of the robot's tool frame in the base frame: ``pin.SE3``
             or a (4, 4) homogeneous matrix [m].
-        q_previous: Optional configuration (6,) [rad] of the previous path
+        q_previous: Optional configuration (nq,) [rad] of the previous path
             sample. Each returned angle is then the representative (mod 2π)
-            nearest to it, and at a wrist singularity θ4/θ6 are split so that
-            the step from ``q_previous`` is shortest (else θ4 = 0).
+            nearest to it, and at a 6R wrist singularity θ4/θ6 are split so
+            that the step from ``q_previous`` is shortest (else θ4 = 0).
+        redundancy: 7R arms only: the redundancy parameter [rad], the arm
+            angle ψ (SRS) or q7 (Franka). None takes that of ``q_previous``
+            (continuity); one of the two is required.
 
     Returns:
         One :class:`IKSolution` per branch that reaches the pose, in the order
@@ -71,20 +103,38 @@ def analytic(
         unless a shoulder offset (a1 != 0, or a UR arm) lets only some reach.
         At a shoulder or elbow singularity some coincide; at a wrist
         singularity the flip twin is the continuity member turned by π.
+        7R arms: one :class:`~workbench.ik.redundant.RedundantIKSolution` per
+        branch reaching the pose for that value of the parameter.
 
     Raises:
         UnsupportedRobotError: If the robot has no closed form.
         UnreachableError: If the wrist centre is out of reach or inside the
-            cylinder of radius |D| (the shoulder offset) around the base axis.
-        DimensionError: If ``target`` is not (4, 4) or ``q_previous`` not (6,).
+            cylinder of radius |D| (the shoulder offset) around the base axis
+            (7R: no branch reaches for this value; the message says why).
+        DimensionError: If ``target`` is not (4, 4) or ``q_previous`` not (nq,).
         NonFiniteError: If an entry is NaN or infinite.
-        InputError: If ``target`` is not rigid (see ``poses.RIGIDITY_TOL``).
+        InputError: If ``target`` is not rigid (see ``poses.RIGIDITY_TOL``),
+            ``redundancy`` is given for a 6R arm, or a 7R arm has neither
+            ``redundancy`` nor ``q_previous``.
     """
-    return get_closed_form(robot).solve(target, q_previous=q_previous)
+    if robot.model.nq != 7:
+        solver = get_closed_form(robot)
+        if redundancy is not None:
+            check_six_axis(robot, redundancy)
+        return solver.solve(target, q_previous=q_previous)
+    redundant = get_redundant_solver(robot)
+    if redundancy is None:
+        if q_previous is None:
+            raise _missing_redundancy(robot, redundant.parameter)
+        redundancy = redundant.parameter_of(q_previous)  # type: ignore[assignment]
+    return redundant.solve(target, redundancy, q_previous=q_previous)  # type: ignore[arg-type]
 
 
 def analytic_batch(
-    robot: Robot, targets: npt.ArrayLike
+    robot: Robot,
+    targets: npt.ArrayLike,
+    *,
+    redundancy: float | npt.ArrayLike | None = None,
 ) -> tuple[FloatArray, npt.NDArray[np.bool_]]:
     """Every closed-form IK branch of N poses, vectorised.
 
@@ -96,9 +146,11 @@ def analytic_batch(
     loop).
 
     Args:
-        robot: A 6R arm of either family (as :func:`analytic`).
+        robot: A 6R arm of either family (as :func:`analytic`), or a 7R arm.
         targets: Shape (N, 4, 4), homogeneous poses of the tool frame in the
             base frame [m].
+        redundancy: 7R arms only, required: the redundancy parameter [rad]
+            (ψ or q7), one value for every pose or (N,).
 
     Returns:
         ``q`` of shape (N, 8, 6) [rad], branch axis in the order of
@@ -108,17 +160,29 @@ def analytic_batch(
         (every branch, unless a shoulder offset a1 or a UR arm lets only some
         reach). Rows of branches that do not reach are NaN. Joint limits are
         not applied: test ``(robot.lower <= q) & (q <= robot.upper)`` for that.
+        7R arms: ``q`` (N, B, 7) and ``valid`` (N, B), B the arm's branch
+        count (SRS 8, Franka 4), as :meth:`RedundantSolver.solve_batch
+        <workbench.ik.redundant.RedundantSolver.solve_batch>`.
 
     Raises:
         UnsupportedRobotError: If the robot has no closed form.
-        DimensionError: If ``targets`` is not (N, 4, 4).
+        DimensionError: If ``targets`` is not (N, 4, 4) or ``redundancy`` not (N,).
         NonFiniteError: If an entry is NaN or infinite.
-        InputError: If a pose is not rigid (``poses.RIGIDITY_TOL``).
+        InputError: If a pose is not rigid (``poses.RIGIDITY_TOL``), or
+            ``redundancy`` is given for a 6R arm or missing for a 7R arm.
     """
-    return get_closed_form(robot).solve_batch(targets)
+    if robot.model.nq != 7:
+        solver = get_closed_form(robot)
+        if redundancy is not None:
+            check_six_axis(robot, redundancy)
+        return solver.solve_batch(targets)
+    redundant = get_redundant_solver(robot)
+    if redundancy is None:
+        raise _missing_redundancy(robot, redundant.parameter)
+    return redundant.solve_batch(targets, redundancy)
 
 
-def nearest(solutions: Sequence[IKSolution], q_previous: npt.ArrayLike) -> IKSolution:
+def nearest(solutions: Sequence[Solution], q_previous: npt.ArrayLike) -> Solution:
     """The solution nearest to ``q_previous``, angles compared modulo 2π.
 
     Generalises Kang's rule "if θ4 jumps by ≈ π, take the other solution": the
@@ -128,7 +192,7 @@ def nearest(solutions: Sequence[IKSolution], q_previous: npt.ArrayLike) -> IKSol
     ``q_previous`` as well, pass it to :func:`analytic`.
 
     Args:
-        solutions: Candidates, e.g. the result of :func:`analytic`.
+        solutions: Candidates, e.g. the result of :func:`analytic` (6R or 7R).
         q_previous: Configuration (nq,) [rad].
 
     Returns:
