@@ -119,3 +119,15 @@ def test_six_axis_solver_points_to_the_redundant_one() -> None:
     for name in ("iiwa14", "panda"):
         with pytest.raises(UnsupportedRobotError, match="get_redundant_solver"):
             get_closed_form(load_robot(name))
+
+
+@pytest.mark.parametrize("name", ["iiwa14", "panda"])
+def test_urdf_rounding_passes(name: str) -> None:
+    """An axis 1.8e-9 rad off (π/2 written 1.570796325) keeps the family."""
+    robot = load_robot(name)
+    turn = pin.SE3(pin.exp3(np.array([1.8e-9, 0.0, 0.0])), np.zeros(3))
+    rounded = _variant(robot, 4, robot.model.jointPlacements[4] * turn)
+    structure = compute_structure(rounded)
+    assert structure.family == get_structure(robot).family
+    assert 1e-9 <= structure.deviation <= 2e-9
+    assert structure.residual <= 1e-8  # the idealised chain vs the rounded model
