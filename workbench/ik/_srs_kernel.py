@@ -76,11 +76,19 @@ BRANCHES: tuple[str, ...] = tuple(
 )
 #: The redundancy parameter, as messages name it.
 PARAMETER = "arm angle"
-#: |sin θ2|, |sin θ4|, |sin θ6| at or below which a branch is flagged shoulder,
-#: elbow, wrist singular; |SW_xy| / |SW| at or below which the arm angle is
-#: flagged PARAMETER_SINGULAR (W on axis 1). Within it, a given ``q_previous``
-#: fixes θ1 (shoulder) or θ5 (wrist), the angle the pose leaves free.
+#: |sin θ2|, |sin θ6| at or below which a branch is flagged shoulder, wrist
+#: singular; |SW_xy| / |SW| at or below which the arm angle is flagged
+#: PARAMETER_SINGULAR (W on axis 1).
 SINGULAR_TOL = 1e-10
+#: |sin θ4| at or below which a branch is flagged elbow singular: the law of
+#: cosines gives cos θ4 to a few ulps, so |sin θ4| only to about 3e-8 at the
+#: stretched elbow (a pose computed at θ4 = 0 may give |sin θ4| = 1.5e-8).
+ELBOW_SINGULAR_TOL = 1e-7
+#: |sin θ2| (|sin θ6|) at or below which a given ``q_previous`` fixes θ1 (θ5):
+#: there the pose leaves θ1 − ±θ3 (θ5 − ±θ7) to rounding (an error of about
+#: 1e-16 / |sin|, above 1e-3 rad), and keeping θ1 costs at most this times π
+#: times the arm's lengths of position (orientation) error.
+SPLIT_TOL = 1e-13
 #: Slack of the law of cosines: |cos θ4| up to 1 + this is clipped to 1 (a pose
 #: at the stretched elbow rounded outward), beyond it the pose is out of reach.
 REACH_TOL = 1e-12
@@ -170,15 +178,21 @@ def _elbow_cosine(geo, length2: float) -> float:
 def _reference(geo, sw, c4: float, s4: float):
     """Columns of R03° (θ3 = 0, θ4 = atan2(s4 ≥ 0, c4)) and ρ = |SW_xy|.
 
-    Returns ``(col0, col1, col2, rho)``; the columns as 3-tuples in frame 0.
+    θ1° = atan2(SW_y, SW_x); within the algorithmic singularity (ρ at most
+    SINGULAR_TOL |SW|) θ1° = 0, and the reference arm, built for SW turned
+    into the plane y = 0, is turned back onto SW by the least rotation (an
+    angle below SINGULAR_TOL), so that it reaches W exactly. Returns
+    ``(col0, col1, col2, rho)``; the columns as 3-tuples in frame 0.
     """
     s1g, s2g, s3g, s4g = geo.sigma[0], geo.sigma[1], geo.sigma[2], geo.sigma[3]
     swx, swy, swz = sw
     vx = s4g * s4 * geo.d5
     vz = geo.d3 - s3g * s4g * c4 * geo.d5
     rho = math.sqrt(swx * swx + swy * swy)
-    c1 = swx / rho if rho > 0.0 else 1.0
-    s1 = swy / rho if rho > 0.0 else 0.0
+    length = math.sqrt(rho * rho + swz * swz)
+    on_axis = rho <= SINGULAR_TOL * length
+    c1 = 1.0 if on_axis else swx / rho
+    s1 = 0.0 if on_axis else swy / rho
     c2 = vx * rho - s2g * vz * s1g * swz
     s2 = s2g * vz * rho + vx * s1g * swz
     h = math.sqrt(c2 * c2 + s2 * s2)
@@ -190,7 +204,35 @@ def _reference(geo, sw, c4: float, s4: float):
     a2 = (s2g * c1 * s2, s2g * s1 * s2, -s1g * s2g * c2)
     col1 = (s3g * a2[0], s3g * a2[1], s3g * a2[2])
     col2 = (-s3g * a1[0], -s3g * a1[1], -s3g * a1[2])
+    if on_axis and rho > 0.0:  # turn (ρ, 0, SW_z) onto SW
+        inv = 1.0 / (length * length)
+        v = (-swz * swy * inv, swz * (swx - rho) * inv, rho * swy * inv)
+        k = 1.0 / (1.0 + (rho * swx + swz * swz) * inv)
+        a0, col1, col2 = (
+            _least_turn(v, k, a0),
+            _least_turn(v, k, col1),
+            _least_turn(v, k, col2),
+        )
     return a0, col1, col2, rho
+
+
+@common.inline
+def _least_turn(v, k: float, x):
+    """The rotation taking a to b applied to x, v = a × b, k = 1 / (1 + a · b).
+
+    x + v × x + k v × (v × x) (Rodrigues' formula of the least rotation).
+    """
+    w = (
+        v[1] * x[2] - v[2] * x[1],
+        v[2] * x[0] - v[0] * x[2],
+        v[0] * x[1] - v[1] * x[0],
+    )
+    ww = (
+        v[1] * w[2] - v[2] * w[1],
+        v[2] * w[0] - v[0] * w[2],
+        v[0] * w[1] - v[1] * w[0],
+    )
+    return (x[0] + w[0] + k * ww[0], x[1] + w[1] + k * ww[1], x[2] + w[2] + k * ww[2])
 
 
 @common.inline
@@ -219,7 +261,7 @@ def _shoulder(geo, c0, c1, gc2: float, prev: FloatArray, has_prev: bool):
     h = math.sqrt(zx * zx + zy * zy)
     c2 = -s1g * s2g * s3g * c1[2]
     s2 = gc2 * h
-    if has_prev and h <= SINGULAR_TOL:  # axes 1 and 3 aligned: θ1 kept
+    if has_prev and h <= SPLIT_TOL:  # axes 1 and 3 aligned: θ1 kept
         t1 = _dh_angle(geo, 0, prev)
         cos1, sin1 = math.cos(t1), math.sin(t1)
     elif h > 0.0:
@@ -241,7 +283,7 @@ def _wrist(geo, r47, gc6: float, prev: FloatArray, has_prev: bool):
     zx, zy = s6g * r47[2], s6g * r47[5]  # = s6 (c5, s5)
     h = math.sqrt(zx * zx + zy * zy)
     c6 = -s5g * s6g * r47[8]
-    if has_prev and h <= SINGULAR_TOL:  # axes 5 and 7 aligned: θ5 kept
+    if has_prev and h <= SPLIT_TOL:  # axes 5 and 7 aligned: θ5 kept
         t5 = _dh_angle(geo, 4, prev)
         cos5, sin5 = math.cos(t5), math.sin(t5)
     elif h > 0.0:
@@ -337,7 +379,7 @@ def _branches(geo, rot, sw, value, prev, has_prev, q, flags, with_flags):
                         ok &= geo.lower[j] <= q[b, j] <= geo.upper[j]
                     bits |= WITHIN_LIMITS if ok else 0
                     bits |= SHOULDER_SINGULAR if h2 <= SINGULAR_TOL else 0
-                    bits |= ELBOW_SINGULAR if s4 <= SINGULAR_TOL else 0
+                    bits |= ELBOW_SINGULAR if s4 <= ELBOW_SINGULAR_TOL else 0
                     bits |= WRIST_SINGULAR if h6 <= SINGULAR_TOL else 0
                     bits |= PARAMETER_SINGULAR if param else 0
                     flags[b] = bits
@@ -361,7 +403,8 @@ def solve_pose(
         pose: (4, 4) pose of the tool frame in the robot's base frame [m].
         value: Arm angle ψ [rad].
         q_previous: (7,) configuration [rad] each angle is taken nearest to
-            (and, at a shoulder or wrist singularity, θ1 or θ5 from), or (0,).
+            (and θ1 or θ5 from, within SPLIT_TOL of a shoulder or wrist
+            singularity), or (0,).
         q: (8, 7) output, robot joint values [rad], branch order
             :data:`BRANCHES`; NaN rows when the pose is out of reach.
         flags: (8,) uint8 output, bits of ``_redundant_common``.
@@ -478,7 +521,7 @@ def _arm_angle(geo, theta: FloatArray) -> float:
         d3 * r02[2][1] + d5 * s4g * (s4 * r03[0][1] - c4 * r03[1][1]),
         d3 * r02[2][2] + d5 * s4g * (s4 * r03[0][2] - c4 * r03[1][2]),
     )
-    e = 1.0 if s4 >= 0.0 else -1.0
+    e = math.copysign(1.0, s4)  # (−0.0: the kernel's stretched elbow-neg)
     col0, col1, col2, _ = _reference(geo, sw, c4, abs(s4))
     a0, a1, a2 = r03
     a0 = (e * a0[0], e * a0[1], e * a0[2])
@@ -598,6 +641,7 @@ def feasible_intervals(geometry: np.ndarray, pose: FloatArray):
 
 __all__ = [
     "BRANCHES",
+    "ELBOW_SINGULAR_TOL",
     "PARAMETER",
     "SINGULAR_TOL",
     "diagnose",
