@@ -15,6 +15,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench._compiled import interpreted
+from workbench.cli import _redundancy
 from workbench.cli._common import (
     add_json_flag,
     add_robot_argument,
@@ -23,11 +24,11 @@ from workbench.cli._common import (
     load_robot_from_args,
     print_json,
 )
+from workbench.cli._redundancy import add_redundancy_argument
 from workbench.errors import InfeasibleError, InputError
 from workbench.ik.closed_form import (
     IKSolution,
     UnsupportedRobotError,
-    analytic,
     get_closed_form,
     nearest,
 )
@@ -48,6 +49,8 @@ EXIT_INFEASIBLE = 3
 _MM = 1e-3
 #: Largest |coordinate| of a target position [m] (1000 km: far beyond any arm).
 MAX_TARGET_COORDINATE = 1e6
+#: ``--criterion`` choices (``ik.choose_redundancy`` criteria needing no q_previous).
+CRITERIA = ("limit_margin", "manipulability")
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -94,7 +97,34 @@ def register(commands: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--mm", action="store_true", help="positions are in mm")
     parser.add_argument(
-        "--all", action="store_true", help="print every closed-form branch"
+        "--all",
+        action="store_true",
+        help="print every closed-form branch (seven-axis arms: every branch is "
+        "printed; --all also when none is within the limits, exit 0)",
+    )
+    add_redundancy_argument(
+        parser,
+        "[rad, or degrees with --deg]; every branch at that value is printed "
+        "(default: the value of largest joint-limit margin, or --criterion)",
+    )
+    parser.add_argument(
+        "--deg",
+        action="store_true",
+        help="--redundancy, and the values and intervals printed, in degrees",
+    )
+    parser.add_argument(
+        "--criterion",
+        choices=CRITERIA,
+        help="seven-axis arms without --redundancy: how the value is chosen "
+        "(limit_margin: largest distance of a joint to its limits, the default; "
+        "manipulability: largest √det(J Jᵀ))",
+    )
+    parser.add_argument(
+        "--feasible",
+        action="store_true",
+        help="seven-axis arms: also print the intervals of the redundancy "
+        "parameter where a branch reaches the pose within the joint limits "
+        "(per branch in --json)",
     )
     add_json_flag(parser)
     parser.set_defaults(run=run, progress_message="ik: solving the inverse kinematics…")
@@ -182,6 +212,17 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _solve_and_print(args: argparse.Namespace, robot: Robot, target: pin.SE3) -> int:
+    redundant = _redundancy.get_redundant(robot)
+    if redundant is not None:
+        from workbench.cli._ik_redundant import solve_and_print_redundant
+
+        return solve_and_print_redundant(args, robot, target, redundant)
+    for option in ("redundancy", "criterion"):
+        if getattr(args, option) is not None:
+            raise _redundancy.refuse_redundancy(robot, f"--{option}")
+    for option in ("deg", "feasible"):
+        if getattr(args, option):
+            raise _redundancy.refuse_redundancy(robot, f"--{option}")
     try:
         family = get_closed_form(robot).family
     except UnsupportedRobotError as err:
@@ -233,7 +274,7 @@ def _solve(
     """
     if solver == "numeric":
         return [_numeric_row(robot, target)]
-    solutions = analytic(robot, target)
+    solutions = get_closed_form(robot).solve(target)
     if not args.all:
         solutions = [_pick(solutions, robot.nq)]
     return [

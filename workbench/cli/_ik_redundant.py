@@ -1,0 +1,170 @@
+"""``workbench ik`` on a seven-axis arm: every branch at one value of ψ or q7.
+
+The value is ``--redundancy`` (rad, or degrees with ``--deg``), else the one
+:func:`workbench.ik.choose_redundancy` picks (largest joint-limit margin, or
+``--criterion``), and the output says which. Every branch reaching the pose
+at that value is printed, with its flags; none within the limits is an
+infeasible request (exit 3, the feasible intervals in the message) unless
+``--all`` asks for the branches anyway.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pinocchio as pin
+
+from workbench.cli import _redundancy
+from workbench.cli._common import format_vector, print_json
+from workbench.errors import InfeasibleError, InputError
+from workbench.model.robot import Robot
+
+if TYPE_CHECKING:
+    from workbench.ik import FeasibleRedundancy, RedundantIKSolution, RedundantSolver
+
+EXIT_INFEASIBLE = 3
+#: The singular flags of a branch, as JSON keys and as printed.
+SINGULAR_FLAGS = (
+    ("shoulder_singular", "shoulder singular"),
+    ("elbow_singular", "elbow singular"),
+    ("wrist_singular", "wrist singular"),
+    ("parameter_singular", "parameter singular"),
+)
+
+
+def solve_and_print_redundant(
+    args: argparse.Namespace, robot: Robot, target: pin.SE3, solver: RedundantSolver
+) -> int:
+    """Print the branches at the given or chosen value; returns the exit code.
+
+    Raises:
+        InfeasibleError: If no value reaches the pose within the limits, the
+            given value reaches it with no branch, or (without ``--all``)
+            with no branch within the limits; the message gives the feasible
+            intervals.
+        InputError: If the value is outside the parameter's range (Franka)
+            or the criterion unknown.
+    """
+    from workbench import ik
+
+    head: dict[str, Any] = {
+        "robot": robot.name,
+        "frame": robot.tool_frame,
+        "solver": "closed-form",
+        "solver_note": f"{solver.family.upper()} family (seven axes, redundancy "
+        f"parameter {solver.parameter})",
+    }
+    feasible: FeasibleRedundancy | None = None
+    if args.feasible:
+        feasible = ik.feasible_redundancy(robot, target)
+        head["feasible_redundancy"] = _redundancy.feasible_json(feasible)
+    try:
+        value, redundancy = _get_value(args, robot, target, solver)
+        head["redundancy"] = redundancy
+        rows = _rows(robot, target, solver.solve(target, value))
+        if not args.all and not any(row["within_limits"] for row in rows):
+            feasible = feasible or ik.feasible_redundancy(robot, target)
+            shown = _redundancy.format_value(value, args.deg)
+            raise InfeasibleError(
+                f"at {solver.parameter} = {shown} {len(rows)} branches reach the "
+                "pose, none within the joint limits (--all prints them); "
+                + _redundancy.describe_feasible(feasible, args.deg)
+            )
+    except InfeasibleError as err:
+        message = " ".join(str(err).split())
+        if "feasible" not in message:  # the solver's reason, without the intervals
+            feasible = feasible or ik.feasible_redundancy(robot, target)
+            message += f"; {_redundancy.describe_feasible(feasible, args.deg)}"
+        if not args.json:
+            raise InfeasibleError(message) from err
+        print_json({**head, "solutions": [], "feasible": False, "error": message})
+        print(f"workbench: error: {message}", file=sys.stderr)
+        return EXIT_INFEASIBLE
+    if args.json:
+        print_json({**head, "solutions": rows, "feasible": True})
+        return 0
+    _print_text(args, head, rows, feasible, solver)
+    return 0
+
+
+def _get_value(
+    args: argparse.Namespace, robot: Robot, target: pin.SE3, solver: RedundantSolver
+) -> tuple[float, dict[str, Any]]:
+    """The value [rad] and the ``redundancy`` JSON object saying where it comes from."""
+    from workbench import ik
+
+    if args.redundancy is not None:
+        if args.criterion is not None:
+            raise InputError("--criterion chooses a value: not with --redundancy")
+        value = _redundancy.to_radians(args.redundancy, args.deg)
+        return value, {
+            "parameter": solver.parameter,
+            "value": value,
+            "source": "given",
+            "criterion": None,
+            "score": None,
+        }
+    criterion = args.criterion or "limit_margin"
+    choice = ik.choose_redundancy(robot, target, criterion=criterion)
+    return choice.value, {
+        "parameter": solver.parameter,
+        "value": choice.value,
+        "source": "chosen",
+        "criterion": choice.criterion,
+        "score": choice.score,
+    }
+
+
+def _rows(
+    robot: Robot, target: pin.SE3, solutions: list[RedundantIKSolution]
+) -> list[dict[str, Any]]:
+    """One JSON-ready row per branch reaching the pose."""
+    from workbench.cli.ik import residual
+
+    return [
+        {
+            "branch": s.branch,
+            "index": s.index,
+            "q": s.q,
+            "joint_values": s.q,  # the seven-axis families' joints are revolute
+            "q_deg": np.rad2deg(s.q),
+            "within_limits": s.within_limits,
+            **{key: bool(getattr(s, key)) for key, _ in SINGULAR_FLAGS},
+            "residual": residual(robot, s.q, target),
+        }
+        for s in solutions
+    ]
+
+
+def _print_text(
+    args: argparse.Namespace,
+    head: dict[str, Any],
+    rows: list[dict[str, Any]],
+    feasible: FeasibleRedundancy | None,
+    solver: RedundantSolver,
+) -> None:
+    redundancy = head["redundancy"]
+    value = _redundancy.format_value(redundancy["value"], args.deg)
+    print(
+        f"robot {head['robot']}   frame {head['frame']}   solver closed-form "
+        f"({solver.family.upper()} family, seven axes)"
+    )
+    if redundancy["source"] == "given":
+        print(f"{solver.parameter} = {value} (given)")
+    else:
+        print(
+            f"{solver.parameter} = {value} (chosen: {redundancy['criterion']}, "
+            f"score {redundancy['score']:.6g})"
+        )
+    if feasible is not None:
+        print(_redundancy.describe_feasible(feasible, args.deg))
+    width = max(len(row["branch"]) for row in rows) + 2
+    for row in rows:
+        flags = "" if row["within_limits"] else "  (outside joint limits)"
+        flags += "".join(f"  ({text})" for key, text in SINGULAR_FLAGS if row[key])
+        q_deg = format_vector(row["q_deg"], 3)
+        print(f"{row['branch']:<{width}}q [deg] {q_deg}{flags}")
+        print(f"{'':<{width}}residual {row['residual']:.2e}")

@@ -1,0 +1,110 @@
+"""The redundancy parameter of seven-axis arms on the command line (``ik``, ``view``).
+
+A seven-axis arm of the SRS family (KUKA LBR iiwa) or of the Franka family
+(Panda, FR3) has a closed form per value of one redundancy parameter: the arm
+angle ψ (SRS) or the joint value q7 (Franka), both in rad
+(:func:`workbench.ik.get_redundant_solver`). Here: the ``--redundancy VALUE``
+option, the solver of a robot or None, and the feasible intervals as text and
+JSON.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import TYPE_CHECKING, Any
+
+from workbench.cli._common import finite_float
+from workbench.errors import InputError
+from workbench.model.robot import Robot
+
+if TYPE_CHECKING:
+    from workbench.ik import FeasibleRedundancy, RedundantSolver
+
+#: Decimals of a parameter value printed in rad (in degrees: this minus 3).
+DIGITS = 6
+
+
+def add_redundancy_argument(parser: argparse.ArgumentParser, unit_help: str) -> None:
+    """``--redundancy VALUE``: ψ (SRS) or q7 (Franka) of a seven-axis arm.
+
+    Args:
+        parser: The command's parser.
+        unit_help: How the command says the value's unit (rad, or degrees
+            with ``--deg``).
+    """
+    parser.add_argument(
+        "--redundancy",
+        type=finite_float,
+        metavar="VALUE",
+        help="seven-axis arms (SRS: KUKA iiwa; Franka: Panda, FR3): the value of "
+        "the redundancy parameter, the arm angle ψ (SRS) or q7 (Franka), "
+        f"{unit_help}",
+    )
+
+
+def get_redundant(robot: Robot) -> RedundantSolver | None:
+    """The closed form of a seven-axis arm of a known family, else None."""
+    from workbench.ik import UnsupportedRobotError, get_redundant_solver
+
+    try:
+        return get_redundant_solver(robot)
+    except UnsupportedRobotError:
+        return None
+
+
+def refuse_redundancy(robot: Robot, option: str = "--redundancy") -> InputError:
+    """The error for a redundancy option given for an arm without the parameter."""
+    if robot.nv == 6:
+        what = "a six-axis arm has no redundancy"
+    else:
+        what = (
+            f"{robot.nv} joints, but no closed form with a redundancy parameter "
+            "(SRS or Franka family)"
+        )
+    return InputError(f"{option}: {robot.name}: {what}")
+
+
+def to_radians(value: float, degrees: bool) -> float:
+    """A typed parameter value in rad (typed in degrees when ``degrees``)."""
+    return math.radians(value) if degrees else value
+
+
+def format_value(value: float, degrees: bool) -> str:
+    """``0.523599 rad`` or ``30.000°``."""
+    if degrees:
+        return f"{math.degrees(value):.{DIGITS - 3}f}°"
+    return f"{value:.{DIGITS}f} rad"
+
+
+def format_intervals(
+    intervals: tuple[tuple[float, float], ...] | list[tuple[float, float]],
+    degrees: bool,
+) -> str:
+    """``[-1.2 rad, 0.4 rad], [...]``, or ``none``."""
+    if not intervals:
+        return "none"
+    return ", ".join(
+        f"[{format_value(lo, degrees)}, {format_value(hi, degrees)}]"
+        for lo, hi in intervals
+    )
+
+
+def describe_feasible(feasible: FeasibleRedundancy, degrees: bool) -> str:
+    """One line: ``feasible arm angle: [...], [...]``."""
+    return f"feasible {feasible.parameter}: {format_intervals(feasible.union, degrees)}"
+
+
+def feasible_json(feasible: FeasibleRedundancy) -> dict[str, Any]:
+    """The ``feasible_redundancy`` object of the commands' JSON (rad)."""
+    return {
+        "parameter": feasible.parameter,
+        "range": list(feasible.range),
+        "union": [list(i) for i in feasible.union],
+        "branches": {
+            label: [list(i) for i in intervals]
+            for label, intervals in zip(
+                feasible.branches, feasible.intervals, strict=True
+            )
+        },
+    }
