@@ -3,19 +3,24 @@
 from __future__ import annotations
 
 import argparse
+import html
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
 
 from workbench.atomic_files import check_outputs
+from workbench.cli import _redundancy
 from workbench.cli._common import (
     add_robot_argument,
+    bounded_int,
     configuration_from_args,
     finite_float,
     get_input_paths,
     load_robot_from_args,
 )
+from workbench.cli._redundancy import add_redundancy_argument
 from workbench.errors import InputError
 from workbench.model.robot import Robot
 from workbench.trajectory.csv_io import (
@@ -23,6 +28,9 @@ from workbench.trajectory.csv_io import (
     TrajectoryFileError,
     read_trajectory_csv,
 )
+
+if TYPE_CHECKING:
+    from workbench.viz import Viewer
 
 
 def _port(text: str) -> int:
@@ -64,8 +72,28 @@ def register(commands: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--ik-branches",
         action="store_true",
-        help="also draw every closed-form IK branch of the pose as ghost arms "
-        "(PUMA models; needs Q)",
+        help="also draw every closed-form IK branch of the pose FK(Q) as ghost "
+        "arms (OPW and UR-type arms; seven-axis arms: the branches at one value "
+        "of the redundancy parameter, --redundancy; needs Q)",
+    )
+    add_redundancy_argument(
+        parser,
+        "in the unit of Q (--deg or --rad): the value whose branches "
+        "--ik-branches draws (default: the value of Q itself)",
+    )
+    parser.add_argument(
+        "--redundancy-sweep",
+        type=bounded_int(1, MAX_SWEEP),
+        metavar="N",
+        help="seven-axis arms: draw one branch of the pose FK(Q) at N values of "
+        "the redundancy parameter spread over the intervals where it is within "
+        "the joint limits, as ghosts coloured by the value, and animate the arm "
+        f"through them (1..{MAX_SWEEP}; needs Q)",
+    )
+    parser.add_argument(
+        "--branch",
+        metavar="LABEL",
+        help="the branch --redundancy-sweep draws (default: the branch of Q)",
     )
     parser.add_argument(
         "--scene",
@@ -109,16 +137,76 @@ def read_samples(path: Path, robot: Robot) -> JointTrajectorySamples:
     return samples
 
 
-def _ik_branches(robot: Robot, q: npt.NDArray[np.float64]) -> tuple[list, list[str]]:
-    try:
-        from workbench.ik import analytic
-    except ImportError as err:
-        raise InputError(
-            "--ik-branches needs the closed-form IK (workbench.ik.analytic), "
-            "which this installation lacks"
-        ) from err
-    solutions = analytic(robot, robot.fk(q))
-    return [s.q for s in solutions], [s.branch for s in solutions]
+#: Largest ``--redundancy-sweep`` (each value a ghost arm in the page).
+MAX_SWEEP = 64
+
+
+def _ik_branches(
+    args: argparse.Namespace, robot: Robot, q: npt.NDArray[np.float64]
+) -> tuple[list, list[str], str | None]:
+    """The branches of FK(q), their labels and, on a seven-axis arm, what value."""
+    from workbench.ik import analytic
+
+    if _redundancy.get_redundant(robot) is None:
+        solutions = analytic(robot, robot.fk(q))
+        return [s.q for s in solutions], [s.branch for s in solutions], None
+    return _redundant_branches(args, robot, q)
+
+
+def _redundant_branches(
+    args: argparse.Namespace, robot: Robot, q: npt.NDArray[np.float64]
+) -> tuple[list, list[str], str]:
+    from workbench.ik import analytic, get_redundant_solver, redundancy_parameter
+
+    solver = get_redundant_solver(robot)
+    if args.redundancy is None:
+        value, source = float(redundancy_parameter(robot, q)), "the value of Q"
+    else:
+        value, source = _redundancy.to_radians(args.redundancy, args.deg), "given"
+    solutions = analytic(robot, robot.fk(q), redundancy=value)
+    labels = [
+        s.branch + ("" if s.within_limits else " (outside the joint limits)")
+        for s in solutions
+    ]
+    shown = _redundancy.format_value(value, bool(args.deg))
+    return [s.q for s in solutions], labels, f"{solver.parameter} = {shown} ({source})"
+
+
+def _check_redundancy_options(args: argparse.Namespace, robot: Robot) -> None:
+    """Exit 2 for the seven-axis options on another arm or without Q."""
+    given = [
+        option
+        for option, value in (
+            ("--redundancy", args.redundancy is not None),
+            ("--redundancy-sweep", args.redundancy_sweep is not None),
+            ("--branch", args.branch is not None),
+        )
+        if value
+    ]
+    if not given:
+        return
+    if _redundancy.get_redundant(robot) is None:
+        raise _redundancy.refuse_redundancy(robot, given[0])
+    if args.redundancy_sweep is not None and args.ik_branches:
+        raise InputError("--ik-branches or --redundancy-sweep, not both")
+    if args.redundancy is not None and not args.ik_branches:
+        raise InputError("--redundancy sets the value --ik-branches draws: add it")
+    if args.branch is not None and args.redundancy_sweep is None:
+        raise InputError("--branch chooses the branch of --redundancy-sweep: add it")
+
+
+def _show_sweep(
+    args: argparse.Namespace, viewer: Viewer, robot: Robot, q: npt.NDArray[np.float64]
+) -> None:
+    from workbench.viz.redundancy_sweep import (
+        compute_redundancy_sweep,
+        find_branch,
+        show_redundancy_sweep,
+    )
+
+    branch = args.branch or find_branch(robot, q)[1]
+    sweep = compute_redundancy_sweep(robot, robot.fk(q), args.redundancy_sweep, branch)
+    show_redundancy_sweep(viewer, sweep, degrees=bool(args.deg))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -132,11 +220,16 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--deg/--rad need joint values")
     if args.q and args.trajectory:
         raise InputError("give joint values or --trajectory, not both")
-    if args.ik_branches and not args.q:
-        raise InputError("--ik-branches needs joint values (the pose is their FK)")
+    for option, wanted in (
+        ("--ik-branches", args.ik_branches),
+        ("--redundancy-sweep", args.redundancy_sweep is not None),
+    ):
+        if wanted and not args.q:
+            raise InputError(f"{option} needs joint values (the pose is their FK)")
     if args.html is not None:
         check_outputs([args.html], get_input_paths(args))
     robot = load_robot_from_args(args)
+    _check_redundancy_options(args, robot)
     samples = read_samples(args.trajectory, robot) if args.trajectory else None
     q = configuration_from_args(robot, args, args.q) if args.q else None
     viewer = Viewer(robot, q, color_by_singularity=args.singularity_color)
@@ -148,8 +241,12 @@ def run(args: argparse.Namespace) -> int:
     if samples is not None:
         viewer.play_trajectory(samples.t, samples.q)
     if args.ik_branches and q is not None:
-        branches, labels = _ik_branches(robot, q)
+        branches, labels, value = _ik_branches(args, robot, q)
         viewer.show_ghosts(branches, labels=labels)
+        if value is not None:
+            viewer.add_legend("redundancy", f"<div>{html.escape(value)}</div>")
+    if args.redundancy_sweep is not None and q is not None:
+        _show_sweep(args, viewer, robot, q)
     if args.html is not None:
         path = viewer.save_html(args.html)
         print(f"wrote {path}")
