@@ -20,7 +20,7 @@ from workbench.workspace.store import open_map
 SMALL = ["--resolution", "0.25", "--orientations", "16", "--block-voxels", "64"]
 KEYS = {"robot", "voxels", "orientations", "poses", "sampled", "reachable_fraction"}
 KEYS |= {"seconds", "poses_per_second", "store", "samples", "blocks"}
-KEYS |= {"blocks_computed"}
+KEYS |= {"blocks_computed", "redundancy_samples"}
 
 
 def test_map_json_keys_and_the_map(capsys, tmp_path) -> None:
@@ -45,6 +45,7 @@ def test_map_json_keys_and_the_map(capsys, tmp_path) -> None:
     assert summary["robot"] == "puma560" and summary["sampled"] is False
     assert summary["voxels"] == grid.voxel_count and summary["orientations"] == 16
     assert summary["poses"] == grid.pose_count and summary["samples"] is None
+    assert summary["redundancy_samples"] is None  # a six-axis arm
     assert summary["store"] == str(out_path.absolute())
     assert summary["blocks"] == summary["blocks_computed"] == -(-grid.voxel_count // 64)
     assert summary["seconds"] > 0 and summary["poses_per_second"] > 0
@@ -129,7 +130,11 @@ def test_map_with_a_scene(capsys, tmp_path) -> None:
         (["--robot", "puma560", "--orientations", "x"], "not an integer"),
         (["--robot", "puma560", "--cone", "0", "0", "0", "30"], "axis"),
         (["--robot", "puma560", "--cone", "0", "0", "1", "nan"], "not a finite"),
-        (["--robot", "panda", "--scene", "SCENE"], "sampled map checks no collisions"),
+        (["--robot", "panda", "--scene", "SCENE"], "seven-axis map checks no collisions"),
+        (
+            ["--robot", "panda", "--samples", "9", "--scene", "SCENE"],
+            "sampled map checks no collisions",
+        ),
         (["--robot", "puma560", "--scene", "missing.json"], "missing.json"),
         (["--robot", "puma560", "--out", "EXISTS"], "already exists"),
         (["--robot", "puma560", "--out", "no/such/folder/m.zarr"], "does not exist"),

@@ -237,7 +237,7 @@ def test_sampled_map_is_bitwise_the_same_on_1_2_workers_and_a_cluster(
     summary = maps["one"]
     assert summary.sampled and summary.samples == SAMPLES and summary.blocks == 2
     atlas = open_map(tmp_path / "one.zarr")
-    assert atlas.sampled and atlas.attrs["family"] is None
+    assert atlas.sampled and atlas.attrs["family"] == "franka"  # sampled on request
     assert atlas.attrs["sampling"] == {
         "samples_per_block": SAMPLES_PER_BLOCK,
         "seed": 0,

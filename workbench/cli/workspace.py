@@ -33,6 +33,10 @@ from workbench.workspace.grid import (
     DEFAULT_RESOLUTION,
     make_pose_grid,
 )
+from workbench.workspace.redundant import (
+    DEFAULT_REDUNDANCY_SAMPLES,
+    MAX_REDUNDANCY_SAMPLES,
+)
 
 #: Largest ``--orientations`` (a voxel's row of every per-pose array).
 MAX_ORIENTATIONS = 1_000_000
@@ -69,7 +73,9 @@ def _register_map(subcommands: argparse._SubParsersAction) -> None:
         "set of tool orientations) in closed form and store per pose the "
         "branches reached and within limits, the dexterity |det J| and the "
         "distances to the singular loci of the best branch, per voxel the "
-        "reachability; arms without a closed form get a sampled map. Blocks of "
+        "reachability; seven-axis arms of the SRS and Franka families in closed "
+        "form at K values of their redundancy parameter (--redundancy-samples); "
+        "arms without a closed form get a sampled map. Blocks of "
         "voxels run as Dask tasks on local threads (--workers) or an existing "
         "cluster (--scheduler). The map appears whole at --out when done; an "
         "interrupted build leaves OUT.partial, which the same command resumes.",
@@ -104,6 +110,15 @@ def _register_map(subcommands: argparse._SubParsersAction) -> None:
         metavar="N",
         help="a sampled map of N random configurations (default for arms "
         "without a closed form)",
+    )
+    parser.add_argument(
+        "--redundancy-samples",
+        type=bounded_int(1, MAX_REDUNDANCY_SAMPLES),
+        metavar="K",
+        help="seven-axis arms (SRS, Franka): solve each pose in closed form at K "
+        "values of the redundancy parameter (arm angle ψ or q7), the centres of "
+        "K equal cells of its range; a pose is reachable when a branch at one of "
+        f"them is within the limits (default: {DEFAULT_REDUNDANCY_SAMPLES})",
     )
     parser.add_argument(
         "--scene",
@@ -163,6 +178,7 @@ def run_map(args: argparse.Namespace) -> int:
         scene=scene,
         samples=args.samples,
         block_voxels=args.block_voxels,
+        redundancy_samples=args.redundancy_samples,
         progress=functools.partial(
             args.progress.count, unit="blocks", label="workspace map"
         ),
@@ -177,6 +193,11 @@ def run_map(args: argparse.Namespace) -> int:
 
 def _print_summary(summary: MapSummary) -> None:
     kind = f"sampled ({summary.samples} samples)" if summary.sampled else "exact"
+    if summary.redundancy_samples is not None:
+        kind = (
+            f"exact at {summary.redundancy_samples} values of the redundancy "
+            "parameter (closed form)"
+        )
     print(f"robot             {summary.robot}")
     print(f"map               {kind}, {summary.store}")
     print(

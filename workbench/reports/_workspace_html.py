@@ -62,6 +62,19 @@ def _kind(summary: Mapping[str, Any]) -> str:
         )
     family = summary.get("family")
     named = f" ({html.escape(str(family).upper())} family)" if family else ""
+    redundancy = summary.get("redundancy")
+    if redundancy:
+        parameter = html.escape(str(redundancy["parameter"]))
+        lo, hi = redundancy["range"]
+        return (
+            f"An <b>exact</b> map at {redundancy['samples']} values of the "
+            f"{parameter}: every grid pose solved in closed form{named} at the "
+            f"centres of {redundancy['samples']} equal cells of [{lo:.4f}, "
+            f"{hi:.4f}] rad; a pose is reached when a branch within the joint "
+            "limits reaches it at one of those values. Exact at those values: a "
+            "pose reached only between them counts as unreached (reachability "
+            "is a lower bound of the arm's, which more values raise)."
+        )
     return (
         f"An <b>exact</b> map: every grid pose solved in closed form{named}; a "
         "pose is reached when a branch within the joint limits reaches it."
@@ -125,6 +138,12 @@ def _metadata(attrs: Mapping[str, Any], summary: Mapping[str, Any]) -> str:
     if bounds is not None:
         grid_text += f"; covers {_vector(bounds[0])} to {_vector(bounds[1])} m"
     kind = "exact (closed form)"
+    if summary.get("redundancy"):
+        redundancy = summary["redundancy"]
+        kind = (
+            f"exact (closed form) at {redundancy['samples']} values of the "
+            f"{html.escape(str(redundancy['parameter']))}"
+        )
     if summary["sampled"]:
         kind = f"sampled, {summary['samples']} random configurations"
     rows = [

@@ -141,6 +141,7 @@ def _summary(
         "family": attrs.get("family"),
         "sampled": bool(attrs.get("sampled", False)),
         "samples": attrs.get("samples"),
+        "redundancy": attrs.get("redundancy"),
         "voxels": int(positions.shape[0]),
         "orientations": orientations,
         "poses": int(positions.shape[0]) * orientations,

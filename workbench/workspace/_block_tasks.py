@@ -19,6 +19,7 @@ import numpy as np
 from workbench.errors import InputError
 from workbench.workspace.grid import PoseGrid
 from workbench.workspace.measures import evaluate_block
+from workbench.workspace.redundant import evaluate_redundant_block
 from workbench.workspace.robot_spec import (
     RobotSpec,
     load_spec_checker,
@@ -44,16 +45,27 @@ class BlockJob:
     block_voxels: int
     scene_json: str | None = None
     samples: int = 0
+    redundancy_samples: int = 0  # K of a seven-axis map, 0 for the others
 
 
 def compute_block(job: BlockJob, block: int) -> None:
-    """Evaluate voxel block ``block`` and write it (data, then its flag)."""
+    """Evaluate voxel block ``block`` and write it (data, then its flag).
+
+    A seven-axis map (``redundancy_samples`` > 0) in closed form at K values
+    of the redundancy parameter (:mod:`workbench.workspace.redundant`).
+    """
     robot = load_spec_robot(job.spec)
+    start = block * job.block_voxels
+    stop = min(start + job.block_voxels, job.grid.voxel_count)
+    if job.redundancy_samples:
+        data = evaluate_redundant_block(
+            robot, job.grid, start, stop, count=job.redundancy_samples
+        )
+        _get_writer(job.path, job.token).write(block, start, data)
+        return
     checker = None
     if job.scene_json is not None:
         checker = load_spec_checker(job.spec, job.scene_json)
-    start = block * job.block_voxels
-    stop = min(start + job.block_voxels, job.grid.voxel_count)
     # the per-pose arrays are this thread's buffers: stored before its next block
     data = evaluate_block(robot, job.grid, start, stop, checker=checker, reuse=True)
     _get_writer(job.path, job.token).write(block, start, data)

@@ -201,6 +201,7 @@ def map_attributes(
     scene: Scene | None,
     block_voxels: int,
     samples: int,
+    redundancy: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The group attributes of a map (``docs/workspace.md`` lists them).
 
@@ -208,10 +209,12 @@ def map_attributes(
         robot: The arm.
         spec: Its spec (URDF digest, limits).
         grid: The pose grid.
-        family: ``"opw"``, ``"ur"`` or None.
+        family: ``"opw"``, ``"ur"``, ``"srs"``, ``"franka"`` or None.
         scene: The obstacles, or None.
         block_voxels: Voxels per block and chunk.
         samples: Configurations of a sampled map, 0 for an exact one.
+        redundancy: Of a seven-axis map in closed form: ``parameter``,
+            ``range`` [rad], ``samples`` (K) and ``values`` [rad]; else None.
     """
     sampled = samples > 0
     return as_json_attributes(
@@ -238,11 +241,10 @@ def map_attributes(
             },
             "orientation_set": grid.orientation_set,
             "block_voxels": block_voxels,
-            "tolerances": {
-                "shoulder": SHOULDER_TOL,
-                "elbow": ELBOW_TOL,
-                "wrist": WRIST_TOL,
-            },
+            "tolerances": None  # no 6R factors of det J on a seven-axis map
+            if redundancy is not None
+            else {"shoulder": SHOULDER_TOL, "elbow": ELBOW_TOL, "wrist": WRIST_TOL},
+            "redundancy": None if redundancy is None else dict(redundancy),
             "scene": None if scene is None else scene.to_dict(),
             "versions": get_versions(),
         }

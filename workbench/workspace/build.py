@@ -39,7 +39,7 @@ import numpy as np
 from workbench.atomic_files import check_output
 from workbench.collision import Scene
 from workbench.errors import InputError
-from workbench.ik import UnsupportedRobotError, get_closed_form
+from workbench.ik import UnsupportedRobotError, get_closed_form, get_redundant_solver
 from workbench.model.robot import Robot
 from workbench.workspace._block_runner import run_tasks
 from workbench.workspace._block_tasks import SAMPLES_PER_BLOCK, BlockJob, compute_block
@@ -52,6 +52,12 @@ from workbench.workspace._partial import (
 from workbench.workspace._sampled_fold import SAMPLED_KEYS, run_sampled
 from workbench.workspace.grid import PoseGrid
 from workbench.workspace.measures import POSE_KEYS, VOXEL_KEYS, get_core_count
+from workbench.workspace.redundant import (
+    DEFAULT_REDUNDANCY_SAMPLES,
+    REDUNDANT_POSE_KEYS,
+    REDUNDANT_VOXEL_KEYS,
+    redundancy_values,
+)
 from workbench.workspace.robot_spec import get_robot_spec, get_scene_json
 from workbench.workspace.store import (
     DONE,
@@ -70,6 +76,8 @@ logger = logging.getLogger(__name__)
 DEFAULT_BLOCK_VOXELS = 1024
 #: Configurations of a sampled map when none is given.
 DEFAULT_SAMPLES = 10_000_000
+#: Families of seven-axis arms, mapped in closed form at K parameter values.
+REDUNDANT_FAMILIES = ("srs", "franka")
 #: ``progress(done, total)``: blocks done so far (those of an earlier run
 #: included) and in all.
 ProgressCallback = Callable[[int, int], None]
@@ -86,6 +94,8 @@ class MapSummary:
         poses: V · O.
         sampled: Whether the map was sampled (no closed form).
         samples: Configurations sampled (None for an exact map).
+        redundancy_samples: K, the values of the redundancy parameter each
+            pose of a seven-axis exact map is solved at (else None).
         reachable_fraction: Fraction of the V · O poses with a usable branch
             (of a sampled map: hit by a sample).
         seconds: Wall time of the build [s].
@@ -102,6 +112,7 @@ class MapSummary:
     poses: int
     sampled: bool
     samples: int | None
+    redundancy_samples: int | None
     reachable_fraction: float
     seconds: float
     poses_per_second: float
@@ -140,6 +151,7 @@ def build_map(
     scene: Scene | None = None,
     samples: int | None = None,
     block_voxels: int = DEFAULT_BLOCK_VOXELS,
+    redundancy_samples: int | None = None,
     progress: ProgressCallback | None = None,
 ) -> MapSummary:
     """Compute the workspace map of ``robot`` over ``grid`` into ``path``.
@@ -158,6 +170,11 @@ def build_map(
             closed form (a sampled map); default: exact for arms with a
             closed form, :data:`DEFAULT_SAMPLES` for the others.
         block_voxels: Voxels per block of an exact map, and per chunk.
+        redundancy_samples: K of a seven-axis arm's exact map: each pose
+            solved in closed form at K values of its redundancy parameter
+            (:mod:`workbench.workspace.redundant`); default
+            :data:`~workbench.workspace.redundant.DEFAULT_REDUNDANCY_SAMPLES`.
+            Only for arms of the SRS or Franka family, without ``samples``.
         progress: Called with ``(done, total)`` blocks as they finish.
 
     Returns:
@@ -167,7 +184,8 @@ def build_map(
         InputError: On a bad argument, an existing ``path``, a partial build
             of another map in ``path``'s partial folder, a partial folder in
             use by another build, an unreachable scheduler, a scene with a
-            sampled map.
+            sampled map, a scene with a seven-axis map, ``redundancy_samples``
+            for another arm or with ``samples``.
     """
     begin = time.perf_counter()
     path = Path(path).absolute()
@@ -180,12 +198,22 @@ def build_map(
             "a sampled map checks no collisions: a scene needs an exact map (an "
             "arm with a closed form, without samples)"
         )
+    redundancy = _redundancy_attributes(robot, family, sampled, redundancy_samples)
+    if redundancy is not None and scene is not None:
+        raise InputError(
+            "a seven-axis map checks no collisions: a scene needs a six-axis arm"
+        )
     count = (samples or DEFAULT_SAMPLES) if sampled else 0
     spec = get_robot_spec(robot)
-    attrs = map_attributes(robot, spec, grid, family, scene, block_voxels, count)
+    attrs = map_attributes(
+        robot, spec, grid, family, scene, block_voxels, count, redundancy
+    )
     if sampled:
         names = list(SAMPLED_KEYS)
         total = get_block_count(count, SAMPLES_PER_BLOCK)
+    elif redundancy is not None:
+        names = [*REDUNDANT_POSE_KEYS, *REDUNDANT_VOXEL_KEYS]
+        total = get_block_count(grid.voxel_count, block_voxels)
     else:
         names = [k for k in (*POSE_KEYS, *VOXEL_KEYS) if k != "collision_free" or scene]
         total = get_block_count(grid.voxel_count, block_voxels)
@@ -215,6 +243,7 @@ def build_map(
             block_voxels=block_voxels,
             scene_json=None if scene is None else get_scene_json(scene),
             samples=count,
+            redundancy_samples=0 if redundancy is None else redundancy["samples"],
         )
         counter = _Counter(total - len(todo), total, progress)
         try:
@@ -260,6 +289,7 @@ def build_map(
         poses=grid.pose_count,
         sampled=sampled,
         samples=count if sampled else None,
+        redundancy_samples=None if redundancy is None else redundancy["samples"],
         reachable_fraction=float(np.sum(reachability) / reachability.size),
         seconds=seconds,
         poses_per_second=computed / seconds if seconds > 0 else math.inf,
@@ -295,8 +325,41 @@ def _check_arguments(
 
 
 def _get_family(robot: Robot) -> str | None:
-    """``"opw"`` or ``"ur"`` for an arm with a closed form, else None."""
+    """The family of an arm with a closed form (6R or seven-axis), else None."""
     try:
         return get_closed_form(robot).family
     except UnsupportedRobotError:
+        pass
+    try:
+        return get_redundant_solver(robot).family
+    except UnsupportedRobotError:
         return None
+
+
+def _redundancy_attributes(
+    robot: Robot, family: str | None, sampled: bool, count: int | None
+) -> dict[str, Any] | None:
+    """The ``redundancy`` attribute of a seven-axis exact map, else None.
+
+    Raises:
+        InputError: If ``count`` is given for a sampled map or an arm without
+            a redundancy parameter, or is out of range.
+    """
+    seven_axis = family in REDUNDANT_FAMILIES
+    if count is not None and (sampled or not seven_axis):
+        what = "a sampled map" if sampled else f"{robot.name} (no seven-axis family)"
+        raise InputError(
+            "redundancy samples are the values of a seven-axis arm's redundancy "
+            f"parameter (SRS or Franka family, exact map): not for {what}"
+        )
+    if sampled or not seven_axis:
+        return None
+    solver = get_redundant_solver(robot)
+    k = DEFAULT_REDUNDANCY_SAMPLES if count is None else count
+    values = redundancy_values(solver.parameter_range, k)
+    return {
+        "parameter": solver.parameter,
+        "range": [float(v) for v in solver.parameter_range],
+        "samples": int(k),
+        "values": values.tolist(),
+    }

@@ -81,7 +81,12 @@ VOXEL_KEYS = (
 )
 
 
-def _check_range(grid: PoseGrid, start: int, stop: int) -> tuple[int, int]:
+def check_voxel_range(grid: PoseGrid, start: int, stop: int) -> tuple[int, int]:
+    """``(start, stop)`` as ints, checked to be a non-empty voxel range of ``grid``.
+
+    Raises:
+        InputError: If they are not integers with ``0 <= start < stop <= V``.
+    """
     for name, value in (("start", start), ("stop", stop)):
         if isinstance(value, bool) or not isinstance(value, int | np.integer):
             raise InputError(f"{name} must be an integer, got {value!r}")
@@ -254,7 +259,7 @@ def evaluate_block(
         UnsupportedRobotError: If the robot has no closed form.
         InputError: If the voxel range is empty or outside the grid.
     """
-    start, stop = _check_range(grid, start, stop)
+    start, stop = check_voxel_range(grid, start, stop)
     solver = get_closed_form(robot)  # raises UnsupportedRobotError
     if checker is None:
         return _evaluate_compiled(robot, solver, grid, start, stop, reuse)
@@ -265,6 +270,7 @@ __all__ = [
     "CHUNK_POSES",
     "POSE_KEYS",
     "VOXEL_KEYS",
+    "check_voxel_range",
     "evaluate_block",
     "get_core_count",
     "singularity_margin",

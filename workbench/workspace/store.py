@@ -116,6 +116,13 @@ ARRAYS: dict[str, ArrayInfo] = {
         "rad",
         "smallest distance of the best branch's joints to their limits",
     ),
+    "redundancy": ArrayInfo(
+        "float32",
+        True,
+        "rad",
+        "seven-axis maps: the redundancy parameter (arm angle or q7) of the best "
+        "candidate",
+    ),
     "reachability": ArrayInfo(
         "float32", False, "1", "fraction of orientations with a usable branch"
     ),

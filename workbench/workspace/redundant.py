@@ -1,0 +1,172 @@
+r"""Per-pose measures of a block of the grid for seven-axis arms, in closed form.
+
+A seven-axis arm of the SRS family (KUKA LBR iiwa) or the Franka family (Panda,
+FR3) reaches a tool pose along a one-parameter family of configurations per
+branch: the arm angle ψ (SRS) or q7 (Franka) [rad]
+(:func:`workbench.ik.get_redundant_solver`). The map solves every pose in
+closed form at a fixed set of :math:`K` values of that parameter,
+:func:`redundancy_values`: the centres of :math:`K` equal cells of the
+parameter's range (SRS :math:`(-\pi, \pi]`, Franka the limits of joint 7),
+through :func:`workbench.ik.analytic_batch`. It is *exact at those values*: a
+pose counts as reachable when some branch at one of the :math:`K` values is
+within the joint limits (each angle's representative nearest the middle of
+its limits, as the six-axis maps); a pose reachable only at values between
+them counts as unreachable. The values of :math:`K` are among those of
+:math:`3K` (odd multiples nest the cell centres), so a map at :math:`3K`
+reaches every pose the one at :math:`K` reaches.
+
+:func:`evaluate_redundant_block` returns, per pose (arrays (B, O)):
+
+* ``reached`` (uint8): branches that reach the pose at some of the values;
+* ``branches`` (uint8): branches within the joint limits at some value;
+* of the **best candidate** (the in-limit (value, branch) of largest limit
+  margin; ties: the first value, then the first branch), NaN where none
+  (float32): ``dexterity`` Yoshikawa's :math:`\sqrt{\det(J J^T)}` of the 6 × 7
+  tool Jacobian (:func:`workbench.ik.compute_tool_poses`), ``limit_margin``
+  [rad] and ``redundancy`` [rad], its parameter value;
+
+and per voxel (B,) float32 ``reachability``, ``dexterity_best`` and
+``dexterity_median`` (as the six-axis maps). The shoulder, elbow and wrist
+distances of the six-axis maps are factors of det J, which a 6 × 7 Jacobian
+has not: a seven-axis map holds none, nor ``near_singular_fraction``.
+
+The function is pure: the same inputs give the same bits on any worker.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+import numpy.typing as npt
+
+from workbench.errors import InputError
+from workbench.ik import analytic_batch, compute_tool_poses, get_redundant_solver
+from workbench.model.robot import Robot
+from workbench.workspace._reference import (
+    block_poses,
+    limit_representatives,
+    summarise_voxels,
+)
+from workbench.workspace.measures import check_voxel_range
+
+if TYPE_CHECKING:
+    from workbench.workspace.grid import PoseGrid
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Default K, the values of the redundancy parameter a map solves each pose at.
+DEFAULT_REDUNDANCY_SAMPLES = 16
+#: Largest K.
+MAX_REDUNDANCY_SAMPLES = 4096
+#: Poses per call of the closed form (times K): bounds the work arrays.
+CHUNK_POSES = 1024
+#: Keys of :func:`evaluate_redundant_block` with one value per pose (B, O).
+REDUNDANT_POSE_KEYS = ("reached", "branches", "dexterity", "limit_margin", "redundancy")
+#: Keys of :func:`evaluate_redundant_block` with one value per voxel (B,).
+REDUNDANT_VOXEL_KEYS = ("reachability", "dexterity_best", "dexterity_median")
+
+
+def redundancy_values(parameter_range: tuple[float, float], count: int) -> FloatArray:
+    """The ``count`` values a map solves at: centres of equal cells of the range.
+
+    Args:
+        parameter_range: ``(lo, hi)`` [rad] of the redundancy parameter.
+        count: K, 1..:data:`MAX_REDUNDANCY_SAMPLES`.
+
+    Returns:
+        (K,) increasing values [rad], ``lo + (k + 1/2)(hi − lo)/K``.
+
+    Raises:
+        InputError: If ``count`` is not an integer in range.
+    """
+    if isinstance(count, bool) or not isinstance(count, int | np.integer):
+        raise InputError(f"redundancy samples must be an integer, got {count!r}")
+    if not 1 <= count <= MAX_REDUNDANCY_SAMPLES:
+        raise InputError(
+            f"redundancy samples must be 1..{MAX_REDUNDANCY_SAMPLES}, got {count}"
+        )
+    lo, hi = (float(v) for v in parameter_range)
+    cells = np.arange(int(count), dtype=np.float64) + 0.5
+    values: FloatArray = lo + cells * ((hi - lo) / int(count))
+    return values
+
+
+def evaluate_redundant_block(
+    robot: Robot, grid: PoseGrid, start: int, stop: int, *, count: int
+) -> dict[str, np.ndarray]:
+    """Measures of every pose of voxels ``start:stop`` × all orientations.
+
+    Args:
+        robot: A seven-axis arm of the SRS or Franka family.
+        grid: The pose grid (positions in the robot's base frame).
+        start: First voxel of the block, ``0 <= start < stop``.
+        stop: One past its last voxel, ``<= V``.
+        count: K, the number of parameter values (:func:`redundancy_values`).
+
+    Returns:
+        Arrays keyed as in the module docstring: :data:`REDUNDANT_POSE_KEYS`
+        (B, O) and :data:`REDUNDANT_VOXEL_KEYS` (B,).
+
+    Raises:
+        UnsupportedRobotError: If the robot has no seven-axis closed form.
+        InputError: If the voxel range is empty or outside the grid, or
+            ``count`` out of range.
+    """
+    start, stop = check_voxel_range(grid, start, stop)
+    solver = get_redundant_solver(robot)
+    values = redundancy_values(solver.parameter_range, count)
+    poses = block_poses(grid, start, stop)
+    total, branches = len(poses), len(solver.branches)
+    reached = np.zeros((total, branches), dtype=bool)
+    usable = np.zeros((total, branches), dtype=bool)
+    margin = np.full(total, -np.inf)
+    best_q = np.zeros((total, robot.nq))
+    best_value = np.full(total, np.nan)
+    for first in range(0, total, CHUNK_POSES):
+        part = slice(first, min(first + CHUNK_POSES, total))
+        n = part.stop - part.start
+        tiled = np.ascontiguousarray(np.tile(poses[part], (len(values), 1, 1)))
+        q, valid = analytic_batch(robot, tiled, redundancy=np.repeat(values, n))
+        q = q.reshape(len(values), n, branches, robot.nq)
+        valid = valid.reshape(len(values), n, branches)
+        shifted, joint_margin, within = limit_representatives(
+            np.where(valid[..., None], q, 0.0), robot.lower, robot.upper
+        )
+        ok = valid & within
+        reached[part] = valid.any(axis=0)
+        usable[part] = ok.any(axis=0)
+        score = np.where(ok, joint_margin, -np.inf).transpose(1, 0, 2).reshape(n, -1)
+        best = np.argmax(score, axis=1)  # first of the largest: value, then branch
+        rows = np.arange(n)
+        k, b = np.divmod(best, branches)
+        margin[part] = score[rows, best]
+        best_q[part] = shifted[k, rows, b]
+        best_value[part] = values[k]
+    has = np.isfinite(margin)
+    dexterity = np.full(total, np.nan)
+    if has.any():
+        dexterity[has] = compute_tool_poses(robot, best_q[has])[2]
+    shape = (stop - start, grid.orientation_count)
+    out: dict[str, np.ndarray] = {
+        "reached": reached.sum(axis=1).astype(np.uint8).reshape(shape),
+        "branches": usable.sum(axis=1).astype(np.uint8).reshape(shape),
+        "dexterity": dexterity.astype(np.float32).reshape(shape),
+        "limit_margin": np.where(has, margin, np.nan).astype(np.float32).reshape(shape),
+        "redundancy": np.where(has, best_value, np.nan)
+        .astype(np.float32)
+        .reshape(shape),
+    }
+    voxels = summarise_voxels(dexterity.reshape(shape), np.full(shape, np.nan))
+    out.update({key: voxels[key] for key in REDUNDANT_VOXEL_KEYS})
+    return out
+
+
+__all__ = [
+    "DEFAULT_REDUNDANCY_SAMPLES",
+    "MAX_REDUNDANCY_SAMPLES",
+    "REDUNDANT_POSE_KEYS",
+    "REDUNDANT_VOXEL_KEYS",
+    "evaluate_redundant_block",
+    "redundancy_values",
+]
