@@ -11,7 +11,10 @@ Modules, in the order they build on each other:
   each locus, in closed form for any OPW or UR-type arm;
 - ``directions``: the Cartesian direction a singular configuration cannot move in (the
   left null vector of J, derived from the joint axes of any OPW or UR-type arm);
-- ``along_path``: the closest approaches of a joint trajectory to each singularity.
+- ``along_path``: the closest approaches of a joint trajectory to each singularity;
+- ``redundant``: SRS seven-axis arms (KUKA LBR iiwa): det(J Jᵀ) of the 6 × 7
+  Jacobian factorised, the elbow, shoulder, wrist and shoulder-wrist loci, the lost
+  directions, and the arm angle's algorithmic singularity.
 """
 
 from workbench.singularities.along_path import ClosestApproach, find_closest_approaches
@@ -53,12 +56,26 @@ from workbench.singularities.measures import (
     compute_singular_values,
     cross_check_det_j,
 )
+from workbench.singularities.redundant import (
+    SRS_CONDITION_UNITS,
+    SRS_SINGULARITY_KINDS,
+    NotSRSArmError,
+    SRSConditions,
+    SRSDegenerateDirection,
+    SRSFactorisation,
+    compute_srs_conditions,
+    compute_srs_degenerate_direction,
+    compute_srs_det_jjt,
+    get_srs_factorisation,
+)
 
 __all__ = [
     "CONDITION_UNITS",
     "ELBOW_TOL",
     "SHOULDER_TOL",
     "SINGULARITY_KINDS",
+    "SRS_CONDITION_UNITS",
+    "SRS_SINGULARITY_KINDS",
     "WRIST_TOL",
     "ClosestApproach",
     "DegenerateDirection",
@@ -66,7 +83,11 @@ __all__ = [
     "JacobianMeasures",
     "JointGrid",
     "NotPumaTypeError",
+    "NotSRSArmError",
     "PumaFactorisation",
+    "SRSConditions",
+    "SRSDegenerateDirection",
+    "SRSFactorisation",
     "SingularityConditions",
     "classify_configuration",
     "compute_conditions",
@@ -79,6 +100,9 @@ __all__ = [
     "compute_measures",
     "compute_measures_from_jacobians",
     "compute_singular_values",
+    "compute_srs_conditions",
+    "compute_srs_degenerate_direction",
+    "compute_srs_det_jjt",
     "compute_wrist_center_jacobian",
     "compute_wrist_point",
     "cross_check_det_j",
@@ -86,5 +110,6 @@ __all__ = [
     "get_elbow_singular_theta3",
     "get_factorisation",
     "get_puma_factorisation",
+    "get_srs_factorisation",
     "solve_shoulder_theta2",
 ]
