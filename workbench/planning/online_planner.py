@@ -1,4 +1,4 @@
-r"""Online, multi-rate Cartesian trajectory planner for PUMA-type arms (Kang 2007, §5).
+r"""Online, multi-rate Cartesian trajectory planner (Kang 2007, §5), 6R and 7R arms.
 
 Once per planning cycle, :meth:`OnlinePlanner.step` runs Kang's chain:
 
@@ -17,6 +17,19 @@ Once per planning cycle, :meth:`OnlinePlanner.step` runs Kang's chain:
    joint position commands rather than about zero, so that position and
    velocity commands agree in the directions the damping suppresses (the
    servo interpolation would otherwise ripple).
+
+On a seven-axis arm (``iiwa14``, ``panda``) step 3 is the redundant closed
+form (``workbench.ik.get_redundant_solver``) at a value of the redundancy
+parameter (SRS: the arm angle ψ; Franka: q7) that the ``redundancy`` policy
+keeps or moves at a bounded rate (:mod:`workbench.planning.redundancy_policy`;
+the branch never changes by that choice), and step 4 is
+:math:`\dot q = J^\# \dot x + (I - J^\# J)\dot q_r` for the 6 × 7 J
+(:func:`workbench.ik.solve_null_space_velocity`), :math:`\dot q_r` the rate
+of the joint position commands: outside the singular region the
+minimum-norm joint velocity plus the self-motion of the commands (the
+parameter's move along the criterion's gradient and the null-space part of
+the closed form's own motion), inside it the DLS solution damped about that
+rate.
 
 Between cycles the caller may report what the tool touches
 (:meth:`~OnlinePlanner.notify`), stop the tool (:meth:`~OnlinePlanner.stop`)
@@ -42,7 +55,9 @@ from workbench.ik import (
     DLS_EPSILON,
     DLS_LAMBDA_MAX,
     get_closed_form,
+    get_redundant_solver,
     nearest,
+    solve_null_space_velocity,
     solve_velocity,
 )
 from workbench.model.robot import Robot
@@ -57,6 +72,11 @@ from workbench.planning.motion_primitives import (
     MotionPrimitive,
     PointToPoint,
     Stop,
+)
+from workbench.planning.redundancy_policy import (
+    DEFAULT_MAX_REDUNDANCY_RATE,
+    RedundancyTracker,
+    check_policy,
 )
 from workbench.validation import check_positive
 
@@ -85,6 +105,9 @@ class PlannerSample(NamedTuple):
             primitive began or went on to its next stage, or a reaction to
             :meth:`OnlinePlanner.notify`, ``stop`` or ``set_goal`` since the
             last cycle.
+        redundancy: The redundancy parameter of ``q`` [rad] on a seven-axis
+            arm (ψ or q7, :attr:`OnlinePlanner.redundancy_parameter`); NaN on
+            a six-axis arm.
     """
 
     t: float
@@ -97,6 +120,7 @@ class PlannerSample(NamedTuple):
     branch: str
     damped: bool
     replanned: bool = False
+    redundancy: float = math.nan
 
 
 def _rigid(value: pin.SE3 | None) -> tuple[FloatArray, FloatArray]:
@@ -121,6 +145,9 @@ def load_kernels() -> None:
     zero, eye = np.zeros(6), np.eye(3)
     solve_velocity(np.eye(6), zero, DLS_EPSILON, DLS_LAMBDA_MAX)  # the exact one
     solve_velocity(np.zeros((6, 6)), zero, DLS_EPSILON, DLS_LAMBDA_MAX)  # damped
+    solve_null_space_velocity(
+        np.zeros((6, 7)), zero, DLS_EPSILON, DLS_LAMBDA_MAX, np.zeros(7)
+    )
     frames = np.vstack([eye, zero[:3], eye, zero[:3]])
     pose, twist = np.empty((4, 4)), np.empty(6)
     wrist_command(eye, zero[:3], zero[:3], zero[:3], frames, pose, twist)
@@ -131,7 +158,8 @@ class OnlinePlanner:
 
     Args:
         robot: An arm with closed-form IK: OPW (``puma560-kang``, the KUKA
-            and ABB models) or UR-type (``ur5``).
+            and ABB models), UR-type (``ur5``), or a seven-axis SRS
+            (``iiwa14``) or Franka (``panda``) arm.
         q_start: Initial configuration (nq,) [rad], within the limits.
         limits: Cartesian speed and acceleration bounds of the tool tip.
         planning_rate: Planning cycles per second [Hz], > 0.
@@ -145,9 +173,16 @@ class OnlinePlanner:
         dls_epsilon: Size of the singular region (see ``workbench.ik``).
         dls_lambda_max: Damping at a singularity.
         check_speed: Raise if a joint velocity command exceeds its limit.
+        redundancy: Seven-axis arms only: how the redundancy parameter moves,
+            ``"keep"`` (the default: constant unless a joint nears a limit),
+            ``"limit_margin"`` or ``"manipulability"``
+            (:mod:`workbench.planning.redundancy_policy`).
+        max_redundancy_rate: Seven-axis arms: largest rate of the parameter
+            [rad/s], > 0.
 
     Raises:
-        InputError: Bad rates, configuration or transforms; a robot without
+        InputError: Bad rates, configuration, transforms or policy; a
+            ``redundancy`` policy for a six-axis arm; a robot without
             closed-form IK (``UnsupportedRobotError``).
         JointLimitError: If ``q_start`` is outside the limits.
     """
@@ -165,6 +200,8 @@ class OnlinePlanner:
         dls_epsilon: float = DLS_EPSILON,
         dls_lambda_max: float = DLS_LAMBDA_MAX,
         check_speed: bool = True,
+        redundancy: str | None = None,
+        max_redundancy_rate: float = DEFAULT_MAX_REDUNDANCY_RATE,
     ) -> None:
         for name, rate in (
             ("planning_rate", planning_rate),
@@ -190,6 +227,7 @@ class OnlinePlanner:
         self.check_speed = check_speed
         check_positive(dls_epsilon, "epsilon", strict=True)  # as dls_inverse
         check_positive(dls_lambda_max, "lambda_max", strict=False)
+        check_positive(max_redundancy_rate, "max_redundancy_rate", strict=True)
         # No cycle waits for a compile: the kernels are loaded here (or, on a
         # first run, compiled), the closed form by the solve below and the
         # branch choice by the first command at the end.
@@ -209,21 +247,43 @@ class OnlinePlanner:
         self._max_step2 = float(np.sum((2.0 * self.period * robot.velocity_limit) ** 2))
         # the frames of _tracking.wrist_command
         self._frames = np.vstack([tip[0].T, -tip[1], base[0], base[1]])
-        self._closed_form = get_closed_form(robot)  # fails early without one
-        self._labels = self._closed_form.branches
         oMf = robot.fk(q0)
+        self._tracker: RedundancyTracker | None = None
+        if robot.nq == 7:  # a seven-axis arm, else UnsupportedRobotError
+            solver = get_redundant_solver(robot)
+            self._tracker = RedundancyTracker(
+                robot,
+                solver,
+                check_policy("keep" if redundancy is None else redundancy),
+                self.period,
+                max_redundancy_rate,
+                q0,
+            )
+            self._labels = solver.branches
+            start = solver.solve(oMf, self._tracker.value, q_previous=q0)
+            self._branch = nearest(start, q0).index
+        else:
+            if redundancy is not None:
+                raise InputError(
+                    f"robot {robot.name!r} has no redundancy (6 joints): the "
+                    "redundancy policy is for seven-axis arms"
+                )
+            self._closed_form = get_closed_form(robot)  # fails early without one
+            self._labels = self._closed_form.branches
+            solutions = self._closed_form.solve(oMf, q_previous=q0)
+            self._branch = nearest(solutions, q0).index
         p = oMf.translation + oMf.rotation @ tip[1]
         rotation = oMf.rotation @ tip[0]
         p, rotation = base[0] @ p + base[1], base[0] @ rotation
         zero = np.zeros(3)
         self._state = CartesianState(p, zero, rotation, zero)
-        start = self._closed_form.solve(oMf, q_previous=q0)
-        self._branch = nearest(start, q0).index
         self._replanned = False  # by notify, stop or set_goal since the last step
         self._queue: deque[MotionPrimitive] = deque()
         self._active: MotionPrimitive = Hold()
         self._active.begin(self._state, 0.0, limits)
         self._command_joints(p, zero, rotation, zero)  # loads the branch choice
+        if self._tracker is not None:  # that call is no cycle: the value stays
+            self._tracker.value = float(solver.parameter_of(q0))
 
     # -- state ---------------------------------------------------------------
     @property
@@ -245,6 +305,21 @@ class OnlinePlanner:
     def state(self) -> CartesianState:
         """Tool-tip state commanded at the last cycle (world frame)."""
         return self._state
+
+    @property
+    def redundancy(self) -> float | None:
+        """Redundancy parameter of the last command [rad]; None on a 6R arm."""
+        return None if self._tracker is None else self._tracker.value
+
+    @property
+    def redundancy_parameter(self) -> str | None:
+        """``"arm angle"`` (SRS) or ``"q7"`` (Franka); None on a 6R arm."""
+        return None if self._tracker is None else self._tracker.solver.parameter
+
+    @property
+    def redundancy_policy(self) -> str | None:
+        """The ``redundancy`` policy; None on a 6R arm."""
+        return None if self._tracker is None else self._tracker.policy
 
     @property
     def active(self) -> MotionPrimitive:
@@ -325,13 +400,24 @@ class OnlinePlanner:
         jacobian = pin.computeFrameJacobian(
             self.robot.model, self.robot.data, q, self._frame_id, _LWA
         )
-        qd, damped = solve_velocity(
-            jacobian,
-            twist,
-            self.dls_epsilon,
-            self.dls_lambda_max,
-            lambda: self._position_rate(q, twist),
-        )
+        redundancy = math.nan
+        if self._tracker is None:
+            qd, damped = solve_velocity(
+                jacobian,
+                twist,
+                self.dls_epsilon,
+                self.dls_lambda_max,
+                lambda: self._position_rate(q, twist),
+            )
+        else:
+            redundancy = self._tracker.value
+            qd, damped = solve_null_space_velocity(
+                jacobian,
+                twist,
+                self.dls_epsilon,
+                self.dls_lambda_max,
+                self._command_rate(q, twist),
+            )
         if self.check_speed and max(map(abs, qd.tolist())) > self._min_speed_limit:
             self._check_speed(qd, t)
         self._cycle += 1
@@ -339,7 +425,17 @@ class OnlinePlanner:
         self._qd, self._branch = qd, index
         self._state = CartesianState(p, v, rotation, omega)
         return PlannerSample(
-            t, p, v, rotation, omega, q, qd, self._labels[index], damped, replanned
+            t,
+            p,
+            v,
+            rotation,
+            omega,
+            q,
+            qd,
+            self._labels[index],
+            damped,
+            replanned,
+            redundancy,
         )
 
     def _command_joints(
@@ -361,9 +457,14 @@ class OnlinePlanner:
         pose, twist = np.empty((4, 4)), np.empty(6)
         wrist_command(rotation, p, v, omega, self._frames, pose, twist)
         q_predicted = 2.0 * self._q - q_before  # the wrist keeps moving as it was
-        q, index, within = self._closed_form.track(
-            pose, q_predicted, self._branch >> 1, self._max_step2
-        )
+        if self._tracker is not None:
+            q, index, within = self._tracker.track(
+                pose, twist, self._q, q_predicted, self._branch, self._max_step2
+            )
+        else:
+            q, index, within = self._closed_form.track(
+                pose, q_predicted, self._branch >> 1, self._max_step2
+            )
         q.setflags(write=False)
         return twist, q, index, within
 
@@ -378,6 +479,17 @@ class OnlinePlanner:
         if self._q_before is None:
             return (q - self._q) / self.period
         return (3.0 * q - 4.0 * self._q + self._q_before) / (2.0 * self.period)
+
+    def _command_rate(self, q: FloatArray, twist: FloatArray) -> FloatArray:
+        """Rate of the joint position commands of a 7R arm: the null-space term.
+
+        As :meth:`_position_rate` while the tool moves; with the tool at rest,
+        the first-order difference ``(q - q_last) / period``: zero when the
+        parameter holds, the self-motion when it moves.
+        """
+        if twist.any():
+            return self._position_rate(q, twist)
+        return (q - self._q) / self.period
 
     def _check_speed(self, qd: FloatArray, t: float) -> None:
         ratio = np.abs(qd) / self._speed_limit

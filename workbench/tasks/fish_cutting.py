@@ -19,6 +19,11 @@ built by :func:`~workbench.tasks.fish_program.build_program`::
 
 Every planning cycle the tool tip's commanded position is checked against the
 fish (:meth:`SimulatedFish.get_contact`) and the active primitive reacts.
+
+A seven-axis arm (``iiwa14``, ``panda``) starts at the home configuration of
+the largest joint-limit margin and runs the program on that branch, its
+redundancy parameter moved by the planner's ``redundancy`` policy
+(``"keep"`` by default); the result holds the parameter's trace.
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ from __future__ import annotations
 import contextlib
 import gc
 import itertools
+import math
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -37,6 +43,10 @@ import pinocchio as pin
 from workbench.errors import InfeasibleError
 from workbench.model.robot import Robot
 from workbench.planning.online_planner import OnlinePlanner
+from workbench.planning.redundancy_policy import (
+    DEFAULT_MAX_REDUNDANCY_RATE,
+    compute_limit_margin,
+)
 from workbench.planning.servo_interpolation import interpolate_servo
 from workbench.tasks.fish import SimulatedFish
 from workbench.tasks.fish_program import (
@@ -83,6 +93,12 @@ class FishCuttingResult:
         latency_us: Time of each planning cycle [µs], one per cycle (K - 1).
         replanned: Per cycle (as ``latency_us``), True if a new motion was
             planned in it (``PlannerSample.replanned``).
+        redundancy: (K,) the redundancy parameter of ``q`` [rad] (ψ or q7) on
+            a seven-axis arm, NaN on a six-axis arm.
+        redundancy_parameter: ``"arm angle"`` or ``"q7"``; None on a 6R arm.
+        redundancy_policy: The planner's policy; None on a 6R arm.
+        min_limit_margin: Smallest distance [rad] of a joint command to its
+            limit over the run (``compute_limit_margin``).
         servo: Joint commands at the servo rate (Hermite interpolation).
         setup: The parameters. fish: The fish.
     """
@@ -100,6 +116,10 @@ class FishCuttingResult:
     events: tuple[FishEvent, ...]
     latency_us: FloatArray
     replanned: npt.NDArray[np.bool_]
+    redundancy: FloatArray
+    redundancy_parameter: str | None
+    redundancy_policy: str | None
+    min_limit_margin: float
     servo: JointTrajectorySamples
     setup: FishCuttingSetup
     fish: SimulatedFish = field(repr=False)
@@ -113,6 +133,18 @@ class FishCuttingResult:
     def wrist_flips(self) -> int:
         """Planning steps where θ4 jumps by more than π/2 (Kang's flip; 0 wanted)."""
         return int(np.count_nonzero(np.abs(np.diff(self.q[:, 3])) > np.pi / 2))
+
+    @property
+    def branch_flips(self) -> int:
+        """Planning steps where some joint jumps by more than π/2 (0 wanted)."""
+        return int(
+            np.count_nonzero((np.abs(np.diff(self.q, axis=0)) > np.pi / 2).any(1))
+        )
+
+    @property
+    def branch_changes(self) -> int:
+        """Times the IK branch label changed (continuously, at a singularity)."""
+        return sum(a != b for a, b in itertools.pairwise(self.branch))
 
     @property
     def wrist_singularity_crossings(self) -> int:
@@ -144,6 +176,8 @@ def run_fish_cutting(
     setup: FishCuttingSetup | None = None,
     *,
     q_home: npt.ArrayLike | None = None,
+    redundancy: str | None = None,
+    max_redundancy_rate: float = DEFAULT_MAX_REDUNDANCY_RATE,
 ) -> FishCuttingResult:
     """Run the fish-cutting program online, cycle by cycle.
 
@@ -155,6 +189,10 @@ def run_fish_cutting(
             :class:`FishCuttingSetup` itself for the PUMA models).
         q_home: Start (and end) configuration; default
             :func:`compute_home_configuration` (zeros for ``puma560-kang``).
+        redundancy: Seven-axis arms: the planner's redundancy policy
+            (``OnlinePlanner(redundancy=...)``, default ``"keep"``).
+        max_redundancy_rate: Seven-axis arms: largest rate of the redundancy
+            parameter's policy moves [rad/s].
 
     Returns:
         The run: planning-rate commands, events, latencies, servo commands.
@@ -163,12 +201,13 @@ def run_fish_cutting(
         InfeasibleError: A waypoint out of reach or limits, a joint command
             beyond its limits (``JointLimitError``), or a program that does
             not finish within ``setup.max_cycles``.
-        InputError: Bad parameters or a robot without closed-form IK.
+        InputError: Bad parameters, a robot without closed-form IK, or a
+            redundancy policy for a six-axis arm.
     """
     setup = setup or FishCuttingSetup().scaled(get_cell_scale(robot))
     fish = fish or SimulatedFish().scaled(setup.scale)
     if q_home is None:
-        q0 = compute_home_configuration(robot, setup)
+        q0 = compute_home_configuration(robot, setup, fish)
     else:
         q0 = robot.check_configuration(q_home)
     check_waypoints(robot, fish, setup, q0)
@@ -181,7 +220,10 @@ def run_fish_cutting(
         servo_rate=setup.servo_rate,
         transform_tip_to_tool=tip,
         transform_base_to_world=base,
+        redundancy=redundancy,
+        max_redundancy_rate=max_redundancy_rate,
     )
+    start_value = planner.redundancy
     home = pin.SE3(planner.state.rotation, planner.state.position)
     planner.append(*build_program(fish, setup, home))
     first = planner.state
@@ -226,6 +268,15 @@ def run_fish_cutting(
         events=tuple(events),
         latency_us=np.array(latency) * 1e6,
         replanned=np.array([s.replanned for s in samples]),
+        redundancy=np.array(
+            [math.nan if start_value is None else start_value]
+            + [s.redundancy for s in samples]
+        ),
+        redundancy_parameter=planner.redundancy_parameter,
+        redundancy_policy=planner.redundancy_policy,
+        min_limit_margin=min(
+            compute_limit_margin(row, robot.lower, robot.upper) for row in q
+        ),
         servo=interpolate_servo(t, q, qd, m),
         setup=setup,
         fish=fish,
@@ -257,6 +308,46 @@ def summarize_fish_cutting(result: FishCuttingResult, robot_name: str) -> dict:
         "dls_cycles": int(np.count_nonzero(result.damped)),
         "seed": result.fish.seed,
         "servo_samples": len(result.servo.t),
+        "branch_flips": result.branch_flips,
+        "redundancy": summarize_redundancy(result),
+    }
+
+
+def summarize_redundancy(result: FishCuttingResult) -> dict | None:
+    """The redundancy trace of a seven-axis run (``redundancy`` in the JSON).
+
+    Returns:
+        None on a six-axis arm; else ``parameter`` (``"arm angle"`` or
+        ``"q7"``), ``policy``, the parameter's ``start``, ``end``, ``min``,
+        ``max`` [rad], ``travel`` (the sum of its steps' sizes, ψ's across ±π
+        the short way) [rad], ``max_rate`` [rad/s], ``moving_cycles`` (cycles
+        that changed it), ``branch`` (the label, or labels in order if it
+        changed), ``branch_changes`` and ``min_limit_margin`` [rad] (the
+        smallest distance of a joint command to its limit over the run).
+    """
+    if result.redundancy_parameter is None:
+        return None
+    values = result.redundancy
+    steps = np.diff(values)
+    if result.redundancy_parameter == "arm angle":
+        steps = np.remainder(steps + np.pi, 2.0 * np.pi) - np.pi
+    period = 1.0 / result.setup.planning_rate
+    labels = [result.branch[0]] + [
+        b for a, b in itertools.pairwise(result.branch) if a != b
+    ]
+    return {
+        "parameter": result.redundancy_parameter,
+        "policy": result.redundancy_policy,
+        "start": float(values[0]),
+        "end": float(values[-1]),
+        "min": float(values.min()),
+        "max": float(values.max()),
+        "travel": float(np.abs(steps).sum()),
+        "max_rate": float(np.abs(steps).max() / period) if len(steps) else 0.0,
+        "moving_cycles": int(np.count_nonzero(steps)),
+        "branch": labels[0] if len(labels) == 1 else labels,
+        "branch_changes": result.branch_changes,
+        "min_limit_margin": result.min_limit_margin,
     }
 
 

@@ -25,9 +25,15 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from workbench.errors import InfeasibleError
-from workbench.ik.closed_form import analytic, nearest
-from workbench.ik.structure import KinematicStructure, get_structure
+from workbench.errors import InfeasibleError, InputError
+from workbench.ik import (
+    KinematicStructure,
+    analytic,
+    choose_redundancy,
+    feasible_redundancy,
+    get_structure,
+    nearest,
+)
 from workbench.model.robot import Robot
 from workbench.planning.cartesian_paths import CartesianLimits
 from workbench.planning.motion_primitives import (
@@ -65,6 +71,20 @@ KANG_HOME_WRIST_CENTER.setflags(write=False)
 #: Reach [m] of Kang's PUMA (Table 1), as :func:`get_arm_reach` measures it:
 #: upper arm a2 plus forearm sqrt(a3² + d4²), shoulder axis to wrist centre.
 KANG_REACH = 0.4318 + math.hypot(0.0203, 0.4318)
+
+#: Distance [m] from the shoulder of Kang's PUMA to its wrist centre at the
+#: start pose ``A`` (the wrist centre 0.05 m, the default tool length, above
+#: ``A``): the nearest the program brings them.
+KANG_START_FOLD = math.hypot(KANG_START_POSITION[1], KANG_BASE_HEIGHT - 0.35)
+
+#: Margin [rad] that a seven-axis arm's elbow (joint 4) keeps inside its
+#: limits at Kang's start pose, which sets its smallest cell scale
+#: (:func:`get_cell_scale`).
+FOLD_MARGIN = 0.05
+
+#: The families of seven-axis arms (their closed form takes a redundancy
+#: parameter, ``workbench.ik.get_redundant_solver``).
+REDUNDANT_FAMILIES = ("srs", "franka")
 
 #: The cell scale is rounded to this many decimals (1 %): models of one arm
 #: whose lengths differ by a fraction of a millimetre (the two PUMA tables:
@@ -159,12 +179,56 @@ def get_arm_reach(structure: KinematicStructure) -> float:
       wrist point, which joint 4 turns into line with them).
 
     Offsets along axis 2 (the PUMA's d3, the UR's d4) and the flange length
-    are left out, as in the makers' "reach to the wrist point".
+    are left out, as in the makers' "reach to the wrist point". A seven-axis
+    arm (SRS, Franka) reaches from its shoulder point S (axes 1, 2, 3 meet)
+    to its wrist point (axes 5 and 6 meet), both segments normal to axis 4,
+    which stretches them into line: ``hypot(a3, d3) + hypot(a4, d5)``
+    (``d3 + d5`` for an SRS arm, whose offsets a3, a4 are zero).
     """
     rows = structure.table.joints
     if structure.family == "ur":
         return abs(rows[1].a) + abs(rows[2].a) + abs(rows[4].d)
+    if structure.family in REDUNDANT_FAMILIES:
+        return math.hypot(rows[2].a, rows[2].d) + math.hypot(rows[3].a, rows[4].d)
     return abs(rows[1].a) + math.hypot(rows[2].a, rows[3].d)
+
+
+def get_shortest_fold(robot: Robot) -> float:
+    """Shortest distance [m] from shoulder to wrist point of a seven-axis arm.
+
+    The distance from S (axes 1, 2, 3 meet) to the wrist point (axes 5 and 6
+    meet) depends on joint 4 alone: on the fitted DH chain, with θ = θ4 −
+    θ0_4, ``|SW|² = A + C cos θ + D sin θ`` (rows 3 to 5), minimised exactly
+    over joint 4's limits narrowed by :data:`FOLD_MARGIN` on each side.
+
+    Raises:
+        UnsupportedRobotError: If the robot has no closed-form IK.
+        InputError: If it is not a seven-axis arm.
+    """
+    structure = get_structure(robot)
+    if structure.family not in REDUNDANT_FAMILIES:
+        raise InputError(f"robot {robot.name!r} is not a seven-axis arm")
+
+    def fold2(theta: float) -> float:
+        x = np.zeros(7)
+        x[3] = theta
+        links = structure.table.link_transforms(x)
+        return float(np.sum((links[2] @ links[3] @ links[4])[:3, 3] ** 2))
+
+    zero, half, full = fold2(0.0), fold2(0.5 * math.pi), fold2(math.pi)
+    a, c = 0.5 * (zero + full), 0.5 * (zero - full)
+    d = half - a
+    sign = structure.joint_sign[3]
+    ends = sorted(
+        [
+            sign * (robot.lower[3] + FOLD_MARGIN),
+            sign * (robot.upper[3] - FOLD_MARGIN),
+        ]
+    )
+    best = math.atan2(-d, -c)  # where A + C cos + D sin is least
+    best += 2.0 * math.pi * math.ceil((ends[0] - best) / (2.0 * math.pi))
+    thetas = [*ends, best] if best <= ends[1] else ends
+    return math.sqrt(min(a + c * math.cos(t) + d * math.sin(t) for t in thetas))
 
 
 def get_cell_scale(robot: Robot) -> float:
@@ -173,12 +237,20 @@ def get_cell_scale(robot: Robot) -> float:
     ``round(get_arm_reach(structure) / KANG_REACH, 2)``: 1.0 for both PUMA
     models, 0.63 for the UR3, 1.06 for the UR5, 1.5 for the UR10, 0.79 for
     the KUKA KR 6 R700, 1.7 for the ABB IRB 2400 (the table in
-    ``docs/closed-form-ik.md``, section 6).
+    ``docs/closed-form-ik.md``, section 6). A seven-axis arm's cell is at
+    least so large that its wrist point, as near its shoulder as the PUMA's
+    at Kang's start pose (:data:`KANG_START_FOLD` times the scale), leaves
+    joint 4 :data:`FOLD_MARGIN` inside its limits
+    (``get_shortest_fold / KANG_START_FOLD``): 0.83 for the Panda (its reach),
+    1.05 for the iiwa14 (its elbow folds to ±120° only; reach 0.95).
 
     Raises:
         UnsupportedRobotError: If the robot has no closed-form IK.
     """
-    ratio = get_arm_reach(get_structure(robot)) / KANG_REACH
+    structure = get_structure(robot)
+    ratio = get_arm_reach(structure) / KANG_REACH
+    if structure.family in REDUNDANT_FAMILIES:
+        ratio = max(ratio, get_shortest_fold(robot) / KANG_START_FOLD)
     return round(ratio, CELL_SCALE_DECIMALS)
 
 
@@ -193,11 +265,20 @@ def get_base_placement(robot: Robot, setup: FishCuttingSetup) -> pin.SE3:
     d1 below it, the KUKA KR 6 R700's 0.4 m below (axis 2 a further 25 mm
     out, a1). For the PUMA models this is ``KANG_BASE_HEIGHT`` straight up.
 
+    A seven-axis arm's tool frame is far beyond its wrist point (the iiwa14's
+    flange 0.126 m, the Panda's hand TCP 0.210 m), where the PUMA's is the
+    wrist centre itself: its shoulder goes that much higher (``d7`` plus the
+    tool frame's offset along axis 7), so that with the tool pointing down,
+    as in every pose of the program, its wrist point moves as the scaled
+    PUMA's wrist centre relative to the shoulder.
+
     Raises:
         UnsupportedRobotError: If the robot has no closed-form IK.
     """
     structure = get_structure(robot)
     height = setup.scale * KANG_BASE_HEIGHT - structure.table.joints[0].d
+    if structure.family in REDUNDANT_FAMILIES:
+        height += structure.table.joints[6].d + structure.tool[2, 3]
     frame0 = pin.SE3(np.eye(3), np.array([0.0, 0.0, height]))  # in the world
     return frame0 * pin.SE3(structure.base).inverse()
 
@@ -284,18 +365,37 @@ def build_program(
     return program
 
 
+def is_redundant(robot: Robot) -> bool:
+    """True for a seven-axis arm of a family with a closed form (SRS, Franka).
+
+    Raises:
+        UnsupportedRobotError: If the robot has no closed-form IK.
+    """
+    return get_structure(robot).family in REDUNDANT_FAMILIES
+
+
 def check_waypoints(
     robot: Robot, fish: SimulatedFish, setup: FishCuttingSetup, q_home: FloatArray
 ) -> None:
     """Check every waypoint has an IK solution within the joint limits.
+
+    On a seven-axis arm: on the branch of ``q_home`` (the online planner
+    keeps it), for some value of the redundancy parameter
+    (``workbench.ik.feasible_redundancy``).
 
     Raises:
         InfeasibleError: Naming the first waypoint out of reach or limits.
     """
     tip, base = get_world_transforms(robot, setup)
     q = q_home
+    branch = None  # of q_home, on a seven-axis arm
+    if is_redundant(robot):
+        branch = nearest(analytic(robot, robot.fk(q), q_previous=q), q).branch
     for name, point in compute_waypoints(fish, setup).items():
         target = base.inverse() * pin.SE3(KANG_START_ROTATION, point) * tip.inverse()
+        if branch is not None:
+            _check_redundant_waypoint(robot, target, branch, f"{name} {point.tolist()}")
+            continue
         try:
             solutions = analytic(robot, target, q_previous=q)
         except InfeasibleError as err:
@@ -309,7 +409,28 @@ def check_waypoints(
         q = nearest(within, q).q
 
 
-def compute_home_configuration(robot: Robot, setup: FishCuttingSetup) -> FloatArray:
+def _check_redundant_waypoint(
+    robot: Robot, target: pin.SE3, branch: str, name: str
+) -> None:
+    """A seven-axis arm reaches ``target`` within limits on ``branch``.
+
+    Raises:
+        InfeasibleError: Naming the waypoint.
+    """
+    try:
+        feasible = feasible_redundancy(robot, target)
+    except InfeasibleError as err:
+        raise InfeasibleError(f"waypoint {name}: {err}") from err
+    if not feasible.intervals[feasible.branches.index(branch)]:
+        raise InfeasibleError(
+            f"waypoint {name} [m] has no IK solution within the joint limits on "
+            f"the branch {branch} of the home configuration"
+        )
+
+
+def compute_home_configuration(
+    robot: Robot, setup: FishCuttingSetup, fish: SimulatedFish | None = None
+) -> FloatArray:
     """The configuration of Kang's home pose ``H``, nearest zero, within limits.
 
     ``H`` scaled: the robot's tool frame at ``setup.scale`` times Kang's wrist
@@ -317,8 +438,12 @@ def compute_home_configuration(robot: Robot, setup: FishCuttingSetup) -> FloatAr
     orientation :data:`KANG_HOME_ROTATION` (tool z down), the base placed by
     :func:`get_base_placement`. For ``puma560-kang`` this is q = 0 (Kang's
     home); for the other PUMA model it is the same physical pose in that
-    model's joint values; for another arm, the IK solution within its limits
-    nearest q = 0.
+    model's joint values; for another six-axis arm, the IK solution within
+    its limits nearest q = 0; for a seven-axis arm, the solution of the
+    largest joint-limit margin (``workbench.ik.choose_redundancy``) over the
+    values of the redundancy parameter and the branches that reach ``H`` and
+    every waypoint of ``fish`` (default the nominal fish of the scaled cell)
+    within the limits (the planner keeps the branch).
 
     Raises:
         InfeasibleError: If ``H`` has no IK solution within the limits.
@@ -327,6 +452,8 @@ def compute_home_configuration(robot: Robot, setup: FishCuttingSetup) -> FloatAr
     _, base = get_world_transforms(robot, setup)
     wrist = pin.SE3(KANG_HOME_ROTATION, setup.scale * KANG_HOME_WRIST_CENTER)
     target = base.inverse() * wrist
+    if is_redundant(robot):
+        return _redundant_home(robot, setup, fish, target)
     zero = np.zeros(robot.nq)
     within = [s for s in analytic(robot, target, q_previous=zero) if s.within_limits]
     if not within:
@@ -336,14 +463,49 @@ def compute_home_configuration(robot: Robot, setup: FishCuttingSetup) -> FloatAr
     return nearest(within, zero).q.copy()
 
 
+def _redundant_home(
+    robot: Robot, setup: FishCuttingSetup, fish: SimulatedFish | None, home: pin.SE3
+) -> FloatArray:
+    """Home of a seven-axis arm: see :func:`compute_home_configuration`."""
+    fish = fish or SimulatedFish().scaled(setup.scale)
+    tip, base = get_world_transforms(robot, setup)
+    targets = [home] + [
+        base.inverse() * pin.SE3(KANG_START_ROTATION, point) * tip.inverse()
+        for point in compute_waypoints(fish, setup).values()
+    ]
+    try:
+        feasible = [feasible_redundancy(robot, target) for target in targets]
+    except InfeasibleError as err:
+        raise InfeasibleError(
+            f"{robot.name}: Kang's cell out of reach ({err})"
+        ) from err
+    labels = feasible[0].branches
+    branches = [
+        label for i, label in enumerate(labels) if all(f.intervals[i] for f in feasible)
+    ]
+    if not branches:
+        raise InfeasibleError(
+            f"{robot.name}: no branch reaches Kang's home pose H and every waypoint "
+            "within the joint limits"
+        )
+    choices = [
+        choose_redundancy(robot, home, criterion="limit_margin", branch=label)
+        for label in branches
+    ]
+    return max(choices, key=lambda choice: choice.score).solution.q.copy()
+
+
 __all__ = [
     "CELL_SCALE_DECIMALS",
+    "FOLD_MARGIN",
     "KANG_BASE_HEIGHT",
     "KANG_HOME_ROTATION",
     "KANG_HOME_WRIST_CENTER",
     "KANG_REACH",
+    "KANG_START_FOLD",
     "KANG_START_POSITION",
     "KANG_START_ROTATION",
+    "REDUNDANT_FAMILIES",
     "FishCuttingSetup",
     "build_program",
     "check_waypoints",
@@ -352,5 +514,7 @@ __all__ = [
     "get_arm_reach",
     "get_base_placement",
     "get_cell_scale",
+    "get_shortest_fold",
     "get_world_transforms",
+    "is_redundant",
 ]
