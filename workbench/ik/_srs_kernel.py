@@ -298,6 +298,17 @@ def _wrist(geo, r47, gc6: float, prev: FloatArray, has_prev: bool):
 
 
 @common.inline
+def _twin(angles):
+    """The twin of a spherical joint's (a, b, c, |sin b|): (a + π, −b, c + π, ·)."""
+    return (
+        common.remainder(angles[0] + common.PI),
+        -angles[1],
+        common.remainder(angles[2] + common.PI),
+        angles[3],
+    )
+
+
+@common.inline
 def _elbow_frames(geo, rot, r03, e: float, c4: float, s4: float):
     """Column 0 of R03 and R47 = R04ᵀ R (row-major (9,)) of one elbow.
 
@@ -358,31 +369,41 @@ def _branches(geo, rot, sw, value, prev, has_prev, q, flags, with_flags):
         e = 1.0 if elbow == 0 else -1.0
         c0, r47 = _elbow_frames(geo, rot, (b0, b1, b2), e, c4, s4)
         q4 = common.joint_value(geo, 3, e * t4, prev, has_prev)
-        for wrist in range(2):
-            gc6 = 1.0 if wrist == 0 else -1.0
-            t5, t6, t7, h6 = _wrist(geo, r47, gc6, prev, has_prev)
-            q5 = common.joint_value(geo, 4, t5, prev, has_prev)
-            q6 = common.joint_value(geo, 5, t6, prev, has_prev)
-            q7 = common.joint_value(geo, 6, t7, prev, has_prev)
-            for shoulder in range(2):
-                gc2 = 1.0 if shoulder == 0 else -1.0
-                b = 4 * shoulder + 2 * elbow + wrist
-                t1, t2, t3, h2 = _shoulder(geo, c0, b1, gc2, prev, has_prev)
-                q[b, 0] = common.joint_value(geo, 0, t1, prev, has_prev)
-                q[b, 1] = common.joint_value(geo, 1, t2, prev, has_prev)
-                q[b, 2] = common.joint_value(geo, 2, t3, prev, has_prev)
-                q[b, 3], q[b, 4], q[b, 5], q[b, 6] = q4, q5, q6, q7
-                if with_flags:
-                    bits = 0
-                    ok = True
-                    for j in range(7):
-                        ok &= geo.lower[j] <= q[b, j] <= geo.upper[j]
-                    bits |= WITHIN_LIMITS if ok else 0
-                    bits |= SHOULDER_SINGULAR if h2 <= SINGULAR_TOL else 0
-                    bits |= ELBOW_SINGULAR if s4 <= ELBOW_SINGULAR_TOL else 0
-                    bits |= WRIST_SINGULAR if h6 <= SINGULAR_TOL else 0
-                    bits |= PARAMETER_SINGULAR if param else 0
-                    flags[b] = bits
+        shoulder = _shoulder(geo, c0, b1, 1.0, prev, has_prev)
+        h2 = shoulder[3]
+        wrist = _wrist(geo, r47, 1.0, prev, has_prev)
+        h6 = wrist[3]
+        for side in range(2):
+            if side == 1:  # the twins: (θ1 + π, −θ2, θ3 + π), (θ5 + π, −θ6, θ7 + π)
+                shoulder = _twin(shoulder)
+                wrist = _twin(wrist)
+                if has_prev and h2 <= SPLIT_TOL:
+                    shoulder = _shoulder(geo, c0, b1, -1.0, prev, has_prev)
+                if has_prev and h6 <= SPLIT_TOL:
+                    wrist = _wrist(geo, r47, -1.0, prev, has_prev)
+            q1 = common.joint_value(geo, 0, shoulder[0], prev, has_prev)
+            q2 = common.joint_value(geo, 1, shoulder[1], prev, has_prev)
+            q3 = common.joint_value(geo, 2, shoulder[2], prev, has_prev)
+            q5 = common.joint_value(geo, 4, wrist[0], prev, has_prev)
+            q6 = common.joint_value(geo, 5, wrist[1], prev, has_prev)
+            q7 = common.joint_value(geo, 6, wrist[2], prev, has_prev)
+            for other in range(2):
+                b = 4 * side + 2 * elbow + other  # shoulder `side`
+                q[b, 0], q[b, 1], q[b, 2], q[b, 3] = q1, q2, q3, q4
+                b = 4 * other + 2 * elbow + side  # wrist `side`
+                q[b, 4], q[b, 5], q[b, 6] = q5, q6, q7
+        if with_flags:
+            for k in range(4):
+                b = 4 * (k >> 1) + 2 * elbow + (k & 1)
+                ok = True
+                for j in range(7):
+                    ok &= geo.lower[j] <= q[b, j] <= geo.upper[j]
+                bits = WITHIN_LIMITS if ok else 0
+                bits |= SHOULDER_SINGULAR if h2 <= SINGULAR_TOL else 0
+                bits |= ELBOW_SINGULAR if s4 <= ELBOW_SINGULAR_TOL else 0
+                bits |= WRIST_SINGULAR if h6 <= SINGULAR_TOL else 0
+                bits |= PARAMETER_SINGULAR if param else 0
+                flags[b] = bits
     return OK
 
 
