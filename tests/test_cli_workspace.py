@@ -130,7 +130,10 @@ def test_map_with_a_scene(capsys, tmp_path) -> None:
         (["--robot", "puma560", "--orientations", "x"], "not an integer"),
         (["--robot", "puma560", "--cone", "0", "0", "0", "30"], "axis"),
         (["--robot", "puma560", "--cone", "0", "0", "1", "nan"], "not a finite"),
-        (["--robot", "panda", "--scene", "SCENE"], "seven-axis map checks no collisions"),
+        (
+            ["--robot", "panda", "--scene", "SCENE"],
+            "seven-axis map checks no collisions",
+        ),
         (
             ["--robot", "panda", "--samples", "9", "--scene", "SCENE"],
             "sampled map checks no collisions",

@@ -28,6 +28,10 @@ REL_DET = 1e-9
 #: Pinocchio's Jacobians (the same numbers, computed again).
 REL_MEASURE = 1e-12
 NUMERIC_FIGURES = ("sigma_min_map", "manipulability_map", "condition_number_map")
+#: Figures of a seven-axis arm without analytic conditions (the Panda).
+SEVEN_AXIS_FIGURES = (*NUMERIC_FIGURES, "sigma_min_samples")
+#: σmin of Pinocchio's J on an analytic locus (rank lost to rounding).
+ATOL_SINGULAR = 1e-12
 
 
 class _Sources(HTMLParser):
@@ -148,12 +152,13 @@ def test_report_of_a_seven_axis_arm_has_the_numeric_maps_and_no_det() -> None:
     assert summary["det_j_map"] is None and summary["elbow_theta3_deg"] is None
     assert summary["sigma_min_map"]["shape"] == [size, size]
     assert stages == {"σmin map": (size * size, size * size)}
-    assert summary["figures"] == list(report.figures) == list(NUMERIC_FIGURES)
-    for name in NUMERIC_FIGURES:
+    assert summary["figures"] == list(report.figures) == list(SEVEN_AXIS_FIGURES)
+    for name in SEVEN_AXIS_FIGURES:
         assert report.figures[name].startswith(PNG_MAGIC)
     parser = _Sources()
     parser.feed(report.html)
-    assert len(parser.images) == len(NUMERIC_FIGURES)
+    assert len(parser.images) == len(SEVEN_AXIS_FIGURES)
+    assert "srs" not in summary and "no analytic singularity conditions" in report.html
     for heading in ("σmin over", "Manipulability over", "Condition number over"):
         assert heading in report.html
     assert "no determinant" in report.html and "det J map" not in report.html
@@ -180,11 +185,12 @@ def test_cli_report_of_a_seven_axis_arm(capsys, tmp_path) -> None:
     assert (code, err) == (0, "")
     summary = json.loads(out)
     assert summary["det_j_map"] is None
-    assert summary["figures"] == list(NUMERIC_FIGURES)
+    assert summary["figures"] == list(SEVEN_AXIS_FIGURES)
     assert "Manipulability over" in html.read_text(encoding="utf-8")
     code, out, err = run_cli(capsys, "report", "singularities", *argv)
     assert (code, err) == (0, "")
     assert "σmin map 6×6" in out and "det J" not in out
+    assert "(numeric only: no analytic conditions)" in out
 
 
 @pytest.mark.parametrize("name", ["ur5", "kuka-kr6-r700"])
@@ -229,3 +235,46 @@ def test_html_has_title_and_units(kang_report) -> None:
     assert re.search(r"<title>Singularities of puma560-kang</title>", text)
     assert "det J [m³]" not in text or "m³" in text
     assert "[m/s; rad/s]" in text
+
+
+def test_report_of_an_srs_arm_checks_its_conditions_against_pinocchio() -> None:
+    """iiwa14: det(J Jᵀ), the loci and the sweeps against Pinocchio's J (numpy SVD)."""
+    robot = load_robot("iiwa14")
+    report = build_singularity_report(robot, grid_size=8, svd_grid_size=8, samples=300)
+    summary = report.summary
+    srs = summary["srs"]
+    assert srs["cross_check"]["samples"] == 300
+    assert srs["cross_check"]["max_relative_error"] < REL_DET
+    assert [locus["kind"] for locus in srs["loci"]] == [
+        "elbow",
+        "shoulder",
+        "wrist",
+        "shoulder_wrist",
+    ]
+    for locus in srs["loci"]:
+        q = np.radians(locus["q_deg"])
+        sigma = np.linalg.svd(robot.jacobian(q), compute_uv=False)[-1]
+        assert sigma < ATOL_SINGULAR and locus["sigma_min"] < ATOL_SINGULAR
+        assert abs(locus["condition"]) < ATOL_SINGULAR
+        assert locus["residual"] < ATOL_SINGULAR
+    for sweep in srs["sweeps"].values():
+        assert sweep["sigma_min_at_locus"] < ATOL_SINGULAR
+        assert sweep["sigma_min_elsewhere"] > 1e-5  # rank only lost on the locus
+    sampled = summary["sigma_min_samples"]
+    assert 0.0 < sampled["min"] <= sampled["median"] <= sampled["max"]
+    assert summary["figures"] == [
+        *SEVEN_AXIS_FIGURES[:3],
+        "sigma_min_samples",
+        "srs_sweeps",
+    ]
+    assert "SRS: analytic conditions of the 6 × 7 Jacobian" in report.html
+    assert "SRS seven-axis arm" in report.html
+
+
+def test_cli_report_of_an_srs_arm(capsys, tmp_path) -> None:
+    html = tmp_path / "iiwa.html"
+    argv = ["--robot", "iiwa14", "--out", str(html), "--svd-grid", "6", "--no-progress"]
+    code, out, err = run_cli(capsys, "report", "singularities", *argv)
+    assert (code, err) == (0, "")
+    assert "SRS det(J Jᵀ) analytic vs Pinocchio" in out
+    assert out.count("locus: σmin") == 4

@@ -41,8 +41,11 @@ def register(commands: argparse._SubParsersAction) -> None:
             "det J over (θ2, θ3) with the shoulder and elbow loci, σmin map, the "
             "arm in each singular configuration, analytic vs Pinocchio check, "
             "degenerate directions; for other OPW or UR-type arms the factors, "
-            "their check and the classes of random configurations; numeric maps "
-            "only for other robots."
+            "their check and the classes of random configurations; for SRS "
+            "seven-axis arms (KUKA iiwa) the analytic conditions of the 6 × 7 "
+            "Jacobian checked against its σmin; numeric maps only for other "
+            "robots (σmin over a joint grid, and over random configurations for "
+            "seven-axis arms such as the Panda)."
         ),
     )
     add_robot_argument(sing)
@@ -129,6 +132,23 @@ def run_singularities(args: argparse.Namespace) -> int:
         print(
             f"analytic vs Pinocchio: max relative error {error:.2e}"
             f" over {check['samples']} configurations"
+        )
+    if (srs := summary.get("srs")) is not None:
+        check = srs["cross_check"]
+        print(
+            f"SRS det(J Jᵀ) analytic vs Pinocchio: max relative error "
+            f"{check['max_relative_error']:.2e} over {check['samples']} configurations"
+        )
+        for locus in srs["loci"]:
+            print(
+                f"on the {locus['kind']} locus: σmin {locus['sigma_min']:.1e}, "
+                f"|uᵀJ| {locus['residual']:.1e}"
+            )
+    if (sampled := summary.get("sigma_min_samples")) is not None:
+        print(
+            f"σmin over {sampled['samples']} random configurations: min "
+            f"{sampled['min']:.3g}, median {sampled['median']:.3g}"
+            + ("" if srs is not None else " (numeric only: no analytic conditions)")
         )
     records = summary.get("degenerate_directions", [])
     if records:

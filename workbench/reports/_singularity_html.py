@@ -37,6 +37,10 @@ def render(data: dict[str, Any], summary: dict[str, Any], figures: dict) -> str:
     if fac is not None:
         parts.append(_conditions(fac))
     parts.append(_maps(data, uri))
+    if "redundant" in data:
+        from workbench.reports._redundant_singularities import render_sections
+
+        parts.append(render_sections(robot, data["redundant"], uri))
     if fac is not None:
         parts += [_arms_and_directions(data, uri), _cross_check(data), _kang(data)]
     elif data.get("directions"):
@@ -59,11 +63,18 @@ def _head(robot: Any, fac: Any, data: dict[str, Any]) -> str:
         )
     elif robot.nv == 6:
         kind = "No OPW or UR structure: numeric measures only (Pinocchio's Jacobian)."
+    elif data.get("redundant", {}).get("srs") is not None:
+        kind = (
+            f"SRS seven-axis arm: J is 6 × {robot.nv}, so it has no determinant; "
+            "det(J Jᵀ) factorised into the elbow, shoulder and wrist conditions, "
+            "checked against σmin of Pinocchio's Jacobian; numeric maps."
+        )
     else:
         kind = (
-            f"{robot.nv} joints: J is 6 × {robot.nv}, so it has no determinant; "
-            "numeric measures only (σmin, manipulability, condition number of "
-            "Pinocchio's Jacobian)."
+            f"{robot.nv} joints: J is 6 × {robot.nv}, so it has no determinant, "
+            "and this arm has no analytic singularity conditions here: numeric "
+            "measures only (σmin, manipulability, condition number of Pinocchio's "
+            "Jacobian over a joint grid and over random configurations)."
         )
     return f"""<!DOCTYPE html><html lang="en"><head><meta charset="utf-8">
 <title>Singularities of {name}</title><style>{_CSS}</style></head><body>

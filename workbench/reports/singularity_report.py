@@ -9,7 +9,10 @@ other OPW or UR-type arm gets the maps, its factors of det J checked against
 Pinocchio, the classes of random configurations, the arm at each singularity
 and the degenerate directions; other robots (a 7-axis arm, any arm without that
 structure) the numeric maps only: σmin, manipulability and condition number, and
-det J when the Jacobian is square.
+det J when the Jacobian is square. A seven-axis arm also gets σmin over random
+configurations and, for an SRS arm (KUKA LBR iiwa), its analytic conditions
+checked against σmin of Pinocchio's Jacobian
+(:mod:`workbench.reports._redundant_singularities`).
 """
 
 from __future__ import annotations
@@ -153,6 +156,15 @@ def build_singularity_report(
         for measure in NUMERIC_MAPS:
             measure_map = figs.plot_measure_map(robot, svd_grid, measure)
             figures[f"{measure}_map"] = figs.png_bytes(measure_map)
+    if robot.nv > 6:  # seven axes: SRS analytic conditions, σmin sampled
+        from workbench.reports import _redundant_singularities as seven
+
+        data["redundant"] = seven.compute_redundant_data(robot, samples, seed, summary)
+        sampled = seven.plot_sigma_samples(robot, data["redundant"]["sigma_samples"])
+        figures["sigma_min_samples"] = figs.png_bytes(sampled)
+        if data["redundant"]["srs"] is not None:
+            sweeps = seven.plot_locus_sweeps(robot, data["redundant"]["srs"]["sweeps"])
+            figures["srs_sweeps"] = figs.png_bytes(sweeps)
     if data.get("directions"):
         arms = figs.plot_singular_arms(robot, data["examples"], data["directions"])
         figures["arms"] = figs.png_bytes(arms, tight=False)
