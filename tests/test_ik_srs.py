@@ -31,6 +31,8 @@ from workbench.ik._redundant_common import (
     WRIST_SINGULAR,
 )
 from workbench.ik.structure import get_structure
+from workbench.model.dh import DHJoint, DHTable
+from workbench.model.urdf_generator import generate_urdf
 
 #: Joint values recovered by the round trip [rad] (mod 2π).
 ATOL_Q = 1e-9
@@ -540,3 +542,129 @@ def test_feasible_interval_of_a_joint_with_a_stationary_point(iiwa, geometry) ->
         np.testing.assert_array_equal(member | ~within[:, 0], np.ones(grid.size, bool))
         checked += 1
     assert checked >= 10
+
+
+# --- other DH sign conventions and lengths ---------------------------------------
+
+#: α signs of joints 1..6: this project's iiwa14 table (Faria et al. 2018), the
+#: KUKA LWR4 table of Enayati's implementation of Shimizu's method, and
+#: Shimizu's own (PA10-like) table.
+SIGN_TABLES = {
+    "faria": (-1, 1, 1, -1, -1, 1),
+    "lwr4": (1, -1, -1, 1, 1, -1),
+    "shimizu": (-1, 1, -1, 1, -1, 1),
+}
+
+
+def _srs_robot(tmp_path, signs, lengths=(0.31, 0.40, 0.39, 0.078)) -> Robot:
+    """An SRS arm generated from a DH table with these α signs and d1, d3, d5, d7."""
+    d1, d3, d5, d7 = lengths
+    ds = (d1, 0.0, d3, 0.0, d5, 0.0, d7)
+    alphas = (*(s * math.pi / 2 for s in signs), 0.0)
+    table = DHTable(
+        name="srs_test",
+        joints=tuple(
+            DHJoint(alpha=a, a=0.0, d=d, lower=-2.9, upper=2.9)
+            for a, d in zip(alphas, ds, strict=True)
+        ),
+        tool_frame="flange",
+    )
+    path = tmp_path / "srs_test.urdf"
+    path.write_text(generate_urdf(table))
+    return load_robot(path, tool_frame="flange")
+
+
+@pytest.mark.parametrize("convention", sorted(SIGN_TABLES))
+def test_other_sign_conventions_and_lengths(tmp_path, rng, convention) -> None:
+    """The kernel takes every sign and length from the fitted chain."""
+    robot = _srs_robot(tmp_path, SIGN_TABLES[convention])
+    structure = get_structure(robot)
+    assert structure.family == "srs"
+    model = robot.model
+    geometry = kernel.pack_geometry(
+        structure, model.lowerPositionLimit, model.upperPositionLimit
+    )
+    qs = rng.uniform(-math.pi, math.pi, (1_000, 7))
+    recovered, residual = _round_trip(robot, geometry, qs)
+    assert recovered <= ATOL_Q
+    assert residual <= ATOL_POSE
+    for q in qs[:20]:  # all branches of one ψ share the elbow, turned by ψ
+        pose = _fk(robot, q)
+        _, q0, _ = _solve(geometry, pose, 0.0)
+        _, q1, _ = _solve(geometry, pose, 1.0)
+        shoulder, e0, wrist = _elbow_and_wrist(robot, q0[0])
+        u = (wrist - shoulder) / np.linalg.norm(wrist - shoulder)
+        r0 = e0 - shoulder - np.dot(e0 - shoulder, u) * u
+        for b in range(8):
+            _, e1, _ = _elbow_and_wrist(robot, q1[b])
+            r1 = e1 - shoulder - np.dot(e1 - shoulder, u) * u
+            angle = math.atan2(np.dot(np.cross(r0, r1), u), np.dot(r0, r1))
+            assert abs(angle - 1.0) <= ATOL_PSI
+
+
+def _lwr4_printed_angles(frames: np.ndarray) -> np.ndarray:
+    """θ1..θ7 by the formulas of the LWR4 implementation of Shimizu's method.
+
+    Enayati's ``LWR4_Kinematics::IK`` (Nearlab, 2016), configuration 0, with
+    R03 and R47 the frames' true rotations and θ4 by the law of cosines.
+    """
+    r03 = frames[3][:3, :3]
+    r47 = frames[4][:3, :3].T @ frames[7][:3, :3]
+    sw = frames[5][:3, 3] - frames[1][:3, 3]
+    d3, d5 = (
+        np.linalg.norm(frames[3][:3, 3] - frames[1][:3, 3]),
+        np.linalg.norm(frames[5][:3, 3] - frames[3][:3, 3]),
+    )
+    return np.array(
+        [
+            math.atan2(r03[1, 1], r03[0, 1]),
+            math.acos(-r03[2, 1]),
+            math.atan2(-r03[2, 2], r03[2, 0]),
+            math.acos((sw @ sw - d3 * d3 - d5 * d5) / (2.0 * d3 * d5)),
+            math.atan2(-r47[1, 2], -r47[0, 2]),
+            math.acos(r47[2, 2]),
+            math.atan2(-r47[2, 1], r47[2, 0]),
+        ]
+    )
+
+
+def test_lwr4_formulas_hold_on_their_table_only(rng) -> None:
+    """Erratum: the LWR4 table's formulas give π − θ2, π − θ3, θ5 + π, θ7 + π here."""
+    faria = DHTable.from_json("urdf/iiwa14.dh.json")
+    lwr4 = DHTable(
+        name="lwr4",
+        joints=tuple(DHJoint(alpha=-j.alpha, a=0.0, d=j.d) for j in faria.joints),
+    )
+    for q in rng.uniform(-3.0, 3.0, (500, 7)):
+        q[[1, 3, 5]] = np.abs(q[[1, 3, 5]])  # configuration 0: θ2, θ4, θ6 > 0
+        own = _lwr4_printed_angles(lwr4.frame_transforms(q))
+        assert _wrapped(own - q).max() <= ATOL_Q
+        printed = _lwr4_printed_angles(faria.frame_transforms(q))
+        pi = math.pi
+        expected = q + np.array([0.0, 0.0, 0.0, 0.0, pi, 0.0, pi])
+        expected[1], expected[2] = pi - q[1], pi - q[2]
+        assert _wrapped(printed - expected).max() <= ATOL_Q
+
+
+def test_reference_with_the_branch_theta4_is_turned_by_pi(iiwa, geometry, rng) -> None:
+    """Convention: a reference arm built with θ4 < 0 puts E0 at ψ = π of ours.
+
+    Shimizu's reference arm (θ3 = 0) taken with the elbow-neg branch's own θ4
+    mirrors E0 across SW: its arm angles are ours + π on the elbow-neg
+    branches. Ours uses θ4 = +|θ4| for every branch, as implementations that
+    apply the elbow flip (θ3 + π, −θ4, θ5 + π) after solving do.
+    """
+    geo = geometry.view(np.recarray)[0]
+    for q in _random_in_limits(iiwa, rng, 100):
+        shoulder, _, wrist = _elbow_and_wrist(iiwa, q)
+        sw = tuple(wrist - shoulder)
+        c4 = kernel._elbow_cosine(geo, float(np.dot(sw, sw)))
+        s4 = math.sqrt(1.0 - c4 * c4)
+        u = np.array(sw) / np.linalg.norm(sw)
+        elbows = []
+        for sine in (s4, -s4):
+            _, col1, _, _ = kernel._reference(geo, sw, c4, sine)
+            z2 = geo.sigma[2] * np.array(col1)
+            elbows.append(z2 - np.dot(z2, u) * u)
+        angle = math.atan2(np.cross(elbows[0], elbows[1]) @ u, elbows[0] @ elbows[1])
+        assert abs(abs(angle) - math.pi) <= ATOL_PSI
