@@ -66,6 +66,7 @@ from workbench.model.robot import Robot
 FloatArray = npt.NDArray[np.float64]
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+_LOCAL = pin.ReferenceFrame.LOCAL
 
 #: The policies of :class:`RedundancyTracker` (``OnlinePlanner(redundancy=...)``).
 REDUNDANCY_POLICIES = ("keep", "limit_margin", "manipulability")
@@ -142,21 +143,28 @@ def compute_limit_margin(q: FloatArray, lower: FloatArray, upper: FloatArray) ->
         lower: Lower joint limits (n,) [rad].
         upper: Upper joint limits (n,) [rad].
     """
-    return float(min((q - lower).min(), (upper - q).min()))
+    # on lists: a fifth of the time of NumPy's reductions on seven values
+    return min(
+        min(v - lo, hi - v)
+        for v, lo, hi in zip(q.tolist(), lower.tolist(), upper.tolist(), strict=True)
+    )
 
 
 def _limit_weights(
     q: FloatArray, lower: FloatArray, upper: FloatArray
-) -> tuple[float, FloatArray]:
-    """Soft minimum of the 2n margins and its softmax weights (2n,)."""
-    margins = np.concatenate([q - lower, upper - q])
-    low = float(margins.min())  # factored out: no overflow far outside
+) -> tuple[FloatArray, FloatArray]:
+    """Soft minima (...,) of the 2n margins of q (..., n), their weights (..., 2n)."""
+    margins = np.concatenate([q - lower, upper - q], axis=-1)
+    low = margins.min(axis=-1, keepdims=True)  # factored out: no overflow
     weights = np.exp(-LIMIT_SHARPNESS * (margins - low))
-    total = float(weights.sum())
-    return low - math.log(total) / LIMIT_SHARPNESS, weights / total
+    total = weights.sum(axis=-1, keepdims=True)
+    score = low - np.log(total) / LIMIT_SHARPNESS
+    return score[..., 0], weights / total
 
 
-def compute_limit_score(q: FloatArray, lower: FloatArray, upper: FloatArray) -> float:
+def compute_limit_score(
+    q: FloatArray, lower: FloatArray, upper: FloatArray
+) -> float | FloatArray:
     r"""Smooth joint-limit margin [rad]: the soft minimum of the 2n margins.
 
     :math:`-\frac{1}{\beta}\log\sum_j (e^{-\beta (q_j - l_j)} + e^{-\beta (u_j -
@@ -166,11 +174,15 @@ def compute_limit_score(q: FloatArray, lower: FloatArray, upper: FloatArray) -> 
     margins cross.
 
     Args:
-        q: Configuration (n,) [rad].
+        q: Configuration (n,) [rad], or (N, n).
         lower: Lower joint limits (n,) [rad].
         upper: Upper joint limits (n,) [rad].
+
+    Returns:
+        A float, or (N,).
     """
-    return _limit_weights(q, lower, upper)[0]
+    score = _limit_weights(q, lower, upper)[0]
+    return float(score) if score.ndim == 0 else score
 
 
 def compute_limit_gradient(
@@ -356,17 +368,13 @@ class RedundancyTracker:
                 ramp = min(1.0, (KEEP_LIMIT_MARGIN - margin) / KEEP_LIMIT_MARGIN)
             gradient = compute_limit_gradient(q_last, self._lower, self._upper)
             null = self._max_rate * ramp * gradient
-        q = q_last + self._period * self._velocity(q_last, twist, null)
+        q = q_last + self._period * self._velocity(q_last, twist, null, _LWA)
         target = pin.SE3(pose)
         for _ in range(MAX_POSE_STEPS):
-            current = robot.fk(q)
-            local = pin.log6(current.actInv(target)).vector
-            error = np.concatenate(
-                [current.rotation @ local[:3], current.rotation @ local[3:]]
-            )
+            error = pin.log6(robot.fk(q).actInv(target)).vector  # tool axes
             if np.abs(error).max() <= POSE_TOL:
                 break
-            q = q + self._velocity(q, error, self._zero)
+            q = q + self._velocity(q, error, self._zero, _LOCAL)
         value = float(self.solver.parameter_of(q))
         try:
             q_all, _ = self.solver.solve_arrays(pose, value, q)
@@ -382,12 +390,16 @@ class RedundancyTracker:
         return q, index, within
 
     def _velocity(
-        self, q: FloatArray, twist: FloatArray, null: FloatArray
+        self,
+        q: FloatArray,
+        twist: FloatArray,
+        null: FloatArray,
+        frame: pin.ReferenceFrame,
     ) -> FloatArray:
-        """``J# twist + (I − J# J) null`` at ``q`` (7,) [rad/s]."""
+        """``J# twist + (I − J# J) null`` at ``q`` (7,) [rad/s], J in ``frame``."""
         robot = self.robot
         jacobian = pin.computeFrameJacobian(
-            robot.model, robot.data, q, robot.tool_frame_id, _LWA
+            robot.model, robot.data, q, robot.tool_frame_id, frame
         )
         qd, _ = solve_null_space_velocity(
             jacobian, twist, DLS_EPSILON, DLS_LAMBDA_MAX, null
@@ -428,9 +440,7 @@ class RedundancyTracker:
         """The criterion at each row of ``q_all`` (3, 7)."""
         if name == "manipulability":
             return compute_tool_poses(self.robot, q_all)[2]
-        return np.array(
-            [compute_limit_score(q, self._lower, self._upper) for q in q_all]
-        )
+        return _limit_weights(q_all, self._lower, self._upper)[0]
 
 
 __all__ = [

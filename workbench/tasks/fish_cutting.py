@@ -319,18 +319,19 @@ def summarize_redundancy(result: FishCuttingResult) -> dict | None:
     Returns:
         None on a six-axis arm; else ``parameter`` (``"arm angle"`` or
         ``"q7"``), ``policy``, the parameter's ``start``, ``end``, ``min``,
-        ``max`` [rad], ``travel`` (the sum of its steps' sizes, ψ's across ±π
-        the short way) [rad], ``max_rate`` [rad/s], ``moving_cycles`` (cycles
-        that changed it), ``branch`` (the label, or labels in order if it
-        changed), ``branch_changes`` and ``min_limit_margin`` [rad] (the
-        smallest distance of a joint command to its limit over the run).
+        ``max`` [rad] (ψ's trace unwrapped: continuous across ±π, from its
+        start in (−π, π]), ``travel`` (the sum of its steps' sizes) [rad],
+        ``max_rate`` [rad/s], ``moving_cycles`` (cycles that changed it),
+        ``branch`` (the label, or the labels in order if it changed),
+        ``branch_changes`` and ``min_limit_margin`` [rad] (the smallest
+        distance of a joint command to its limit over the run).
     """
     if result.redundancy_parameter is None:
         return None
     values = result.redundancy
-    steps = np.diff(values)
     if result.redundancy_parameter == "arm angle":
-        steps = np.remainder(steps + np.pi, 2.0 * np.pi) - np.pi
+        values = np.unwrap(values)
+    steps = np.diff(values)
     period = 1.0 / result.setup.planning_rate
     labels = [result.branch[0]] + [
         b for a, b in itertools.pairwise(result.branch) if a != b
