@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import gc
 import json
 import math
@@ -12,7 +13,7 @@ import pytest
 from workbench import InfeasibleError, InputError, load_robot
 from workbench.cli import main
 from workbench.collision import CollisionChecker
-from workbench.ik import get_structure
+from workbench.ik import get_redundant_solver, get_structure
 from workbench.ik.structure import axis_lines
 from workbench.tasks import (
     FishCuttingSetup,
@@ -21,7 +22,9 @@ from workbench.tasks import (
     VerticalDownCut,
     run_fish_cutting,
 )
+from workbench.tasks.fish_cutting import summarize_fish_cutting
 from workbench.tasks.fish_program import (
+    FOLD_MARGIN,
     KANG_BASE_HEIGHT,
     KANG_HOME_ROTATION,
     KANG_HOME_WRIST_CENTER,
@@ -29,8 +32,10 @@ from workbench.tasks.fish_program import (
     check_waypoints,
     compute_home_configuration,
     compute_waypoints,
+    get_arm_reach,
     get_base_placement,
     get_cell_scale,
+    get_shortest_fold,
     get_world_transforms,
 )
 from workbench.tasks.fish_scene import get_fish_cutting_scene
@@ -427,3 +432,130 @@ def test_cli_runs_any_closed_form_arm_in_its_scaled_cell(capsys, run) -> None:
     assert [e["kind"] for e in result["events"]][:2] == ["flesh", "bone"]
     code, out, _ = run_cli(capsys, "fishcut", "--json", "--no-collision")
     assert code == 0 and json.loads(out)["scale"] == 1.0
+
+
+# -- seven-axis arms -----------------------------------------------------------------
+SEVEN_AXIS_SCALES = {
+    # reach hypot(a3, d3) + hypot(a4, d5) over KANG_REACH
+    "panda": (math.hypot(0.0825, 0.316) + math.hypot(0.0825, 0.384), 0.83),
+    # its elbow (±120°) folds too little for Kang's start pose at its reach 0.82 m
+    "iiwa14": (0.42 + 0.40, 1.05),
+}
+#: Pinocchio axis lines meet (S, W) to rounding [m].
+ATOL_LINES = 1e-9
+
+
+def _axis_point(robot, q, joint: int):
+    """A point (3,) [m] and the direction (3,) of joint ``joint`` (1-based) at q."""
+    pin = pytest.importorskip("pinocchio")
+    jacobian = pin.computeJointJacobians(robot.model, robot.data, q)
+    v, w = jacobian[:3, joint - 1], jacobian[3:, joint - 1]  # WORLD: v = p × w
+    return np.cross(w, v) / (w @ w), w / np.linalg.norm(w)
+
+
+def _meet(robot, q, i: int, j: int) -> np.ndarray:
+    """The point where axes i and j meet (the midpoint of their shortest link)."""
+    p1, d1 = _axis_point(robot, q, i)
+    p2, d2 = _axis_point(robot, q, j)
+    a = np.array([[d1 @ d1, -d1 @ d2], [d1 @ d2, -d2 @ d2]])
+    s, t = np.linalg.solve(a, [(p2 - p1) @ d1, (p2 - p1) @ d2])
+    x1, x2 = p1 + s * d1, p2 + t * d2
+    assert np.linalg.norm(x1 - x2) <= ATOL_LINES
+    return 0.5 * (x1 + x2)
+
+
+@pytest.fixture(scope="module", params=sorted(SEVEN_AXIS_SCALES))
+def seven_axis_run(request):
+    robot = load_robot(request.param)
+    return robot, run_fish_cutting(robot)
+
+
+def test_seven_axis_cell_scale(seven_axis_run):
+    robot, result = seven_axis_run
+    reach, scale = SEVEN_AXIS_SCALES[robot.name]
+    assert get_arm_reach(get_structure(robot)) == pytest.approx(reach, abs=1e-12)
+    assert get_cell_scale(robot) == scale == result.setup.scale
+
+
+def test_shortest_fold_against_pinocchio(seven_axis_run):
+    robot, _ = seven_axis_run
+    q = np.zeros(7)
+    lo, hi = robot.lower[3] + FOLD_MARGIN, robot.upper[3] - FOLD_MARGIN
+    distances = []
+    for q4 in np.linspace(lo, hi, 4001):
+        q[3] = q4
+        distances.append(np.linalg.norm(_meet(robot, q, 5, 6) - _meet(robot, q, 1, 2)))
+    # sampled: within the sampling's error of the exact minimum, never below
+    fold = get_shortest_fold(robot)
+    assert fold <= min(distances) + 1e-12
+    assert fold >= min(distances) - 1e-6
+
+
+def test_seven_axis_shoulder_and_wrist_where_the_scaled_pumas_are(seven_axis_run):
+    """With the tool down, W − S is Kang's wrist centre − shoulder, scaled.
+
+    Exactly for the SRS arm; the Franka's wrist point is its flange offset
+    a6 = 0.088 m aside of axis 7, so there only the height is exact.
+    """
+    robot, result = seven_axis_run
+    _, base = get_world_transforms(robot, result.setup)
+    q_home = result.q[0]
+    shoulder = base.act(_meet(robot, q_home, 1, 2))
+    wrist = base.act(_meet(robot, q_home, 5, 6))
+    s = result.setup.scale
+    np.testing.assert_allclose(shoulder[:2], 0.0, rtol=0, atol=1e-9)
+    expected = s * (KANG_HOME_WRIST_CENTER - np.array([0.0, 0.0, KANG_BASE_HEIGHT]))
+    offset = abs(get_structure(robot).table.joints[5].a)  # a6: 0 (SRS), 0.088 m
+    aside = np.linalg.norm((wrist - shoulder - expected)[:2])
+    assert aside == pytest.approx(offset, abs=1e-9)
+    assert wrist[2] - shoulder[2] == pytest.approx(expected[2], abs=1e-9)
+
+
+def test_seven_axis_run_is_continuous_within_limits_without_flips(seven_axis_run):
+    robot, result = seven_axis_run
+    q = result.q
+    assert len(result.t) - 1 == 2869 and result.branch_flips == 0
+    assert np.all((q >= robot.lower) & (q <= robot.upper))
+    assert result.min_limit_margin > 0.0
+    step = np.abs(np.diff(q, axis=0))
+    assert np.all(step <= robot.velocity_limit / SETUP.planning_rate)
+    servo = result.servo
+    assert np.all(np.abs(servo.qd) <= robot.velocity_limit)
+    assert np.all((servo.q >= robot.lower) & (servo.q <= robot.upper))
+
+
+def test_seven_axis_trace_and_summary(seven_axis_run):
+    robot, result = seven_axis_run
+    solver = get_redundant_solver(robot)
+    trace = solver.parameter_of(result.q)
+    wrapped = np.remainder(trace - result.redundancy + np.pi, 2 * np.pi) - np.pi
+    np.testing.assert_allclose(wrapped, 0.0, rtol=0, atol=1e-9)
+    summary = summarize_fish_cutting(result, robot.name)
+    trace_summary = summary["redundancy"]
+    assert set(trace_summary) == {
+        "parameter", "policy", "start", "end", "min", "max", "travel", "max_rate",
+        "moving_cycles", "branch", "branch_changes", "min_limit_margin",
+    }  # fmt: skip
+    assert trace_summary["parameter"] == solver.parameter
+    assert trace_summary["policy"] == "keep"
+    assert trace_summary["start"] == result.redundancy[0]
+    assert trace_summary["min"] <= trace_summary["start"] <= trace_summary["max"]
+    assert trace_summary["min_limit_margin"] == result.min_limit_margin
+    assert summary["branch_flips"] == 0 and summary["cycles"] == 2869
+
+
+def test_six_axis_summary_has_no_redundancy(run):
+    summary = summarize_fish_cutting(run, "puma560-kang")
+    assert summary["redundancy"] is None and summary["branch_flips"] == 0
+    assert np.isnan(run.redundancy).all() and run.redundancy_parameter is None
+
+
+def test_seven_axis_policy_options():
+    panda = load_robot("panda")
+    setup = dataclasses.replace(
+        FishCuttingSetup().scaled(get_cell_scale(panda)), max_cycles=50
+    )
+    with pytest.raises(InfeasibleError, match="did not finish within 50 cycles"):
+        run_fish_cutting(panda, setup=setup, redundancy="limit_margin")
+    with pytest.raises(InputError, match="no redundancy"):
+        run_fish_cutting(load_robot("puma560-kang"), redundancy="keep")

@@ -270,7 +270,8 @@ def get_base_placement(robot: Robot, setup: FishCuttingSetup) -> pin.SE3:
     wrist centre itself: its shoulder goes that much higher (``d7`` plus the
     tool frame's offset along axis 7), so that with the tool pointing down,
     as in every pose of the program, its wrist point moves as the scaled
-    PUMA's wrist centre relative to the shoulder.
+    PUMA's wrist centre relative to the shoulder (the Panda's wrist point,
+    where axes 5 and 6 meet, is a further a6 = 0.088 m aside of axis 7).
 
     Raises:
         UnsupportedRobotError: If the robot has no closed-form IK.
