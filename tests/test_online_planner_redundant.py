@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from workbench import InputError, Robot, load_robot
+from workbench import InfeasibleError, InputError, Robot, load_robot
 from workbench.ik import (
     DLS_EPSILON,
     DLS_LAMBDA_MAX,
@@ -255,3 +255,22 @@ def test_limit_score_is_a_smooth_minimum_and_its_gradient_is_exact(seed):
     np.testing.assert_allclose(gradient, numeric, rtol=0, atol=ATOL_FD)
     rows = compute_limit_score(np.stack([q, q]), lower, upper)
     np.testing.assert_allclose(rows, [score, score], rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("name", ["iiwa14", "panda"])
+def test_try_track_is_track_without_the_error(name):
+    robot = load_robot(name)
+    solver = get_redundant_solver(robot)
+    q = IIWA_START if name == "iiwa14" else PANDA_START
+    pose = robot.fk(q).homogeneous
+    value = solver.parameter_of(q)
+    found = solver.try_track(pose, value, q, 0, 10.0)
+    expected = solver.track(pose, value, q, 0, 10.0)
+    assert found is not None
+    np.testing.assert_array_equal(found[0], expected[0])
+    assert found[1:] == expected[1:]
+    far = pose.copy()
+    far[:3, 3] = [5.0, 0.0, 0.0]  # [m], beyond any reach
+    assert solver.try_track(far, value, q, 0, 10.0) is None
+    with pytest.raises(InfeasibleError):
+        solver.track(far, value, q, 0, 10.0)

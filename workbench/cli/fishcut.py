@@ -25,11 +25,13 @@ from workbench.cli._common import (
     load_robot_from_args,
     print_json,
 )
+from workbench.cli._redundancy import refuse_redundancy
 from workbench.collision import CollisionChecker
 from workbench.model.robot import Robot
+from workbench.planning.redundancy_policy import REDUNDANCY_POLICIES
 from workbench.tasks import FishCuttingSetup, SimulatedFish, run_fish_cutting
 from workbench.tasks.fish_cutting import FishCuttingResult, summarize_fish_cutting
-from workbench.tasks.fish_program import get_cell_scale
+from workbench.tasks.fish_program import get_cell_scale, is_redundant
 from workbench.trajectory.csv_io import write_trajectory_csv
 
 DEFAULT_ROBOT = "puma560-kang"
@@ -50,11 +52,13 @@ def register(commands: argparse._SubParsersAction) -> None:
         description=(
             "Run the fish-cutting program of Kang (2007, Fig. 7) on a simulated fish "
             "with the online planner, on any arm with a closed form (OPW or UR "
-            "type): Kang's cell is scaled to the arm's reach (every length and the "
-            "tool's speed and acceleration limits; scale 1 for the PUMA models) and "
-            "the arm's shoulder is put where the PUMA's is. Cartesian command, "
-            "closed-form IK with branch "
-            "continuity and DLS joint rates each planning cycle, cubic Hermite "
+            "type, or a seven-axis SRS or Franka arm): Kang's cell is scaled to "
+            "the arm's reach (every length and the tool's speed and acceleration "
+            "limits; scale 1 for the PUMA models) and the arm's shoulder is put "
+            "where the PUMA's is. Cartesian command, closed-form IK with branch "
+            "continuity (seven-axis arms: its redundancy parameter moved by "
+            "--redundancy-policy) and DLS joint rates each planning cycle, cubic "
+            "Hermite "
             "interpolation at the servo rate. Touching the flesh slows the vertical "
             "cut, touching the bone stops it (or lifts the horizontal cut). The "
             "servo path is checked for collisions with the scene and between the "
@@ -98,6 +102,14 @@ def register(commands: argparse._SubParsersAction) -> None:
         help=f"servo samples per second, a multiple of the planning rate "
         f"(default {_DEFAULTS.servo_rate:g}, at most {MAX_RATE_HZ:g})",
     )
+    parser.add_argument(
+        "--redundancy-policy",
+        choices=REDUNDANCY_POLICIES,
+        metavar="POLICY",
+        help="seven-axis arms: how the planner moves the redundancy parameter (the "
+        "arm angle ψ of an SRS arm, q7 of a Franka arm): keep (the default: "
+        "constant unless a joint nears a limit), limit_margin or manipulability",
+    )
     add_collision_arguments(
         parser, "Kang's cell scaled to the arm: table, fish, pedestal of a DH model"
     )
@@ -138,6 +150,17 @@ def run(args: argparse.Namespace) -> int:
         f"{summary['wrist_flips']}, wrist singularity crossings "
         f"{summary['wrist_singularity_crossings']}, DLS cycles {summary['dls_cycles']}"
     )
+    trace = summary["redundancy"]
+    if trace is not None:
+        print(
+            f"redundancy {trace['parameter']} ({trace['policy']}): "
+            f"{trace['start']:.4f} -> {trace['end']:.4f} rad, range "
+            f"[{trace['min']:.4f}, {trace['max']:.4f}], travel {trace['travel']:.4f} "
+            f"rad, max rate {trace['max_rate']:.3f} rad/s, moved in "
+            f"{trace['moving_cycles']} cycles; min limit margin "
+            f"{trace['min_limit_margin']:.4f} rad; branch flips "
+            f"{summary['branch_flips']}"
+        )
     for option, path in (("csv", args.csv), ("html", args.html)):
         if path is not None:
             print(f"{option} written to {path}")
@@ -152,13 +175,15 @@ def _run_fish_cutting(robot: Robot, args: argparse.Namespace) -> FishCuttingResu
         InfeasibleError: If the run does not finish or leaves a limit.
     """
     scale = get_cell_scale(robot)  # (an arm without a closed form fails here)
+    if args.redundancy_policy is not None and not is_redundant(robot):
+        raise refuse_redundancy(robot, "--redundancy-policy")
     setup = FishCuttingSetup(
         planning_rate=args.planning_rate, servo_rate=args.servo_rate
     ).scaled(scale)
     if args.max_velocity is not None:
         setup = dataclasses.replace(setup, max_velocity=args.max_velocity)
     fish = SimulatedFish(args.seed).scaled(scale)
-    return run_fish_cutting(robot, fish, setup)
+    return run_fish_cutting(robot, fish, setup, redundancy=args.redundancy_policy)
 
 
 def _write_outputs(

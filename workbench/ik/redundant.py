@@ -409,6 +409,33 @@ class RedundantSolver:
             self._raise(status, pose, value)
         return q, index, bool(within)
 
+    def try_track(
+        self,
+        pose: FloatArray,
+        value: float,
+        q_predicted: FloatArray,
+        branch: int,
+        max_step2: float,
+    ) -> tuple[FloatArray, int, bool] | None:
+        """:meth:`track`, but None where no branch reaches (no error is built).
+
+        For callers that probe values of the parameter (the online planner):
+        the error of :meth:`track` says why a pose is out of reach, which
+        takes a search over the parameter (milliseconds for q7).
+
+        Returns:
+            ``(q, index, within)`` as :meth:`track`, or None if the kernel's
+            status is not OK (the pose out of reach for this value, or not
+            rigid).
+        """
+        q = np.empty(7)
+        status, index, within = self._kernel.track(
+            self.geometry, pose, value, q_predicted, branch, max_step2, q
+        )
+        if status != OK:
+            return None
+        return q, index, bool(within)
+
     def _previous(self, q_previous: npt.ArrayLike) -> FloatArray:
         """``q_previous`` checked (``Robot.check_configuration``), as floats."""
         return self.robot.check_configuration(q_previous)

@@ -54,7 +54,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from workbench.errors import InputError, WorkbenchError
+from workbench.errors import InputError
 from workbench.ik import (
     DLS_EPSILON,
     DLS_LAMBDA_MAX,
@@ -124,10 +124,15 @@ class RedundantTrack(Protocol):
         """Closed form at ``value`` continuing a motion: ``(q, index, within)``."""
         ...
 
-    def solve_arrays(
-        self, pose: FloatArray, value: float, q_previous: FloatArray
-    ) -> tuple[FloatArray, npt.NDArray[np.uint8]]:
-        """Every branch at ``value``: ``(q (B, 7), flags (B,))``."""
+    def try_track(
+        self,
+        pose: FloatArray,
+        value: float,
+        q_predicted: FloatArray,
+        branch: int,
+        max_step2: float,
+    ) -> tuple[FloatArray, int, bool] | None:
+        """As ``track``, None where no branch reaches (no error built)."""
         ...
 
     def parameter_of(self, q: npt.ArrayLike) -> float | FloatArray:
@@ -347,7 +352,9 @@ class RedundancyTracker:
         ``q_last + period · (J# twist + (I − J# J) z)``, then Gauss–Newton
         steps ``q += J# e`` on the pose error ``e`` until it is below
         :data:`POSE_TOL`; :attr:`value` becomes its parameter and the branch
-        the closed form's branch nearest it at that value.
+        the closed form's branch nearest it at that value. Without
+        convergence in :data:`MAX_POSE_STEPS` steps: the closed form at the
+        last value (which raises if the pose is out of reach).
 
         Args:
             pose: (4, 4) target pose of the tool frame, base frame [m].
@@ -357,6 +364,9 @@ class RedundancyTracker:
 
         Returns:
             ``(q, branch index, within limits)``.
+
+        Raises:
+            UnreachableError: If the pose is out of reach.
         """
         self.differential = True
         robot = self.robot
@@ -370,18 +380,17 @@ class RedundancyTracker:
             null = self._max_rate * ramp * gradient
         q = q_last + self._period * self._velocity(q_last, twist, null, _LWA)
         target = pin.SE3(pose)
-        for _ in range(MAX_POSE_STEPS):
+        for _ in range(MAX_POSE_STEPS + 1):
             error = pin.log6(robot.fk(q).actInv(target)).vector  # tool axes
             if np.abs(error).max() <= POSE_TOL:
                 break
             q = q + self._velocity(q, error, self._zero, _LOCAL)
+        else:  # no convergence: out of reach (the closed form's error says why)
+            return self.solver.track(pose, self.value, q_last, index, 0.0)
         value = float(self.solver.parameter_of(q))
-        try:
-            q_all, _ = self.solver.solve_arrays(pose, value, q)
-            step = q_all - q
-            index = int(np.nanargmin(np.einsum("ij,ij->i", step, step)))
-        except (WorkbenchError, ValueError):  # (none reached: the index stays)
-            pass
+        found = self.solver.try_track(pose, value, q, index, 0.0)  # nearest of all
+        if found is not None:
+            index = found[1]
         within = bool(((q >= self._lower) & (q <= self._upper)).all())
         self._last_step = value - self.value
         if self._periodic:
@@ -415,10 +424,7 @@ class RedundancyTracker:
         max_step2: float,
     ) -> tuple[FloatArray, int, bool] | None:
         """The closed form at ``value``; None where no branch reaches."""
-        try:
-            return self.solver.track(pose, value, q_predicted, branch, max_step2)
-        except WorkbenchError:
-            return None
+        return self.solver.try_track(pose, value, q_predicted, branch, max_step2)
 
     def _shift(self, value: float, step: float) -> float:
         """``value + step`` within the parameter's range (ψ wraps, q7 clips)."""
