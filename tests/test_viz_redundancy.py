@@ -238,3 +238,23 @@ def test_sweep_page_renders_the_ghosts(chromium, tmp_path, name) -> None:
         chromium, viewer.render_html(legend=False), tmp_path / "n.png", seek(0.0)
     )
     assert changed(shown, bare).mean() > 0.01  # the ghosts cover part of the view
+
+
+def test_ghosts_of_collada_arms_take_their_colour_from_the_collision_geometry() -> None:
+    from workbench.viz._arm import get_colorable_geometry
+
+    panda = load_robot("panda")
+    geometry, visual = get_colorable_geometry(panda)
+    assert geometry is panda.collision_model and not visual
+    for name in ("iiwa14", "puma560"):  # primitives, STL: their visual geometry
+        robot = load_robot(name)
+        assert get_colorable_geometry(robot) == (robot.visual_model, True)
+    viewer = Viewer(panda, Q0["panda"])
+    viewer.show_ghosts([Q0["panda"]], labels=["g"], colors=[[1.0, 0.0, 0.0]])
+    page = viewer.render_html()
+    objects = by_path(page_commands(page), "set_object")
+    ghosts = [c for p, c in objects.items() if p.startswith("/meshcat/ghosts/g/")]
+    assert ghosts and all(
+        c["object"]["materials"][0]["color"] == 0xFF0000 for c in ghosts
+    )
+    assert "collision geometry" in page

@@ -38,7 +38,9 @@ def _corners(geometry: pin.GeometryObject) -> FloatArray:
 class Arm:
     """The robot's visual geometry under scene node ``root`` (arm or ghost).
 
-    ``with_base=False`` leaves out the geometry fixed to the base (joint 0).
+    ``with_base=False`` leaves out the geometry fixed to the base (joint 0);
+    ``geometry_model`` replaces the visual geometry (e.g. by the collision
+    geometry, whose meshes take a colour where Collada ones keep their own).
 
     Raises:
         URDFLoadError: If Pinocchio cannot draw a geometry object (it only
@@ -53,8 +55,10 @@ class Arm:
         rgba: list[float] | None = None,
         *,
         with_base: bool = True,
+        geometry_model: pin.GeometryModel | None = None,
     ):
-        geometry_model = robot.visual_model
+        if geometry_model is None:
+            geometry_model = robot.visual_model
         self.viz = MeshcatVisualizer(robot.model, None, geometry_model)
         self.viz.initViewer(viewer=scene)
         with warnings.catch_warnings(record=True) as caught:
@@ -118,6 +122,23 @@ class Arm:
         if not chosen:
             return np.zeros((1, 3))
         return np.vstack([c @ t[:3, :3].T + t[:3, 3] for t, c in chosen])
+
+
+def get_colorable_geometry(robot: Robot) -> tuple[pin.GeometryModel, bool]:
+    """The geometry a coloured copy of the arm is drawn with, and whether it is visual.
+
+    Collada (``.dae``) meshes keep the colours of their own materials, so an arm
+    whose visual geometry has one is drawn with its collision geometry (STL,
+    primitives) when that has none; else with its visual geometry.
+    """
+
+    def has_collada(model: pin.GeometryModel) -> bool:
+        return any(g.meshPath.lower().endswith(".dae") for g in model.geometryObjects)
+
+    visual, collision = robot.visual_model, robot.collision_model
+    if has_collada(visual) and collision.ngeoms and not has_collada(collision):
+        return collision, False
+    return visual, True
 
 
 def as_configurations(robot: Robot, q: npt.ArrayLike, name: str) -> FloatArray:

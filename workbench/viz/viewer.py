@@ -26,7 +26,12 @@ from workbench.errors import DimensionError, InputError, NonFiniteError
 from workbench.model.robot import Robot
 from workbench.poses import as_se3
 from workbench.viz import _legend, _shapes
-from workbench.viz._arm import Arm, as_configurations, to_node_name
+from workbench.viz._arm import (
+    Arm,
+    as_configurations,
+    get_colorable_geometry,
+    to_node_name,
+)
 from workbench.viz._camera import CameraView, frame_points
 from workbench.viz._scene import SceneRecorder, render_page
 from workbench.viz._server import LiveServer
@@ -221,7 +226,9 @@ class Viewer:
         """Draw translucent copies of the arm, e.g. every IK branch of one pose.
 
         Replaces earlier ghosts. Each is a node ``ghosts/<label>`` that the
-        page's control panel can hide.
+        page's control panel can hide. An arm whose visual meshes are Collada
+        files (they keep their own colours) gets ghosts of its collision
+        geometry, which take the ghost's colour.
 
         Args:
             configurations: Shape (M, nq) [rad], e.g. the ``q`` of each
@@ -252,15 +259,29 @@ class Viewer:
             if rgb.shape != (len(qs), 3):
                 raise DimensionError("colors", (len(qs), 3), rgb.shape)
         self._scene["ghosts"].delete()
+        geometry, visual = get_colorable_geometry(self.robot)
         points = [np.zeros((0, 3))]
         for i, (qk, label) in enumerate(zip(qs, labels, strict=True)):
             rgba = [*(float(c) for c in rgb[i]), float(opacity)]
             root = f"ghosts/{to_node_name(label)}"
-            ghost = Arm(self.robot, self._scene, root, rgba, with_base=False)
+            ghost = Arm(
+                self.robot,
+                self._scene,
+                root,
+                rgba,
+                with_base=False,
+                geometry_model=geometry,
+            )
             ghost.draw(self._scene, qk)
             points.append(ghost.compute_points(qk))
         self._extra_points["ghosts"] = np.vstack(points)
-        self._legend["ghosts"] = legend or _legend.ghosts(labels, rgb.tolist())
+        entry = legend or _legend.ghosts(labels, rgb.tolist())
+        if not visual:
+            entry += (
+                "<div>ghosts drawn with the collision geometry (the visual "
+                "meshes keep their own colours)</div>"
+            )
+        self._legend["ghosts"] = entry
 
     def show_collisions(self, checker: CollisionChecker) -> None:
         """Draw the checker's scene; colour contacts and the closest pair from now on.
