@@ -144,3 +144,119 @@ def test_bad_rate_exits_2(capsys) -> None:
 def test_missing_subcommand_exits_2(capsys) -> None:
     code, _, err = run(capsys, "plan")
     assert code == EXIT_BAD_INPUT and "KIND" in err
+
+
+# -- pick and place as tool poses (closed form; seven-axis arms at a redundancy value)
+PICK_POSE = ["0.5", "0.1", "0.3", "0", "1", "0", "0"]  # [m], tool z down
+PLACE_POSE = ["0.4", "-0.3", "0.4", "0", "1", "0", "0"]
+POSES = ("--pick-xyz-quat-wxyz", *PICK_POSE, "--place-xyz-quat-wxyz", *PLACE_POSE)
+#: FK of the planned ends against the typed poses [m, 1].
+ATOL_POSE = 1e-12
+
+
+def _plan_poses(capsys, robot: str, *extra: str):
+    code, out, err = run(
+        capsys, "plan", "pick-place", "--robot", robot, *POSES, "--duration", "6",
+        "--no-collision", "--json", *extra,
+    )  # fmt: skip
+    return code, json.loads(out) if out else None, err
+
+
+def _check_ends(name: str, result: dict) -> None:
+    import pinocchio as pin
+
+    from workbench import load_robot
+    from workbench.poses import rotation_from_quat_wxyz
+
+    robot = load_robot(name)
+    for q, typed in ((result["q_pick"], PICK_POSE), (result["q_place"], PLACE_POSE)):
+        x = np.array(typed, dtype=float)
+        pose = robot.fk(np.array(q))
+        target = pin.SE3(rotation_from_quat_wxyz(x[3:]), x[:3])
+        np.testing.assert_allclose(pose.translation, target.translation, atol=ATOL_POSE)
+        np.testing.assert_allclose(pose.rotation, target.rotation, atol=ATOL_POSE)
+        assert np.all((q >= robot.lower) & (q <= robot.upper))
+
+
+def test_seven_axis_poses_at_a_given_redundancy(capsys) -> None:
+    from workbench import ik, load_robot
+
+    code, result, _ = _plan_poses(capsys, "iiwa14", "--redundancy", "1.5")
+    assert code == 0 and result["branch"] == "shoulder-pos/elbow-pos/wrist-pos"
+    assert result["redundancy"] == {
+        "parameter": "arm angle", "source": "given", "criterion": None,
+        "pick": 1.5, "place": 1.5,
+    }  # fmt: skip
+    _check_ends("iiwa14", result)
+    iiwa = load_robot("iiwa14")
+    for key in ("q_pick", "q_place"):  # the closed form at ψ = 1.5 exactly
+        value = ik.redundancy_parameter(iiwa, np.array(result[key]))
+        assert value == pytest.approx(1.5, abs=1e-9)
+
+
+def test_seven_axis_poses_at_chosen_values_on_one_branch(capsys) -> None:
+    code, result, _ = _plan_poses(capsys, "panda", "--criterion", "manipulability")
+    assert code == 0
+    redundancy = result["redundancy"]
+    assert redundancy["source"] == "chosen"
+    assert redundancy["criterion"] == "manipulability"
+    assert redundancy["parameter"] == "q7"
+    assert result["q_pick"][6] == redundancy["pick"]  # q7 is the parameter
+    assert result["q_place"][6] == redundancy["place"]
+    _check_ends("panda", result)
+
+
+def test_six_axis_poses_on_one_branch(capsys) -> None:
+    code, result, _ = _plan_poses(capsys, "ur5")
+    assert code == 0 and result["redundancy"] is None
+    _check_ends("ur5", result)
+    from workbench import ik, load_robot
+
+    ur5 = load_robot("ur5")
+    for key in ("q_pick", "q_place"):  # both ends on the one branch reported
+        q = np.array(result[key])
+        solutions = ik.analytic(ur5, ur5.fk(q), q_previous=q)
+        assert ik.nearest(solutions, q).branch == result["branch"]
+
+
+def test_joint_values_report_their_redundancy(capsys) -> None:
+    pick = ["0", "-30", "0", "-120", "0", "90", "45"]
+    place = ["60", "10", "20", "-90", "30", "120", "0"]
+    code, out, _ = run(
+        capsys, "plan", "pick-place", "--robot", "panda", "--pick-deg", *pick,
+        "--place-deg", *place, "--duration", "3", "--json", "--no-collision",
+    )  # fmt: skip
+    result = json.loads(out)
+    assert code == 0 and result["branch"] is None
+    assert result["redundancy"]["source"] == "configuration"
+    assert result["redundancy"]["pick"] == pytest.approx(np.deg2rad(45), abs=1e-15)
+
+
+@pytest.mark.parametrize(
+    ("robot", "args", "code", "fragment"),
+    [
+        ("ur5", [*POSES, "--redundancy", "1"], EXIT_BAD_INPUT, "no redundancy"),
+        ("ur5", [*POSES, "--criterion", "manipulability"], EXIT_BAD_INPUT,
+         "no redundancy"),
+        ("iiwa14", [*POSES, "--redundancy", "1", "--criterion", "limit_margin"],
+         EXIT_BAD_INPUT, "not with --redundancy"),
+        ("panda", ["--pick-deg", *["0"] * 7, "--place-deg", *["0"] * 7,
+                   "--redundancy", "1"], EXIT_BAD_INPUT, "fix the redundancy"),
+        ("panda", ["--pick-deg", *["0"] * 7, "--place-xyz-quat-wxyz", *PLACE_POSE],
+         EXIT_BAD_INPUT, "both as joint values"),
+        ("iiwa14", ["--pick-xyz-quat-wxyz", *PICK_POSE[:3], "0", "0", "0", "0",
+                    "--place-xyz-quat-wxyz", *PLACE_POSE], EXIT_BAD_INPUT,
+         "--pick-xyz-quat-wxyz"),
+        ("iiwa14", [*POSES, "--redundancy", "0.5"], EXIT_INFEASIBLE,
+         "no IK solution within the joint limits"),
+        ("iiwa14", ["--pick-xyz-quat-wxyz", "3", *PICK_POSE[1:],
+                    "--place-xyz-quat-wxyz", *PLACE_POSE], EXIT_INFEASIBLE,
+         "out of reach"),
+    ],
+)  # fmt: skip
+def test_pose_options_exit_codes(capsys, robot, args, code, fragment) -> None:
+    result = run(
+        capsys, "plan", "pick-place", "--robot", robot, *args, "--duration", "6",
+        "--no-collision",
+    )  # fmt: skip
+    assert result[0] == code and fragment in result[2], result[2]

@@ -1,4 +1,9 @@
-"""``workbench plan pick-place``: Angeles' normal-spline pick-and-place trajectory."""
+"""``workbench plan pick-place``: Angeles' normal-spline pick-and-place trajectory.
+
+Pick and place are joint values, or tool poses solved in closed form
+(:mod:`workbench.cli._plan_poses`; seven-axis arms at ``--redundancy`` or a
+value chosen by ``--criterion``, as ``workbench ik``).
+"""
 
 from __future__ import annotations
 
@@ -26,8 +31,10 @@ from workbench.cli._common import (
     get_input_paths,
     load_robot_from_args,
     print_json,
-    q_from_degrees,
 )
+from workbench.cli._plan_poses import get_configurations
+from workbench.cli._redundancy import add_redundancy_argument
+from workbench.cli.ik import CRITERIA
 from workbench.errors import InputError
 from workbench.trajectory import minimum_duration, pick_and_place
 from workbench.trajectory.csv_io import check_sample_count, write_trajectory_csv
@@ -55,7 +62,9 @@ def register(commands: argparse._SubParsersAction) -> None:
         "pick-place",
         help="Angeles et al. (1988) normal-spline pick-and-place trajectory",
         description="Rest-to-rest joint trajectory from the pick to the place "
-        "configuration along Angeles' normal spline; checks position, speed and "
+        "configuration along Angeles' normal spline (each given as joint values, "
+        "or as a tool pose solved in closed form on one branch; seven-axis arms "
+        "at --redundancy or a value chosen by --criterion); checks position, speed and "
         "acceleration limits exactly, reports the minimum duration and the "
         "clearance to the scene and between the links (proven between samples). "
         "Exit code 3 (after printing the result) when a limit is violated or two "
@@ -63,21 +72,35 @@ def register(commands: argparse._SubParsersAction) -> None:
     )
     add_robot_argument(pick)
     add_limit_arguments(pick)
-    pick.add_argument(
-        "--pick-deg",
-        nargs="+",
-        type=finite_float,
-        required=True,
-        metavar="Q",
-        help="pick configuration [deg]",
+    for name in ("pick", "place"):
+        given = pick.add_mutually_exclusive_group(required=True)
+        given.add_argument(
+            f"--{name}-deg",
+            nargs="+",
+            type=finite_float,
+            metavar="Q",
+            help=f"{name} configuration [deg]",
+        )
+        given.add_argument(
+            f"--{name}-xyz-quat-wxyz",
+            nargs=7,
+            type=finite_float,
+            metavar="X",
+            help=f"{name} pose of the tool frame, base frame: position x y z [m], "
+            "then unit quaternion w x y z; solved in closed form, the pick's "
+            "branch of largest joint-limit margin, the place on the same branch",
+        )
+    add_redundancy_argument(
+        pick,
+        "[rad]: both poses are solved at that value (with "
+        "--pick-xyz-quat-wxyz and --place-xyz-quat-wxyz)",
     )
     pick.add_argument(
-        "--place-deg",
-        nargs="+",
-        type=finite_float,
-        required=True,
-        metavar="Q",
-        help="place configuration [deg]",
+        "--criterion",
+        choices=CRITERIA,
+        help="seven-axis arms, poses without --redundancy: how each pose's value "
+        "is chosen (ik.choose_redundancy; limit_margin, the default, or "
+        "manipulability); the place's on the pick's branch",
     )
     pick.add_argument(
         "--duration",
@@ -133,8 +156,7 @@ def run_pick_place(args: argparse.Namespace) -> int:
         f"--duration {args.duration:g} s at --rate {args.rate:g} Hz",
     )
     robot = load_robot_from_args(args)
-    q_pick = q_from_degrees(robot, args.pick_deg)
-    q_place = q_from_degrees(robot, args.place_deg)
+    q_pick, q_place, ik_keys = get_configurations(args, robot)
     traj = pick_and_place(robot, q_pick, q_place, args.duration, n_points=args.n_points)
     t_min = minimum_duration(robot, q_pick, q_place, n_points=args.n_points)
     violations = traj.check_limits()
@@ -171,6 +193,7 @@ def run_pick_place(args: argparse.Namespace) -> int:
         "csv": None if args.csv is None else str(args.csv),
         "samples": 0 if samples is None else int(samples.t.size),
         "plot": None if args.plot is None else str(args.plot),
+        **ik_keys,
         **get_collision_keys(scene, clearance),
     }
     if args.json:
@@ -227,6 +250,19 @@ def _print_human(robot, traj, result: dict) -> None:
             f"{np.rad2deg(robot.velocity_limit[i]):9.2f}"
             f"{np.rad2deg(result['peak_acceleration'][i]):11.3f}"
             f"{np.rad2deg(robot.acceleration_limit[i]):9.2f}"
+        )
+    redundancy = result["redundancy"]
+    if result["branch"] is not None:
+        print(f"pick and place poses on branch {result['branch']}")
+    if redundancy is not None:
+        how = {
+            "given": "given",
+            "chosen": f"chosen: {redundancy['criterion']}",
+            "configuration": "of the configurations",
+        }[redundancy["source"]]
+        print(
+            f"{redundancy['parameter']} at pick {redundancy['pick']:.6f} rad, at "
+            f"place {redundancy['place']:.6f} rad ({how})"
         )
     if result["violations"]:
         print(f"{len(result['violations'])} limit violation(s):")
