@@ -559,3 +559,25 @@ def test_seven_axis_policy_options():
         run_fish_cutting(panda, setup=setup, redundancy="limit_margin")
     with pytest.raises(InputError, match="no redundancy"):
         run_fish_cutting(load_robot("puma560-kang"), redundancy="keep")
+
+
+def test_cli_seven_axis_arms_and_the_policy_option(capsys) -> None:
+    from tests.conftest import run_cli
+
+    code, out, _ = run_cli(
+        capsys, "fishcut", "--robot", "iiwa14", "--json", "--no-collision"
+    )
+    result = json.loads(out)
+    assert code == 0 and result["scale"] == 1.05 and result["branch_flips"] == 0
+    assert result["redundancy"]["parameter"] == "arm angle"
+    assert result["redundancy"]["policy"] == "keep"
+    code, out, _ = run_cli(
+        capsys, "fishcut", "--robot", "panda", "--redundancy-policy",
+        "limit_margin", "--no-collision",
+    )  # fmt: skip
+    assert code == 0 and "redundancy q7 (limit_margin)" in out
+    assert "branch flips 0" in out
+    code, _, err = run_cli(
+        capsys, "fishcut", "--robot", "ur5", "--redundancy-policy", "keep"
+    )
+    assert code == 2 and "ur5: a six-axis arm has no redundancy" in err
