@@ -1,6 +1,6 @@
 """Planning-cycle latency of the online planner, against the same loop on peers.
 
-    python benchmarks/bench_online.py [--seed N]
+    python benchmarks/bench_online.py [--seed N] [--robots NAME,...]
 
 One run of Kang's fish-cutting program with the workbench planner (after an
 untimed warm-up run) times every planning cycle (react to the last touch,
@@ -11,8 +11,15 @@ are then replayed through the same loop built on Robotics Toolbox for Python
 (``Puma560.ikine_a`` with Kang's θ4 flip rule, ``jacob0``, the same DLS
 inverse), and ruckig's
 per-cycle ``update`` is timed against the workbench's per-cycle Cartesian
-command. Peers are optional: a missing one is reported and skipped. Timings
-depend on the machine; nothing here is asserted.
+command. Peers are optional: a missing one is reported and skipped.
+
+Then the same program on each arm of ``--robots`` (default the PUMA and the
+two seven-axis arms, ``iiwa14`` and ``panda``, each in its scaled cell, the
+default redundancy policy ``keep``): median and p99 of the planning cycle
+over the run, and on a seven-axis arm apart for the cycles that moved the
+redundancy parameter (a policy move, or the differential command near a
+singularity of the closed form) and the others. Timings depend on the
+machine; nothing here is asserted.
 """
 
 from __future__ import annotations
@@ -27,7 +34,12 @@ import pinocchio as pin
 
 from workbench import ik, load_robot
 from workbench.planning import OnlinePlanner
-from workbench.tasks import FishCuttingSetup, SimulatedFish, run_fish_cutting
+from workbench.tasks import (
+    FishCuttingSetup,
+    SimulatedFish,
+    get_cell_scale,
+    run_fish_cutting,
+)
 from workbench.tasks.fish_program import KANG_BASE_HEIGHT, build_program
 
 clock = time.perf_counter
@@ -144,9 +156,38 @@ def bench_ruckig(run, setup, cycles: int):
     return np.array(latency)
 
 
+def bench_robots(names: list[str], seed: int) -> None:
+    """The fish-cutting run's planning cycle on each arm, in its scaled cell."""
+    print(
+        f"{'robot':14s} {'cycles':>7s} {'median µs':>10s} {'p99 µs':>10s} "
+        f"{'max µs':>10s}   {'moved':>6s} {'median':>8s} {'p99':>8s}   "
+        f"{'kept':>6s} {'median':>8s} {'p99':>8s}"
+    )
+    for name in names:
+        robot = load_robot(name)
+        run_fish_cutting(robot, SimulatedFish(seed=seed).scaled(get_cell_scale(robot)))
+        run = run_fish_cutting(
+            robot, SimulatedFish(seed=seed).scaled(get_cell_scale(robot))
+        )
+        us = run.latency_us
+        med, p99 = stats(us)
+        line = f"{name:14s} {len(us):7d} {med:10.1f} {p99:10.1f} {us.max():10.1f}"
+        if run.redundancy_parameter is not None:
+            moved = np.diff(run.redundancy) != 0.0
+            for part in (us[moved], us[~moved]):
+                part_med, part_p99 = stats(part)
+                line += f"   {len(part):6d} {part_med:8.1f} {part_p99:8.1f}"
+        print(line)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--robots",
+        default="puma560-kang,iiwa14,panda",
+        help="comma-separated arms for the per-robot table",
+    )
     args = parser.parse_args()
     robot = load_robot("puma560-kang")
     fish, setup = SimulatedFish(seed=args.seed), FishCuttingSetup()
@@ -192,6 +233,9 @@ def main() -> None:
         med, p99 = stats(us)
         print(f"{name:42s} {len(us):10d} {med:10.1f} {p99:10.1f} {us.max():10.1f}")
     print("targets: workbench cycle median <= 30 µs, p99 <= 100 µs")
+    print()
+    print("the fish-cutting program per arm (its scaled cell, redundancy policy keep)")
+    bench_robots(args.robots.split(","), args.seed)
 
 
 if __name__ == "__main__":

@@ -74,13 +74,14 @@ KANG_REACH = 0.4318 + math.hypot(0.0203, 0.4318)
 
 #: Distance [m] from the shoulder of Kang's PUMA to its wrist centre at the
 #: start pose ``A`` (the wrist centre 0.05 m, the default tool length, above
-#: ``A``): the nearest the program brings them.
+#: ``A``): about the nearest the program brings them (the arcs between the
+#: stations come about 1 % nearer).
 KANG_START_FOLD = math.hypot(KANG_START_POSITION[1], KANG_BASE_HEIGHT - 0.35)
 
 #: Margin [rad] that a seven-axis arm's elbow (joint 4) keeps inside its
 #: limits at Kang's start pose, which sets its smallest cell scale
 #: (:func:`get_cell_scale`).
-FOLD_MARGIN = 0.05
+FOLD_MARGIN = 0.1
 
 #: The families of seven-axis arms (their closed form takes a redundancy
 #: parameter, ``workbench.ik.get_redundant_solver``).
@@ -242,7 +243,9 @@ def get_cell_scale(robot: Robot) -> float:
     at Kang's start pose (:data:`KANG_START_FOLD` times the scale), leaves
     joint 4 :data:`FOLD_MARGIN` inside its limits
     (``get_shortest_fold / KANG_START_FOLD``): 0.83 for the Panda (its reach),
-    1.05 for the iiwa14 (its elbow folds to ±120° only; reach 0.95).
+    1.09 for the iiwa14 (its elbow folds to ±120° only; reach 0.95). The arcs
+    between stations bring the wrist a little nearer than ``A`` (the iiwa14's
+    elbow keeps 0.05 rad at the top of the first).
 
     Raises:
         UnsupportedRobotError: If the robot has no closed-form IK.
