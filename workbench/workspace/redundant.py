@@ -43,11 +43,8 @@ import numpy.typing as npt
 from workbench.errors import InputError
 from workbench.ik import analytic_batch, compute_tool_poses, get_redundant_solver
 from workbench.model.robot import Robot
-from workbench.workspace._reference import (
-    block_poses,
-    limit_representatives,
-    summarise_voxels,
-)
+from workbench.workspace import _redundant_kernel as kernel
+from workbench.workspace._reference import block_poses, summarise_voxels
 from workbench.workspace.measures import check_voxel_range
 
 if TYPE_CHECKING:
@@ -59,8 +56,8 @@ FloatArray = npt.NDArray[np.float64]
 DEFAULT_REDUNDANCY_SAMPLES = 16
 #: Largest K.
 MAX_REDUNDANCY_SAMPLES = 4096
-#: Poses per call of the closed form (times K): bounds the work arrays.
-CHUNK_POSES = 1024
+#: Poses per call of the closed form at one value: its work arrays stay small.
+CHUNK_POSES = 4096
 #: Keys of :func:`evaluate_redundant_block` with one value per pose (B, O).
 REDUNDANT_POSE_KEYS = ("reached", "branches", "dexterity", "limit_margin", "redundancy")
 #: Keys of :func:`evaluate_redundant_block` with one value per voxel (B,).
@@ -117,49 +114,48 @@ def evaluate_redundant_block(
     solver = get_redundant_solver(robot)
     values = redundancy_values(solver.parameter_range, count)
     poses = block_poses(grid, start, stop)
-    total, branches = len(poses), len(solver.branches)
-    reached = np.zeros((total, branches), dtype=bool)
-    usable = np.zeros((total, branches), dtype=bool)
+    total = len(poses)
+    reached = np.zeros(total, dtype=np.uint8)  # bit b: branch b
+    usable = np.zeros(total, dtype=np.uint8)
     margin = np.full(total, -np.inf)
     best_q = np.zeros((total, robot.nq))
-    best_value = np.full(total, np.nan)
+    best_value = np.full(total, -1, dtype=np.int64)
+    joints = _joint_constants(robot)
     for first in range(0, total, CHUNK_POSES):
-        part = slice(first, min(first + CHUNK_POSES, total))
-        n = part.stop - part.start
-        tiled = np.ascontiguousarray(np.tile(poses[part], (len(values), 1, 1)))
-        q, valid = analytic_batch(robot, tiled, redundancy=np.repeat(values, n))
-        q = q.reshape(len(values), n, branches, robot.nq)
-        valid = valid.reshape(len(values), n, branches)
-        shifted, joint_margin, within = limit_representatives(
-            np.where(valid[..., None], q, 0.0), robot.lower, robot.upper
-        )
-        ok = valid & within
-        reached[part] = valid.any(axis=0)
-        usable[part] = ok.any(axis=0)
-        score = np.where(ok, joint_margin, -np.inf).transpose(1, 0, 2).reshape(n, -1)
-        best = np.argmax(score, axis=1)  # first of the largest: value, then branch
-        rows = np.arange(n)
-        k, b = np.divmod(best, branches)
-        margin[part] = score[rows, best]
-        best_q[part] = shifted[k, rows, b]
-        best_value[part] = values[k]
-    has = np.isfinite(margin)
+        chunk = np.ascontiguousarray(poses[first : first + CHUNK_POSES])
+        for k, value in enumerate(values):
+            q, valid = analytic_batch(robot, chunk, redundancy=float(value))
+            kernel.fold_value(
+                joints, q, valid, k, first, reached, usable, margin, best_q, best_value
+            )
+    has = best_value >= 0
     dexterity = np.full(total, np.nan)
     if has.any():
         dexterity[has] = compute_tool_poses(robot, best_q[has])[2]
     shape = (stop - start, grid.orientation_count)
+    bits = np.unpackbits(np.stack([reached, usable], axis=1)[..., None], axis=2)
+    counts = bits.sum(axis=2, dtype=np.uint8)
     out: dict[str, np.ndarray] = {
-        "reached": reached.sum(axis=1).astype(np.uint8).reshape(shape),
-        "branches": usable.sum(axis=1).astype(np.uint8).reshape(shape),
+        "reached": counts[:, 0].reshape(shape),
+        "branches": counts[:, 1].reshape(shape),
         "dexterity": dexterity.astype(np.float32).reshape(shape),
-        "limit_margin": np.where(has, margin, np.nan).astype(np.float32).reshape(shape),
-        "redundancy": np.where(has, best_value, np.nan)
-        .astype(np.float32)
-        .reshape(shape),
     }
+    chosen = values[np.maximum(best_value, 0)]
+    for key, field in (("limit_margin", margin), ("redundancy", chosen)):
+        out[key] = np.where(has, field, np.nan).astype(np.float32).reshape(shape)
     voxels = summarise_voxels(dexterity.reshape(shape), np.full(shape, np.nan))
     out.update({key: voxels[key] for key in REDUNDANT_VOXEL_KEYS})
     return out
+
+
+def _joint_constants(robot: Robot) -> FloatArray:
+    """(JOINT_ROWS, nq) lower, upper, middle of the limits, bounded (1.0 or 0.0)."""
+    lower, upper = robot.lower, robot.upper
+    bounded = np.isfinite(lower) & np.isfinite(upper)
+    mid = 0.5 * (np.where(bounded, lower, 0.0) + np.where(bounded, upper, 0.0))
+    return np.ascontiguousarray(
+        np.stack([lower, upper, mid, bounded.astype(np.float64)])
+    )
 
 
 __all__ = [
