@@ -9,6 +9,7 @@ analytic feasible intervals against a dense ψ grid.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 
@@ -668,3 +669,67 @@ def test_reference_with_the_branch_theta4_is_turned_by_pi(iiwa, geometry, rng) -
             elbows.append(z2 - np.dot(z2, u) * u)
         angle = math.atan2(np.cross(elbows[0], elbows[1]) @ u, elbows[0] @ elbows[1])
         assert abs(abs(angle) - math.pi) <= ATOL_PSI
+
+
+def _random_rigid(rng: np.random.Generator) -> np.ndarray:
+    quat = rng.normal(size=4)
+    pose = np.eye(4)
+    pose[:3, :3] = pin.Quaternion(*(quat / np.linalg.norm(quat))).matrix()
+    pose[:3, 3] = rng.uniform(-0.5, 0.5, 3)
+    return pose
+
+
+def test_base_tool_joint_signs_and_offsets(iiwa, rng) -> None:
+    """A chain base · DH(s q + θ0) · tool with all four non-trivial."""
+    fitted = get_structure(iiwa)
+    offsets = rng.uniform(-math.pi, math.pi, 7)
+    table = DHTable(
+        name="srs_offsets",
+        joints=tuple(
+            dataclasses.replace(j, theta_offset=float(o))
+            for j, o in zip(fitted.table.joints, offsets, strict=True)
+        ),
+    )
+    signs = tuple(float(s) for s in rng.choice([-1.0, 1.0], 7))
+    base, tool = _random_rigid(rng), _random_rigid(rng)
+    structure = dataclasses.replace(
+        fitted, table=table, joint_sign=signs, base=base, tool=tool
+    )
+    low, high = np.full(7, -2.5), np.full(7, 2.5)
+    geometry = kernel.pack_geometry(structure, low, high)
+
+    def fk(q: np.ndarray) -> np.ndarray:
+        return base @ table.forward_kinematics(np.asarray(signs) * q) @ tool
+
+    for q in rng.uniform(-2.5, 2.5, (300, 7)):
+        pose = fk(q)
+        psi = _psi(geometry, q[None])[0]
+        status, qs, flags = _solve(geometry, pose, psi)
+        assert status == OK
+        assert _distance_to_branches(qs, q) <= ATOL_Q
+        for b in range(8):
+            assert np.abs(fk(qs[b]) - pose).max() <= ATOL_POSE
+            inside = bool(
+                np.all((qs[b] >= low - LIMIT_TOL) & (qs[b] <= high + LIMIT_TOL))
+            )
+            assert bool(flags[b] & WITHIN_LIMITS) == inside
+            back = _psi(geometry, qs[b][None])[0]
+            assert _wrapped(np.array(back - psi)) <= ATOL_PSI
+    grid = np.linspace(-math.pi, math.pi, 20_001)
+    for q in rng.uniform(-2.5, 2.5, (10, 7)):
+        pose = fk(q)
+        n = grid.size
+        q_grid = np.empty((n, 8, 7))
+        valid = np.empty((n, 8), dtype=bool)
+        poses = np.ascontiguousarray(np.broadcast_to(pose, (n, 4, 4)))
+        kernel.solve_batch(geometry, poses, grid, q_grid, valid)
+        within = valid & np.all((q_grid >= low) & (q_grid <= high), axis=2)
+        for b, branch in enumerate(kernel.feasible_intervals(geometry, pose)):
+            member = np.zeros(n, dtype=bool)
+            near_end = np.zeros(n, dtype=bool)
+            for lo, hi in branch:
+                member |= (grid >= lo) & (grid <= hi)
+                near_end |= (np.abs(grid - lo) <= ATOL_END) | (
+                    np.abs(grid - hi) <= ATOL_END
+                )
+            np.testing.assert_array_equal(member[~near_end], within[~near_end, b])

@@ -256,6 +256,39 @@ def is_rigid(pose: FloatArray) -> bool:
     )
 
 
+def pack_joint_fields(
+    record: np.ndarray, structure, lower, upper, limit_tol: float
+) -> None:
+    """Fill the joint and frame fields of a kernel's (1,) geometry record.
+
+    Sets ``theta_offset``, ``joint_sign``, ``plain`` (θ in [−π, π] is the
+    joint's own value: no offset, sign +1, limits within or around ±π, as
+    :func:`joint_value` reads it), ``lower`` and ``upper`` widened by
+    ``limit_tol`` [rad], ``base_inv``, ``based`` (1.0 unless ``base_inv`` is
+    the identity) and ``tool_inv``, from a fitted ``KinematicStructure``.
+
+    Args:
+        record: The (1,) record array, writable.
+        structure: The arm's fitted structure (n joints).
+        lower: Lower joint limits, (n,) [rad].
+        upper: Upper joint limits, (n,) [rad].
+        limit_tol: Widening of the limits [rad].
+    """
+    offsets = [x.theta_offset for x in structure.table.joints]
+    record["theta_offset"], record["joint_sign"] = offsets, structure.joint_sign
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    record["plain"] = [
+        o == 0.0 and s == 1.0 and ((-PI <= lo and hi <= PI) or lo <= -PI < PI <= hi)
+        for o, s, lo, hi in zip(
+            offsets, structure.joint_sign, lower, upper, strict=True
+        )
+    ]
+    record["lower"], record["upper"] = lower - limit_tol, upper + limit_tol
+    record["base_inv"] = np.linalg.inv(structure.base)
+    record["based"] = not np.array_equal(record["base_inv"][0], np.eye(4))
+    record["tool_inv"] = np.linalg.inv(structure.tool)
+
+
 @body
 def solve_one(
     geo,
@@ -460,6 +493,7 @@ __all__ = [
     "is_rigid",
     "joint_value",
     "matrix_row",
+    "pack_joint_fields",
     "pose_row",
     "remainder",
     "rigid_rows",

@@ -53,15 +53,7 @@ def _rotations(geo, pose: FloatArray, cos_psi: float, sin_psi: float):
     R47[0,2], R47[2,2], R47[2,1], R47[2,0]. ``None`` when out of reach.
     """
     tool, base = common.frames(geo)
-    r0, r1, r2 = common.frame_rows(
-        common.matrix_row(pose, 0),
-        common.matrix_row(pose, 1),
-        common.matrix_row(pose, 2),
-        tool,
-        base,
-        geo.based != 0.0,
-    )
-    rot, sw = kernel._wrist_point(geo, r0, r1, r2)
+    rot, sw = kernel._framed_target(geo, pose, tool, base, geo.based != 0.0)
     length2 = sw[0] ** 2 + sw[1] ** 2 + sw[2] ** 2
     c4 = kernel._elbow_cosine(geo, length2)
     if not abs(c4) <= 1.0 + geo.reach_tol:

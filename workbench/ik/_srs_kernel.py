@@ -130,23 +130,7 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     g["reach_tol"] = REACH_TOL + model_slack * (abs(j[2].d) + abs(j[4].d)) / abs(
         j[2].d * j[4].d
     )
-    offsets = [x.theta_offset for x in j]
-    g["theta_offset"], g["joint_sign"] = offsets, structure.joint_sign
-    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
-    g["plain"] = [  # as PumaGeometry.plain
-        o == 0.0
-        and s == 1.0
-        and (
-            (-common.PI <= lo and hi <= common.PI) or lo <= -common.PI < common.PI <= hi
-        )
-        for o, s, lo, hi in zip(
-            offsets, structure.joint_sign, lower, upper, strict=True
-        )
-    ]
-    g["lower"], g["upper"] = lower - LIMIT_TOL, upper + LIMIT_TOL
-    g["base_inv"] = np.linalg.inv(structure.base)
-    g["based"] = not np.array_equal(g["base_inv"][0], np.eye(4))
-    g["tool_inv"] = np.linalg.inv(structure.tool)
+    common.pack_joint_fields(g, structure, lower, upper, LIMIT_TOL)
     g.setflags(write=False)
     return g
 
@@ -154,6 +138,20 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
 def parameter_range(geometry: np.ndarray) -> tuple[float, float]:
     """The range of the arm angle [rad]: (−π, π] (every value is reached)."""
     return -math.pi, math.pi
+
+
+@common.inline
+def _framed_target(geo, pose: FloatArray, tool, base, based: bool):
+    """Rotation (9,) row-major and SW [m] of ``base_inv · pose · tool_inv``."""
+    r0, r1, r2 = common.frame_rows(
+        common.matrix_row(pose, 0),
+        common.matrix_row(pose, 1),
+        common.matrix_row(pose, 2),
+        tool,
+        base,
+        based,
+    )
+    return _wrist_point(geo, r0, r1, r2)
 
 
 @common.inline
@@ -440,15 +438,7 @@ def solve_pose(
         flags[:] = 0
         return NOT_RIGID
     tool, base = common.frames(geo)
-    r0, r1, r2 = common.frame_rows(
-        common.matrix_row(pose, 0),
-        common.matrix_row(pose, 1),
-        common.matrix_row(pose, 2),
-        tool,
-        base,
-        geo.based != 0.0,
-    )
-    rot, sw = _wrist_point(geo, r0, r1, r2)
+    rot, sw = _framed_target(geo, pose, tool, base, geo.based != 0.0)
     previous = np.empty(q_previous.shape[0])
     for j in range(q_previous.shape[0]):
         previous[j] = q_previous[j]
@@ -486,15 +476,7 @@ def solve_batch(
     no_flags = np.empty(0, dtype=np.uint8)
     for i in range(poses.shape[0]):
         pose = poses[i]
-        r0, r1, r2 = common.frame_rows(
-            common.matrix_row(pose, 0),
-            common.matrix_row(pose, 1),
-            common.matrix_row(pose, 2),
-            tool,
-            base,
-            based,
-        )
-        rot, sw = _wrist_point(geo, r0, r1, r2)
+        rot, sw = _framed_target(geo, pose, tool, base, based)
         status = _branches(geo, rot, sw, values[i], none, False, q[i], no_flags, False)
         reached = status == OK
         for b in range(8):
@@ -596,15 +578,7 @@ def diagnose(
     if not common.is_rigid(pose):
         return NOT_RIGID, 0.0, 0.0, 0.0
     tool, base = common.frames(geo)
-    r0, r1, r2 = common.frame_rows(
-        common.matrix_row(pose, 0),
-        common.matrix_row(pose, 1),
-        common.matrix_row(pose, 2),
-        tool,
-        base,
-        geo.based != 0.0,
-    )
-    _, sw = _wrist_point(geo, r0, r1, r2)
+    _, sw = _framed_target(geo, pose, tool, base, geo.based != 0.0)
     length2 = sw[0] * sw[0] + sw[1] * sw[1] + sw[2] * sw[2]
     d3, d5 = abs(geo.d3), abs(geo.d5)
     reached = abs(_elbow_cosine(geo, length2)) <= 1.0 + geo.reach_tol
