@@ -48,7 +48,6 @@ crosses the singular configuration).
 from __future__ import annotations
 
 import math
-from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -58,6 +57,7 @@ from workbench.errors import InputError
 from workbench.ik import (
     DLS_EPSILON,
     DLS_LAMBDA_MAX,
+    RedundantSolver,
     compute_tool_poses,
     solve_null_space_velocity,
 )
@@ -104,40 +104,6 @@ MAX_POSE_STEPS = 4
 
 #: Parameter steps below this [rad] are not taken (the kept value is exact).
 MIN_STEP = 1e-12
-
-
-class RedundantTrack(Protocol):
-    """The part of ``workbench.ik.RedundantSolver`` the tracker uses."""
-
-    family: str
-    parameter: str
-    parameter_range: tuple[float, float]
-
-    def track(
-        self,
-        pose: FloatArray,
-        value: float,
-        q_predicted: FloatArray,
-        branch: int,
-        max_step2: float,
-    ) -> tuple[FloatArray, int, bool]:
-        """Closed form at ``value`` continuing a motion: ``(q, index, within)``."""
-        ...
-
-    def try_track(
-        self,
-        pose: FloatArray,
-        value: float,
-        q_predicted: FloatArray,
-        branch: int,
-        max_step2: float,
-    ) -> tuple[FloatArray, int, bool] | None:
-        """As ``track``, None where no branch reaches (no error built)."""
-        ...
-
-    def parameter_of(self, q: npt.ArrayLike) -> float | FloatArray:
-        """Parameter [rad] of configurations (7,) or (N, 7)."""
-        ...
 
 
 def compute_limit_margin(q: FloatArray, lower: FloatArray, upper: FloatArray) -> float:
@@ -241,7 +207,7 @@ class RedundancyTracker:
     def __init__(
         self,
         robot: Robot,
-        solver: RedundantTrack,
+        solver: RedundantSolver,
         policy: str,
         period: float,
         max_rate: float,
