@@ -97,3 +97,23 @@ def test_kernels_refuse_exactly_the_poses_the_exact_checks_refuse(
         flat = np.ascontiguousarray(pose).reshape(16)
         kernel.batch_arguments(geometry, flat, y, x, codes, exact, odd, True)
         assert bool(odd[0] & 2) == (not rigid)
+
+
+def test_nearest_or_kept_and_row_within_limits() -> None:
+    """The seven-axis kernels' branch choice and limit test (any row length)."""
+    q = np.array([[0.0, 0.0], [1.0, 0.0], [np.nan, np.nan], [0.1, 0.0]])
+    reference = np.array([0.2, 0.0])
+    assert common.nearest_or_kept(q, reference, 1, 1.0) == 1  # kept: step 0.64
+    assert common.nearest_or_kept(q, reference, 1, 0.5) == 3  # too far: nearest
+    assert common.nearest_or_kept(q, reference, 2, 1.0) == 3  # NaN row skipped
+    assert common.nearest_or_kept(np.full((2, 2), np.nan), reference, 0, 1.0) == -1
+    geo = np.zeros(1, dtype=[("lower", "f8", 2), ("upper", "f8", 2)]).view(np.recarray)[
+        0
+    ]
+    geo.lower[:], geo.upper[:] = -0.5, 0.5
+    assert [common.row_within_limits(geo, q, b) for b in range(4)] == [
+        True,
+        False,
+        False,
+        True,
+    ]

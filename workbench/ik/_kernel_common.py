@@ -109,6 +109,38 @@ def within_limits(geo, q: FloatArray, b: int) -> bool:
 
 
 @inline
+def row_within_limits(geo, q: FloatArray, b: int) -> bool:
+    """Whether row ``b`` of ``q`` (B, n) is within ``geo``'s widened limits (any n)."""
+    ok = True
+    for j in range(q.shape[1]):
+        ok &= geo.lower[j] <= q[b, j] <= geo.upper[j]
+    return ok
+
+
+@inline
+def nearest_or_kept(
+    q: FloatArray, reference: FloatArray, kept: int, max_step2: float
+) -> int:
+    """The row of ``q`` (B, n) continuing a motion at ``reference`` (n,).
+
+    Row ``kept`` if its squared distance to ``reference`` is at most
+    ``max_step2`` [rad²], else the nearest row (the first on a tie); NaN rows
+    (branches not reached) are skipped; −1 if every row is NaN.
+    """
+    best, best_d2 = -1, math.inf
+    for b in range(q.shape[0]):
+        d2 = 0.0
+        for j in range(q.shape[1]):
+            d = q[b, j] - reference[j]
+            d2 += d * d
+        if b == kept and d2 <= max_step2:
+            return b
+        if d2 < best_d2:
+            best, best_d2 = b, d2
+    return best
+
+
+@inline
 def clip_unit(k: float) -> float:
     """``k`` clipped to [−1, 1] (selects, which the batch loop vectorises)."""
     k = k if k > -1.0 else -1.0
@@ -493,10 +525,12 @@ __all__ = [
     "is_rigid",
     "joint_value",
     "matrix_row",
+    "nearest_or_kept",
     "pack_joint_fields",
     "pose_row",
     "remainder",
     "rigid_rows",
+    "row_within_limits",
     "solve_one",
     "track_one",
     "within_limits",

@@ -393,9 +393,7 @@ def _branches(geo, rot, sw, value, prev, has_prev, q, flags, with_flags):
         if with_flags:
             for k in range(4):
                 b = 4 * (k >> 1) + 2 * elbow + (k & 1)
-                ok = True
-                for j in range(7):
-                    ok &= geo.lower[j] <= q[b, j] <= geo.upper[j]
+                ok = common.row_within_limits(geo, q, b)
                 bits = WITHIN_LIMITS if ok else 0
                 bits |= SHOULDER_SINGULAR if h2 <= SINGULAR_TOL else 0
                 bits |= ELBOW_SINGULAR if s4 <= ELBOW_SINGULAR_TOL else 0
@@ -610,18 +608,7 @@ def track(
     status = solve_pose(geometry, pose, value, q_predicted, q, flags, True)
     if status != OK:
         return status, -1, False
-    best, best_d2 = 0, math.inf
-    keep = -1
-    for b in range(8):
-        d2 = 0.0
-        for j in range(7):
-            d = q[b, j] - q_predicted[j]
-            d2 += d * d
-        if b == branch and d2 <= max_step2:
-            keep = b
-        if d2 < best_d2:
-            best, best_d2 = b, d2
-    index = keep if keep >= 0 else best
+    index = common.nearest_or_kept(q, q_predicted, branch, max_step2)
     for j in range(7):
         q_out[j] = q[index, j]
     return status, index, (flags[index] & WITHIN_LIMITS) != 0
