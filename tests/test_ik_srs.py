@@ -396,16 +396,13 @@ def test_multi_start_numerical_ik_agrees(iiwa, geometry, rng) -> None:
         solutions = _numeric_solutions(iiwa, geometry, pose, psi, rng, starts=50)
         labels = set()
         for s in solutions:
-            sines = np.abs(np.sin(s[[1, 3, 5]]))
-            if sines.min() < 1e-6:  # a numeric solve near a singular arm
-                continue
             d = _wrapped(qs - s).max(axis=1)
             assert d.min() <= ATOL_Q
             labels.add(int(d.argmin()))
         found_total += len(solutions)
         distinct += len(labels)
-    assert found_total >= 200 * 25
-    assert distinct >= 200 * 4  # the starts find several branches of each pose
+    assert found_total >= 200 * 45  # measured: 9 916 of 10 000 starts converge
+    assert distinct >= 200 * 7  # and find 7.99 of the 8 branches per pose
 
 
 # --- flags, bad input, diagnose, track -------------------------------------
