@@ -26,7 +26,7 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-from workbench._compiled import entry_point
+from workbench._compiled import entry_point, helper
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -44,6 +44,52 @@ _SIGN, _OFFSET, _LOWER, _UPPER, _MID, _BOUNDED = range(JOINT_ROWS)
 TAU = 2.0 * math.pi
 #: 1 / 2π, the turns of an angle (the reference multiplies by it too).
 INV_TAU = 1.0 / TAU
+
+
+@helper(forceinline=True)
+def branch_limits(
+    joints: FloatArray, q: FloatArray, i: int, b: int
+) -> tuple[bool, float]:
+    """Whether branch ``b`` of pose ``i`` is within the limits, and its margin [rad].
+
+    Each bounded angle ``q[i, b, j]`` is taken as its representative ``+ 2πk``
+    nearest the middle of its limits (``rint((mid − q) / 2π)`` turns), as
+    :func:`workbench.workspace._reference.limit_representatives` does.
+
+    Args:
+        joints: (JOINT_ROWS, n) per-joint constants (module slots).
+        q: (N, B, n) joint values [rad].
+        i: Pose.
+        b: Branch.
+    """
+    within = True
+    margin = math.inf
+    for j in range(q.shape[2]):
+        if joints[_BOUNDED, j] != 0.0:
+            shifted = represent(joints[_MID, j], q[i, b, j])
+            lo, hi = joints[_LOWER, j], joints[_UPPER, j]
+            within &= (shifted >= lo) & (shifted <= hi)
+            margin = min(margin, min(shifted - lo, hi - shifted))
+    return within, margin
+
+
+@helper(forceinline=True)
+def write_representatives(
+    joints: FloatArray, q: FloatArray, i: int, b: int, out: FloatArray, row: int
+) -> None:
+    """Write branch ``b`` of pose ``i`` to ``out[row]`` (angles as branch_limits)."""
+    for j in range(q.shape[2]):
+        value = q[i, b, j]
+        if joints[_BOUNDED, j] != 0.0:
+            value = represent(joints[_MID, j], value)
+        out[row, j] = value
+
+
+@helper(forceinline=True)
+def represent(mid: float, value: float) -> float:
+    """The representative ``value + 2πk`` [rad] nearest ``mid`` (ties: even k)."""
+    turns: float = np.rint((mid - value) * INV_TAU)
+    return value + turns * TAU
 
 
 @entry_point(outputs=("poses",), contiguous=("positions", "rotations"))
@@ -113,16 +159,7 @@ def measure_poses(
             if not valid[i, b]:
                 continue
             reached += 1
-            within = True
-            margin = math.inf
-            for j in range(6):
-                if joints[_BOUNDED, j] != 0.0:
-                    value = q[i, b, j]
-                    lo, hi = joints[_LOWER, j], joints[_UPPER, j]
-                    turns = np.rint((joints[_MID, j] - value) * INV_TAU)
-                    shifted = value + turns * TAU
-                    within &= (shifted >= lo) & (shifted <= hi)
-                    margin = min(margin, min(shifted - lo, hi - shifted))
+            within, margin = branch_limits(joints, q, i, b)
             if not within:
                 continue
             usable += 1

@@ -9,30 +9,26 @@ increasing order and branches in label order, so a tie keeps the first value,
 then the first branch (:mod:`workbench.workspace.redundant`).
 
 Each angle's representative :math:`q + 2\pi k` nearest the middle of its
-limits is taken, as :func:`workbench.workspace._reference.limit_representatives`
-does with NumPy, in the same arithmetic (``rint((mid − q) / 2π)`` turns):
-within the limits if any representative is, and of largest margin.
+limits is taken (:func:`workbench.workspace._measure_kernel.branch_limits`, the
+six-axis maps' test): within the limits if any representative is, and of
+largest margin.
 """
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 import numpy.typing as npt
 
 from workbench._compiled import entry_point
+from workbench.workspace._measure_kernel import (
+    JOINT_ROWS,
+    branch_limits,
+    write_representatives,
+)
 
 FloatArray = npt.NDArray[np.float64]
 
-#: Rows of the per-joint constants: lower, upper, middle of the limits,
-#: bounded (1.0 or 0.0).
-JOINT_ROWS = 4
-_LOWER, _UPPER, _MID, _BOUNDED = range(JOINT_ROWS)
-
-TAU = 2.0 * math.pi
-#: 1 / 2π, the turns of an angle (as ``_reference.INV_TAU``).
-INV_TAU = 1.0 / TAU
+__all__ = ["JOINT_ROWS", "fold_value"]
 
 
 @entry_point(
@@ -54,7 +50,8 @@ def fold_value(
     """Fold the branches of N poses at one parameter value into the block's state.
 
     Args:
-        joints: (JOINT_ROWS, n) per-joint constants (module slots).
+        joints: (JOINT_ROWS, n) per-joint constants, the rows of
+            :mod:`workbench.workspace._measure_kernel` (sign and offset unused).
         q: (N, B, n) joint values [rad] of every branch (B <= 8; NaN rows:
             not reached).
         valid: (N, B) branch reaches the pose.
@@ -66,7 +63,6 @@ def fold_value(
         best_q: (P, n) representatives of the best candidate [rad].
         best_value: (P,) value index of the best candidate (−1: none).
     """
-    joint_count = q.shape[2]
     for i in range(q.shape[0]):
         row = first + i
         for b in range(q.shape[1]):
@@ -74,25 +70,11 @@ def fold_value(
                 continue
             bit = np.uint8(1 << b)
             reached[row] |= bit
-            within = True
-            candidate = math.inf
-            for j in range(joint_count):
-                if joints[_BOUNDED, j] != 0.0:
-                    value = q[i, b, j]
-                    lo, hi = joints[_LOWER, j], joints[_UPPER, j]
-                    turns = np.rint((joints[_MID, j] - value) * INV_TAU)
-                    shifted = value + turns * TAU
-                    within &= (shifted >= lo) & (shifted <= hi)
-                    candidate = min(candidate, min(shifted - lo, hi - shifted))
+            within, candidate = branch_limits(joints, q, i, b)
             if not within:
                 continue
             usable[row] |= bit
             if candidate > margin[row]:
                 margin[row] = candidate
                 best_value[row] = value_index
-                for j in range(joint_count):
-                    value = q[i, b, j]
-                    if joints[_BOUNDED, j] != 0.0:
-                        turns = np.rint((joints[_MID, j] - value) * INV_TAU)
-                        value = value + turns * TAU
-                    best_q[row, j] = value
+                write_representatives(joints, q, i, b, best_q, row)

@@ -149,13 +149,13 @@ def evaluate_redundant_block(
 
 
 def _joint_constants(robot: Robot) -> FloatArray:
-    """(JOINT_ROWS, nq) lower, upper, middle of the limits, bounded (1.0 or 0.0)."""
+    """(JOINT_ROWS, nq): the six-axis kernel's rows (sign 1 and offset 0, unused)."""
     lower, upper = robot.lower, robot.upper
     bounded = np.isfinite(lower) & np.isfinite(upper)
     mid = 0.5 * (np.where(bounded, lower, 0.0) + np.where(bounded, upper, 0.0))
-    return np.ascontiguousarray(
-        np.stack([lower, upper, mid, bounded.astype(np.float64)])
-    )
+    ones, zeros = np.ones(robot.nq), np.zeros(robot.nq)
+    rows = [ones, zeros, lower, upper, mid, bounded.astype(np.float64)]
+    return np.ascontiguousarray(np.stack(rows))
 
 
 __all__ = [
