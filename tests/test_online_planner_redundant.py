@@ -274,3 +274,36 @@ def test_try_track_is_track_without_the_error(name):
     assert solver.try_track(far, value, q, 0, 10.0) is None
     with pytest.raises(InfeasibleError):
         solver.track(far, value, q, 0, 10.0)
+
+
+@pytest.mark.parametrize(
+    ("q6", "direction"),
+    [(0.01, (0.0, 1.0, 0.0)), (0.003, (0.0, 1.0, 0.0)), (0.01, (0.6, 0.6, 0.0))],
+)
+def test_near_the_wrist_singularity_no_joint_spins(iiwa, q6, direction):
+    """A line passing near sin θ6 = 0: the closed form at a constant arm angle spins
+    q5 and q7 beyond their speed limits; the planner's commands stay continuous."""
+    q_mid = np.array([0.3, 0.6, 0.2, -1.2, 0.4, q6, 0.3])
+    step = 0.05 * np.array(direction)  # [m]
+    solver = get_redundant_solver(iiwa)
+    psi = solver.parameter_of(q_mid)
+    mid = iiwa.fk(q_mid)
+    q0 = nearest(
+        solver.solve(pin.SE3(mid.rotation, mid.translation - step), psi), q_mid
+    ).q
+    _, samples = _run(iiwa, q0, mid.translation + step)
+    q = np.array([q0] + [s.q for s in samples])
+    ratio = np.abs(np.diff(q, axis=0)) / (iiwa.velocity_limit * LIMITS_PERIOD)
+    assert ratio.max() <= 1.0
+    for s in samples:
+        np.testing.assert_allclose(iiwa.fk(s.q).translation, s.position, atol=ATOL_POSE)
+    # the closed form at the start's arm angle along the same poses
+    kept, previous, index = [], q0, nearest(solver.solve(iiwa.fk(q0), psi), q0).index
+    for s in samples:
+        pose = pin.SE3(s.rotation, s.position).homogeneous
+        previous, index, _ = solver.track(pose, psi, previous, index, 10.0)
+        kept.append(previous)
+    kept_ratio = np.abs(np.diff(np.array([q0, *kept]), axis=0)) / (
+        iiwa.velocity_limit * LIMITS_PERIOD
+    )
+    assert kept_ratio.max() > 1.0

@@ -316,7 +316,7 @@ class RedundancyTracker:
         """The command near a singularity of the closed form (module docstring).
 
         ``q_last + period · (J# twist + (I − J# J) z)``, then Gauss–Newton
-        steps ``q += J# e`` on the pose error ``e`` until it is below
+        steps ``q += J⁺ e`` on the pose error ``e`` until it is below
         :data:`POSE_TOL`; :attr:`value` becomes its parameter and the branch
         the closed form's branch nearest it at that value. Without
         convergence in :data:`MAX_POSE_STEPS` steps: the closed form at the
@@ -350,7 +350,7 @@ class RedundancyTracker:
             error = pin.log6(robot.fk(q).actInv(target)).vector  # tool axes
             if np.abs(error).max() <= POSE_TOL:
                 break
-            q = q + self._velocity(q, error, self._zero, _LOCAL)
+            q = q + self._velocity(q, error, self._zero, _LOCAL, damped=False)
         else:  # no convergence: out of reach (the closed form's error says why)
             return self.solver.track(pose, self.value, q_last, index, 0.0)
         value = float(self.solver.parameter_of(q))
@@ -370,15 +370,21 @@ class RedundancyTracker:
         twist: FloatArray,
         null: FloatArray,
         frame: pin.ReferenceFrame,
+        *,
+        damped: bool = True,
     ) -> FloatArray:
-        """``J# twist + (I − J# J) null`` at ``q`` (7,) [rad/s], J in ``frame``."""
+        """``J# twist + (I − J# J) null`` at ``q`` (7,) [rad/s], J in ``frame``.
+
+        ``damped=False``: the pseudo-inverse J⁺ (no damping), for the
+        Gauss–Newton steps on a pose error, which the damping would slow to
+        a crawl near a singularity of J.
+        """
         robot = self.robot
         jacobian = pin.computeFrameJacobian(
             robot.model, robot.data, q, robot.tool_frame_id, frame
         )
-        qd, _ = solve_null_space_velocity(
-            jacobian, twist, DLS_EPSILON, DLS_LAMBDA_MAX, null
-        )
+        damping = DLS_LAMBDA_MAX if damped else 0.0
+        qd, _ = solve_null_space_velocity(jacobian, twist, DLS_EPSILON, damping, null)
         return qd
 
     def _solve(
