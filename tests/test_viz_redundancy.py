@@ -16,6 +16,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from tests.conftest import run_cli
+from tests.test_cli_seven_axis import Q0, ROBOTS
 from tests.test_viz import by_path, page_commands
 from tests.test_viz_browser import HEIGHT, WIDTH, changed, screenshot, seek
 from workbench import InputError, ik, load_robot
@@ -36,11 +37,6 @@ ATOL_POSE = 1e-9
 ATOL_PARAMETER = 1e-9
 #: Arithmetic on interval ends [rad].
 ATOL_SPREAD = 1e-12
-Q0 = {
-    "iiwa14": np.array([0.06, 1.7, -1.9, 1.69, -1.0, -0.29, 1.8]),
-    "panda": np.array([0.2, -0.4, 0.3, -2.0, 0.4, 1.8, 0.5]),
-}
-ROBOTS = tuple(Q0)
 
 
 @st.composite

@@ -11,21 +11,19 @@ infeasible request (exit 3, the feasible intervals in the message) unless
 from __future__ import annotations
 
 import argparse
-import sys
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
 
 from workbench.cli import _redundancy
-from workbench.cli._common import format_vector, print_json
+from workbench.cli._common import print_json
 from workbench.errors import InfeasibleError, InputError
 from workbench.model.robot import Robot
 
 if TYPE_CHECKING:
     from workbench.ik import FeasibleRedundancy, RedundantIKSolution, RedundantSolver
 
-EXIT_INFEASIBLE = 3
 #: The singular flags of a branch, as JSON keys and as printed.
 SINGULAR_FLAGS = (
     ("shoulder_singular", "shoulder singular"),
@@ -49,6 +47,7 @@ def solve_and_print_redundant(
             or the criterion unknown.
     """
     from workbench import ik
+    from workbench.cli.ik import print_infeasible
 
     head: dict[str, Any] = {
         "robot": robot.name,
@@ -80,9 +79,7 @@ def solve_and_print_redundant(
             message += f"; {_redundancy.describe_feasible(feasible, args.deg)}"
         if not args.json:
             raise InfeasibleError(message) from err
-        print_json({**head, "solutions": [], "feasible": False, "error": message})
-        print(f"workbench: error: {message}", file=sys.stderr)
-        return EXIT_INFEASIBLE
+        return print_infeasible(head, InfeasibleError(message))
     if args.json:
         print_json({**head, "solutions": rows, "feasible": True})
         return 0
@@ -146,6 +143,8 @@ def _print_text(
     feasible: FeasibleRedundancy | None,
     solver: RedundantSolver,
 ) -> None:
+    from workbench.cli.ik import print_rows
+
     redundancy = head["redundancy"]
     value = _redundancy.format_value(redundancy["value"], args.deg)
     print(
@@ -161,10 +160,4 @@ def _print_text(
         )
     if feasible is not None:
         print(_redundancy.describe_feasible(feasible, args.deg))
-    width = max(len(row["branch"]) for row in rows) + 2
-    for row in rows:
-        flags = "" if row["within_limits"] else "  (outside joint limits)"
-        flags += "".join(f"  ({text})" for key, text in SINGULAR_FLAGS if row[key])
-        q_deg = format_vector(row["q_deg"], 3)
-        print(f"{row['branch']:<{width}}q [deg] {q_deg}{flags}")
-        print(f"{'':<{width}}residual {row['residual']:.2e}")
+    print_rows(rows, SINGULAR_FLAGS)

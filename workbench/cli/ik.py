@@ -51,6 +51,11 @@ _MM = 1e-3
 MAX_TARGET_COORDINATE = 1e6
 #: ``--criterion`` choices (``ik.choose_redundancy`` criteria needing no q_previous).
 CRITERIA = ("limit_margin", "manipulability")
+#: The flags printed after a six-axis branch: (JSON key, text).
+SIX_AXIS_FLAGS = (
+    ("wrist_singular", "wrist singular"),
+    ("shoulder_singular", "shoulder singular"),
+)
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -242,25 +247,37 @@ def _solve_and_print(args: argparse.Namespace, robot: Robot, target: pin.SE3) ->
     except InfeasibleError as err:
         if not args.json:
             raise
-        message = " ".join(str(err).split())
-        print_json({**head, "solutions": [], "feasible": False, "error": message})
-        print(f"workbench: error: {message}", file=sys.stderr)
-        return EXIT_INFEASIBLE
+        return print_infeasible(head, err)
     if args.json:
         print_json({**head, "solutions": rows, "feasible": True})
         return 0
     print(f"robot {robot.name}   frame {robot.tool_frame}   solver {solver}")
+    print_rows(rows, SIX_AXIS_FLAGS)
+    return 0
+
+
+def print_rows(rows: list[dict[str, Any]], flags: tuple[tuple[str, str], ...]) -> None:
+    """Two lines per solution: branch, q [deg] and its flags; the residual.
+
+    Args:
+        rows: The JSON rows of the solutions.
+        flags: ``(key, text)``: ``(text)`` is printed where ``row[key]`` is true.
+    """
     width = max(len(row["branch"]) for row in rows) + 2
     for row in rows:
-        flags = "" if row["within_limits"] else "  (outside joint limits)"
-        if row["wrist_singular"]:
-            flags += "  (wrist singular)"
-        if row["shoulder_singular"]:
-            flags += "  (shoulder singular)"
+        marks = "" if row["within_limits"] else "  (outside joint limits)"
+        marks += "".join(f"  ({text})" for key, text in flags if row[key])
         q_deg = format_vector(row["q_deg"], 3)
-        print(f"{row['branch']:<{width}}q [deg] {q_deg}{flags}")
+        print(f"{row['branch']:<{width}}q [deg] {q_deg}{marks}")
         print(f"{'':<{width}}residual {row['residual']:.2e}")
-    return 0
+
+
+def print_infeasible(head: dict[str, Any], err: InfeasibleError) -> int:
+    """The ``--json`` answer of an infeasible request (and its line on stderr): 3."""
+    message = " ".join(str(err).split())
+    print_json({**head, "solutions": [], "feasible": False, "error": message})
+    print(f"workbench: error: {message}", file=sys.stderr)
+    return EXIT_INFEASIBLE
 
 
 def _solve(
