@@ -35,6 +35,9 @@ from workbench.viz.redundancy_sweep import (
 ATOL_POSE = 1e-9
 #: A parameter value recovered from its configuration [rad].
 ATOL_PARAMETER = 1e-9
+#: Largest |dq/dψ| along the test pose's sweep through ±π [1]: a jump between
+#: branches or intervals would be a step of order 1 rad per sample.
+MAX_JOINT_RATE = 8.0
 #: Arithmetic on interval ends [rad].
 ATOL_SPREAD = 1e-12
 
@@ -99,6 +102,11 @@ def test_sweep_configurations_reach_the_pose_at_their_values(name) -> None:
         assert np.all((qk >= robot.lower) & (qk <= robot.upper))
         assert abs(float(ik.redundancy_parameter(robot, qk)) - vk) < ATOL_PARAMETER
         assert any(lo <= vk <= hi for lo, hi in sweep.intervals)
+    assert np.all(np.diff(sweep.unwrapped) > 0.0)
+    wrapped = np.where(
+        sweep.unwrapped < -np.pi, sweep.unwrapped + 2 * np.pi, sweep.unwrapped
+    )
+    np.testing.assert_array_equal(sweep.values, wrapped)
 
 
 def test_branch_of_q_reproduces_q() -> None:
@@ -141,7 +149,7 @@ def test_page_has_one_coloured_ghost_per_value_and_an_animation() -> None:
             color = int(command["object"]["materials"][0]["color"])
             by_ghost.setdefault(path.split("/")[3], set()).add(color)
     assert all(len(colors) == 1 for colors in by_ghost.values())  # one per ghost
-    rgb = (255 * sweep_colors(sweep.values)).astype(int)  # truncated, as Meshcat
+    rgb = (255 * sweep_colors(sweep.unwrapped)).astype(int)  # truncated, as Meshcat
     expected = {(r << 16) | (g << 8) | b for r, g, b in rgb}
     assert {c for colors in by_ghost.values() for c in colors} == expected
     assert "set_animation" in {c["type"] for c in commands}
@@ -254,3 +262,28 @@ def test_ghosts_of_collada_arms_take_their_colour_from_the_collision_geometry() 
         c["object"]["materials"][0]["color"] == 0xFF0000 for c in ghosts
     )
     assert "collision geometry" in page
+
+
+def test_an_arm_angle_sweep_runs_through_pi_without_a_jump() -> None:
+    """A branch feasible across ψ = ±π is swept across it, continuously."""
+    robot = load_robot("iiwa14")
+    target = robot.fk(Q0["iiwa14"])
+    feasible = ik.feasible_redundancy(robot, target)
+    through = [
+        label
+        for label, intervals in zip(feasible.branches, feasible.intervals, strict=True)
+        if len(intervals) > 1
+        and intervals[0][0] == -np.pi
+        and intervals[-1][1] == np.pi
+    ]
+    assert through, "no branch of the test pose is feasible through ±π"
+    sweep = compute_redundancy_sweep(robot, target, 24, through[0])
+    first, last = sweep.intervals[0], sweep.intervals[-1]
+    inside = (sweep.unwrapped >= last[0] - 2 * np.pi) & (sweep.unwrapped <= first[1])
+    assert sweep.unwrapped[0] < -np.pi and inside.sum() >= 2  # the joined interval
+    steps = np.abs(np.angle(np.exp(1j * np.diff(sweep.q[inside], axis=0))))
+    spacing = np.diff(sweep.unwrapped[inside]).max()
+    assert steps.max() < MAX_JOINT_RATE * spacing  # no jump: joints follow ψ
+    viewer = Viewer(robot, Q0["iiwa14"])
+    show_redundancy_sweep(viewer, sweep, degrees=True)
+    assert ">±180<" in viewer.render_html()  # the scale marks where it passes ±π

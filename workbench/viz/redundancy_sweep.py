@@ -7,7 +7,10 @@ samples one branch at ``count`` values spread over the intervals where it is
 within the joint limits (:func:`workbench.ik.feasible_redundancy`): the total
 length of the intervals is cut into ``count`` equal cells and each value is a
 cell's centre, so every value lies inside an interval and the spacing is even
-across them. :func:`show_redundancy_sweep` draws those configurations as
+across them. The arm angle is periodic: a branch feasible through ψ = ±π (its
+first interval starts at −π and its last ends at π) is swept through ±π, the
+two joined into one interval, so that the sweep runs on without a jump there.
+:func:`show_redundancy_sweep` draws those configurations as
 translucent ghosts coloured by the value (viridis, the legend gives the
 scale) and animates the arm through them (play, pause and scrub in the page).
 """
@@ -37,6 +40,10 @@ SWEEP_SECONDS = 4.0
 SWEEP_OPACITY = 0.35
 #: Largest number of values of a sweep (each a ghost arm in the page).
 MAX_SWEEP = 64
+#: A full turn [rad], the period of the arm angle.
+TAU = 2.0 * np.pi
+#: How close [rad] a range is to 2π (periodic), and an interval end to its end.
+PERIOD_TOL = 1e-12
 
 
 @dataclass(frozen=True, slots=True)
@@ -46,9 +53,12 @@ class RedundancySweep:
     Attributes:
         parameter: ``"arm angle"`` (SRS) or ``"q7"`` (Franka).
         branch: The branch label.
-        values: (N,) parameter values [rad], increasing.
+        values: (N,) parameter values [rad] in sweep order, within the
+            parameter's range.
         q: (N, 7) configurations [rad], all within the joint limits.
         intervals: The branch's feasible intervals [rad] the values spread over.
+        unwrapped: (N,) the values, increasing: through ±π a periodic
+            parameter goes on below −π (``values`` = ``unwrapped`` + 2π there).
     """
 
     parameter: str
@@ -56,6 +66,7 @@ class RedundancySweep:
     values: FloatArray
     q: FloatArray
     intervals: tuple[tuple[float, float], ...]
+    unwrapped: FloatArray
 
 
 def spread_over_intervals(
@@ -135,10 +146,12 @@ def compute_redundancy_sweep(
             f"branch {branch} reaches the pose within the joint limits for no "
             f"{feasible.parameter}"
         )
-    if sum(hi - lo for lo, hi in intervals) <= 0.0:
-        values = np.array([intervals[0][0]] * count)
+    joined = _join_through_pi(tuple(intervals), feasible.range)
+    if sum(hi - lo for lo, hi in joined) <= 0.0:
+        unwrapped = np.array([joined[0][0]] * count)
     else:
-        values = spread_over_intervals(intervals, count)
+        unwrapped = spread_over_intervals(joined, count)
+    values = np.where(unwrapped < feasible.range[0], unwrapped + TAU, unwrapped)
     rows = []
     for value in values:
         found = [
@@ -153,12 +166,34 @@ def compute_redundancy_sweep(
             )
         rows.append(found[0].q)
     return RedundancySweep(
-        feasible.parameter, branch, values, np.array(rows), tuple(intervals)
+        feasible.parameter, branch, values, np.array(rows), tuple(intervals), unwrapped
     )
 
 
+def _join_through_pi(
+    intervals: tuple[tuple[float, float], ...], parameter_range: tuple[float, float]
+) -> tuple[tuple[float, float], ...]:
+    """The intervals, the last one moved below the first when they meet at ±π.
+
+    Only for a periodic parameter (a range of 2π, the arm angle) whose first
+    interval starts at the range's start and last ends at its end.
+    """
+    lo, hi = parameter_range
+    periodic = abs((hi - lo) - TAU) <= PERIOD_TOL
+    if not (periodic and len(intervals) > 1):
+        return intervals
+    (first_lo, first_hi), (last_lo, last_hi) = intervals[0], intervals[-1]
+    if first_lo > lo + PERIOD_TOL or last_hi < hi - PERIOD_TOL:
+        return intervals
+    return ((last_lo - TAU, first_hi), *intervals[1:-1])
+
+
 def sweep_colors(values: FloatArray) -> FloatArray:
-    """RGB (N, 3) in [0, 1] of each value on the sweep's scale (its min to max)."""
+    """RGB (N, 3) in [0, 1] of each value on the sweep's scale (its min to max).
+
+    Args:
+        values: (N,) the sweep's ``unwrapped`` values [rad].
+    """
     from matplotlib import colormaps
 
     lo, hi = float(values.min()), float(values.max())
@@ -174,10 +209,14 @@ def _scale_legend(sweep: RedundancySweep, degrees: bool) -> str:
         (x, tuple(float(c) for c in cmap(x)[:3]))
         for x in np.linspace(0.0, 1.0, RAMP_STOPS)
     ]
-    lo, hi = float(sweep.values.min()), float(sweep.values.max())
-    shown = np.degrees([lo, hi]) if degrees else np.array([lo, hi])
+    unwrapped = sweep.unwrapped
+    lo, hi = float(unwrapped.min()), float(unwrapped.max())
+    ends = np.array([sweep.values[0], sweep.values[-1]])
+    shown = np.degrees(ends) if degrees else ends
     unit = "deg" if degrees else "rad"
     ticks = [(0.0, f"{shown[0]:.3g}"), (1.0, f"{shown[1]:.3g}")]
+    if lo < -np.pi and hi > lo:  # through ±π: mark where
+        ticks.insert(1, ((-np.pi - lo) / (hi - lo), "±180" if degrees else "±π"))
     return _legend.color_scale(
         "Ghost colour",
         f"{sweep.parameter} [{unit}] of branch {sweep.branch}, "
@@ -207,7 +246,7 @@ def show_redundancy_sweep(
         sweep.q,
         labels=labels,
         opacity=SWEEP_OPACITY,
-        colors=sweep_colors(sweep.values),
+        colors=sweep_colors(sweep.unwrapped),
         legend=_scale_legend(sweep, degrees),
     )
     if len(sweep.values) > 1:
