@@ -1,5 +1,7 @@
 """``workbench ik``: inverse kinematics, closed form for OPW and UR-type arms.
 
+Seven-axis arms of the SRS and Franka families are solved in closed form at
+one value of their redundancy parameter (:mod:`workbench.cli._ik_redundant`).
 Any other robot falls back to numerical IK (one solution, branch "numeric"),
 and the output says so: ``solver`` is ``"closed-form"`` or ``"numeric"``.
 """
@@ -67,7 +69,10 @@ def register(commands: argparse._SubParsersAction) -> None:
         description="Joint values that put the tool frame at a pose. Prints the "
         "branch within the joint limits nearest to q = 0, or with --all every "
         "closed-form branch. Arms of the OPW (PUMA, KUKA, ABB, ...) and UR families "
-        "are recognised from their joint axes; any other robot gets one numerical "
+        "are recognised from their joint axes; so are the seven-axis SRS (KUKA "
+        "iiwa) and Franka (Panda) families, whose every branch at one value of the "
+        "redundancy parameter is printed (--redundancy, else the value chosen by "
+        "--criterion, said in the output); any other robot gets one numerical "
         "solution (solver 'numeric', branch 'numeric'). residual = max(position "
         "error [m], rotation error [rad]) of FK(q) against the target.",
     )

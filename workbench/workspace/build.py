@@ -7,8 +7,11 @@ writes them into its own chunk of every array, then the block's ``done`` flag.
 A block's bits depend on the block only, so the map is bitwise the same on one
 worker, many workers or a cluster.
 
-Arms without a closed form get a sampled map (:mod:`workbench.workspace.sampled`):
-a block is :data:`SAMPLES_PER_BLOCK` random configurations, drawn from
+Seven-axis arms of the SRS and Franka families get the same blocks, each pose
+solved in closed form at K values of the redundancy parameter
+(:mod:`workbench.workspace.redundant`). Arms without a closed form get a
+sampled map (:mod:`workbench.workspace.sampled`): a block is
+:data:`SAMPLES_PER_BLOCK` random configurations, drawn from
 ``default_rng([seed, block])``; each task returns the grid poses its samples
 hit and their manipulability, which this process folds into the map (hit flag
 and maximum: the same bits in any order), saving it as it goes
