@@ -282,8 +282,8 @@ class OnlinePlanner:
         self._active: MotionPrimitive = Hold()
         self._active.begin(self._state, 0.0, limits)
         self._command_joints(p, zero, rotation, zero)  # loads the branch choice
-        if self._tracker is not None:  # that call is no cycle: the value stays
-            self._tracker.value = float(solver.parameter_of(q0))
+        if self._tracker is not None:  # that call is no cycle: back at q0
+            self._tracker.reset(q0)
 
     # -- state ---------------------------------------------------------------
     @property

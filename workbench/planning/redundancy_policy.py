@@ -216,8 +216,6 @@ class RedundancyTracker:
         self.robot = robot
         self.solver = solver
         self.policy = check_policy(policy)
-        self.value = float(solver.parameter_of(q_start))
-        self.differential = False
         self._lower, self._upper = robot.lower, robot.upper
         self._range = solver.parameter_range
         self._periodic = solver.family == "srs"  # the arm angle, mod 2π
@@ -225,9 +223,15 @@ class RedundancyTracker:
         self._max_rate = max_rate
         self._max_step = max_rate * period
         self._max_step_change = self._max_step * period / RATE_RAMP_TIME
-        self._last_step = 0.0  # the parameter's step at the last cycle [rad]
         self._fast_step = FAST_SHARE * robot.velocity_limit * period
         self._zero = np.zeros(robot.nv)
+        self.reset(q_start)
+
+    def reset(self, q: FloatArray) -> None:
+        """Start again at configuration ``q`` (7,) [rad]: its parameter, at rest."""
+        self.value = float(self.solver.parameter_of(q))
+        self.differential = False
+        self._last_step = 0.0  # the parameter's step at the last cycle [rad]
 
     def track(
         self,
