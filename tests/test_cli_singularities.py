@@ -139,7 +139,48 @@ def test_singularities_of_a_redundant_robot_has_null_det(capsys) -> None:
         capsys, "singularities", "--robot", "panda", "--rad", *["0.3"] * 7, "--json"
     )
     assert code == 0
-    assert json.loads(out)["det_j"] is None
+    result = json.loads(out)
+    assert result["det_j"] is None and result["srs"] is None  # Franka: numeric only
+    code, out, _ = run(
+        capsys, "singularities", "--robot", "panda", "--rad", *["0.3"] * 7
+    )
+    assert code == 0 and "no analytic conditions for this arm" in out
+
+
+def test_singularities_of_an_srs_arm(capsys) -> None:
+    """iiwa14 with θ4 = 0 (elbow stretched): distances and det(J Jᵀ) both ways."""
+    robot = load_robot("iiwa14")
+    q_deg = [10.0, 30.0, 20.0, 0.0, 40.0, 50.0, 60.0]
+    argv = ["singularities", "--robot", "iiwa14", "--deg", *map(str, q_deg)]
+    code, out, _ = run(capsys, *argv, "--json")
+    assert code == 0
+    srs = json.loads(out)["srs"]
+    assert set(srs["near"]) == {
+        "elbow",
+        "shoulder",
+        "wrist",
+        "shoulder_wrist",
+        "arm_angle",
+    }
+    assert abs(srs["near"]["elbow"]) < 1e-12 and srs["det_jjt"] < 1e-24
+    q = np.radians(q_deg)
+    q[3] = 0.5  # off the elbow locus: det(J Jᵀ) both ways agree
+    code, out, _ = run(
+        capsys,
+        "singularities",
+        "--robot",
+        "iiwa14",
+        "--rad",
+        *map(repr, q.tolist()),
+        "--json",
+    )
+    srs = json.loads(out)["srs"]
+    jacobian = robot.jacobian(q)
+    expected = np.linalg.det(jacobian @ jacobian.T)
+    assert srs["det_jjt"] == pytest.approx(expected, rel=1e-9, abs=0.0)
+    assert srs["det_jjt_pinocchio"] == pytest.approx(expected, rel=1e-9, abs=0.0)
+    code, out, _ = run(capsys, *argv)
+    assert code == 0 and "near elbow" in out and "family           SRS" in out
 
 
 @pytest.mark.parametrize(

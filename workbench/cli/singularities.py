@@ -32,6 +32,13 @@ from workbench.singularities.conditions import (
 )
 from workbench.singularities.directions import compute_degenerate_direction
 from workbench.singularities.measures import compute_measures
+from workbench.singularities.redundant import (
+    SRS_CONDITION_UNITS,
+    SRS_SINGULARITY_KINDS,
+    NotSRSArmError,
+    compute_srs_conditions,
+    compute_srs_det_jjt,
+)
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -42,7 +49,10 @@ def register(commands: argparse._SubParsersAction) -> None:
         description=(
             "det J, singular values, manipulability and condition number of the "
             "tool Jacobian (any robot), and for OPW and UR-type arms the signed "
-            "distances to the shoulder [m], elbow [sine] and wrist [sin θ5] loci; "
+            "distances to the shoulder [m], elbow [sine] and wrist [sin θ5] loci "
+            "(SRS seven-axis arms: to their elbow, shoulder, wrist, "
+            "shoulder-wrist and arm-angle loci, and det(J Jᵀ) analytic and "
+            "numeric); "
             "where a configuration is within tolerance of a locus, its degenerate "
             "direction u (the twist the arm cannot make, at the wrist point and at "
             "the tool) and the self-motion v. "
@@ -78,6 +88,7 @@ def analyse_configuration(robot: Robot, q: np.ndarray) -> dict[str, Any]:
         },
         "det_j_constant": None,
         "directions": None,
+        "srs": _srs(robot, q, measures.singular_values),
     }
     try:
         conditions = compute_conditions(robot, q).as_dict()
@@ -92,6 +103,22 @@ def analyse_configuration(robot: Robot, q: np.ndarray) -> dict[str, Any]:
         kind: _direction(robot, q, kind) for kind in result["singular"]
     }
     return result
+
+
+def _srs(
+    robot: Robot, q: np.ndarray, singular_values: np.ndarray
+) -> dict[str, Any] | None:
+    """An SRS seven-axis arm's distances to its loci and det(J Jᵀ); else None."""
+    try:
+        conditions = compute_srs_conditions(robot, q).as_dict()
+    except NotSRSArmError:
+        return None
+    return {
+        "near": {kind: float(value) for kind, value in conditions.items()},
+        "units": SRS_CONDITION_UNITS,
+        "det_jjt": float(compute_srs_det_jjt(robot, q)),
+        "det_jjt_pinocchio": float(np.prod(np.square(singular_values))),
+    }
 
 
 def _direction(robot: Robot, q: np.ndarray, kind: str) -> dict[str, Any] | None:
@@ -132,8 +159,17 @@ def run(args: argparse.Namespace) -> int:
     print(f"sigma_min        {result['sigma_min']:.6e}")
     print(f"manipulability   {result['manipulability']:.6e}")
     print(f"condition number {'inf' if condition is None else f'{condition:.6g}'}")
+    if (srs := result["srs"]) is not None:
+        for kind in SRS_SINGULARITY_KINDS:
+            value, unit = srs["near"][kind], SRS_CONDITION_UNITS[kind]
+            print(f"near {kind:<14} {value:+.6f}  [{unit}]")
+        print(
+            f"family           SRS (det(J Jᵀ) = {srs['det_jjt']:.6e} m⁶ analytic, "
+            f"{srs['det_jjt_pinocchio']:.6e} from Pinocchio's J)"
+        )
+        return 0
     if result["singular"] is None:
-        print("near             n/a (no OPW or UR structure: numeric measures only)")
+        print("near             n/a (no analytic conditions for this arm: numeric only)")
         return 0
     for kind in SINGULARITY_KINDS:
         value, unit = result["near"][kind], CONDITION_UNITS[kind]
