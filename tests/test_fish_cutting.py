@@ -581,3 +581,13 @@ def test_cli_seven_axis_arms_and_the_policy_option(capsys) -> None:
         capsys, "fishcut", "--robot", "ur5", "--redundancy-policy", "keep"
     )
     assert code == 2 and "ur5: a six-axis arm has no redundancy" in err
+
+
+def test_seven_axis_cell_too_small_is_refused_before_running():
+    iiwa = load_robot("iiwa14")
+    setup = FishCuttingSetup().scaled(0.95)  # its reach ratio: A too near the shoulder
+    with pytest.raises(InfeasibleError, match="no branch reaches Kang's home pose H"):
+        run_fish_cutting(iiwa, setup=setup)
+    home = compute_home_configuration(iiwa, FishCuttingSetup().scaled(1.09))
+    with pytest.raises(InfeasibleError, match=r"waypoint S0 .* no IK solution"):
+        check_waypoints(iiwa, SimulatedFish().scaled(0.95), setup, home)

@@ -307,3 +307,12 @@ def test_near_the_wrist_singularity_no_joint_spins(iiwa, q6, direction):
         iiwa.velocity_limit * LIMITS_PERIOD
     )
     assert kept_ratio.max() > 1.0
+
+
+def test_a_pose_out_of_reach_raises(iiwa):
+    planner = OnlinePlanner(iiwa, IIWA_START, LIMITS, check_speed=False)
+    start = iiwa.fk(IIWA_START).translation
+    planner.append(StraightLine(2.5 * start))  # radially out: the elbow stretches
+    with pytest.raises(InfeasibleError, match="out of reach"):
+        while not planner.done:
+            planner.step()
