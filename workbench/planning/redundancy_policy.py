@@ -262,7 +262,7 @@ class RedundancyTracker:
         """
         value, last_step, self._last_step = self.value, self._last_step, 0.0
         self.differential = False
-        kept = self._solve(pose, value, q_predicted, branch, max_step2)
+        kept = self.solver.try_track(pose, value, q_predicted, branch, max_step2)
         if kept is None or self._too_fast(kept[0], q_last):
             return self._differential_command(pose, twist, q_last, branch)
         q0, index, _ = kept
@@ -272,8 +272,8 @@ class RedundancyTracker:
             return kept
         low = self._shift(value, -PROBE_STEP)
         high = self._shift(value, PROBE_STEP)
-        below = self._solve(pose, low, q0, index, max_step2)
-        above = self._solve(pose, high, q0, index, max_step2)
+        below = self.solver.try_track(pose, low, q0, index, max_step2)
+        above = self.solver.try_track(pose, high, q0, index, max_step2)
         if below is None or above is None or below[1] != index or above[1] != index:
             return self._differential_command(pose, twist, q_last, index)
         derivative = (above[0] - below[0]) / self._span(low, high)  # ∂q/∂v
@@ -283,7 +283,9 @@ class RedundancyTracker:
         step = self._policy_step(q_all, margin, last_step)
         if abs(step) < MIN_STEP:
             return kept
-        moved = self._solve(pose, self._shift(value, step), q0, index, max_step2)
+        moved = self.solver.try_track(
+            pose, self._shift(value, step), q0, index, max_step2
+        )
         if moved is None or moved[1] != index or self._too_fast(moved[0], q_last):
             return self._differential_command(pose, twist, q_last, index)
         self.value, self._last_step = self._shift(value, step), step
@@ -390,17 +392,6 @@ class RedundancyTracker:
         damping = DLS_LAMBDA_MAX if damped else 0.0
         qd, _ = solve_null_space_velocity(jacobian, twist, DLS_EPSILON, damping, null)
         return qd
-
-    def _solve(
-        self,
-        pose: FloatArray,
-        value: float,
-        q_predicted: FloatArray,
-        branch: int,
-        max_step2: float,
-    ) -> tuple[FloatArray, int, bool] | None:
-        """The closed form at ``value``; None where no branch reaches."""
-        return self.solver.try_track(pose, value, q_predicted, branch, max_step2)
 
     def _shift(self, value: float, step: float) -> float:
         """``value + step`` within the parameter's range (ψ wraps, q7 clips)."""
