@@ -27,6 +27,7 @@ from workbench.planning.redundancy_policy import (
     compute_limit_gradient,
     compute_limit_margin,
     compute_limit_score,
+    compute_manipulability_gradient,
 )
 from workbench.poses import rotation_from_axis_angle
 
@@ -40,6 +41,9 @@ ATOL_TWIST = 1e-10
 ATOL_PARAMETER = 1e-9
 #: Central differences of the limit score (step 1e-6 rad).
 ATOL_FD = 1e-6
+#: Central differences (step 1e-6 rad) of the manipulability [m³/rad]: the
+#: truncation ~1e-12, the rounding of √det ~1e-16 / 1e-6.
+ATOL_FD_GRADIENT = 1e-9
 LIMITS_PERIOD = 0.01  # [s], the planner's default planning period
 
 
@@ -316,3 +320,18 @@ def test_a_pose_out_of_reach_raises(iiwa):
     with pytest.raises(InfeasibleError, match="out of reach"):
         while not planner.done:
             planner.step()
+
+
+@pytest.mark.parametrize("name", ["iiwa14", "panda"])
+def test_manipulability_gradient_against_the_compiled_chain(name):
+    robot = load_robot(name)
+    rng = np.random.default_rng(7)
+    step = 1e-6  # [rad], central differences of compute_tool_poses' √det(J Jᵀ)
+    for _ in range(5):
+        q = rng.uniform(robot.lower, robot.upper)
+        w, gradient = compute_manipulability_gradient(robot, q)
+        shifted = q + step * np.concatenate([np.eye(7), -np.eye(7)])
+        values = compute_tool_poses(robot, np.vstack([q, shifted]))[2]
+        numeric = (values[1:8] - values[8:]) / (2 * step)
+        assert w == pytest.approx(values[0], abs=1e-14)
+        np.testing.assert_allclose(gradient, numeric, rtol=0, atol=ATOL_FD_GRADIENT)

@@ -35,9 +35,12 @@ its speed limit, or where a joint's :math:`|\partial q/\partial v|` exceeds
 constant parameter, the arm angle's algorithmic singularity, q7 turning back
 where the Panda's q2 = 0). It is the damped-least-squares step with a
 null-space term, :math:`q + T\,(J^\# \dot x + (I - J^\# J) z)` (J 6 × 7,
-:func:`workbench.ik.solve_null_space_velocity`; z the gradient of the limit
-score while a joint is near a limit or the policy is ``"limit_margin"``),
-put exactly on the pose by Gauss–Newton steps; v becomes its parameter.
+:func:`workbench.ik.solve_null_space_velocity`; z the gradient of the
+criterion: of the limit score while a joint is near a limit or the policy is
+``"limit_margin"``, else of the manipulability
+(:func:`compute_manipulability_gradient`) under ``"manipulability"``, zero
+under ``"keep"``), put exactly on the pose by Gauss–Newton steps; v becomes
+its parameter.
 Near those singularities the least joint motion does not spin the joints
 that the closed form at a constant parameter would spin; a Franka arm that
 keeps q7 would otherwise turn the tool about its axis with the other six
@@ -171,6 +174,46 @@ def compute_limit_gradient(
     """
     weights = _limit_weights(q, lower, upper)[1]
     return weights[: len(q)] - weights[len(q) :]
+
+
+def compute_manipulability_gradient(
+    robot: Robot, q: FloatArray
+) -> tuple[float, FloatArray]:
+    r"""Manipulability :math:`w = \sqrt{\det J J^T}` and its gradient (nv,).
+
+    With the tool Jacobian J in the tool frame (LOCAL; w is the same in any
+    frame at the tool origin), :math:`\partial w/\partial q_k = w\,
+    \mathrm{tr}(J^+ \partial J/\partial q_k)`, and the columns of a serial
+    chain's body Jacobian move with the later joints only, by the Lie bracket
+    of twists: :math:`\partial J_i/\partial q_k = [J_i, J_k]` for i < k, 0
+    otherwise, :math:`[(v_i, \omega_i), (v_k, \omega_k)] = (\omega_i \times
+    v_k - \omega_k \times v_i,\ \omega_i \times \omega_k)`.
+
+    Args:
+        robot: A serial arm of revolute joints with at least six of them.
+        q: Configuration (nq,) [rad], where J has full rank 6.
+
+    Returns:
+        ``(w, gradient)``: w [m³ for revolute joints] and (nv,) [per rad].
+    """
+    jacobian = pin.computeFrameJacobian(
+        robot.model, robot.data, q, robot.tool_frame_id, _LOCAL
+    )
+    linear, angular = jacobian[:3].T, jacobian[3:].T  # (nv, 3)
+    gram = jacobian @ jacobian.T
+    w = math.sqrt(max(float(np.linalg.det(gram)), 0.0))
+    pseudo_inverse = np.linalg.solve(gram, jacobian).T  # (nv, 6)
+    brackets = np.concatenate(
+        [
+            np.cross(angular[:, None], linear[None, :])
+            - np.cross(angular[None, :], linear[:, None]),
+            np.cross(angular[:, None], angular[None, :]),
+        ],
+        axis=2,
+    )  # (nv, nv, 6): [J_i, J_k]
+    later = np.triu(np.ones((len(linear), len(linear))), 1)  # i < k
+    gradient = w * np.einsum("ik,ia,ika->k", later, pseudo_inverse, brackets)
+    return w, gradient
 
 
 def check_policy(policy: str) -> str:
@@ -350,6 +393,11 @@ class RedundancyTracker:
                 ramp = min(1.0, (KEEP_LIMIT_MARGIN - margin) / KEEP_LIMIT_MARGIN)
             gradient = compute_limit_gradient(q_last, self._lower, self._upper)
             null = self._max_rate * ramp * gradient
+        elif self.policy == "manipulability":  # its direction, at max_rate
+            gradient = compute_manipulability_gradient(robot, q_last)[1]
+            size = float(np.linalg.norm(gradient))
+            if size > 0.0:
+                null = (self._max_rate / size) * gradient
         q = q_last + self._period * self._velocity(q_last, twist, null, _LWA)
         target = pin.SE3(pose)
         for _ in range(MAX_POSE_STEPS + 1):
@@ -433,4 +481,5 @@ __all__ = [
     "compute_limit_gradient",
     "compute_limit_margin",
     "compute_limit_score",
+    "compute_manipulability_gradient",
 ]
