@@ -190,3 +190,10 @@ def test_criterion_with_a_value_exits_2(capsys) -> None:
         capsys, "iiwa14", "--redundancy", "0.1", "--criterion", "manipulability"
     )
     assert code == 2 and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("value", ["1001", "-1e308", "57300"])
+def test_huge_values_exit_2(capsys, value) -> None:
+    unit = ["--deg"] if value == "57300" else []  # 57300° > 1000 rad
+    code, out, err = _ik(capsys, "iiwa14", "--redundancy", value, *unit)
+    assert code == 2 and out == "" and "at most 1000 rad" in err

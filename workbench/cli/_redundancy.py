@@ -23,6 +23,9 @@ if TYPE_CHECKING:
 
 #: Decimals of a parameter value printed in rad (in degrees: this minus 3).
 DIGITS = 6
+#: Largest |--redundancy| [rad]: the arm angle is taken modulo 2π, which
+#: loses 2.5e-13 rad at this size (the float nearest 2π is not 2π).
+MAX_REDUNDANCY = 1000.0
 
 
 def add_redundancy_argument(parser: argparse.ArgumentParser, unit_help: str) -> None:
@@ -66,8 +69,19 @@ def refuse_redundancy(robot: Robot, option: str = "--redundancy") -> InputError:
 
 
 def to_radians(value: float, degrees: bool) -> float:
-    """A typed parameter value in rad (typed in degrees when ``degrees``)."""
-    return math.radians(value) if degrees else value
+    """A typed parameter value in rad (typed in degrees when ``degrees``).
+
+    Raises:
+        InputError: If it exceeds :data:`MAX_REDUNDANCY` in magnitude.
+    """
+    radians = math.radians(value) if degrees else value
+    if abs(radians) > MAX_REDUNDANCY:
+        raise InputError(
+            f"--redundancy {value:g}{' deg' if degrees else ' rad'}: at most "
+            f"{MAX_REDUNDANCY:g} rad in magnitude (the arm angle is taken modulo "
+            "2π, q7 must be within the joint's limits)"
+        )
+    return radians
 
 
 def format_value(value: float, degrees: bool) -> str:
