@@ -14,12 +14,13 @@ section "Franka arms" of docs/seven-axis.md has the details):
 * θ4 (elbow): E − S = u = (a3, σ3 d3) and W − E = R(θ4) (a4, −σ4 d5) in the
   plane z3 = 0 of frame 3, so |W − S|² = L24² + L46² + 2 L24 L46 cos(θ4 + φ),
   φ the angle from u to (a4, −σ4 d5): two elbows θ4 = ±δ4 − φ.
-* θ6 (wrist): axis 5 (z4) lies in the plane of S, E, W, so (W − S) · z4 = D,
-  known from θ4; z4 = σ5 (s6 x6 − σ6 c6 z6) makes it A s6 + B c6 = D: two
-  wrists per elbow.
-* Frame 3 from W − S and z4 (their coordinates in frame 3 are known), then
-  θ1, θ2 from axis 3 (z2 = σ3 y3), two shoulders (θ1 + π, −θ2, θ3 + π), θ3
-  from x3 in frame 2, θ5 from x5 in frame 4.
+* θ5 (wrist): in frame 4, W − S is (−σ4 κ, 0, D) with
+  κ = −σ4 (a4 + a3 c4 + σ3 d3 s4) and D = σ4 (a3 s4 − σ3 d3 c4) + d5 (known
+  from θ4), and axis 6 (z5) makes σ5 s5 (−σ4 κ) = (W − S) · z5 (known from
+  the pose): two wrists per elbow, θ5 and π − θ5 (|(W − S) · z5| ≤ |κ|).
+* θ6 turns W − S, seen from frame 6, onto its image in frame 5; then
+  R03 = R06 (R34 R45 R56)ᵀ, θ1, θ2 from axis 3 (z2 = σ3 y3), two shoulders
+  (θ1 + π, −θ2, θ3 + π), and θ3 from x3 in frame 2.
 
 Every step is an exact identity of the chain, so the eight rows are every real
 solution for the given q7 (He & Liu and ``frankik`` keep the elbow θ4 = −δ4 − φ
@@ -29,7 +30,8 @@ Branches: bit 2 elbow, bit 1 wrist, bit 0 shoulder, each set when a triple
 product of the joint axes a_k (their positive directions) is positive:
 shoulder (a1 × a3) · a2 (the Panda: sign of sin q2); elbow
 ((E − S) × (W − E)) · a4 (the turn of the arm at the elbow about axis 4; the
-Panda's q4 limits hold the "neg" elbow); wrist (W − S) · (a5 × a6).
+Panda's q4 limits hold the "neg" elbow, He & Liu's); wrist (a5 × a6) · n45,
+n45 the unit common normal from axis 4 to axis 5 (the Panda: sign of −cos q5).
 """
 
 from __future__ import annotations
@@ -64,16 +66,20 @@ BRANCHES: tuple[str, ...] = tuple(
     for shoulder in ("neg", "pos")
 )
 PARAMETER = "q7"
-#: A branch is flagged singular where it meets its twin: |sin θ2| (shoulder),
-#: |sin(θ4 + φ)| (elbow: S, E, W aligned), |sin δ6| (wrist: the two roots of
-#: A s6 + B c6 = D meet, which includes axis 5 through S) at most this.
-SINGULAR_TOL = 1e-10
-#: Relative rounding tolerated beyond the reach before a branch is refused:
-#: |cos(θ4 + φ)| ≤ 1 + REACH_SLACK, D² ≤ (A² + B²)(1 + REACH_SLACK).
+#: A branch is flagged singular where it meets its twin: |sin θ2| (shoulder:
+#: axes 1 and 3 aligned), |sin(θ4 + φ)| (elbow: S, E, W aligned), |cos θ5|
+#: (wrist: axis 6 in the plane of S, E, W) at most this. The elbow's and
+#: the wrist's are roots of differences, (1 − k)(1 + k) and
+#: (κ² − (w · z5)²) / κ², so at the singularity itself they come out as
+#: √(rounding) ≈ 1e-8, or more where |κ| is small (axis 5 near S).
+SINGULAR_TOL = 1e-6
+#: Rounding tolerated beyond the reach before a branch is refused:
+#: |cos(θ4 + φ)| ≤ 1 + REACH_SLACK; |w · z5| ≤ |κ| + REACH_SLACK (L24 + L46).
 REACH_SLACK = 1e-12
-#: Below this |sin θ2| (relative), θ1 is not computed from axis 3 but taken
-#: from q_previous (or θ1 = θ0_1): axes 1 and 3 aligned, only θ1 ± θ3 matter.
-_SHOULDER_FREE = 1e-14
+#: Below this |sin θ2|, θ1 is not computed from axis 3 but taken from
+#: q_previous (or θ1 = θ0_1): axes 1 and 3 aligned, only θ1 ± θ3 matter.
+#: Axis 3 comes out of R06 (R34 R45 R56)ᵀ with an error of up to ~1e-13.
+_SHOULDER_FREE = 1e-12
 B = 8
 
 GEOMETRY_DTYPE = np.dtype(
@@ -93,6 +99,7 @@ GEOMETRY_DTYPE = np.dtype(
         ("l24s", "f8"),  # L24²
         ("l46s", "f8"),  # L46²
         ("inv_2l", "f8"),  # 1 / (2 L24 L46)
+        ("reach_tol", "f8"),  # REACH_SLACK (L24 + L46) [m]
         ("cphi", "f8"),
         ("sphi", "f8"),
         ("label", "f8", 3),  # ±1: the sign of shoulder, wrist, elbow bit 0
@@ -132,13 +139,14 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     l24, l46 = math.hypot(ux, uy), math.hypot(vx, vy)
     g["l24s"], g["l46s"] = l24 * l24, l46 * l46
     g["inv_2l"] = 1.0 / (2.0 * l24 * l46)
+    g["reach_tol"] = REACH_SLACK * (l24 + l46)
     g["cphi"] = (ux * vx + uy * vy) / (l24 * l46)
     g["sphi"] = (ux * vy - uy * vx) / (l24 * l46)
     s = structure.joint_sign
-    # physical sign (module docstring) of the kernel's root sin theta2 >= 0,
-    # epsilon = +1 of theta6 = gamma + epsilon delta6, of theta4 = epsilon delta4 - phi
+    # physical sign (module docstring) of the kernel's roots sin theta2 >= 0,
+    # cos theta5 >= 0 and epsilon = +1 of theta4 = epsilon delta4 - phi
     shoulder = -sigma[0] * sigma[1] * s[0] * s[1] * s[2]
-    wrist = -sigma[5] * s[4] * s[5]
+    wrist = s[4] * s[5] * math.copysign(1.0, j[3].a) * sigma[4]
     elbow = s[3]
     g["label"] = [shoulder, wrist, elbow]
     offsets = [x.theta_offset for x in j]
@@ -183,7 +191,7 @@ def _flip(t: float) -> float:
 
 @common.inline
 def _wrist_point(geo, f0, f1, f2, t7: float):
-    """Axes x6, z6 of frame 6 and W − S, in frame 0, from the DH-framed pose rows."""
+    """Axes x6, y6, z6 of frame 6 and W − S in frame 0 from the DH-framed pose."""
     (r00, r01, r02, px), (r10, r11, r12, py), (r20, r21, r22, pz) = f0, f1, f2
     ca, sa = geo.ca7, geo.sa7
     c7, s7 = math.cos(t7), math.sin(t7)
@@ -199,7 +207,7 @@ def _wrist_point(geo, f0, f1, f2, t7: float):
         py - a7 * qx[1] - d7 * qz[1] - a6 * x6[1] - d6s * y6[1],
         pz - a7 * qx[2] - d7 * qz[2] - a6 * x6[2] - d6s * y6[2] - geo.d1,
     )
-    return x6, qz, w
+    return x6, y6, qz, w
 
 
 @common.inline
@@ -208,37 +216,34 @@ def _dot(a, b) -> float:
 
 
 @common.inline
-def _cross(a, b):
-    return (
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    )
-
-
-@common.inline
-def _combine(ca: float, a, cb: float, b):
-    """The 3-vector ``ca · a + cb · b``."""
-    return (ca * a[0] + cb * b[0], ca * a[1] + cb * b[1], ca * a[2] + cb * b[2])
-
-
-@common.inline
 def _arm(geo, f0, f1, f2, value: float):
     """What the elbow and the wrist need from a DH-framed pose and q7 = ``value``.
 
     Returns:
-        ``(x6, z6, w, r2, k, big_a, big_b, rho2)``: axes x6, z6 of frame 6,
-        w = W − S [m] (frame 0), r2 = |w|², k = cos(θ4 + φ) (unclipped), and
-        A, B, A² + B² of the wrist equation A s6 + B c6 = D.
+        ``(x6, y6, z6, w, r2, k, wz5)``: the axes of frame 6, w = W − S [m]
+        (frame 0), r2 = |w|², k = cos(θ4 + φ) (unclipped) and w · z5 [m]
+        (z5 = σ6 y6: axis 6).
     """
-    sg = geo.sigma
     t7 = geo.joint_sign[6] * value + geo.theta_offset[6]
-    x6, z6, w = _wrist_point(geo, f0, f1, f2, t7)
+    x6, y6, z6, w = _wrist_point(geo, f0, f1, f2, t7)
     r2 = _dot(w, w)
     k = (r2 - geo.l24s - geo.l46s) * geo.inv_2l
-    big_a = sg[4] * _dot(w, x6)
-    big_b = -sg[4] * sg[5] * _dot(w, z6)
-    return x6, z6, w, r2, k, big_a, big_b, big_a * big_a + big_b * big_b
+    return x6, y6, z6, w, r2, k, geo.sigma[5] * _dot(w, y6)
+
+
+@common.inline
+def _times_t(r, c: float, s: float, sigma: float):
+    """Row ``r`` times (Rz(θ) Rx(α))ᵀ, α = ±90° (σ = sin α), θ of cos c, sin s."""
+    return (r[0] * c + r[2] * sigma * s, r[0] * s - r[2] * sigma * c, r[1] * sigma)
+
+
+@common.inline
+def _free_angle(geo, j: int, prev, has_prev: bool) -> float:
+    """The DH angle of joint ``j`` where it is free: q_previous's, else θ0."""
+    t = geo.theta_offset[j]
+    if has_prev:
+        t += geo.joint_sign[j] * prev[j]
+    return t
 
 
 @common.inline
@@ -255,8 +260,9 @@ def _elbow(geo, k: float, s_delta: float, elbow: int):
     s4 = e * s_delta * geo.cphi - k * geo.sphi
     rx = geo.a3 + c4 * geo.a4 + s4 * sg[3] * geo.d5
     ry = sg[2] * geo.d3 + s4 * geo.a4 - c4 * sg[3] * geo.d5
-    big_d = sg[3] * (rx * s4 - ry * c4)
-    kappa = -sg[3] * (rx * c4 + ry * s4)
+    # (rx, ry) . (sigma4 s4, -sigma4 c4) and (rx, ry) x (...), expanded
+    big_d = sg[3] * (geo.a3 * s4 - sg[2] * geo.d3 * c4) + geo.d5
+    kappa = -sg[3] * (geo.a4 + geo.a3 * c4 + sg[2] * geo.d3 * s4)
     return c4, s4, rx, ry, big_d, kappa
 
 
@@ -268,7 +274,7 @@ def _solve(geo, f0, f1, f2, value, prev, has_prev, q, flags) -> int:
     returns OK or OUT_OF_REACH.
     """
     sg = geo.sigma
-    x6, z6, w, r2, k, big_a, big_b, rho2 = _arm(geo, f0, f1, f2, value)
+    x6, y6, z6, w, r2, k, wz5 = _arm(geo, f0, f1, f2, value)
     for b in range(8):
         flags[b] = 0
         for j in range(7):
@@ -278,49 +284,59 @@ def _solve(geo, f0, f1, f2, value, prev, has_prev, q, flags) -> int:
     k = common.clip_unit(k)
     s_delta = common.clamped_root((1.0 - k) * (1.0 + k))
     elbow_flag = ELBOW_SINGULAR if s_delta <= SINGULAR_TOL else 0
-    wn = math.sqrt(r2)
+    # w in frame 6 rotated by Rx(alpha6): (w.x6, -sigma6 w.z6, w.z5)
+    vx, vy = _dot(w, x6), -sg[5] * _dot(w, z6)
+    rows6 = ((x6[0], y6[0], z6[0]), (x6[1], y6[1], z6[1]), (x6[2], y6[2], z6[2]))
     reached = False
     for elbow in range(2):
-        c4, s4, rx, ry, big_d, kappa = _elbow(geo, k, s_delta, elbow)
+        c4, s4, _, _, big_d, kappa = _elbow(geo, k, s_delta, elbow)
         t4 = math.atan2(s4, c4)
-        e2 = rho2 - big_d * big_d
-        if not (e2 >= -REACH_SLACK * rho2):  # (rho2 = 0 needs D = 0)
+        # w in frame 4 is (-sigma4 kappa, 0, D); axis 6 needs
+        # sigma5 s5 (-sigma4 kappa) = w . z5, so |w . z5| <= |kappa|
+        gap = abs(kappa) - abs(wz5)
+        if not (gap >= -geo.reach_tol) or (kappa == 0.0 and wz5 != 0.0):
             continue
-        root = common.clamped_root(e2)
-        wrist_flag = WRIST_SINGULAR if root <= SINGULAR_TOL * math.sqrt(rho2) else 0
-        rn = math.sqrt(rx * rx + ry * ry) * wn
+        e2 = gap * (abs(kappa) + abs(wz5))
+        w4x = -sg[3] * kappa
+        if kappa != 0.0:
+            s5_up = common.clip_unit(sg[4] * wz5 / w4x)
+            c5_up = common.clamped_root(e2) / abs(kappa)
+        else:  # axis 5 through S: theta5 free (self-motion)
+            t5 = _free_angle(geo, 4, prev, has_prev)
+            s5_up, c5_up = math.sin(t5), abs(math.cos(t5))
+        wrist_flag = WRIST_SINGULAR if c5_up <= SINGULAR_TOL else 0
         for wrist in range(2):
-            ew = -geo.label[1] if wrist == 0 else geo.label[1]
-            if rho2 > 0.0:
-                c6 = big_b * big_d - ew * big_a * root
-                s6 = big_a * big_d + ew * big_b * root
-                n6 = math.sqrt(c6 * c6 + s6 * s6)
-                c6, s6 = c6 / n6, s6 / n6
-            else:  # W - S along axis 6 (and D = 0): theta6 free
-                t6 = geo.theta_offset[5]
-                if has_prev:
-                    t6 += geo.joint_sign[5] * prev[5]
-                c6, s6 = math.cos(t6), math.sin(t6)
-            t6 = math.atan2(s6, c6)
-            z4 = _combine(sg[4] * s6, x6, -sg[4] * sg[5] * c6, z6)
-            x5 = _combine(c6, x6, sg[5] * s6, z6)
-            n = _cross(w, z4)
-            nn = math.sqrt(_dot(n, n))
-            if nn > 0.0:  # axis 4 (z3) normal to the plane of S, E, W
-                sign = 1.0 if kappa >= 0.0 else -1.0
-                z3 = _combine(sign / nn, n, 0.0, n)
-            else:  # axis 5 through S: any normal of W - S (self-motion)
-                h = _cross(
-                    w, (1.0, 0.0, 0.0) if abs(w[0]) < abs(w[1]) else (0.0, 1.0, 0.0)
-                )
-                z3 = _combine(1.0 / math.sqrt(_dot(h, h)), h, 0.0, h)
-            zw = _cross(z3, w)
-            x3 = _combine(rx / rn, w, -ry / rn, zw)
-            y3 = _combine(ry / rn, w, rx / rn, zw)
-            # theta5: x4 = c4 x3 + s4 y3, y4 = sigma4 z3
-            c5 = c4 * _dot(x3, x5) + s4 * _dot(y3, x5)
-            s5 = sg[3] * _dot(z3, x5)
+            # the root cos theta5 >= 0 has the physical sign label[1]
+            c5 = c5_up if (wrist == 1) == (geo.label[1] > 0.0) else -c5_up
+            s5 = s5_up
             t5 = math.atan2(s5, c5)
+            # theta6 turns v onto u = w in frame 5 rotated by Rx(-alpha5)
+            ux, uy = c5 * w4x, sg[4] * big_d
+            y6a, x6a = vx * uy - vy * ux, vx * ux + vy * uy
+            n6 = math.sqrt(y6a * y6a + x6a * x6a)
+            if n6 > 0.0:
+                c6, s6 = x6a / n6, y6a / n6
+                t6 = math.atan2(y6a, x6a)
+            else:  # W - S along axis 6: theta6 free
+                t6 = _free_angle(geo, 5, prev, has_prev)
+                c6, s6 = math.cos(t6), math.sin(t6)
+            # frame 3: R03 = R06 (R34 R45 R56)^T
+            r03 = (
+                _times_t(
+                    _times_t(_times_t(rows6[0], c6, s6, sg[5]), c5, s5, sg[4]),
+                    c4, s4, sg[3],
+                ),
+                _times_t(
+                    _times_t(_times_t(rows6[1], c6, s6, sg[5]), c5, s5, sg[4]),
+                    c4, s4, sg[3],
+                ),
+                _times_t(
+                    _times_t(_times_t(rows6[2], c6, s6, sg[5]), c5, s5, sg[4]),
+                    c4, s4, sg[3],
+                ),
+            )  # fmt: skip
+            x3 = (r03[0][0], r03[1][0], r03[2][0])
+            y3 = (r03[0][1], r03[1][1], r03[2][1])
             # shoulder: axis 3 is z2 = sigma3 y3 = (s2' c1, s2' s1, -s1s2 c2)
             z2x, z2y, z2z = sg[2] * y3[0], sg[2] * y3[1], sg[2] * y3[2]
             h2 = math.sqrt(z2x * z2x + z2y * z2y)
@@ -328,9 +344,7 @@ def _solve(geo, f0, f1, f2, value, prev, has_prev, q, flags) -> int:
             if h2 > _SHOULDER_FREE:
                 c1, s1 = sg[1] * z2x / h2, sg[1] * z2y / h2
             else:
-                t1 = geo.theta_offset[0]
-                if has_prev:
-                    t1 += geo.joint_sign[0] * prev[0]
+                t1 = _free_angle(geo, 0, prev, has_prev)
                 c1, s1 = math.cos(t1), math.sin(t1)
             t1 = math.atan2(s1, c1)
             t2 = math.atan2(h2, c2)
@@ -408,7 +422,7 @@ def solve_pose(
     return _solve(geo, f0, f1, f2, value, q_previous, has_prev, q, flags)
 
 
-@entry_point(outputs=("q", "valid"), contiguous=("poses", "values"))
+@entry_point(outputs=("q", "valid"), contiguous=("poses",))
 def solve_batch(
     geometry: np.ndarray,
     poses: FloatArray,
@@ -468,14 +482,14 @@ def diagnose(
         ``(status, distance, low, high)``: the status of :func:`solve_pose`
         (checked), the distance |W − S| [m] of the wrist point from the
         shoulder for this q7 and the elbow's reach [|L24 − L46|, L24 + L46]
-        [m]. A distance within the reach with OUT_OF_REACH means that axis 5
-        cannot be normal to axis 6 there (|D| > √(A² + B²) for both elbows).
+        [m]. A distance within the reach with OUT_OF_REACH means that axis 6
+        cannot be normal to axis 5 there (|w · z5| > |κ| for both elbows).
     """
     geo = geometry[0]
     if not common.is_rigid(pose):
         return NOT_RIGID, 0.0, 0.0, 0.0
     f0, f1, f2 = _framed_rows(geo, pose)
-    w = _arm(geo, f0, f1, f2, value)[2]
+    w = _arm(geo, f0, f1, f2, value)[3]
     q = np.empty((B, 7))
     flags = np.empty(B, dtype=np.uint8)
     status = _solve(geo, f0, f1, f2, value, np.empty(0), False, q, flags)
@@ -534,7 +548,7 @@ def track(
     return status, best, flags[best] & WITHIN_LIMITS != 0
 
 
-@entry_point(outputs=("out",), contiguous=("values",))
+@entry_point(outputs=("out",))
 def reach_margins(
     geometry: np.ndarray, pose: FloatArray, values: FloatArray, out: FloatArray
 ) -> None:
@@ -545,7 +559,7 @@ def reach_margins(
         pose: (4, 4) pose of the tool frame [m], finite and rigid.
         values: (N,) q7 [rad].
         out: (N, 3) output: 1 − k² (k = cos(θ4 + φ): the elbow reaches where
-            ≥ 0), then (A² + B² − D²) / |W − S|² for elbow 0 and elbow 1 (the
+            ≥ 0), then (κ² − (w · z5)²) / |w|² for elbow 0 and elbow 1 (the
             wrists of that elbow reach where ≥ 0; the elbow's margin where the
             elbow does not reach). Smooth in q7, unitless.
     """
@@ -553,13 +567,13 @@ def reach_margins(
     f0, f1, f2 = _framed_rows(geo, pose)
     for i in range(values.shape[0]):
         arm = _arm(geo, f0, f1, f2, values[i])
-        r2, k, rho2 = arm[3], arm[4], arm[7]
+        r2, k, wz5 = arm[4], arm[5], arm[6]
         elbow = (1.0 - k) * (1.0 + k)
         out[i, 0] = elbow
         s_delta = common.clamped_root(elbow)
         for e in range(2):
-            big_d = _elbow(geo, common.clip_unit(k), s_delta, e)[4]
-            margin = (rho2 - big_d * big_d) / r2
+            kappa = _elbow(geo, common.clip_unit(k), s_delta, e)[5]
+            margin = (kappa * kappa - wz5 * wz5) / r2
             out[i, 1 + e] = margin if elbow >= 0.0 else elbow
 
 
