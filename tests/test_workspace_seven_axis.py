@@ -192,3 +192,16 @@ def test_command_line_refusals_exit_2(capsys, tmp_path, argv, message) -> None:
         capsys, "workspace", "map", *argv, "--out", str(tmp_path / "m.zarr")
     )
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("name", ["iiwa14", "generic6r"])
+def test_base_placement_says_it_needs_a_six_axis_closed_form(
+    capsys, tmp_path, name
+) -> None:
+    targets = tmp_path / "targets.csv"
+    targets.write_text("x,y,z,qx,qy,qz,qw\n0.5,0.1,0.4,1,0,0,0\n", encoding="utf-8")
+    code, out, err = run_cli(
+        capsys, "workspace", "place", "--robot", name, "--targets", str(targets)
+    )
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
+    assert "base placement needs a six-axis arm of the OPW or UR family" in err

@@ -34,7 +34,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.collision import CollisionChecker, Scene
-from workbench.ik import get_closed_form
+from workbench.ik import UnsupportedRobotError, get_closed_form
 from workbench.model.robot import Robot
 from workbench.singularities import compute_conditions, get_factorisation
 from workbench.workspace._placement_kernel import chain_parents
@@ -200,7 +200,13 @@ class PlacementEvaluator:
         self, robot: Robot, task: FloatArray, scene: Scene | None, ordered: bool
     ):
         self.robot = robot
-        self.solver = get_closed_form(robot)
+        try:
+            self.solver = get_closed_form(robot)
+        except UnsupportedRobotError as err:
+            raise UnsupportedRobotError(
+                f"base placement needs a six-axis arm of the OPW or UR family, "
+                f"which {robot.name} is not ({str(err).split(':')[0]})"
+            ) from err
         self.constant = abs(get_factorisation(robot).constant)
         self.task = np.asarray(task, dtype=np.float64)
         self.scene = scene
