@@ -35,6 +35,10 @@ REPORT = "report singularities --robot puma560".split()
 URSCRIPT = "export --format urscript --robot ur5 --trajectory traj.csv".split()
 #: ``ik`` of the identity orientation at a position still to append (3 numbers).
 IK_AT = "ik --robot ur5 --angeles7 0 0 0 1".split()
+#: ``ik`` of a seven-axis arm (SRS) at a pose it reaches; options to append.
+IK_SEVEN = "ik --robot iiwa14 --xyz-quat-wxyz 0.5 0.1 0.4 0 1 0 0".split()
+#: ``view`` of a seven-axis arm at a configuration within its limits.
+VIEW_SEVEN = ["view", "--robot", "iiwa14", "--deg", *["10"] * 7, "--html", "o.html"]
 DH_ROW = {"alpha": 1.5707963267948966, "a": 0.1, "d": 0.2}
 #: Contents of an existing output that a failed run must leave as it is.
 OLD = "old output, must survive a failed run\n"
@@ -161,6 +165,14 @@ SIZES = st.one_of(
         st.just(IK_AT),
         st.lists(st.floats(1e7, 1e308).map(str), min_size=3, max_size=3),
     ),
+    st.tuples(
+        st.just([*IK_SEVEN, "--redundancy"]),
+        st.floats(1000.001, 1e308).map(str),
+    ),
+    st.tuples(
+        st.just([*VIEW_SEVEN, "--redundancy-sweep"]),
+        st.one_of(st.integers(65, 10**30), st.integers(-(10**12), 0)).map(str),
+    ),
 ).map(lambda pair: [*pair[0], *([pair[1]] if isinstance(pair[1], str) else pair[1])])
 
 
@@ -281,6 +293,11 @@ FLAGS = st.sampled_from(
         ],
         ["view", "--robot", "ur5", "--deg", "--html", "o.html"],
         ["urdf", "srdf", "--robot", "ur5", "--json"],
+        [*IK_AT, "0.4", "0", "0.4", "--redundancy", "1"],
+        [*IK_SEVEN, "--redundancy", "1", "--criterion", "manipulability"],
+        [*VIEW_SEVEN, "--ik-branches", "--redundancy-sweep", "3"],
+        [*VIEW_SEVEN, "--redundancy", "1"],
+        [*VIEW_SEVEN, "--redundancy-sweep", "3", "--branch", "nope"],
     ]
 )
 
@@ -309,6 +326,10 @@ WORKSPACE_SIZES = st.one_of(
     st.tuples(st.just([*_SMALL, "--samples"]), _above(10**12)),
     st.tuples(st.just([*_SMALL, "--workers"]), _above(4096)),
     st.tuples(st.just([*_SMALL, "--block-voxels"]), _above(1 << 20)),
+    st.tuples(
+        st.just([*SMALL_MAP, "x.zarr", "--robot", "iiwa14", "--redundancy-samples"]),
+        _above(4096),
+    ),
     st.tuples(
         st.just([*_SMALL, "--cone", "0", "0", "-1"]),
         st.sampled_from(["0", "-30", "180.0001", "1e308", "nan"]),
@@ -418,6 +439,8 @@ WORKSPACE_FLAGS = st.sampled_from(
         [*_SMALL, "--cone", "0", "0", "1e-320", "30"],
         [*_SMALL, "--cone", "nan", "0", "1", "30"],
         [*_SMALL, "--samples", "10", "--scene", "scene.json"],
+        [*_SMALL, "--redundancy-samples", "3"],
+        [*_SMALL, "--robot", "panda", "--samples", "10", "--redundancy-samples", "3"],
         [*PLACE_ON_MAP, "--targets", "task.csv", "--trajectory", "traj.csv"],
         [*PLACE_ON_MAP, "--targets", "task.csv", "--region", "1", "0", "0", "1"],
         [*PLACE_ON_MAP, "--targets", "task.csv", "--region", "0", "1", "1", "0"],

@@ -24,12 +24,14 @@ from hypothesis import strategies as st
 from tests._cli_fuzz import (
     CLASSES,
     IK_AT,
+    IK_SEVEN,
     OLD,
     PICK,
     PLACE,
     PLACE_ON_MAP,
     PLAN,
     SMALL_MAP,
+    VIEW_SEVEN,
     WORKSPACE_CLASSES,
     contract_violations,
     run_case,
@@ -107,6 +109,9 @@ def _run_in(
         (["fishcut", "--seed", "-1"], "--seed: must be 0.."),
         ([*PLAN, "--scene", "scene.json", "--no-collision"], "contradict"),
         ([*IK_AT, "1e308", "1e308", "1e308", "--mm"], "at most 1e+06 m"),
+        ([*IK_AT, "0.4", "0", "0.4", "--redundancy", "1"], "no redundancy"),
+        ([*IK_SEVEN, "--redundancy", "1e308"], "at most 1000 rad"),
+        ([*VIEW_SEVEN, "--redundancy-sweep", "65"], "must be 1..64"),
     ],
 )
 def test_found_cases_exit_2(tmp_path: Path, argv: list[str], fragment: str) -> None:
