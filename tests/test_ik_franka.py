@@ -237,7 +237,7 @@ def _random_franka(rng: np.random.Generator) -> KinematicStructure:
         (sign() * half, 0.0, length(0.1, 0.5)),
         (sign() * half, 0.0, 0.0),
         (sign() * half, length(0.03, 0.2), length(0.2, 0.6)),
-        (sign() * half, length(0.03, 0.2), 0.0),
+        (sign() * half, length(0.03, 0.2), length(0.0, 0.1)),
         (sign() * half, 0.0, length(0.2, 0.6)),
         (sign() * half, length(0.03, 0.2), length(0.0, 0.1)),
         (float(rng.uniform(-math.pi, math.pi)), length(0.0, 0.1), length(0.0, 0.3)),
@@ -309,9 +309,10 @@ def test_labels_are_physical(panda: Robot, geometry: np.ndarray) -> None:
         _, q_b, _ = _solve(other_geometry, pose, q[6])
         np.testing.assert_array_equal(np.isnan(q_a), np.isnan(q_b))
         assert np.nanmax(_angle_gap(q_a, q_b)) <= ATOL_Q
-        # the Panda's branches: sign of sin q2 (shoulder), of -cos q5 (wrist)
+        # the Panda's branches: sign of sin q2 (shoulder), of -cos q5 (wrist,
+        # where q4 is within its limits: axis 5 passes S at neither end)
         for b, row in enumerate(q_a):
-            if not np.isnan(row[0]):
+            if not np.isnan(row[0]) and panda.lower[3] <= row[3] <= panda.upper[3]:
                 assert (math.sin(row[1]) > 0) == bool(b & 1)
                 assert (-math.cos(row[4]) > 0) == bool(b & 2)
 

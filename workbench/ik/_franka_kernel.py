@@ -3,21 +3,23 @@ r"""Compiled closed form of Franka-type seven-axis arms, q7 given: all eight bra
 The arm is the fitted chain base · DH(θ) · tool of :mod:`workbench.ik.structure`
 (standard DH, θ_k = s_k q_k + θ0_k) with the Franka pattern: α1..α6 = ±90°
 (σ_k = sin α_k), a1 = a2 = d2 = 0 (axes 1, 2, 3 meet in the shoulder point
-S = (0, 0, d1)), a3 ≠ 0 and a4 ≠ 0 with d4 = 0 (the elbow offsets: both common
-normals meet axis 4 in the elbow point E), a5 = 0 (axes 5 and 6 meet in the
-wrist point W), a6 ≠ 0 (axis 7 off axis 6); d3, d5, d6 and row 7 are free.
+S = (0, 0, d1)), a3 ≠ 0 and a4 ≠ 0 (the elbow offsets; E, the foot on axis 4
+of the common normal of axes 3 and 4, is the elbow point), a5 = 0 (axes 5 and
+6 meet in the wrist point W), a6 ≠ 0 (axis 7 off axis 6); d3, d4 (the Panda's
+0), d5, d6 and row 7 are free.
 Derivation (after He & Liu 2021, written for any lengths of the pattern; the
 section "Franka arms" of docs/seven-axis.md has the details):
 
 * q7 fixes frame 6: the target of the DH chain is M = B⁻¹ T E⁻¹ (frame 7) and
   frame 6 is M · A7(θ7)⁻¹; W = o6 − a6 x6 − d6 σ6 y6 (axis 6 is z5 = σ6 y6).
-* θ4 (elbow): E − S = u = (a3, σ3 d3) and W − E = R(θ4) (a4, −σ4 d5) in the
-  plane z3 = 0 of frame 3, so |W − S|² = L24² + L46² + 2 L24 L46 cos(θ4 + φ),
-  φ the angle from u to (a4, −σ4 d5): two elbows θ4 = ±δ4 − φ.
-* θ5 (wrist): in frame 4, W − S is (−σ4 κ, 0, D) with
+* θ4 (elbow): in frame 3, E − S = u = (a3, σ3 d3, 0) and
+  W − E = (R(θ4) (a4, −σ4 d5), d4), so
+  |W − S|² = L24² + L46² + d4² + 2 L24 L46 cos(θ4 + φ), φ the angle from u to
+  (a4, −σ4 d5): two elbows θ4 = ±δ4 − φ.
+* θ5 (wrist): in frame 4, W − S is (X, Y, D) = (−σ4 κ, σ4 d4, D) with
   κ = −σ4 (a4 + a3 c4 + σ3 d3 s4) and D = σ4 (a3 s4 − σ3 d3 c4) + d5 (known
-  from θ4), and axis 6 (z5) makes σ5 s5 (−σ4 κ) = (W − S) · z5 (known from
-  the pose): two wrists per elbow, θ5 and π − θ5 (|(W − S) · z5| ≤ |κ|).
+  from θ4), and axis 6 (z5) makes σ5 (s5 X − c5 Y) = (W − S) · z5 (known
+  from the pose): two wrists per elbow, (W − S) · x5 = ±√(X² + Y² − (w · z5)²).
 * θ6 turns W − S, seen from frame 6, onto its image in frame 5; then
   R03 = R06 (R34 R45 R56)ᵀ, θ1, θ2 from axis 3 (z2 = σ3 y3), two shoulders
   (θ1 + π, −θ2, θ3 + π), and θ3 from x3 in frame 2.
@@ -30,8 +32,8 @@ Branches: bit 2 elbow, bit 1 wrist, bit 0 shoulder, each set when a triple
 product of the joint axes a_k (their positive directions) is positive:
 shoulder (a1 × a3) · a2 (the Panda: sign of sin q2); elbow
 ((E − S) × (W − E)) · a4 (the turn of the arm at the elbow about axis 4; the
-Panda's q4 limits hold the "neg" elbow, He & Liu's); wrist (a5 × a6) · n45,
-n45 the unit common normal from axis 4 to axis 5 (the Panda: sign of −cos q5).
+Panda's q4 limits hold the "neg" elbow, He & Liu's); wrist (W − S) · (a5 × a6)
+(the Panda, within its q4 limits: sign of −cos q5).
 """
 
 from __future__ import annotations
@@ -67,14 +69,15 @@ BRANCHES: tuple[str, ...] = tuple(
 )
 PARAMETER = "q7"
 #: A branch is flagged singular where it meets its twin: |sin θ2| (shoulder:
-#: axes 1 and 3 aligned), |sin(θ4 + φ)| (elbow: S, E, W aligned), |cos θ5|
-#: (wrist: axis 6 in the plane of S, E, W) at most this. The elbow's and
-#: the wrist's are roots of differences, (1 − k)(1 + k) and
-#: (κ² − (w · z5)²) / κ², so at the singularity itself they come out as
+#: axes 1 and 3 aligned), |sin(θ4 + φ)| (elbow: S, E, W aligned), the
+#: cosine |(W − S) · x5| / √(X² + Y²) of the wrist equation (module
+#: docstring; d4 = 0: |cos θ5|, axis 6 in the plane of S, E, W) at most
+#: this. The elbow's and the wrist's are roots of differences, (1 − k)(1 + k) and
+#: (X² + Y² − (w · z5)²) / (X² + Y²), so at the singularity they come out as
 #: √(rounding) ≈ 1e-8, or more where |κ| is small (axis 5 near S).
 SINGULAR_TOL = 1e-6
 #: Rounding tolerated beyond the reach before a branch is refused:
-#: |cos(θ4 + φ)| ≤ 1 + REACH_SLACK; |w · z5| ≤ |κ| + REACH_SLACK (L24 + L46).
+#: |cos(θ4 + φ)| ≤ 1 + REACH_SLACK; |w · z5| ≤ √(κ² + d4²) + REACH_SLACK (L24 + L46).
 REACH_SLACK = 1e-12
 #: Below this |sin θ2|, θ1 is not computed from axis 3 but taken from
 #: q_previous (or θ1 = θ0_1): axes 1 and 3 aligned, only θ1 ± θ3 matter.
@@ -87,6 +90,7 @@ GEOMETRY_DTYPE = np.dtype(
         ("sigma", "f8", 6),  # sin α1..α6, each ±1
         ("d1", "f8"),
         ("d3", "f8"),
+        ("d4", "f8"),
         ("a3", "f8"),
         ("a4", "f8"),
         ("d5", "f8"),
@@ -131,6 +135,7 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     sigma = [math.copysign(1.0, x.alpha) for x in j[:6]]
     g["sigma"] = sigma
     g["d1"], g["d3"], g["a3"], g["a4"] = j[0].d, j[2].d, j[2].a, j[3].a
+    g["d4"] = j[3].d
     g["d5"], g["a6"], g["d6"] = j[4].d, j[5].a, j[5].d
     g["a7"], g["d7"] = j[6].a, j[6].d
     g["ca7"], g["sa7"] = math.cos(j[6].alpha), math.sin(j[6].alpha)
@@ -146,7 +151,7 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     # physical sign (module docstring) of the kernel's roots sin theta2 >= 0,
     # cos theta5 >= 0 and epsilon = +1 of theta4 = epsilon delta4 - phi
     shoulder = -sigma[0] * sigma[1] * s[0] * s[1] * s[2]
-    wrist = s[4] * s[5] * math.copysign(1.0, j[3].a) * sigma[4]
+    wrist = s[4] * s[5] * sigma[4]
     elbow = s[3]
     g["label"] = [shoulder, wrist, elbow]
     offsets = [x.theta_offset for x in j]
@@ -227,7 +232,7 @@ def _arm(geo, f0, f1, f2, value: float):
     t7 = geo.joint_sign[6] * value + geo.theta_offset[6]
     x6, y6, z6, w = _wrist_point(geo, f0, f1, f2, t7)
     r2 = _dot(w, w)
-    k = (r2 - geo.l24s - geo.l46s) * geo.inv_2l
+    k = (r2 - geo.l24s - geo.l46s - geo.d4 * geo.d4) * geo.inv_2l
     return x6, y6, z6, w, r2, k, geo.sigma[5] * _dot(w, y6)
 
 
@@ -251,19 +256,19 @@ def _elbow(geo, k: float, s_delta: float, elbow: int):
     """The elbow ``elbow`` (bit 2 of the branch) from k and |sin(θ4 + φ)|.
 
     Returns:
-        ``(c4, s4, rx, ry, big_d, kappa)``: cos, sin θ4; W − S in frame 3
-        (rx, ry, 0) [m]; D = (W − S) · z4 and κ = ((W − S) × z4) · z3 [m].
+        ``(c4, s4, big_d, kappa)``: cos, sin θ4; D = (W − S) · z4 and
+        κ = ((W − S) × z4) · z3 [m].
     """
     sg = geo.sigma
     e = -geo.label[2] if elbow == 0 else geo.label[2]
     c4 = k * geo.cphi + e * s_delta * geo.sphi
     s4 = e * s_delta * geo.cphi - k * geo.sphi
-    rx = geo.a3 + c4 * geo.a4 + s4 * sg[3] * geo.d5
-    ry = sg[2] * geo.d3 + s4 * geo.a4 - c4 * sg[3] * geo.d5
-    # (rx, ry) . (sigma4 s4, -sigma4 c4) and (rx, ry) x (...), expanded
+    # w in frame 3 is (rx, ry, d4), rx = a3 + a4 c4 + sigma4 d5 s4 and
+    # ry = sigma3 d3 + a4 s4 - sigma4 d5 c4; in frame 4 it is
+    # (-sigma4 kappa, sigma4 d4, D), kappa and D expanded (no cancellation)
     big_d = sg[3] * (geo.a3 * s4 - sg[2] * geo.d3 * c4) + geo.d5
     kappa = -sg[3] * (geo.a4 + geo.a3 * c4 + sg[2] * geo.d3 * s4)
-    return c4, s4, rx, ry, big_d, kappa
+    return c4, s4, big_d, kappa
 
 
 @common.inline
@@ -289,29 +294,31 @@ def _solve(geo, f0, f1, f2, value, prev, has_prev, q, flags) -> int:
     rows6 = ((x6[0], y6[0], z6[0]), (x6[1], y6[1], z6[1]), (x6[2], y6[2], z6[2]))
     reached = False
     for elbow in range(2):
-        c4, s4, _, _, big_d, kappa = _elbow(geo, k, s_delta, elbow)
+        c4, s4, big_d, kappa = _elbow(geo, k, s_delta, elbow)
         t4 = math.atan2(s4, c4)
-        # w in frame 4 is (-sigma4 kappa, 0, D); axis 6 needs
-        # sigma5 s5 (-sigma4 kappa) = w . z5, so |w . z5| <= |kappa|
-        gap = abs(kappa) - abs(wz5)
-        if not (gap >= -geo.reach_tol) or (kappa == 0.0 and wz5 != 0.0):
+        # w in frame 4 is (X, Y, D) = (-sigma4 kappa, sigma4 d4, D); axis 6
+        # needs sigma5 (s5 X - c5 Y) = w . z5: |w . z5| <= rho5 = |(X, Y)|
+        big_x, big_y = -sg[3] * kappa, sg[3] * geo.d4
+        rho5_2 = big_x * big_x + big_y * big_y
+        rho5 = math.sqrt(rho5_2)
+        gap = rho5 - abs(wz5)
+        if not (gap >= -geo.reach_tol) or (rho5 == 0.0 and wz5 != 0.0):
             continue
-        e2 = gap * (abs(kappa) + abs(wz5))
-        w4x = -sg[3] * kappa
-        if kappa != 0.0:
-            s5_up = common.clip_unit(sg[4] * wz5 / w4x)
-            c5_up = common.clamped_root(e2) / abs(kappa)
-        else:  # axis 5 through S: theta5 free (self-motion)
-            t5 = _free_angle(geo, 4, prev, has_prev)
-            s5_up, c5_up = math.sin(t5), abs(math.cos(t5))
-        wrist_flag = WRIST_SINGULAR if c5_up <= SINGULAR_TOL else 0
+        root = common.clamped_root(gap * (rho5 + abs(wz5)))  # |w . x5|
+        g5 = sg[4] * wz5
+        wrist_flag = WRIST_SINGULAR if root <= SINGULAR_TOL * rho5 else 0
         for wrist in range(2):
-            # the root cos theta5 >= 0 has the physical sign label[1]
-            c5 = c5_up if (wrist == 1) == (geo.label[1] > 0.0) else -c5_up
-            s5 = s5_up
+            # w . x5 = h: its sign, times label[1], is the wrist's bit
+            h = root if (wrist == 1) == (geo.label[1] > 0.0) else -root
+            if rho5 > 0.0:
+                s5 = (big_y * h + big_x * g5) / rho5_2
+                c5 = (big_x * h - big_y * g5) / rho5_2
+            else:  # axis 5 through S: theta5 free (self-motion)
+                t5 = _free_angle(geo, 4, prev, has_prev)
+                s5, c5 = math.sin(t5), math.cos(t5)
             t5 = math.atan2(s5, c5)
             # theta6 turns v onto u = w in frame 5 rotated by Rx(-alpha5)
-            ux, uy = c5 * w4x, sg[4] * big_d
+            ux, uy = c5 * big_x + s5 * big_y, sg[4] * big_d
             y6a, x6a = vx * uy - vy * ux, vx * ux + vy * uy
             n6 = math.sqrt(y6a * y6a + x6a * x6a)
             if n6 > 0.0:
@@ -483,7 +490,7 @@ def diagnose(
         (checked), the distance |W − S| [m] of the wrist point from the
         shoulder for this q7 and the elbow's reach [|L24 − L46|, L24 + L46]
         [m]. A distance within the reach with OUT_OF_REACH means that axis 6
-        cannot be normal to axis 5 there (|w · z5| > |κ| for both elbows).
+        cannot be normal to axis 5 there (|w · z5| > √(κ² + d4²), both elbows).
     """
     geo = geometry[0]
     if not common.is_rigid(pose):
@@ -559,7 +566,7 @@ def reach_margins(
         pose: (4, 4) pose of the tool frame [m], finite and rigid.
         values: (N,) q7 [rad].
         out: (N, 3) output: 1 − k² (k = cos(θ4 + φ): the elbow reaches where
-            ≥ 0), then (κ² − (w · z5)²) / |w|² for elbow 0 and elbow 1 (the
+            ≥ 0), then (κ² + d4² − (w · z5)²) / |w|² for elbow 0 and 1 (the
             wrists of that elbow reach where ≥ 0; the elbow's margin where the
             elbow does not reach). Smooth in q7, unitless.
     """
@@ -572,8 +579,8 @@ def reach_margins(
         out[i, 0] = elbow
         s_delta = common.clamped_root(elbow)
         for e in range(2):
-            kappa = _elbow(geo, common.clip_unit(k), s_delta, e)[5]
-            margin = (kappa * kappa - wz5 * wz5) / r2
+            kappa = _elbow(geo, common.clip_unit(k), s_delta, e)[3]
+            margin = (kappa * kappa + geo.d4 * geo.d4 - wz5 * wz5) / r2
             out[i, 1 + e] = margin if elbow >= 0.0 else elbow
 
 
