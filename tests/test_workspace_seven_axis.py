@@ -174,6 +174,7 @@ def test_command_line_says_what_exact_means(capsys, tmp_path) -> None:
     assert code == 0
     page = (tmp_path / "r.html").read_text()
     assert "exact</b> map at 3 values of the arm angle" in page
+    assert "6 × 7 Jacobian of a seven-axis arm" in page
 
 
 @pytest.mark.parametrize(

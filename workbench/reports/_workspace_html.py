@@ -211,6 +211,11 @@ def _singular(
     attrs: Mapping[str, Any], summary: Mapping[str, Any], uri: Mapping[str, str]
 ) -> str:
     if "singular_regions" not in uri:
+        if summary.get("redundancy"):
+            return """<h2>Singular regions</h2><p>This map holds no singularity
+measures: the shoulder, elbow and wrist distances of a six-axis map are factors of
+det J, which the 6 × 7 Jacobian of a seven-axis arm has not (its manipulability is
+kept; the loci of an SRS arm are in <code>workbench report singularities</code>).</p>"""
         return """<h2>Singular regions</h2><p>This map holds no singularity
 measures (a sampled map keeps the manipulability only).</p>"""
     by_kind = summary.get("near_singular_by_kind") or {}
