@@ -488,9 +488,10 @@ def diagnose(
     Returns:
         ``(status, distance, low, high)``: the status of :func:`solve_pose`
         (checked), the distance |W − S| [m] of the wrist point from the
-        shoulder for this q7 and the elbow's reach [|L24 − L46|, L24 + L46]
-        [m]. A distance within the reach with OUT_OF_REACH means that axis 6
-        cannot be normal to axis 5 there (|w · z5| > √(κ² + d4²), both elbows).
+        shoulder for this q7 and the elbow's reach
+        [√((L24 − L46)² + d4²), √((L24 + L46)² + d4²)] [m]. A distance
+        within the reach with OUT_OF_REACH means that axis 6 cannot be
+        normal to axis 5 there (|w · z5| > √(κ² + d4²), both elbows).
     """
     geo = geometry[0]
     if not common.is_rigid(pose):
@@ -500,8 +501,9 @@ def diagnose(
     q = np.empty((B, 7))
     flags = np.empty(B, dtype=np.uint8)
     status = _solve(geo, f0, f1, f2, value, np.empty(0), False, q, flags)
-    l24, l46 = math.sqrt(geo.l24s), math.sqrt(geo.l46s)
-    return status, math.sqrt(_dot(w, w)), abs(l24 - l46), l24 + l46
+    l24, l46, d4s = math.sqrt(geo.l24s), math.sqrt(geo.l46s), geo.d4 * geo.d4
+    low, high = math.sqrt((l24 - l46) ** 2 + d4s), math.sqrt((l24 + l46) ** 2 + d4s)
+    return status, math.sqrt(_dot(w, w)), low, high
 
 
 @entry_point(outputs=("q_out",))
