@@ -10,7 +10,7 @@ parameter leaves finitely many:
   vector from the shoulder S to the wrist W, from the reference plane (S, E0,
   W: the arm with θ3 = 0 reaching the same W) to the arm plane (S, E, W); 8
   branches (:data:`SRS_BRANCHES`), kernel :mod:`workbench.ik._srs_kernel`;
-* Franka: q7 [rad], the robot's own value of joint 7, within its limits; 4
+* Franka: q7 [rad], the robot's own value of joint 7, within its limits; 8
   branches (:data:`FRANKA_BRANCHES`), kernel :mod:`workbench.ik._franka_kernel`.
 
 :func:`get_redundant_solver` gives a robot's :class:`RedundantSolver`, built on
