@@ -10,6 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from workbench import Robot, load_robot
+from workbench._compiled import interpreted
 from workbench.ik import _franka_kernel as kernel
 from workbench.ik import get_structure
 from workbench.ik._franka_intervals import END_TOL
@@ -453,3 +454,19 @@ def test_feasible_intervals(panda: Robot, geometry: np.ndarray) -> None:
                 inside = any(a <= value <= b for a, b in runs)
                 assert feasible == inside
     assert ends > 20
+
+
+def test_interpreted_equals_compiled(panda: Robot, geometry: np.ndarray) -> None:
+    """A first call runs the Python source (``interpreted``): the same rows."""
+    rng = np.random.default_rng(SEED)
+    for _ in range(5):
+        q = rng.uniform(panda.lower, panda.upper)
+        pose = np.asarray(panda.fk(q))
+        with interpreted():
+            status_a, q_a, flags_a = _solve(geometry, pose, q[6])
+            diagnosis_a = kernel.diagnose(geometry, pose, q[6])
+        status_b, q_b, flags_b = _solve(geometry, pose, q[6])
+        assert status_a == status_b
+        np.testing.assert_array_equal(q_a, q_b)
+        np.testing.assert_array_equal(flags_a, flags_b)
+        assert diagnosis_a == kernel.diagnose(geometry, pose, q[6])
