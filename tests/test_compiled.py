@@ -349,3 +349,48 @@ def test_the_first_compile_of_a_process_is_said_once_on_stderr(tmp_path: Path) -
     )
     assert stderr() == ""  # loaded from the cache
     assert stderr(NUMBA_CACHE_DIR=str(tmp_path / "other"), WORKBENCH_PROGRESS="0") == ""
+
+
+_STRIDED_FIRST = """
+import sys
+import numpy as np
+from workbench._compiled import entry_point
+
+
+@entry_point(contiguous=("x",))
+def total(x) -> float:
+    s = 0.0
+    for i in range(x.shape[0]):
+        s += x[i]
+    return s
+
+
+strided = np.arange(20.0)[::2]
+for call in range(2):
+    try:
+        print(total(strided))
+    except TypeError as error:
+        print(f"TypeError: {error}")
+print(total(np.ascontiguousarray(strided)))
+"""
+
+
+def test_a_strided_array_is_refused_where_layout_c_is_declared(tmp_path: Path) -> None:
+    """Also on the call that compiles: Numba hands that call's own arguments on.
+
+    The signature says layout "C"; a first call with a strided array would run
+    on it as if it were contiguous (here the sum of the wrong ten numbers).
+    """
+    (tmp_path / "strided.py").write_text(_STRIDED_FIRST)
+    done = subprocess.run(
+        [sys.executable, str(tmp_path / "strided.py")],
+        env=dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache")),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    first, second, contiguous = done.stdout.splitlines()
+    assert first == "TypeError: total: x must be C-contiguous arrays"
+    assert second.startswith("TypeError: No matching definition")
+    assert contiguous == "90.0"

@@ -26,7 +26,9 @@ Compilation is then disabled, so Numba converts the arguments of every later
 call to that signature: a writable array passes as read-only, a C or
 F-contiguous one as layout "A", an int as a float, at no cost per call (no
 copy, no new compile). Arguments it cannot convert (another dtype or number
-of dimensions, a read-only array for an output) raise ``TypeError``. Entry
+of dimensions, a read-only array for an output, a strided array where
+``contiguous`` says "C" — the call that compiles included, whose arguments
+Numba would otherwise pass on unconverted) raise ``TypeError``. Entry
 points take no default arguments: an omitted argument has a type of its own
 (``omitted(default=...)``) that no signature accepts once compilation is
 disabled, so callers pass every argument.
@@ -351,12 +353,33 @@ class _EntryPoint(_Interpretable):
     def compile(self, sig: Any) -> Any:
         args, _ = sigutils.normalize_signature(sig)
         with global_compiler_lock:  # one thread builds the signature
-            if not self._can_compile:  # another thread built it meanwhile
-                return next(iter(self.overloads.values())).entry_point
-            with self._one_process_at_a_time(), self._vectorizer_options():
-                entry = super().compile(self._signature(args))  # or load it
-            self.disable_compile()
-            return entry
+            if self._can_compile:
+                with self._one_process_at_a_time(), self._vectorizer_options():
+                    entry = super().compile(self._signature(args))  # or load it
+                self.disable_compile()
+            else:  # another thread built it meanwhile
+                entry = next(iter(self.overloads.values())).entry_point
+        # Numba runs the entry it gets here on the arguments of the call that
+        # compiled it, unconverted: a strided array where the one signature
+        # takes layout "C" would be read as if it were contiguous.
+        self._refuse_strided(args)
+        return entry
+
+    def _refuse_strided(self, args: Iterable[Any]) -> None:
+        """Raise ``TypeError`` if an array named in ``contiguous`` is strided."""
+        parameters = inspect.signature(self.py_func).parameters
+        strided = [
+            name
+            for name, arg in zip(parameters, args, strict=True)
+            if name in self._contiguous
+            and isinstance(arg, types.Array)
+            and arg.layout != "C"
+        ]
+        if strided:
+            raise TypeError(
+                f"{self.py_func.__qualname__}: {', '.join(strided)} must be "
+                "C-contiguous arrays"
+            )
 
     def _signature(self, args: Iterable[Any]) -> tuple[Any, ...]:
         """The one signature, from the argument types of the first use."""
