@@ -1,7 +1,8 @@
 """Workspace atlas: reachability and dexterity maps over a grid of tool poses.
 
 A :class:`PoseGrid` (voxel positions × tool orientations, :mod:`.grid`), the
-per-pose measures of a block of it in closed form (:mod:`.measures`) and the
+per-pose measures of a block of it in closed form (:mod:`.measures`; seven-axis
+arms at K values of their redundancy parameter, :mod:`.redundant`) and the
 sampled maps of arms without a closed form (:mod:`.sampled`); the joint-space
 singularity map (:mod:`.joint_space`); base placement for a task
 (:mod:`.placement`, task poses from :mod:`.task_poses`); maps built on Dask
@@ -29,6 +30,7 @@ from workbench.workspace.placement import (
     PlacementInfeasibleError,
     place_base,
 )
+from workbench.workspace.redundant import evaluate_redundant_block, redundancy_values
 from workbench.workspace.sampled import accumulate, sample_block
 from workbench.workspace.store import WorkspaceMap, open_map
 from workbench.workspace.task_poses import (
@@ -54,10 +56,12 @@ __all__ = [
     "cone_orientations",
     "default_bounds",
     "evaluate_block",
+    "evaluate_redundant_block",
     "make_pose_grid",
     "open_map",
     "place_base",
     "read_task_poses",
+    "redundancy_values",
     "sample_block",
     "singularity_margin",
     "task_poses_from_trajectory",
