@@ -287,3 +287,15 @@ def test_an_arm_angle_sweep_runs_through_pi_without_a_jump() -> None:
     viewer = Viewer(robot, Q0["iiwa14"])
     show_redundancy_sweep(viewer, sweep, degrees=True)
     assert ">±180<" in viewer.render_html()  # the scale marks where it passes ±π
+
+
+def test_cli_branches_at_a_value_that_reaches_nothing_exit_3(capsys, tmp_path) -> None:
+    """Panda at q7 = 160°: no branch reaches FK(Q); the feasible q7 are said."""
+    q = [repr(float(v)) for v in np.degrees(Q0["panda"])]
+    out = tmp_path / "x.html"
+    argv = ["view", "--robot", "panda", "--deg", *q, "--ik-branches"]
+    code, stdout, err = run_cli(
+        capsys, *argv, "--redundancy", "160", "--html", str(out)
+    )
+    assert code == 3 and stdout == "" and not out.exists()
+    assert len(err.strip().splitlines()) == 1 and "feasible q7" in err

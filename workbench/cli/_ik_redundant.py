@@ -73,13 +73,10 @@ def solve_and_print_redundant(
                 + _redundancy.describe_feasible(feasible, args.deg)
             )
     except InfeasibleError as err:
-        message = " ".join(str(err).split())
-        if "feasible" not in message:  # the solver's reason, without the intervals
-            feasible = feasible or ik.feasible_redundancy(robot, target)
-            message += f"; {_redundancy.describe_feasible(feasible, args.deg)}"
+        said = _redundancy.with_feasible(err, robot, target, args.deg, feasible)
         if not args.json:
-            raise InfeasibleError(message) from err
-        return print_infeasible(head, InfeasibleError(message))
+            raise said from err
+        return print_infeasible(head, said)
     if args.json:
         print_json({**head, "solutions": rows, "feasible": True})
         return 0

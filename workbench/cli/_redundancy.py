@@ -15,10 +15,12 @@ import math
 from typing import TYPE_CHECKING, Any
 
 from workbench.cli._common import finite_float
-from workbench.errors import InputError
+from workbench.errors import InfeasibleError, InputError
 from workbench.model.robot import Robot
 
 if TYPE_CHECKING:
+    import pinocchio as pin
+
     from workbench.ik import FeasibleRedundancy, RedundantSolver
 
 #: Decimals of a parameter value printed in rad (in degrees: this minus 3).
@@ -107,6 +109,31 @@ def format_intervals(
 def describe_feasible(feasible: FeasibleRedundancy, degrees: bool) -> str:
     """One line: ``feasible arm angle: [...], [...]``."""
     return f"feasible {feasible.parameter}: {format_intervals(feasible.union, degrees)}"
+
+
+def with_feasible(
+    err: InfeasibleError,
+    robot: Robot,
+    target: pin.SE3,
+    degrees: bool,
+    feasible: FeasibleRedundancy | None = None,
+) -> InfeasibleError:
+    """``err`` on one line, with the feasible intervals when it does not give them.
+
+    Args:
+        err: The solver's reason (an out-of-reach value, none within limits).
+        robot: A seven-axis arm.
+        target: The tool pose.
+        degrees: Print the intervals in degrees.
+        feasible: The intervals if already known (else computed).
+    """
+    from workbench.ik import feasible_redundancy
+
+    message = " ".join(str(err).split())
+    if "feasible" not in message:  # the solver's reason, without the intervals
+        feasible = feasible or feasible_redundancy(robot, target)
+        message += f"; {describe_feasible(feasible, degrees)}"
+    return InfeasibleError(message)
 
 
 def feasible_json(feasible: FeasibleRedundancy) -> dict[str, Any]:

@@ -21,7 +21,7 @@ from workbench.cli._common import (
     load_robot_from_args,
 )
 from workbench.cli._redundancy import add_redundancy_argument
-from workbench.errors import InputError
+from workbench.errors import InfeasibleError, InputError
 from workbench.model.robot import Robot
 from workbench.trajectory.csv_io import (
     JointTrajectorySamples,
@@ -163,7 +163,11 @@ def _redundant_branches(
         value, source = float(redundancy_parameter(robot, q)), "the value of Q"
     else:
         value, source = _redundancy.to_radians(args.redundancy, args.deg), "given"
-    solutions = analytic(robot, robot.fk(q), redundancy=value)
+    target = robot.fk(q)
+    try:
+        solutions = analytic(robot, target, redundancy=value)
+    except InfeasibleError as err:
+        raise _redundancy.with_feasible(err, robot, target, bool(args.deg)) from err
     labels = [
         s.branch + ("" if s.within_limits else " (outside the joint limits)")
         for s in solutions
