@@ -31,6 +31,8 @@ ROBOTS = ("iiwa14", "panda")
 ATOL_VALUES = 1e-12
 #: float32 storage of a float64 measure (relative).
 RTOL_FLOAT32 = 1e-6
+#: A parameter value [rad] stored as float32 (|value| <= π).
+ATOL_FLOAT32_VALUE = 4e-7
 K = 5
 
 
@@ -206,3 +208,24 @@ def test_base_placement_says_it_needs_a_six_axis_closed_form(
     )
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
     assert "base placement needs a six-axis arm of the OPW or UR family" in err
+
+
+def test_a_pose_reached_at_the_values_is_feasible_and_its_value_inside(
+    robot, grid
+) -> None:
+    """Sound: a reached pose has a feasible interval holding its best value."""
+    start = grid.voxel_count // 2 - 6
+    out = evaluate_redundant_block(robot, grid, start, start + 12, count=K)
+    poses = block_poses(grid, start, start + 12)
+    branches = out["branches"].reshape(-1)
+    values = out["redundancy"].reshape(-1)
+    assert branches.any()
+    for pose, usable, value in zip(poses, branches, values, strict=True):
+        feasible = ik.feasible_redundancy(robot, pose)
+        if not usable:
+            continue
+        assert feasible.union, "reached at a value, yet feasible for none"
+        assert any(
+            lo - ATOL_FLOAT32_VALUE <= value <= hi + ATOL_FLOAT32_VALUE
+            for lo, hi in feasible.union
+        )
