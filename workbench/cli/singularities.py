@@ -169,7 +169,9 @@ def run(args: argparse.Namespace) -> int:
         )
         return 0
     if result["singular"] is None:
-        print("near             n/a (no analytic conditions for this arm: numeric only)")
+        print(
+            "near             n/a (no analytic conditions for this arm: numeric only)"
+        )
         return 0
     for kind in SINGULARITY_KINDS:
         value, unit = result["near"][kind], CONDITION_UNITS[kind]
