@@ -229,3 +229,23 @@ def test_a_pose_reached_at_the_values_is_feasible_and_its_value_inside(
             lo - ATOL_FLOAT32_VALUE <= value <= hi + ATOL_FLOAT32_VALUE
             for lo, hi in feasible.union
         )
+
+
+def test_query_gives_the_best_value_and_it_reaches_the_grid_pose(robot, grid, tmp_path):
+    """MapQuery.redundancy: the closed form at that value reaches the grid pose."""
+    build_map(robot, grid, tmp_path / "m.zarr", workers=1, block_voxels=64)
+    atlas = open_map(tmp_path / "m.zarr")
+    reached = np.argwhere(atlas["branches"] > 0)[:5]
+    poses = np.array([grid.pose(int(v), int(o)) for v, o in reached])
+    query = atlas.query(poses)
+    assert np.all(np.isfinite(query.redundancy))
+    values = atlas.attrs["redundancy"]["values"]
+    for pose, value in zip(poses, query.redundancy, strict=True):
+        nearest = float(values[int(np.argmin(np.abs(np.array(values) - value)))])
+        assert abs(nearest - value) <= ATOL_FLOAT32_VALUE  # one of the K values
+        solutions = ik.analytic(robot, pose, redundancy=nearest)
+        assert any(s.within_limits for s in solutions)
+    six = load_robot("puma560")
+    six_grid = make_pose_grid(six, resolution=0.5, orientations=2)
+    build_map(six, six_grid, tmp_path / "p.zarr", workers=1)
+    assert np.all(np.isnan(open_map(tmp_path / "p.zarr").query(poses[:1]).redundancy))

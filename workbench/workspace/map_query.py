@@ -62,6 +62,8 @@ class MapQuery:
             (NaN outside).
         orientation_error: Rotation angle from the orientation to the
             nearest one of the set [rad].
+        redundancy: Of a seven-axis map, the arm angle or q7 of the best
+            candidate [rad] (NaN: none, outside, and in other maps).
     """
 
     voxel: npt.NDArray[np.int64]
@@ -74,6 +76,7 @@ class MapQuery:
     limit_margin: FloatArray
     position_error: FloatArray
     orientation_error: FloatArray
+    redundancy: FloatArray
 
 
 def split_poses(poses: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
@@ -167,4 +170,5 @@ def query_map(group: zarr.Group, grid: PoseGrid, poses: npt.ArrayLike) -> MapQue
         limit_margin=read("limit_margin", nan, np.float64),
         position_error=position_error,
         orientation_error=rotation_angle_between(quats, grid.orientations[orientation]),
+        redundancy=read("redundancy", nan, np.float64),
     )
