@@ -43,8 +43,8 @@ def solve_and_print_redundant(
             given value reaches it with no branch, or (without ``--all``)
             with no branch within the limits; the message gives the feasible
             intervals.
-        InputError: If the value is outside the parameter's range (Franka)
-            or the criterion unknown.
+        InputError: If the value exceeds ``_redundancy.MAX_REDUNDANCY`` or
+            comes with ``--criterion``.
     """
     from workbench import ik
     from workbench.cli.ik import print_infeasible

@@ -271,7 +271,7 @@ def print_rows(rows: list[dict[str, Any]], flags: tuple[tuple[str, str], ...]) -
         rows: The JSON rows of the solutions.
         flags: ``(key, text)``: ``(text)`` is printed where ``row[key]`` is true.
     """
-    width = max(len(row["branch"]) for row in rows) + 2
+    width = max((len(row["branch"]) for row in rows), default=0) + 2
     for row in rows:
         marks = "" if row["within_limits"] else "  (outside joint limits)"
         marks += "".join(f"  ({text})" for key, text in flags if row[key])
