@@ -299,3 +299,9 @@ def test_cli_branches_at_a_value_that_reaches_nothing_exit_3(capsys, tmp_path) -
     )
     assert code == 3 and stdout == "" and not out.exists()
     assert len(err.strip().splitlines()) == 1 and "feasible q7" in err
+
+
+def test_the_command_line_bound_is_the_viewer_s() -> None:
+    from workbench.cli import view
+
+    assert view.MAX_SWEEP == MAX_SWEEP

@@ -137,7 +137,9 @@ def read_samples(path: Path, robot: Robot) -> JointTrajectorySamples:
     return samples
 
 
-#: Largest ``--redundancy-sweep`` (each value a ghost arm in the page).
+#: Largest ``--redundancy-sweep`` (each value a ghost arm in the page): the
+#: viewer's ``redundancy_sweep.MAX_SWEEP``, not imported (the viewer loads
+#: lazily; a test checks that they agree).
 MAX_SWEEP = 64
 
 
