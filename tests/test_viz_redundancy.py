@@ -305,3 +305,29 @@ def test_the_command_line_bound_is_the_viewer_s() -> None:
     from workbench.cli import view
 
     assert view.MAX_SWEEP == MAX_SWEEP
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_branches_page_renders_the_arm_and_its_ghosts(chromium, tmp_path, name) -> None:
+    """The --ik-branches page of a seven-axis arm: no console error, arm and ghosts."""
+    from tests._chromium import take_screenshot
+
+    robot = load_robot(name)
+    value = float(ik.redundancy_parameter(robot, Q0[name]))
+    solutions = ik.analytic(robot, robot.fk(Q0[name]), redundancy=value)
+    viewer = Viewer(robot, Q0[name], color_by_singularity=True)
+    viewer.show_ghosts([s.q for s in solutions], labels=[s.branch for s in solutions])
+    viewer.set_camera([1.6, 1.6, 1.2], [0.0, 0.0, 0.4])
+    page = tmp_path / "page.html"
+    page.write_text(viewer.render_html(), encoding="utf-8")
+    errors = take_screenshot(
+        chromium, page, tmp_path / "page.png", width=WIDTH, height=HEIGHT
+    )
+    assert errors == []
+    whole = screenshot(chromium, viewer.render_html(legend=False), tmp_path / "w.png")
+    viewer.set_visible("ghosts", False)
+    arm = screenshot(chromium, viewer.render_html(legend=False), tmp_path / "a.png")
+    viewer.set_visible("robot", False)
+    bare = screenshot(chromium, viewer.render_html(legend=False), tmp_path / "b.png")
+    assert changed(arm, bare).mean() > 0.01  # the arm's pixels
+    assert changed(whole, arm).mean() > 0.002  # the ghosts' (tinting the arm)
