@@ -249,3 +249,35 @@ def test_query_gives_the_best_value_and_it_reaches_the_grid_pose(robot, grid, tm
     six_grid = make_pose_grid(six, resolution=0.5, orientations=2)
     build_map(six, six_grid, tmp_path / "p.zarr", workers=1)
     assert np.all(np.isnan(open_map(tmp_path / "p.zarr").query(poses[:1]).redundancy))
+
+
+def test_a_stopped_build_resumes_to_the_same_bits_and_refuses_another_k(
+    robot, grid, tmp_path, monkeypatch
+) -> None:
+    from workbench.workspace import _block_tasks
+    from workbench.workspace.store import get_partial_path
+
+    whole = tmp_path / "whole.zarr"
+    build_map(robot, grid, whole, workers=1, block_voxels=16, redundancy_samples=K)
+    real = _block_tasks.evaluate_redundant_block
+    calls: list[int] = []
+
+    def failing(*args, **kwargs):
+        calls.append(1)
+        if len(calls) > 2:
+            raise RuntimeError("injected failure")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(_block_tasks, "evaluate_redundant_block", failing)
+    path = tmp_path / "resumed.zarr"
+    with pytest.raises(RuntimeError, match="injected"):
+        build_map(robot, grid, path, workers=1, block_voxels=16, redundancy_samples=K)
+    assert get_partial_path(path).is_dir()
+    monkeypatch.setattr(_block_tasks, "evaluate_redundant_block", real)
+    with pytest.raises(InputError, match="redundancy"):  # another K: another map
+        build_map(robot, grid, path, workers=1, block_voxels=16, redundancy_samples=3)
+    summary = build_map(
+        robot, grid, path, workers=2, block_voxels=16, redundancy_samples=K
+    )
+    assert summary.blocks_computed == summary.blocks - 2
+    assert _arrays(whole) == _arrays(path)
