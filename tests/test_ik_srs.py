@@ -31,6 +31,7 @@ from workbench.ik._redundant_common import (
     WITHIN_LIMITS,
     WRIST_SINGULAR,
 )
+from workbench.ik._srs_intervals import compute_feasible_intervals
 from workbench.ik.structure import get_structure
 from workbench.model.dh import DHJoint, DHTable
 from workbench.model.urdf_generator import generate_urdf
@@ -439,7 +440,7 @@ def test_not_rigid_and_out_of_reach(iiwa, geometry) -> None:
     valid = np.empty((1, 8), dtype=bool)
     kernel.solve_batch(geometry, far[None], np.zeros(1), q_out, valid)
     assert np.isnan(q_out).all() and not valid.any()
-    assert kernel.feasible_intervals(geometry, far) == [[] for _ in range(8)]
+    assert compute_feasible_intervals(geometry, far) == [[] for _ in range(8)]
 
 
 def test_stretched_elbow_is_reached(iiwa, geometry) -> None:
@@ -494,7 +495,7 @@ def test_feasible_intervals_against_a_dense_grid(iiwa, geometry, rng) -> None:
     counted = 0
     for q in _random_in_limits(iiwa, rng, 40):
         pose = _fk(iiwa, q)
-        intervals = kernel.feasible_intervals(geometry, pose)
+        intervals = compute_feasible_intervals(geometry, pose)
         within, _ = _grid_within(iiwa, geometry, pose, grid)
         assert any(
             lo - ATOL_END <= _psi(geometry, q[None])[0] <= hi + ATOL_END
@@ -533,7 +534,7 @@ def test_feasible_interval_of_a_joint_with_a_stationary_point(iiwa, geometry) ->
         slope = np.diff(np.unwrap(qs[:, 0, 0]))
         if not (slope.max() > 0.0 > slope.min()):
             continue  # monotonic θ1(ψ)
-        intervals = kernel.feasible_intervals(geometry, pose)
+        intervals = compute_feasible_intervals(geometry, pose)
         member = np.zeros(grid.size, dtype=bool)
         for lo, hi in intervals[0]:
             member |= (grid >= lo - ATOL_END) & (grid <= hi + ATOL_END)
@@ -721,7 +722,7 @@ def test_base_tool_joint_signs_and_offsets(iiwa, rng) -> None:
         poses = np.ascontiguousarray(np.broadcast_to(pose, (n, 4, 4)))
         kernel.solve_batch(geometry, poses, grid, q_grid, valid)
         within = valid & np.all((q_grid >= low) & (q_grid <= high), axis=2)
-        for b, branch in enumerate(kernel.feasible_intervals(geometry, pose)):
+        for b, branch in enumerate(compute_feasible_intervals(geometry, pose)):
             member = np.zeros(n, dtype=bool)
             near_end = np.zeros(n, dtype=bool)
             for lo, hi in branch:

@@ -42,7 +42,7 @@ from workbench.cli import (
     view,
     workspace,
 )
-from workbench.cli._common import print_json
+from workbench.cli._common import EXIT_INFEASIBLE, print_json
 from workbench.cli._interrupt_guard import interrupts_wait_for_compiler
 from workbench.cli._progress import Progress
 from workbench.errors import InfeasibleError, InputError, WorkbenchError
@@ -50,7 +50,6 @@ from workbench.errors import InfeasibleError, InputError, WorkbenchError
 EXIT_OK = 0
 EXIT_INTERNAL = 1
 EXIT_BAD_INPUT = 2
-EXIT_INFEASIBLE = 3
 EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for `yes | head`
 
 _COMMANDS = (

@@ -18,6 +18,10 @@ from workbench.json_numbers import to_json_ready
 from workbench.model.loading import load_robot
 from workbench.model.robot import Robot
 
+#: Exit code of a request the robot cannot meet (an unreachable pose, a
+#: limit violation), printed as one line on stderr.
+EXIT_INFEASIBLE = 3
+
 
 def add_robot_argument(
     parser: argparse.ArgumentParser,

@@ -18,6 +18,7 @@ import pinocchio as pin
 
 from workbench.cli import _redundancy
 from workbench.cli._common import print_json
+from workbench.cli._ik_output import print_infeasible, print_rows, residual
 from workbench.errors import InfeasibleError, InputError
 from workbench.model.robot import Robot
 
@@ -47,7 +48,6 @@ def solve_and_print_redundant(
             comes with ``--criterion``.
     """
     from workbench import ik
-    from workbench.cli.ik import print_infeasible
 
     head: dict[str, Any] = {
         "robot": robot.name,
@@ -116,8 +116,6 @@ def _rows(
     robot: Robot, target: pin.SE3, solutions: list[RedundantIKSolution]
 ) -> list[dict[str, Any]]:
     """One JSON-ready row per branch reaching the pose."""
-    from workbench.cli.ik import residual
-
     return [
         {
             "branch": s.branch,
@@ -140,7 +138,6 @@ def _print_text(
     feasible: FeasibleRedundancy | None,
     solver: RedundantSolver,
 ) -> None:
-    from workbench.cli.ik import print_rows
 
     redundancy = head["redundancy"]
     value = _redundancy.format_value(redundancy["value"], args.deg)

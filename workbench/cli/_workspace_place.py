@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from workbench.cli._common import (
+    EXIT_INFEASIBLE,
     add_json_flag,
     add_robot_argument,
     bounded_float,
@@ -50,7 +51,6 @@ from workbench.workspace.task_poses import (
 #: Largest ``--top``.
 MAX_TOP = 10_000
 #: Exit code of a task no candidate reaches whole (as every command's).
-EXIT_INFEASIBLE = 3
 
 
 def register(commands: argparse._SubParsersAction) -> None:

@@ -13,7 +13,6 @@ import sys
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 import pinocchio as pin
 
 from workbench._compiled import interpreted
@@ -22,9 +21,13 @@ from workbench.cli._common import (
     add_json_flag,
     add_robot_argument,
     finite_float,
-    format_vector,
     load_robot_from_args,
     print_json,
+)
+from workbench.cli._ik_output import (
+    print_infeasible,
+    print_rows,
+    residual,
 )
 from workbench.cli._redundancy import add_redundancy_argument
 from workbench.errors import InfeasibleError, InputError
@@ -47,7 +50,6 @@ from workbench.poses import (
 #: decimals, as in "0.7071 0 0 0.7071", are enough.
 QUAT_TYPED_TOL = 1e-3
 
-EXIT_INFEASIBLE = 3
 _MM = 1e-3
 #: Largest |coordinate| of a target position [m] (1000 km: far beyond any arm).
 MAX_TARGET_COORDINATE = 1e6
@@ -171,14 +173,6 @@ def target_from_args(args: argparse.Namespace) -> pin.SE3:
     return pin.SE3(rotation, x[:3] * scale)
 
 
-def residual(robot: Robot, q: npt.ArrayLike, target: pin.SE3) -> float:
-    """max(position error [m], rotation angle error [rad]) of FK(q) vs target."""
-    pose = robot.fk(q)
-    error = target.actInv(pose)
-    angle = float(np.linalg.norm(pin.log3(error.rotation)))
-    return max(float(np.linalg.norm(pose.translation - target.translation)), angle)
-
-
 def _pick(solutions: list[IKSolution], nq: int) -> IKSolution:
     feasible = [s for s in solutions if s.within_limits]
     if not feasible:
@@ -262,30 +256,6 @@ def _solve_and_print(args: argparse.Namespace, robot: Robot, target: pin.SE3) ->
     print(f"robot {robot.name}   frame {robot.tool_frame}   solver {solver}")
     print_rows(rows, SIX_AXIS_FLAGS)
     return 0
-
-
-def print_rows(rows: list[dict[str, Any]], flags: tuple[tuple[str, str], ...]) -> None:
-    """Two lines per solution: branch, q [deg] and its flags; the residual.
-
-    Args:
-        rows: The JSON rows of the solutions.
-        flags: ``(key, text)``: ``(text)`` is printed where ``row[key]`` is true.
-    """
-    width = max((len(row["branch"]) for row in rows), default=0) + 2
-    for row in rows:
-        marks = "" if row["within_limits"] else "  (outside joint limits)"
-        marks += "".join(f"  ({text})" for key, text in flags if row[key])
-        q_deg = format_vector(row["q_deg"], 3)
-        print(f"{row['branch']:<{width}}q [deg] {q_deg}{marks}")
-        print(f"{'':<{width}}residual {row['residual']:.2e}")
-
-
-def print_infeasible(head: dict[str, Any], err: InfeasibleError) -> int:
-    """The ``--json`` answer of an infeasible request (and its line on stderr): 3."""
-    message = " ".join(str(err).split())
-    print_json({**head, "solutions": [], "feasible": False, "error": message})
-    print(f"workbench: error: {message}", file=sys.stderr)
-    return EXIT_INFEASIBLE
 
 
 def _solve(

@@ -22,6 +22,7 @@ from workbench.cli._collision import (
     report_collision_error,
 )
 from workbench.cli._common import (
+    EXIT_INFEASIBLE,
     add_json_flag,
     add_limit_arguments,
     add_robot_argument,
@@ -40,7 +41,6 @@ from workbench.trajectory import minimum_duration, pick_and_place
 from workbench.trajectory.csv_io import check_sample_count, write_trajectory_csv
 from workbench.trajectory.normal_spline import DEFAULT_N_POINTS, MIN_N_POINTS
 
-EXIT_INFEASIBLE = 3
 DEFAULT_RATE_HZ = 100.0
 #: Largest ``--rate`` [Hz] (duration × rate is bounded by ``MAX_SAMPLES`` too).
 MAX_RATE_HZ = 100_000.0

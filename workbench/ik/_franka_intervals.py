@@ -108,7 +108,7 @@ def _settled(h, g_left, g_right, bound) -> npt.NDArray[np.bool_]:
     return np.all(dead | never | always, axis=1)
 
 
-def feasible_intervals(
+def compute_feasible_intervals(
     geometry: np.ndarray, pose: FloatArray
 ) -> list[list[tuple[float, float]]]:
     """The q7 intervals where each branch reaches ``pose`` within the limits.
@@ -164,4 +164,4 @@ def _runs(t: FloatArray, feasible: npt.NDArray[np.bool_]) -> list[tuple[float, f
     return [(float(t[a]), float(t[b])) for a, b in zip(starts, ends, strict=True)]
 
 
-__all__ = ["END_TOL", "SAMPLES", "SLOPE_SAFETY", "feasible_intervals"]
+__all__ = ["END_TOL", "SAMPLES", "SLOPE_SAFETY", "compute_feasible_intervals"]

@@ -584,17 +584,3 @@ def reach_margins(
             kappa = _elbow(geo, common.clip_unit(k), s_delta, e)[3]
             margin = (kappa * kappa + geo.d4 * geo.d4 - wz5 * wz5) / r2
             out[i, 1 + e] = margin if elbow >= 0.0 else elbow
-
-
-def feasible_intervals(
-    geometry: np.ndarray, pose: FloatArray
-) -> list[list[tuple[float, float]]]:
-    """Per branch, the q7 intervals where it reaches ``pose`` within the limits.
-
-    Sampled and refined, each end exact to 1e-12 rad: see
-    :func:`workbench.ik._franka_intervals.feasible_intervals` (imported here
-    on use: that module calls this one's kernels).
-    """
-    from workbench.ik._franka_intervals import feasible_intervals as compute
-
-    return compute(geometry, pose)

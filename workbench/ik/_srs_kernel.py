@@ -38,8 +38,9 @@ Branch ``b = 4·(θ2 < 0) + 2·(θ4 < 0) + (θ6 < 0)``, DH angles of the fitted
 chain; labels :data:`BRANCHES`. Status codes and flag bits are those of
 :mod:`workbench.ik._redundant_common`; the joint values and their limits those
 of :mod:`workbench.ik._kernel_common` (``joint_value``), limits widened by
-``LIMIT_TOL``. :func:`feasible_intervals` lives in
-:mod:`workbench.ik._srs_intervals` and is re-exported here.
+``LIMIT_TOL``. The feasible arm angles are
+:mod:`workbench.ik._srs_intervals` (``compute_feasible_intervals``), which
+calls these kernels.
 """
 
 from __future__ import annotations
@@ -614,20 +615,12 @@ def track(
     return status, index, (flags[index] & WITHIN_LIMITS) != 0
 
 
-def feasible_intervals(geometry: np.ndarray, pose: FloatArray):
-    """Per branch, the closed ψ intervals within the limits (``_srs_intervals``)."""
-    from workbench.ik._srs_intervals import compute_feasible_intervals
-
-    return compute_feasible_intervals(geometry, pose)
-
-
 __all__ = [
     "BRANCHES",
     "ELBOW_SINGULAR_TOL",
     "PARAMETER",
     "SINGULAR_TOL",
     "diagnose",
-    "feasible_intervals",
     "pack_geometry",
     "parameter_of",
     "parameter_range",

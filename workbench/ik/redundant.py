@@ -32,7 +32,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InputError, NonFiniteError
-from workbench.ik import _franka_kernel, _srs_kernel
+from workbench.ik import _franka_intervals, _franka_kernel, _srs_intervals, _srs_kernel
 from workbench.ik._puma import UnreachableError
 from workbench.ik._redundant_common import (
     ELBOW_SINGULAR,
@@ -58,6 +58,12 @@ SRS_BRANCHES: tuple[str, ...] = _srs_kernel.BRANCHES
 FRANKA_BRANCHES: tuple[str, ...] = _franka_kernel.BRANCHES
 
 _KERNELS: dict[str, types.ModuleType] = {"srs": _srs_kernel, "franka": _franka_kernel}
+#: Per family, the feasible intervals of the parameter per branch, from the
+#: kernel's geometry record and a pose (these modules call the kernels).
+_INTERVALS = {
+    "srs": _srs_intervals.compute_feasible_intervals,
+    "franka": _franka_intervals.compute_feasible_intervals,
+}
 
 #: Poses per chunk of the rigidity check of :meth:`RedundantSolver.solve_batch`
 #: (4096: 50 ns a pose, in cache; 65536 and more were 30 % slower).
@@ -539,7 +545,7 @@ class RedundantSolver:
             DimensionError, NonFiniteError, InputError: Bad target.
         """
         pose = np.array(pose_rows(target))
-        found = self._kernel.feasible_intervals(self.geometry, pose)
+        found = _INTERVALS[self.family](self.geometry, pose)
         intervals = tuple(
             tuple((float(lo), float(hi)) for lo, hi in branch) for branch in found
         )
