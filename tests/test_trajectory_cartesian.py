@@ -7,7 +7,14 @@ import pinocchio as pin
 import pytest
 from conftest import random_configurations
 
-from workbench import InfeasibleError, InputError, load_robot, paper_data, trajectory
+from workbench import (
+    InfeasibleError,
+    InputError,
+    ik,
+    load_robot,
+    paper_data,
+    trajectory,
+)
 from workbench.poses import ANGELES7_PRINTED_TOL, angeles7_from_se3, se3_from_angeles7
 
 ATOL_ENDS = 1e-9
@@ -118,13 +125,16 @@ def test_unreachable_pose_is_infeasible(puma) -> None:
         trajectory.select_ik_solution(puma, far)
 
 
-def test_panda_from_poses_uses_numerical_ik(rng) -> None:
+def test_panda_from_poses_uses_its_closed_form(rng) -> None:
+    """A seven-axis arm: the closed form at q7 of ``q_near``, else a chosen q7."""
     panda = load_robot("panda")
     q0, q1 = random_configurations(panda, rng, 2)
     planned = trajectory.pick_and_place_from_poses(
         panda, panda.fk(q0), panda.fk(q1), 5.0, pick_near=q0, place_near=q1
     )
-    assert planned.pick.branch == planned.place.branch == "numeric"
+    assert planned.pick.branch in ik.FRANKA_BRANCHES
+    np.testing.assert_allclose(planned.pick.q, q0, atol=1e-9)  # its own branch
+    np.testing.assert_allclose(planned.place.q, q1, atol=1e-9)
     cart = trajectory.compute_cartesian_trajectory(planned.trajectory, [0.0, 5.0])
     np.testing.assert_allclose(
         np.concatenate([cart.velocity, cart.acceleration]), 0.0, atol=ATOL_ENDS
@@ -132,8 +142,31 @@ def test_panda_from_poses_uses_numerical_ik(rng) -> None:
     np.testing.assert_allclose(
         cart.angeles7[0], angeles7_from_se3(panda.fk(q0)), atol=1e-8
     )
-    with pytest.raises(InputError, match="no closed-form IK"):
+    chosen = trajectory.select_ik_solution(panda, panda.fk(q0))  # no q_near
+    best = ik.choose_redundancy(panda, panda.fk(q0))
+    assert chosen.within_limits and chosen.rule == "largest-limit-margin"
+    assert chosen.branch == best.solution.branch
+    np.testing.assert_allclose(chosen.q, best.solution.q, atol=0.0)
+    np.testing.assert_allclose(
+        panda.fk(chosen.q).homogeneous, panda.fk(q0).homogeneous, atol=1e-12
+    )
+    label = planned.pick.branch
+    one = trajectory.select_ik_solution(panda, panda.fk(q0), branch=label)
+    assert one.branch == label and one.rule == "branch"
+    with pytest.raises(InputError, match="is not one of"):
         trajectory.select_ik_solution(panda, panda.fk(q0), branch="right/elbow-up/flip")
+
+
+def test_an_arm_without_closed_form_uses_numerical_ik(rng) -> None:
+    arm = load_robot("generic6r")
+    q0 = random_configurations(arm, rng, 1)[0]
+    choice = trajectory.select_ik_solution(arm, arm.fk(q0), q_near=q0)
+    assert choice.branch == "numeric"
+    np.testing.assert_allclose(
+        arm.fk(choice.q).homogeneous, arm.fk(q0).homogeneous, atol=1e-9
+    )
+    with pytest.raises(InputError, match="no closed-form IK"):
+        trajectory.select_ik_solution(arm, arm.fk(q0), branch="right/elbow-up/flip")
 
 
 def test_ur5_from_poses_uses_the_closed_form(rng) -> None:

@@ -49,8 +49,11 @@ class IKChoice:
         branch: Closed-form branch label (e.g. ``"right/elbow-up/no-flip"``) or
             ``"numeric"``.
         within_limits: True if every joint is within its position limits.
-        rule: How it was chosen: ``"branch"``, ``"nearest"`` or
-            ``"first-within-limits"`` (``"numeric"`` for the numerical IK).
+        rule: How it was chosen: ``"branch"``, ``"nearest"``,
+            ``"first-within-limits"``, ``"largest-limit-margin"`` (seven-axis
+            arms without ``q_near``: the branch and the value of the redundancy
+            parameter that ``ik.choose_redundancy`` picks) or ``"numeric"``
+            (the numerical IK).
     """
 
     q: FloatArray
@@ -144,7 +147,10 @@ def select_ik_solution(
 ) -> IKChoice:
     """Invert one end pose and choose one solution.
 
-    Closed form (``ik.analytic``) for the PUMA models, else ``ik.numeric``.
+    Closed form (``ik.analytic``) for the arms that have one (OPW and UR-type
+    six-axis arms; SRS and Franka seven-axis arms at the redundancy parameter
+    of ``q_near``, else at the value and branch of the largest joint-limit
+    margin, ``ik.choose_redundancy``), else ``ik.numeric``.
     Rule, first that applies: ``branch`` given → that closed-form branch;
     ``q_near`` given → the solution nearest to it (angles compared modulo 2π,
     each angle the representative nearest ``q_near``), within limits or not;
@@ -168,7 +174,9 @@ def select_ik_solution(
     near = None if q_near is None else robot.check_configuration(q_near)
     from workbench.ik import closed_form
 
-    try:  # any OPW or UR-type arm, recognised from its joint axes
+    try:  # any OPW, UR, SRS or Franka-type arm, recognised from its joint axes
+        if near is None and robot.nq == 7:  # a redundant arm: choose its value
+            return _most_inside(robot, target, branch)
         solutions = closed_form.analytic(robot, target, q_previous=near)
     except closed_form.UnsupportedRobotError:
         solutions = None
@@ -189,6 +197,22 @@ def select_ik_solution(
     q = np.array(result.q)
     q.setflags(write=False)
     return IKChoice(q, NUMERIC_BRANCH, _within(robot, q), "numeric")
+
+
+def _most_inside(robot: Robot, target: pin.SE3, branch: str | None) -> IKChoice:
+    """A seven-axis arm's branch and parameter with the largest limit margin.
+
+    Raises:
+        UnsupportedRobotError: If the arm has no closed form.
+        InputError: If ``branch`` is not one of its labels.
+        InfeasibleError: If no value of the parameter puts a branch (or
+            ``branch``) within the limits.
+    """
+    from workbench.ik import choose_redundancy
+
+    chosen = choose_redundancy(robot, target, branch=branch).solution
+    rule = "largest-limit-margin" if branch is None else "branch"
+    return IKChoice(chosen.q, chosen.branch, bool(chosen.within_limits), rule)
 
 
 def _choose(robot, solutions, branch, near, closed_form) -> IKChoice:
