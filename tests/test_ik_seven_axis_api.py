@@ -322,6 +322,27 @@ def test_unreachable_franka_names_the_feasible_q7() -> None:
     )
 
 
+def test_choose_redundancy_says_why_no_value_serves() -> None:
+    """Out of reach for every q7 (sampled), or reached outside the limits only."""
+    robot = load_robot("panda")
+    far = np.eye(4)
+    far[:3, 3] = [5.0, 0.2, 0.5]
+    with pytest.raises(UnreachableError) as err:
+        choose_redundancy(robot, far)
+    message = str(err.value)
+    assert message.startswith("out of reach for every q7 in [-2.8973, 2.8973] rad")
+    assert err.value.distance == pytest.approx(np.linalg.norm([5.0, 0.2]), abs=0.2)
+    low = np.eye(4)  # the hand in the base: reached, never within the limits
+    low[:3, :3] = np.diag([1.0, -1.0, -1.0])
+    low[2, 3] = 0.2
+    solver = get_redundant_solver(robot)
+    grid = np.linspace(*solver.parameter_range, 721)
+    _, valid = solver.solve_batch(np.broadcast_to(low, (721, 4, 4)), grid)
+    assert valid.any()
+    with pytest.raises(InfeasibleError, match="reached outside them"):
+        choose_redundancy(robot, low)
+
+
 # -- redundancy tools ------------------------------------------------------------------
 
 

@@ -40,7 +40,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InfeasibleError, InputError
-from workbench.ik._puma import LIMIT_TOL
+from workbench.ik._puma import LIMIT_TOL, UnreachableError
 from workbench.ik._targets import pose_rows
 from workbench.ik.batch_jacobians import compute_jacobians_local
 from workbench.ik.redundant import (
@@ -219,6 +219,43 @@ def _golden(
     return np.where(best, x1, x2), np.where(best, f1, f2)
 
 
+def _refuse(solver: RedundantSolver, pose: FloatArray, only: int | None) -> None:
+    """Raise why no value of the parameter puts a branch on ``pose`` in limits.
+
+    ``UnreachableError`` when no branch reaches the pose at any value: the
+    SRS arm's reach does not depend on ψ (the kernel's error says so); a
+    Franka arm's wrist point turns with q7, so its values are sampled (every
+    :data:`SAMPLE_STEP`) and the error gives the distance nearest the reach.
+    Else ``InfeasibleError``: the pose is reached, outside the joint limits.
+    """
+    lo, hi = solver.parameter_range
+    if solver.family == "srs":
+        solver.solve_arrays(pose, 0.5 * (lo + hi), np.empty(0))  # raises if out
+    else:
+        values = _samples(lo, hi)
+        _, valid = solver.solve_batch(np.repeat(pose[None], len(values), 0), values)
+        if not valid.any():
+            gaps = []
+            for value in values:
+                distance, low, high = solver.diagnose(pose, float(value))
+                gaps.append((max(low - distance, distance - high), distance, low, high))
+            _, distance, low, high = min(gaps)
+            raise UnreachableError(
+                distance,
+                (low, high),
+                "reach",
+                f"out of reach for every {solver.parameter} in [{lo:.6g}, {hi:.6g}] "
+                f"rad (sampled every {math.degrees(SAMPLE_STEP):g}°): the wrist "
+                f"point comes within {distance:.6g} m of the shoulder at best, the "
+                f"elbow reaches [{low:.6g}, {high:.6g}] m",
+            )
+    which = "any branch" if only is None else f"branch {solver.branches[only]}"
+    raise InfeasibleError(
+        f"no {solver.parameter} puts {which} on the pose within the joint limits "
+        "(the pose is reached outside them)"
+    )
+
+
 def choose_redundancy(
     robot: Robot,
     target: pin.SE3 | npt.ArrayLike,
@@ -269,12 +306,7 @@ def choose_redundancy(
         for lo, hi in intervals
     ]
     if not pieces:
-        middle = 0.5 * (solver.parameter_range[0] + solver.parameter_range[1])
-        solver.solve_arrays(pose, middle, np.empty(0))  # raises when out of reach
-        which = "any branch" if only is None else f"branch {solver.branches[only]}"
-        raise InfeasibleError(
-            f"no {solver.parameter} puts {which} on the pose within the joint limits"
-        )
+        _refuse(solver, pose, only)
     score = _Scorer(solver, pose, criterion, previous)
     samples = [_samples(lo, hi) for _, lo, hi in pieces]
     values = np.concatenate(samples)

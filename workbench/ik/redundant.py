@@ -442,6 +442,22 @@ class RedundantSolver:
             return None
         return q, index, bool(within)
 
+    def diagnose(self, pose: FloatArray, value: float) -> tuple[float, float, float]:
+        """How far the wrist point is from the shoulder, and the arm's reach.
+
+        Args:
+            pose: (4, 4) float64 pose of the tool frame in the base frame [m].
+            value: The redundancy parameter [rad] (a Franka arm's wrist point
+                turns with q7; an SRS arm's wrist centre does not depend on ψ).
+
+        Returns:
+            ``(distance, low, high)`` [m]: the distance of the wrist point
+            (SRS: wrist centre) from the shoulder, and the interval of
+            distances the elbow reaches.
+        """
+        _, distance, low, high = self._kernel.diagnose(self.geometry, pose, value)
+        return float(distance), float(low), float(high)
+
     def _previous(self, q_previous: npt.ArrayLike) -> FloatArray:
         """``q_previous`` checked (``Robot.check_configuration``), as floats."""
         return self.robot.check_configuration(q_previous)
@@ -451,7 +467,7 @@ class RedundantSolver:
         if status == NOT_RIGID:  # the kernel's test is the exact one
             pose_rows(pose)  # raises the error that says why
             raise InputError("target is not a rigid transform")  # (pose_rows raised)
-        _, distance, low, high = self._kernel.diagnose(self.geometry, pose, value)
+        distance, low, high = self.diagnose(pose, value)
         if self.family == "srs":
             message = (
                 f"out of reach for every arm angle: wrist centre at distance "
