@@ -40,6 +40,7 @@ import pinocchio as pin
 from benchmarks.bench_ik_closed_form import _chain, _ik_geo_peer
 from workbench import Robot, load_robot
 from workbench.ik import analytic, analytic_batch, get_structure
+from workbench.model.catalog import CATALOG
 
 #: How far a rounded URDF's nonzero joint-origin numbers are moved: ``rpy``
 #: [rad] (π/2 written 1.570796325 is 1.8e-9 off) and ``xyz`` [m].
@@ -60,7 +61,12 @@ Peer = Callable[[np.ndarray], np.ndarray]
 
 
 def rounded_urdf(
-    name: str, folder: Path, *, zeros: bool = False, seed: int = 0
+    name: str,
+    folder: Path,
+    *,
+    zeros: bool = False,
+    seed: int = 0,
+    decimals: int | None = None,
 ) -> Robot:
     """The catalog robot ``name`` loaded from a copy of its URDF with rounded numbers.
 
@@ -69,19 +75,32 @@ def rounded_urdf(
     :data:`ROUNDING_XYZ`; zeros stay zero, as a file's rounding leaves them,
     unless ``zeros``. (A UR arm's URDF turns its joints about their own axes,
     so rounding leaves it exactly of its family; moving its zeros too makes it
-    UR-type only up to 1e-9.)
+    UR-type only up to 1e-9.) With ``decimals``, every ``rpy`` and ``xyz``
+    value is instead rounded to that many decimals, as a file written so is
+    (4: π/2 written ``1.5708``, 3.67e-6 rad off, as example-robot-data's
+    xArm7). The joints the catalog locks (a gripper's fingers), which a
+    path cannot lock, are removed with their child links.
 
     Args:
-        name: Catalog name (``"ur5"``, ``"kuka-kr6-r700"``, ...).
+        name: Catalog name (``"ur5"``, ``"kuka-kr6-r700"``, ``"iiwa14"``, ...).
         folder: Where the URDF copy is written.
-        zeros: Move the zero values too.
+        zeros: Move the zero values too (not with ``decimals``).
         seed: Seed of the perturbations.
+        decimals: Round to this many decimals instead of perturbing.
 
     Returns:
         The robot, with the catalog's tool frame.
     """
     robot = load_robot(name)
     tree = ElementTree.parse(robot.urdf_path)
+    root = tree.getroot()
+    locked = CATALOG[name].locked_joints if name in CATALOG else ()
+    for joint in [j for j in root.iter("joint") if j.get("name") in locked]:
+        child = joint.find("child")
+        root.remove(joint)
+        for link in [k for k in root.iter("link") if child is not None
+                     and k.get("name") == child.get("link")]:  # fmt: skip
+            root.remove(link)
     rng = np.random.default_rng(seed)
     for joint in tree.getroot().iter("joint"):
         origin = joint.find("origin")
@@ -89,6 +108,9 @@ def rounded_urdf(
             continue
         for key, size in (("rpy", ROUNDING_RPY), ("xyz", ROUNDING_XYZ)):
             values = [float(v) for v in origin.get(key, "0 0 0").split()]
+            if decimals is not None:
+                origin.set(key, " ".join(f"{v:.{decimals}f}" for v in values))
+                continue
             moved = [
                 v + size * rng.uniform(1.0, 2.0) * rng.choice((-1.0, 1.0))
                 if v or zeros
@@ -96,7 +118,9 @@ def rounded_urdf(
                 for v in values
             ]
             origin.set(key, " ".join(repr(float(v)) for v in moved))
-    path = Path(folder) / f"{name}-{'perturbed' if zeros else 'rounded'}.urdf"
+    kind = "perturbed" if zeros else "rounded"
+    suffix = kind if decimals is None else f"rounded{decimals}"
+    path = Path(folder) / f"{name}-{suffix}.urdf"
     tree.write(path)
     package = Path(robot.urdf_path).parent
     return load_robot(path, tool_frame=robot.tool_frame, package_dirs=[package])

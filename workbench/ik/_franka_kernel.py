@@ -45,7 +45,7 @@ import numpy.typing as npt
 
 from workbench._compiled import entry_point
 from workbench.ik import _kernel_common as common
-from workbench.ik._puma import LIMIT_TOL
+from workbench.ik._puma import LIMIT_TOL, MODEL_ERROR_SLACK
 from workbench.ik._redundant_common import (
     ELBOW_SINGULAR,
     NOT_RIGID,
@@ -103,7 +103,7 @@ GEOMETRY_DTYPE = np.dtype(
         ("l24s", "f8"),  # L24²
         ("l46s", "f8"),  # L46²
         ("inv_2l", "f8"),  # 1 / (2 L24 L46)
-        ("reach_tol", "f8"),  # REACH_SLACK (L24 + L46) [m]
+        ("reach_tol", "f8"),  # REACH_SLACK (L24 + L46) + model slack [m]
         ("cphi", "f8"),
         ("sphi", "f8"),
         ("label", "f8", 3),  # ±1: the sign of shoulder, wrist, elbow bit 0
@@ -144,7 +144,10 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     l24, l46 = math.hypot(ux, uy), math.hypot(vx, vy)
     g["l24s"], g["l46s"] = l24 * l24, l46 * l46
     g["inv_2l"] = 1.0 / (2.0 * l24 * l46)
-    g["reach_tol"] = REACH_SLACK * (l24 + l46)
+    # (a model off its idealised structure reaches up to this much further:
+    # the branches are clamped onto the wrist's edge and refined on the model)
+    model_slack = MODEL_ERROR_SLACK * structure.residual
+    g["reach_tol"] = REACH_SLACK * (l24 + l46) + model_slack
     g["cphi"] = (ux * vx + uy * vy) / (l24 * l46)
     g["sphi"] = (ux * vy - uy * vx) / (l24 * l46)
     s = structure.joint_sign

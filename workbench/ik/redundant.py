@@ -32,7 +32,14 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InputError, NonFiniteError
-from workbench.ik import _franka_intervals, _franka_kernel, _srs_intervals, _srs_kernel
+from workbench.ik import (
+    _franka_intervals,
+    _franka_kernel,
+    _refine_redundant_kernel,
+    _srs_intervals,
+    _srs_kernel,
+)
+from workbench.ik._kernel_common import nearest_or_kept
 from workbench.ik._puma import UnreachableError
 from workbench.ik._redundant_common import (
     ELBOW_SINGULAR,
@@ -43,6 +50,7 @@ from workbench.ik._redundant_common import (
     WITHIN_LIMITS,
     WRIST_SINGULAR,
 )
+from workbench.ik._refine_kernel import refinement_chain
 from workbench.ik._targets import as_targets, check_poses, pose_rows
 from workbench.ik.structure import UnsupportedRobotError, get_structure
 from workbench.model.per_robot import per_robot
@@ -70,6 +78,9 @@ _INTERVALS = {
 CHECK_CHUNK = 4096
 
 _NO_PREVIOUS = np.empty(0)
+#: The SRS record the refinement of a Franka arm is given (it holds q7, not ψ).
+_NO_ARM_ANGLE = np.zeros(1, dtype=_srs_kernel.GEOMETRY_DTYPE)
+_NO_ARM_ANGLE.setflags(write=False)
 _FLOAT64 = np.dtype(np.float64)
 
 
@@ -246,8 +257,8 @@ class RedundantSolver:
     """
 
     __slots__ = (
-        "__weakref__", "_indices", "_kernel", "_robot", "branches", "family",
-        "geometry", "parameter", "parameter_range",
+        "__weakref__", "_arm_angle_geometry", "_indices", "_kernel", "_refine",
+        "_robot", "branches", "family", "geometry", "parameter", "parameter_range",
     )  # fmt: skip
 
     def __init__(self, robot: Robot):
@@ -277,6 +288,12 @@ class RedundantSolver:
         self._kernel: types.ModuleType = kernel
         self._robot = weakref.ref(robot)
         self._indices = tuple(range(len(self.branches)))
+        # the model's own chain where it is not exactly the idealised one
+        # (a rounded URDF): every branch is then refined on it
+        self._refine: FloatArray | None = refinement_chain(robot)
+        self._arm_angle_geometry: np.ndarray = (
+            geometry if self.family == "srs" else _NO_ARM_ANGLE
+        )
 
     @property
     def robot(self) -> Robot:
@@ -338,6 +355,9 @@ class RedundantSolver:
         )
         if status != OK:
             self._raise(status, pose, value)
+        chain = self._refine
+        if chain is not None and not self._refined(chain, pose, value, q, flags):
+            raise UnreachableError(0.0, (0.0, 0.0), "model")
         q.setflags(write=False)
         shared = (q, flags.tolist(), self.branches, value)
         first = q[:, 0].tolist()
@@ -376,7 +396,37 @@ class RedundantSolver:
         )
         if status != OK:
             self._raise(status, pose, value)
+        chain = self._refine
+        if chain is not None and not self._refined(chain, pose, value, q, flags):
+            raise UnreachableError(0.0, (0.0, 0.0), "model")
         return q, flags
+
+    def _refined(
+        self,
+        chain: FloatArray,
+        pose: FloatArray,
+        value: float,
+        q: FloatArray,
+        flags: np.ndarray,
+    ) -> int:
+        """Refine the branches ``q`` (B, 7) on the model's own chain, in place.
+
+        Returns:
+            The number of branches that reach the pose on the model (the others
+            are NaN rows now); the ``WITHIN_LIMITS`` bits of ``flags`` (B,)
+            are updated.
+        """
+        return int(
+            _refine_redundant_kernel.refine_pose(
+                chain,
+                self._arm_angle_geometry,
+                self.family == "srs",
+                pose,
+                value,
+                q,
+                flags,
+            )
+        )
 
     def track(
         self,
@@ -407,6 +457,14 @@ class RedundantSolver:
         Raises:
             UnreachableError, InputError: As :meth:`solve`.
         """
+        if self._refine is not None:
+            found = self._track_refined(
+                self._refine, pose, value, q_predicted, branch, max_step2
+            )
+            if found is None:  # raises the error that says why
+                self.solve_arrays(pose, value, q_predicted)
+                raise UnreachableError(0.0, (0.0, 0.0), "model")  # (it raised)
+            return found
         q = np.empty(7)
         status, index, within = self._kernel.track(
             self.geometry, pose, value, q_predicted, branch, max_step2, q
@@ -414,6 +472,26 @@ class RedundantSolver:
         if status != OK:
             self._raise(status, pose, value)
         return q, index, bool(within)
+
+    def _track_refined(
+        self,
+        chain: FloatArray,
+        pose: FloatArray,
+        value: float,
+        q_predicted: FloatArray,
+        branch: int,
+        max_step2: float,
+    ) -> tuple[FloatArray, int, bool] | None:
+        """:meth:`try_track` on a model refined from the idealised arm."""
+        q = np.empty((len(self._indices), 7))
+        flags = np.empty(len(self._indices), dtype=np.uint8)
+        status = self._kernel.solve_pose(
+            self.geometry, pose, value, q_predicted, q, flags, True
+        )
+        if status != OK or not self._refined(chain, pose, value, q, flags):
+            return None
+        index = int(nearest_or_kept(q, q_predicted, branch, max_step2))
+        return q[index].copy(), index, bool(flags[index] & WITHIN_LIMITS)
 
     def try_track(
         self,
@@ -434,6 +512,10 @@ class RedundantSolver:
             status is not OK (the pose out of reach for this value, or not
             rigid).
         """
+        if self._refine is not None:
+            return self._track_refined(
+                self._refine, pose, value, q_predicted, branch, max_step2
+            )
         q = np.empty(7)
         status, index, within = self._kernel.track(
             self.geometry, pose, value, q_predicted, branch, max_step2, q
@@ -525,9 +607,18 @@ class RedundantSolver:
             vals = as_finite_array(values, (count,), "redundancy")
         q = np.empty((count, len(self._indices), 7))
         valid = np.empty((count, len(self._indices)), dtype=bool)
-        self._kernel.solve_batch(
-            self.geometry, poses, np.ascontiguousarray(vals), q, valid
-        )
+        vals = np.ascontiguousarray(vals)
+        self._kernel.solve_batch(self.geometry, poses, vals, q, valid)
+        if self._refine is not None:
+            _refine_redundant_kernel.refine_batch(
+                self._refine,
+                self._arm_angle_geometry,
+                self.family == "srs",
+                poses,
+                vals,
+                q,
+                valid,
+            )
         return q, valid
 
     def parameter_of(self, q: npt.ArrayLike) -> float | FloatArray:
