@@ -77,7 +77,9 @@ PARAMETER = "q7"
 #: √(rounding) ≈ 1e-8, or more where |κ| is small (axis 5 near S).
 SINGULAR_TOL = 1e-6
 #: Rounding tolerated beyond the reach before a branch is refused:
-#: |cos(θ4 + φ)| ≤ 1 + REACH_SLACK; |w · z5| ≤ √(κ² + d4²) + REACH_SLACK (L24 + L46).
+#: |cos(θ4 + φ)| ≤ 1 + REACH_SLACK; |w · z5| ≤ √(κ² + d4²) + REACH_SLACK (L24 + L46);
+#: each widened by ``MODEL_ERROR_SLACK`` times the model's residual (a model
+#: off its idealised structure: the branch is clamped and refined on it).
 REACH_SLACK = 1e-12
 #: Below this |sin θ2|, θ1 is not computed from axis 3 but taken from
 #: q_previous (or θ1 = θ0_1): axes 1 and 3 aligned, only θ1 ± θ3 matter.
@@ -104,6 +106,7 @@ GEOMETRY_DTYPE = np.dtype(
         ("l46s", "f8"),  # L46²
         ("inv_2l", "f8"),  # 1 / (2 L24 L46)
         ("reach_tol", "f8"),  # REACH_SLACK (L24 + L46) + model slack [m]
+        ("cos_tol", "f8"),  # REACH_SLACK + model slack, on cos(θ4 + φ)
         ("cphi", "f8"),
         ("sphi", "f8"),
         ("label", "f8", 3),  # ±1: the sign of shoulder, wrist, elbow bit 0
@@ -148,6 +151,7 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     # the branches are clamped onto the wrist's edge and refined on the model)
     model_slack = MODEL_ERROR_SLACK * structure.residual
     g["reach_tol"] = REACH_SLACK * (l24 + l46) + model_slack
+    g["cos_tol"] = REACH_SLACK + model_slack * (l24 + l46) / (l24 * l46)
     g["cphi"] = (ux * vx + uy * vy) / (l24 * l46)
     g["sphi"] = (ux * vy - uy * vx) / (l24 * l46)
     s = structure.joint_sign
@@ -287,7 +291,7 @@ def _solve(geo, f0, f1, f2, value, prev, has_prev, q, flags) -> int:
         flags[b] = 0
         for j in range(7):
             q[b, j] = np.nan
-    if not (abs(k) <= 1.0 + REACH_SLACK) or r2 <= 0.0:
+    if not (abs(k) <= 1.0 + geo.cos_tol) or r2 <= 0.0:
         return OUT_OF_REACH
     k = common.clip_unit(k)
     s_delta = common.clamped_root((1.0 - k) * (1.0 + k))
