@@ -96,14 +96,15 @@ def refinement_chain(robot: Robot) -> FloatArray | None:
         robot: A robot with a closed form.
 
     Returns:
-        ``get_chain(robot).packed``, (7, CHAIN_WIDTH) read-only, when the
-        structure fitted to its axes differs from its model by more than
-        :data:`EXACT_STRUCTURE_TOL`; else None (the closed form is exact).
+        ``get_chain(robot).packed``, (n + 1, CHAIN_WIDTH) read-only (n = 6 or
+        7 joints), when the structure fitted to its axes differs from its
+        model by more than :data:`EXACT_STRUCTURE_TOL`; else None (the closed
+        form is exact).
     """
     if get_structure(robot).residual <= EXACT_STRUCTURE_TOL:
         return None
     chain = get_chain(robot)
-    if not chain.identity:  # (a closed form needs six one-coordinate joints)
+    if not chain.identity:  # (a closed form needs n one-coordinate joints)
         return None
     return chain.packed
 

@@ -18,6 +18,11 @@ first use and cached per robot object (weakly). It checks every input, calls
 the family's compiled kernel and words its failures; ``workbench.ik.analytic``
 (``redundancy=``), the redundancy choice (:mod:`workbench.ik.redundancy`), the
 online planner and the command line all solve through it.
+
+On a model that is of its family only up to its rounding (a URDF written with
+4 decimals: the xArm7), every reached branch is then refined on the model's
+own chain, the parameter held (:mod:`workbench.ik._refine_redundant_kernel`):
+exact to 1e-12 there too; a branch that does not converge does not reach.
 """
 
 from __future__ import annotations
@@ -629,7 +634,10 @@ class RedundantSolver:
 
         Returns:
             A float for (7,), an (N,) array for (N, 7): ψ in [−π, π] (SRS; the
-            θ1 = 0 reference when the wrist centre is on axis 1) or q7.
+            θ1 = 0 reference when the wrist centre is on axis 1) or q7. On a
+            model off its idealised structure (a rounded URDF) ψ is that of
+            the idealised chain at ``q``, the value the refinement holds, so
+            that :meth:`solve` at it gives ``q`` back.
 
         Raises:
             DimensionError, NonFiniteError: Bad shape or entries.
