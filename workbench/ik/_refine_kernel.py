@@ -110,6 +110,42 @@ def refinement_chain(robot: Robot) -> FloatArray | None:
 
 
 @helper()
+def pose_error(target: FloatArray, frames: FloatArray, e: FloatArray) -> float:
+    """The FK residual in tolerances: the larger of position and rotation.
+
+    Position [m] over :data:`POSITION_TOL`, rotation [rad] over
+    :data:`ROTATION_TOL`. ``e`` (>= 6,) gets the error log6(T⁻¹ M(q)) of the
+    tool (last row of ``frames``, ``_chain_kernel._forward``'s); a NaN error
+    fails every test.
+    """
+    position = _error(target, frames, e) / POSITION_TOL
+    rotation = math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5]) / ROTATION_TOL
+    return max(position, rotation)
+
+
+@helper()
+def keep_best(
+    error: float, best: float, best_step: int, step: int, q: FloatArray, best_q
+) -> tuple[float, int, bool]:
+    """One step's bookkeeping of a refinement: the best iterate, and whether to stop.
+
+    Copies ``q`` into ``best_q`` when ``error`` (in tolerances) is the least yet;
+    stops at :data:`POLISH`, after :data:`STALL_STEPS` steps without progress,
+    at a NaN error or after :data:`REFINE_STEPS` steps.
+
+    Returns:
+        ``(best, best_step, stop)``.
+    """
+    if error < best:
+        best, best_step = error, step
+        for k in range(q.shape[0]):
+            best_q[k] = q[k]
+    elif not error == error or step - best_step >= STALL_STEPS:
+        return best, best_step, True
+    return best, best_step, best <= POLISH or step == REFINE_STEPS
+
+
+@helper()
 def _refine_branch(chain: FloatArray, target: FloatArray, q: FloatArray, work) -> bool:
     """Newton steps on ``q`` (6,) in place; whether its residual is within tolerance.
 
@@ -126,16 +162,9 @@ def _refine_branch(chain: FloatArray, target: FloatArray, q: FloatArray, work) -
     best, best_step = math.inf, 0
     for step in range(REFINE_STEPS + 1):
         _forward(chain, q, frames)
-        position = _error(target, frames, e) / POSITION_TOL
-        rotation = math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5]) / ROTATION_TOL
-        error = max(position, rotation)  # in tolerances; NaN fails every test
-        if error < best:
-            best, best_step = error, step
-            for k in range(6):
-                best_q[k] = q[k]
-        elif not error == error or step - best_step >= STALL_STEPS:
-            break
-        if best <= POLISH or step == REFINE_STEPS:
+        error = pose_error(target, frames, e)
+        best, best_step, stop = keep_best(error, best, best_step, step, q, best_q)
+        if stop:
             break
         damping = 0.0
         for i in range(6):

@@ -34,17 +34,16 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench._compiled import entry_point, helper
-from workbench.ik._chain_kernel import _damped_step, _error, _forward, _jacobian, _solve
+from workbench.ik._chain_kernel import _damped_step, _forward, _jacobian, _solve
 from workbench.ik._kernel_common import remainder
 from workbench.ik._puma import LIMIT_TOL
 from workbench.ik._redundant_common import WITHIN_LIMITS
 from workbench.ik._refine_kernel import (
     ACCEPT,
-    POLISH,
-    POSITION_TOL,
     REFINE_STEPS,
     ROTATION_TOL,
-    STALL_STEPS,
+    keep_best,
+    pose_error,
 )
 from workbench.ik._srs_kernel import _arm_angle
 
@@ -87,19 +86,12 @@ def _refine_row(chain, geo, srs: bool, target, value: float, q, work) -> bool:
     best, best_step = math.inf, 0
     for step in range(REFINE_STEPS + 1):
         _forward(chain, q, frames)
-        position = _error(target, frames, r) / POSITION_TOL
-        rotation = math.sqrt(r[3] * r[3] + r[4] * r[4] + r[5] * r[5]) / ROTATION_TOL
-        error = max(position, rotation)  # in tolerances; NaN fails every test
+        error = pose_error(target, frames, r)
         if srs:
             r[6] = remainder(_arm_angle_of(geo, q, theta) - value)
             error = max(error, abs(r[6]) / ROTATION_TOL)
-        if error < best:
-            best, best_step = error, step
-            for k in range(7):
-                best_q[k] = q[k]
-        elif not error == error or step - best_step >= STALL_STEPS:
-            break
-        if best <= POLISH or step == REFINE_STEPS:
+        best, best_step, stop = keep_best(error, best, best_step, step, q, best_q)
+        if stop:
             break
         damping = 0.0
         for i in range(rows):
