@@ -109,7 +109,7 @@ def refinement_chain(robot: Robot) -> FloatArray | None:
     return chain.packed
 
 
-@helper()
+@helper(forceinline=True)
 def pose_error(target: FloatArray, frames: FloatArray, e: FloatArray) -> float:
     """The FK residual in tolerances: the larger of position and rotation.
 
@@ -123,7 +123,7 @@ def pose_error(target: FloatArray, frames: FloatArray, e: FloatArray) -> float:
     return max(position, rotation)
 
 
-@helper()
+@helper(forceinline=True)
 def keep_best(
     error: float, best: float, best_step: int, step: int, q: FloatArray, best_q
 ) -> tuple[float, int, bool]:
