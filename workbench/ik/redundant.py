@@ -353,16 +353,7 @@ class RedundantSolver:
         if value.__class__ is not float or not -math.inf < value < math.inf:
             value = check_redundancy(value, self.parameter)
         prev = _NO_PREVIOUS if q_previous is None else self._previous(q_previous)
-        q = np.empty((len(self._indices), 7))
-        flags = np.empty(len(self._indices), dtype=np.uint8)
-        status = self._kernel.solve_pose(
-            self.geometry, pose, value, prev, q, flags, True
-        )
-        if status != OK:
-            self._raise(status, pose, value)
-        chain = self._refine
-        if chain is not None and not self._refined(chain, pose, value, q, flags):
-            raise UnreachableError(0.0, (0.0, 0.0), "model")
+        q, flags = self.solve_arrays(pose, value, prev)
         q.setflags(write=False)
         shared = (q, flags.tolist(), self.branches, value)
         first = q[:, 0].tolist()
@@ -462,21 +453,11 @@ class RedundantSolver:
         Raises:
             UnreachableError, InputError: As :meth:`solve`.
         """
-        if self._refine is not None:
-            found = self._track_refined(
-                self._refine, pose, value, q_predicted, branch, max_step2
-            )
-            if found is None:  # raises the error that says why
-                self.solve_arrays(pose, value, q_predicted)
-                raise UnreachableError(0.0, (0.0, 0.0), "model")  # (it raised)
-            return found
-        q = np.empty(7)
-        status, index, within = self._kernel.track(
-            self.geometry, pose, value, q_predicted, branch, max_step2, q
-        )
-        if status != OK:
-            self._raise(status, pose, value)
-        return q, index, bool(within)
+        found = self.try_track(pose, value, q_predicted, branch, max_step2)
+        if found is None:  # raises the error that says why
+            self.solve_arrays(pose, value, q_predicted)
+            raise UnreachableError(0.0, (0.0, 0.0), "model")  # (it raised)
+        return found
 
     def _track_refined(
         self,
