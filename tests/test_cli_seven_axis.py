@@ -122,6 +122,7 @@ def test_feasible_intervals_are_the_library_s(capsys, name) -> None:
     assert printed["parameter"] == feasible.parameter
     assert printed["range"] == list(feasible.range)
     assert printed["union"] == [list(i) for i in feasible.union]
+    assert printed["circular"] is (name == "iiwa14")
     assert list(printed["branches"]) == list(feasible.branches)
     for label, intervals in zip(feasible.branches, feasible.intervals, strict=True):
         assert printed["branches"][label] == [list(i) for i in intervals]

@@ -322,6 +322,24 @@ def test_unreachable_franka_names_the_feasible_q7() -> None:
     )
 
 
+def test_an_arc_through_pi_is_said_to_join() -> None:
+    """The arm angle is circular: intervals at −π and π are one arc (SRS)."""
+    from workbench.cli._redundancy import describe_feasible
+
+    robot = load_robot("iiwa14")
+    target = np.eye(4)
+    target[:3, :3] = np.diag([-1.0, 1.0, -1.0])
+    target[:3, 3] = [0.5, 0.2, 0.7]
+    feasible = feasible_redundancy(robot, target)
+    assert feasible.circular and len(feasible.union) == 2
+    assert feasible.union[0][0] == -math.pi and feasible.union[-1][1] == math.pi
+    for value in (math.pi - 1e-6, -math.pi + 1e-6):  # both sides of ±π serve
+        assert any(s.within_limits for s in analytic(robot, target, redundancy=value))
+    assert describe_feasible(feasible, False).endswith(
+        "(the first and the last are one arc through ±π)"
+    )
+
+
 def test_choose_redundancy_says_why_no_value_serves() -> None:
     """Out of reach for every q7 (sampled), or reached outside the limits only."""
     robot = load_robot("panda")
@@ -353,6 +371,7 @@ def test_feasible_intervals_are_feasible(arm: Robot) -> None:
     feasible = feasible_redundancy(arm, arm.fk(q))
     assert isinstance(feasible, FeasibleRedundancy)
     assert feasible.parameter == solver.parameter
+    assert feasible.circular is (solver.family == "srs")
     assert feasible.branches == solver.branches
     assert len(feasible.intervals) == len(solver.branches)
     value = redundancy_parameter(arm, q)

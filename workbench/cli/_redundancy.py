@@ -107,8 +107,18 @@ def format_intervals(
 
 
 def describe_feasible(feasible: FeasibleRedundancy, degrees: bool) -> str:
-    """One line: ``feasible arm angle: [...], [...]``."""
-    return f"feasible {feasible.parameter}: {format_intervals(feasible.union, degrees)}"
+    """One line: ``feasible arm angle: [...], [...]`` (and whether the ends join)."""
+    union = feasible.union
+    text = f"feasible {feasible.parameter}: {format_intervals(union, degrees)}"
+    low, high = feasible.range
+    if (
+        feasible.circular
+        and len(union) > 1
+        and union[0][0] == low
+        and union[-1][1] == high
+    ):
+        text += " (the first and the last are one arc through ±π)"
+    return text
 
 
 def with_feasible(
@@ -142,6 +152,7 @@ def feasible_json(feasible: FeasibleRedundancy) -> dict[str, Any]:
         "parameter": feasible.parameter,
         "range": list(feasible.range),
         "union": [list(i) for i in feasible.union],
+        "circular": feasible.circular,
         "branches": {
             label: [list(i) for i in intervals]
             for label, intervals in zip(

@@ -102,6 +102,10 @@ class FeasibleRedundancy:
             [rad] of the parameter where that branch reaches the pose with
             every joint within its limits.
         union: Sorted disjoint closed intervals [rad] where some branch does.
+        circular: True for the arm angle (SRS): ψ and ψ + 2π are one arm, so
+            an interval ending at π and one starting at −π are one arc
+            through ±π (they stay two here, each within ``range``); False
+            for q7, a joint with limits.
     """
 
     parameter: str
@@ -109,6 +113,7 @@ class FeasibleRedundancy:
     branches: tuple[str, ...]
     intervals: tuple[tuple[tuple[float, float], ...], ...]
     union: tuple[tuple[float, float], ...]
+    circular: bool
 
 
 class RedundantIKSolution:
@@ -651,6 +656,7 @@ class RedundantSolver:
             branches=self.branches,
             intervals=intervals,
             union=_union(intervals),
+            circular=self.family == "srs",
         )
 
 
