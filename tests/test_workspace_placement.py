@@ -440,7 +440,7 @@ def test_cli_place_json(puma, rng, tmp_path, capsys):
     assert out["poses"] == 6 and out["path"] is False
     assert 1 <= len(out["placements"]) <= 3
     keys = {"x", "y", "z", "yaw", "all_reachable", "min_dexterity",
-            "min_singularity_margin", "branch", "missed"}  # fmt: skip
+            "min_singularity_margin", "branch", "missed", "redundancy"}  # fmt: skip
     assert all(set(p) == keys and p["all_reachable"] for p in out["placements"])
 
 

@@ -6,7 +6,9 @@ robot), ranks candidate base poses with
 or a map built in memory, the best verified exactly) and prints them. Exit 3
 when no placement reaches every pose; with ``--json`` the JSON is printed all
 the same (``feasible`` false, ``placements`` the best candidate verified, if
-any). The ``workspace`` group
+any). Seven-axis arms (SRS, Franka) are verified at the K values of their
+map's redundancy parameter (``--redundancy-samples`` for a map built in
+memory). The ``workspace`` group
 (``workbench/cli/workspace.py``) calls :func:`register`.
 """
 
@@ -42,6 +44,8 @@ from workbench.workspace.placement import (
     PlacementInfeasibleError,
     place_base,
 )
+from workbench.workspace.redundant import MAX_REDUNDANCY_SAMPLES
+from workbench.workspace.task_map import TASK_MAP_REDUNDANCY_SAMPLES
 from workbench.workspace.task_poses import (
     TaskPoses,
     read_task_poses,
@@ -64,7 +68,8 @@ def register(commands: argparse._SubParsersAction) -> None:
         "--trajectory, one IK branch along the whole path, no flip), then the "
         "worst singularity margin and dexterity along the task. Candidates are "
         "screened against a workspace map (--map, else one built in memory), "
-        "the best verified exactly in closed form. Exit 3 when none reaches "
+        "the best verified exactly in closed form (seven-axis arms: at the K "
+        "values of the map's redundancy parameter). Exit 3 when none reaches "
         "every pose.",
     )
     add_robot_argument(parser)
@@ -124,6 +129,15 @@ def register(commands: argparse._SubParsersAction) -> None:
         "collision-free",
     )
     parser.add_argument(
+        "--redundancy-samples",
+        type=bounded_int(1, MAX_REDUNDANCY_SAMPLES),
+        metavar="K",
+        help="seven-axis arms without --map: K values of the redundancy "
+        "parameter (arm angle ψ or q7) the map built in memory and the exact "
+        "check solve at (default: "
+        f"{TASK_MAP_REDUNDANCY_SAMPLES}); with --map, the map's values",
+    )
+    parser.add_argument(
         "--top",
         type=bounded_int(1, MAX_TOP),
         default=10,
@@ -157,6 +171,7 @@ def run_place(args: argparse.Namespace) -> int:
             map=args.map,
             scene=scene,
             top=args.top,
+            redundancy_samples=args.redundancy_samples,
             progress=functools.partial(
                 args.progress.count, unit="steps", label="workspace place"
             ),
@@ -215,7 +230,9 @@ def _print_placements(summary: dict[str, Any], placements: list[Placement]) -> N
         f"x {xmin:g}..{xmax:g} m, y {ymin:g}..{ymax:g} m at z {summary['height']:g} m "
         f"({summary['seconds']:.2f} s)"
     )
-    print("   x [m]    y [m]    z [m]  yaw [deg]  min |det J| [m³]  margin  branch")
+    seven_axis = any(p.redundancy is not None for p in placements)
+    measure = "min √det(JJᵀ) [m³]" if seven_axis else "min |det J| [m³]"
+    print(f"   x [m]    y [m]    z [m]  yaw [deg] {measure:>17}  margin  branch")
     for p in placements:
         print(
             f"{p.x:8.3f} {p.y:8.3f} {p.z:8.3f} {math.degrees(p.yaw):10.1f} "

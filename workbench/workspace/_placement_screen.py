@@ -126,6 +126,9 @@ class Screening:
         read: ``read(name)`` gives the map's per-pose array ``name`` (V, O).
         task: (N, 4, 4) task poses in the world frame [m].
         lattice: The candidates.
+        distances: The map holds the singularity distances ``shoulder``,
+            ``elbow``, ``wrist``; without them (a seven-axis map) the margin
+            is 0 at every pose and the ranking falls to the dexterity.
     """
 
     def __init__(
@@ -134,6 +137,7 @@ class Screening:
         read: Callable[[str], npt.NDArray[np.generic]],
         task: FloatArray,
         lattice: CandidateLattice,
+        distances: bool = True,
     ):
         self.lattice = lattice
         centre = task[:, :3, 3].mean(axis=0)
@@ -164,10 +168,15 @@ class Screening:
         self.dexterity = np.empty(shape, dtype=np.float32)
         self.margin = np.empty(shape, dtype=np.float32)
 
-        dexterity, shoulder, elbow, wrist = (
+        names = ("dexterity", "shoulder", "elbow", "wrist")
+        loaded = [
             np.ascontiguousarray(read(name), dtype=np.float32).reshape(-1)
-            for name in ("dexterity", "shoulder", "elbow", "wrist")
-        )
+            for name in (names if distances else names[:1])
+        ]
+        dexterity, shoulder, elbow, wrist = loaded if distances else loaded * 4
+        inverse = 1.0 / np.array([SHOULDER_TOL, ELBOW_TOL, WRIST_TOL])
+        if not distances:  # margin |dexterity| · 0 = 0 at every reached pose
+            inverse = np.zeros(3)
         gather_planes(
             dexterity,
             shoulder,
@@ -177,7 +186,7 @@ class Screening:
             int(grid.orientation_count),
             rows.astype(np.int64),
             used.astype(np.int64),
-            1.0 / np.array([SHOULDER_TOL, ELBOW_TOL, WRIST_TOL]),
+            inverse,
             self.dexterity,
             self.margin,
         )

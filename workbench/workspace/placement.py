@@ -27,6 +27,15 @@ Method, for a region of candidates (yaws × a square lattice at one height):
    the exact values and is ranked by them.
 
 Explicit candidates (``mounts``) skip the screening: each is verified exactly.
+
+Seven-axis arms (SRS, Franka) are verified exactly at the K values of the
+redundancy parameter of their map (its attribute ``redundancy``; a map built
+in memory, or ``mounts`` without a map, at ``redundancy_samples`` values,
+default :data:`~workbench.workspace.task_map.TASK_MAP_REDUNDANCY_SAMPLES`), the
+meaning of *exact* of their maps: a pose reached only between those values
+counts as missed (:mod:`workbench.workspace.placement_check`). Their maps
+hold no singularity distances: the screening ranks by missed poses, then
+dexterity.
 """
 
 from __future__ import annotations
@@ -41,6 +50,7 @@ import numpy.typing as npt
 
 from workbench.collision import Scene
 from workbench.errors import InfeasibleError, InputError
+from workbench.ik import UnsupportedRobotError, get_redundant_solver
 from workbench.model.robot import Robot
 from workbench.validation import as_finite_array
 from workbench.workspace._placement_screen import CandidateLattice, Screening
@@ -52,7 +62,8 @@ from workbench.workspace.placement_check import (
     base_transform,
     follow_path,
 )
-from workbench.workspace.task_map import build_task_map
+from workbench.workspace.redundant import redundancy_values
+from workbench.workspace.task_map import TASK_MAP_REDUNDANCY_SAMPLES, build_task_map
 from workbench.workspace.task_poses import TaskPoses, matrices_from_xyz_quat_xyzw
 
 FloatArray = npt.NDArray[np.float64]
@@ -110,12 +121,14 @@ def place_base(
     scene: Scene | None = None,
     top: int = 10,
     path: bool | None = None,
+    redundancy_samples: int | None = None,
     progress: Progress | None = None,
 ) -> list[Placement]:
     """Rank base poses of ``robot`` for a task (method: module docstring).
 
     Args:
-        robot: An OPW or UR-type arm (its closed form verifies every result).
+        robot: An OPW or UR-type six-axis arm, or a seven-axis arm of the SRS
+            or Franka family (its closed form verifies every result).
         targets: The task: :class:`~workbench.workspace.task_poses.TaskPoses`,
             or poses of the tool frame in the world frame, (N, 4, 4) [m] or
             (N, 7) rows ``x y z qx qy qz qw``.
@@ -136,6 +149,11 @@ def place_base(
         top: How many placements to return (>= 1).
         path: The task is a path (one branch along it, no flip); default
             ``targets.ordered`` for ``TaskPoses``, else False.
+        redundancy_samples: Seven-axis arms without ``map``: K, the values
+            of the redundancy parameter the map built in memory and the
+            verification solve at (default
+            :data:`~workbench.workspace.task_map.TASK_MAP_REDUNDANCY_SAMPLES`);
+            with a map, its values are used.
         progress: Called as ``progress(done, total)`` during the screening
             (yaws) and the verification (candidates).
 
@@ -146,7 +164,8 @@ def place_base(
     Raises:
         PlacementInfeasibleError: If no verified candidate reaches every pose
             (the message names the best one and how many poses it misses).
-        InputError: On malformed arguments, or a map of another robot.
+        InputError: On malformed arguments, a map of another robot, or
+            ``redundancy_samples`` with a map or for a six-axis arm.
         UnsupportedRobotError: If the robot has no closed form.
     """
     task = _as_task(targets)
@@ -154,24 +173,34 @@ def place_base(
     ordered = ordered if path is None else bool(path)
     if isinstance(top, bool) or not isinstance(top, int) or top < 1:
         raise InputError(f"top must be an integer >= 1, got {top!r}")
-    evaluator = PlacementEvaluator(robot, task, scene, ordered)
+    seven_axis = _check_samples(robot, map, redundancy_samples)
     if mounts is not None:
         if region is not None:
             raise InputError("give a region or mounts, not both")
         rows = np.asarray(mounts, dtype=np.float64)
         rows = as_finite_array(rows, (len(rows) if rows.ndim == 2 else -1, 4), "mounts")
+        values = None
+        if seven_axis:
+            given = None if map is None else _get_map(robot, map, task, 0.0, None)
+            values = _values(robot, given, redundancy_samples)
+        evaluator = PlacementEvaluator(robot, task, scene, ordered, values)
         placements = []
-        size = _batch_size(len(task))
+        size = _batch_size(len(task) * len(evaluator.values))
         for start in range(0, len(rows), size):
             placements += evaluator.evaluate(rows[start : start + size])
         return _best(placements, top, len(task))
     if region is None:
         raise InputError("place_base needs a region (xmin, xmax, ymin, ymax) or mounts")
     lattice = CandidateLattice.make(region, float(height), yaw_step, resolution)
-    the_map = _get_map(robot, map, task, lattice.height)
-    screening = Screening(the_map.grid, the_map.__getitem__, task, lattice)
+    the_map = _get_map(robot, map, task, lattice.height, redundancy_samples)
+    values = _values(robot, the_map, redundancy_samples) if seven_axis else None
+    evaluator = PlacementEvaluator(robot, task, scene, ordered, values)
+    screening = Screening(
+        the_map.grid, the_map.__getitem__, task, lattice, distances=not seven_axis
+    )
     verified: dict[int, Placement] = {}
-    for flat in _candidates(screening, top, _batch_size(len(task)), progress):
+    size = _batch_size(len(task) * len(evaluator.values))
+    for flat in _candidates(screening, top, size, progress):
         batch = evaluator.evaluate(lattice.rows(flat))
         verified.update(zip(flat.tolist(), batch, strict=True))
         if progress is not None:
@@ -179,6 +208,53 @@ def place_base(
         if sum(p.all_reachable for p in verified.values()) >= top:
             break
     return _best(list(verified.values()), top, len(task))
+
+
+def _check_samples(robot: Robot, given: object, samples: int | None) -> bool:
+    """Whether ``robot`` is a seven-axis arm; checks ``redundancy_samples``.
+
+    Raises:
+        InputError: If ``samples`` is given for a six-axis arm or with a map.
+    """
+    try:
+        get_redundant_solver(robot)
+    except UnsupportedRobotError:
+        seven_axis = False
+    else:
+        seven_axis = True
+    if samples is not None and not seven_axis:
+        raise InputError(
+            f"redundancy samples are for seven-axis arms, not {robot.name}"
+        )
+    if samples is not None and given is not None:
+        raise InputError(
+            "the map fixes the values of the redundancy parameter: give "
+            "redundancy samples only without a map"
+        )
+    return seven_axis
+
+
+def _values(
+    robot: Robot, the_map: WorkspaceMapLike | None, samples: int | None
+) -> FloatArray:
+    """(K,) the redundancy values [rad] of a seven-axis arm's map, else K = samples.
+
+    Raises:
+        InputError: If the map holds no redundancy values.
+    """
+    if the_map is None:
+        count = TASK_MAP_REDUNDANCY_SAMPLES if samples is None else samples
+        return redundancy_values(get_redundant_solver(robot).parameter_range, count)
+    attrs = getattr(the_map, "attrs", None)
+    values = getattr(the_map, "redundancy", None)
+    if attrs is not None:
+        values = (attrs.get("redundancy") or {}).get("values")
+    if values is None:
+        raise InputError(
+            f"the map holds no values of {robot.name}'s redundancy parameter "
+            "(not a seven-axis closed-form map)"
+        )
+    return np.asarray(values, dtype=np.float64)
 
 
 def _batch_size(poses: int) -> int:
@@ -233,10 +309,12 @@ def _get_map(
     given: WorkspaceMapLike | str | Path | None,
     task: FloatArray,
     height: float,
+    samples: int | None,
 ) -> WorkspaceMapLike:
-    """The map to screen with, checked to be of ``robot``."""
+    """The map to screen with, checked to be of ``robot`` (K = ``samples`` if built)."""
     if given is None:
-        return build_task_map(robot, task[:, 2, 3] - height)
+        heights = task[:, 2, 3] - height
+        return build_task_map(robot, heights, redundancy_samples=samples)
     if isinstance(given, str | Path):
         from workbench.workspace.store import open_map
 

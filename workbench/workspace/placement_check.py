@@ -21,6 +21,27 @@ branch label may change along the chain only where two branches meet (a
 singularity crossed in joint space, as a joint-space trajectory may); a wrist
 flip (θ4 and θ6 turning by π) or a change of arm or elbow posture is a jump.
 Of the chains, the one of largest worst dexterity is kept.
+
+**Seven-axis arms** (SRS: ψ, Franka: q7; :func:`workbench.ik.get_redundant_solver`)
+are verified exactly at the :math:`K` values of the redundancy parameter of
+their map (:func:`workbench.workspace.redundant.redundancy_values`), the same
+meaning of *exact* as their maps: every :math:`B^{-1} T` of a batch of
+candidates is solved at every value in one call of
+:func:`workbench.ik.analytic_batch`, and a pose's *solutions* are its
+(value, branch) pairs, :math:`K \times B` of them (B = 8 for SRS, 4 for
+Franka); a pose reachable only between the values counts as missed. Usable
+as above (reaches, a representative of every angle within the limits,
+collision-free). The dexterity is Yoshikawa's manipulability
+:math:`\sqrt{\det(J J^T)}` [m³] of the 6 × 7 tool Jacobian
+(:func:`workbench.ik.compute_tool_poses`, as the maps; by Cauchy–Binet the
+sum of the squares of seven 6 × 6 minors, each m³ as |det J| of a 6R arm). A
+6 × 7 Jacobian has no shoulder, elbow and wrist factors: a seven-axis
+placement has no singularity margin (NaN); the manipulability, zero on every
+locus, ranks it. :attr:`Placement.redundancy` holds, per task pose, the
+parameter value of the solution kept (the best usable one; for a path, the
+chain's). A path is followed by a chain over the (value, branch) solutions,
+each joint stepping by at most :data:`PATH_STEP_MAX`: the parameter may
+change between samples (it is free) where the joints stay continuous.
 """
 
 from __future__ import annotations
@@ -34,9 +55,19 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.collision import CollisionChecker, Scene
-from workbench.ik import UnsupportedRobotError, get_closed_form
+from workbench.errors import InputError
+from workbench.ik import (
+    ClosedFormSolver,
+    RedundantSolver,
+    UnsupportedRobotError,
+    analytic_batch,
+    compute_tool_poses,
+    get_closed_form,
+    get_redundant_solver,
+)
 from workbench.model.robot import Robot
 from workbench.singularities import compute_conditions, get_factorisation
+from workbench.validation import as_finite_array
 from workbench.workspace._placement_kernel import chain_parents
 from workbench.workspace._reference import limit_representatives
 from workbench.workspace.measures import singularity_margin
@@ -62,12 +93,18 @@ class Placement:
         missed: Task poses without a usable branch.
         min_dexterity: Smallest |det J| [m³] over the task (best usable branch
             of each pose; for a path, along :attr:`branch`); NaN if none.
+            Seven-axis arms: Yoshikawa's √det(J Jᵀ) [m³].
         min_singularity_margin: Smallest singularity margin [1] likewise
-            (< 1: a pose is near-singular); NaN if none.
+            (< 1: a pose is near-singular); NaN if none, and for seven-axis
+            arms (no factors of det J).
         branch: Label of one branch usable at every pose, the one of largest
-            worst dexterity; for a path, the labels along the chain that
-            follows it (``"a -> b"`` where it crosses a singularity); None if
-            there is none.
+            worst dexterity (seven-axis arms: at some parameter value per
+            pose); for a path, the labels along the chain that follows it
+            (``"a -> b"`` where it crosses a singularity); None if there is
+            none.
+        redundancy: Seven-axis arms: per task pose, the redundancy parameter
+            (ψ or q7) [rad] of the solution kept (best usable; for a path,
+            along the chain), NaN where none; None for six-axis arms.
     """
 
     x: float
@@ -79,6 +116,7 @@ class Placement:
     min_dexterity: float
     min_singularity_margin: float
     branch: str | None
+    redundancy: tuple[float, ...] | None = None
 
     @property
     def base_pose(self) -> FloatArray:
@@ -115,6 +153,9 @@ class Placement:
                 else self.min_singularity_margin
             ),
             "branch": self.branch,
+            "redundancy": None
+            if self.redundancy is None
+            else [None if math.isnan(v) else v for v in self.redundancy],
         }
 
 
@@ -187,27 +228,47 @@ class PlacementEvaluator:
     """Exact :class:`Placement` of candidate base poses for one task.
 
     Args:
-        robot: An OPW or UR-type arm.
+        robot: An OPW or UR-type six-axis arm, or a seven-axis arm of the SRS
+            or Franka family.
         task: (N, 4, 4) task poses of the tool frame in the world frame [m].
         scene: Obstacles in the world frame, or None (no collision check).
         ordered: The task is a path (one branch must follow it).
+        redundancy: Seven-axis arms only, required: (K,) the values of the
+            redundancy parameter [rad] to solve at (those of the map).
+
+    Attributes:
+        values: (K,) the parameter values [rad]; (1,) NaN for a six-axis arm.
+        branches: The B branch labels of the closed form.
 
     Raises:
         UnsupportedRobotError: If the robot has no closed form.
+        InputError: If ``redundancy`` is missing for a seven-axis arm, given
+            for a six-axis one, or not a non-empty finite (K,) array.
     """
 
     def __init__(
-        self, robot: Robot, task: FloatArray, scene: Scene | None, ordered: bool
+        self,
+        robot: Robot,
+        task: FloatArray,
+        scene: Scene | None,
+        ordered: bool,
+        redundancy: npt.ArrayLike | None = None,
     ):
         self.robot = robot
-        try:
-            self.solver = get_closed_form(robot)
-        except UnsupportedRobotError as err:
-            raise UnsupportedRobotError(
-                f"base placement needs a six-axis arm of the OPW or UR family, "
-                f"which {robot.name} is not ({str(err).split(':')[0]})"
-            ) from err
-        self.constant = abs(get_factorisation(robot).constant)
+        self.solver = _closed_form(robot)
+        self.seven_axis = isinstance(self.solver, RedundantSolver)
+        self.branches: tuple[str, ...] = self.solver.branches
+        if self.seven_axis != (redundancy is not None):
+            raise InputError(
+                "base placement of a seven-axis arm needs the values of its "
+                "redundancy parameter (those of its map); a six-axis arm has none"
+            )
+        self.values = np.full(1, np.nan)
+        if redundancy is not None:
+            values = np.asarray(redundancy, dtype=np.float64).reshape(-1)
+            self.values = as_finite_array(values, (max(len(values), 1),), "redundancy")
+        else:
+            self.constant = abs(get_factorisation(robot).constant)
         self.task = np.asarray(task, dtype=np.float64)
         self.scene = scene
         self.ordered = ordered
@@ -221,23 +282,44 @@ class PlacementEvaluator:
         count, n = len(rows), len(self.task)
         inverse = np.linalg.inv(np.array([base_transform(*r) for r in rows]))
         targets = np.einsum("cij,njk->cnik", inverse, self.task).reshape(-1, 4, 4)
-        q, valid = self.solver.solve_batch(targets)
+        q, valid = self._solve(targets)
         q, _, within = limit_representatives(q, self.lower, self.upper)
         within &= valid
         dexterity = np.full(valid.shape, np.nan)
         margin = np.full(valid.shape, np.nan)
-        if valid.any():
-            c = compute_conditions(self.robot, q[valid])
-            dexterity[valid] = self.constant * np.abs(c.shoulder * c.elbow * c.wrist)
-            margin[valid] = singularity_margin(c.shoulder, c.elbow, c.wrist)
-        shape = (count, n, q.shape[1])
-        q = q.reshape(*shape, 6)
+        if within.any():
+            dexterity[within], margin[within] = self._measures(q[within])
+        # solutions of a pose: (value, branch) pairs, value-major
+        shape = (count, n, len(self.values) * len(self.branches))
+        q = q.reshape(*shape, q.shape[-1])
         within = within.reshape(shape)
         dexterity, margin = dexterity.reshape(shape), margin.reshape(shape)
         return [
             self._placement(rows[i], q[i], within[i], dexterity[i], margin[i])
             for i in range(count)
         ]
+
+    def _solve(self, targets: FloatArray) -> tuple[FloatArray, BoolArray]:
+        """Every solution of M poses: q (M·K, B, n) [rad], valid (M·K, B).
+
+        Seven-axis arms: each pose at each of the K values, in one call.
+        """
+        if isinstance(self.solver, ClosedFormSolver):
+            return self.solver.solve_batch(targets)
+        k = len(self.values)
+        return analytic_batch(
+            self.robot,
+            np.repeat(targets, k, axis=0),
+            redundancy=np.tile(self.values, len(targets)),
+        )
+
+    def _measures(self, q: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Dexterity [m³] and singularity margin [1] (NaN: none) of (M, n) q."""
+        if self.seven_axis:
+            return compute_tool_poses(self.robot, q)[2], np.full(len(q), np.nan)
+        c = compute_conditions(self.robot, q)
+        dexterity = self.constant * np.abs(c.shoulder * c.elbow * c.wrist)
+        return dexterity, singularity_margin(c.shoulder, c.elbow, c.wrist)
 
     def _placement(
         self,
@@ -247,28 +329,38 @@ class PlacementEvaluator:
         dexterity: FloatArray,
         margin: FloatArray,
     ) -> Placement:
+        """The placement of one candidate from its (N, S) solutions, S = K·B."""
         checker = self._checker(row)
         usable = within if checker is None else _collision_free(checker, q, within)
         reached = usable.any(axis=1)
         missed = int(np.count_nonzero(~reached))
-        best = np.argmax(np.where(usable, dexterity, -np.inf), axis=1)
-        index = np.arange(len(best))
+        kept = np.argmax(np.where(usable, dexterity, -np.inf), axis=1)
+        index = np.arange(len(kept))
         min_dexterity = min_margin = math.nan
         if reached.any():
-            min_dexterity = float(np.min(dexterity[index, best][reached]))
-            min_margin = float(np.min(margin[index, best][reached]))
+            min_dexterity = float(np.min(dexterity[index, kept][reached]))
+            min_margin = float(np.min(margin[index, kept][reached]))
         branch = None
+        count = len(self.branches)
         if self.ordered:
             found = None if missed else follow_path(q, usable, dexterity, self.wraps)
             if found is not None:
+                kept = found[1]
                 min_dexterity = found[0]
-                min_margin = float(np.min(margin[index, found[1]]))
-                branch = _labels(self.solver.branches, found[1])
+                min_margin = float(np.min(margin[index, kept]))
+                branch = _labels(self.branches, kept % count)
         else:
-            everywhere = np.all(usable, axis=0)
+            # per branch: usable at some value at every pose, worst best dexterity
+            per_value = np.where(usable, dexterity, -np.inf).reshape(len(q), -1, count)
+            best = per_value.max(axis=1)
+            everywhere = np.all(best > -np.inf, axis=0)
             if everywhere.any():
-                worst = np.where(everywhere, np.min(dexterity, axis=0), -np.inf)
-                branch = self.solver.branches[int(np.argmax(worst))]
+                worst = np.where(everywhere, np.min(best, axis=0), -np.inf)
+                branch = self.branches[int(np.argmax(worst))]
+        redundancy = None
+        if self.seven_axis:
+            value = self.values[kept // count]
+            redundancy = tuple(np.where(reached, value, np.nan).tolist())
         all_reachable = missed == 0 and (branch is not None or not self.ordered)
         return Placement(
             x=float(row[0]),
@@ -280,6 +372,7 @@ class PlacementEvaluator:
             min_dexterity=min_dexterity,
             min_singularity_margin=min_margin,
             branch=branch,
+            redundancy=redundancy,
         )
 
     def _checker(self, row: FloatArray) -> CollisionChecker | None:
@@ -294,6 +387,21 @@ class PlacementEvaluator:
         return CollisionChecker(self.robot, replace(self.scene, obstacles=obstacles))
 
 
+def _closed_form(robot: Robot) -> ClosedFormSolver | RedundantSolver:
+    """The six-axis closed form of ``robot``, else its seven-axis one."""
+    try:
+        return get_closed_form(robot)
+    except UnsupportedRobotError as six_axis:
+        try:
+            return get_redundant_solver(robot)
+        except UnsupportedRobotError:
+            raise UnsupportedRobotError(
+                f"base placement needs a six-axis arm of the OPW or UR family or "
+                f"a seven-axis arm of the SRS or Franka family, which "
+                f"{robot.name} is not ({str(six_axis).split(':')[0]})"
+            ) from six_axis
+
+
 def _touches_nothing(checker: CollisionChecker, q: FloatArray) -> bool:
     distances = checker.compute_raw_distances(np.ascontiguousarray(q))
     return bool(distances.size == 0 or np.min(distances) > 0.0)
@@ -302,7 +410,7 @@ def _touches_nothing(checker: CollisionChecker, q: FloatArray) -> bool:
 def _collision_free(
     checker: CollisionChecker, q: FloatArray, within: BoolArray
 ) -> BoolArray:
-    """(N, 8): the in-limit branches whose configuration touches nothing."""
+    """(N, S): the in-limit solutions whose configuration touches nothing."""
     free = within.copy()
     for pose, branch in zip(*np.nonzero(within), strict=True):
         free[pose, branch] = _touches_nothing(checker, q[pose, branch])

@@ -6,7 +6,10 @@ x and y, only the slab of base-frame heights the task poses lie at (the
 base height is fixed, so a task pose keeps its height in the base frame
 whatever the candidate), computed with
 :func:`~workbench.workspace.measures.evaluate_block`, block by block, on a
-thread per core (the closed-form kernels release the GIL).
+thread per core (the closed-form kernels release the GIL). A seven-axis arm's
+map is solved at K values of its redundancy parameter
+(:func:`~workbench.workspace.redundant.evaluate_redundant_block`, default
+:data:`TASK_MAP_REDUNDANCY_SAMPLES`), which the placement then verifies at.
 """
 
 from __future__ import annotations
@@ -18,16 +21,23 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from workbench.errors import InputError
+from workbench.ik import UnsupportedRobotError, get_redundant_solver
 from workbench.model.robot import Robot
 from workbench.workspace.grid import PoseGrid, default_bounds, make_pose_grid
 from workbench.workspace.measures import evaluate_block, get_core_count
+from workbench.workspace.redundant import evaluate_redundant_block, redundancy_values
 
 #: Voxel edge [m] of the map :func:`build_task_map` builds by default.
 TASK_MAP_RESOLUTION = 0.05
 #: Orientations per voxel of that map (a uniform set).
 TASK_MAP_ORIENTATIONS = 512
+#: K of a seven-axis arm's map: values of the redundancy parameter per pose.
+TASK_MAP_REDUNDANCY_SAMPLES = 8
 #: The per-pose arrays the placement reads.
 TASK_MAP_KEYS = ("branches", "dexterity", "shoulder", "elbow", "wrist")
+#: ... of a seven-axis arm (no singularity distances).
+TASK_MAP_REDUNDANT_KEYS = ("branches", "dexterity")
 #: Voxels per block of :func:`build_task_map`.
 _BLOCK_VOXELS = 256
 
@@ -39,11 +49,15 @@ class TaskMap:
     Attributes:
         grid: Its pose grid (base frame).
         arrays: The per-pose arrays :data:`TASK_MAP_KEYS` of
-            :func:`~workbench.workspace.measures.evaluate_block`, each (V, O).
+            :func:`~workbench.workspace.measures.evaluate_block`, each (V, O)
+            (seven-axis arms: :data:`TASK_MAP_REDUNDANT_KEYS`).
+        redundancy: Seven-axis arms: (K,) the values of the redundancy
+            parameter [rad] the map was solved at; None for six-axis arms.
     """
 
     grid: PoseGrid
     arrays: dict[str, npt.NDArray[Any]]
+    redundancy: npt.NDArray[np.float64] | None = None
 
     def __getitem__(self, name: str) -> npt.NDArray[Any]:
         """The array called ``name``, shape (V, O)."""
@@ -56,6 +70,7 @@ def build_task_map(
     *,
     resolution: float = TASK_MAP_RESOLUTION,
     orientations: int = TASK_MAP_ORIENTATIONS,
+    redundancy_samples: int | None = None,
 ) -> TaskMap:
     """The map of ``robot`` over the slab of base-frame heights a task needs.
 
@@ -65,6 +80,9 @@ def build_task_map(
             world z minus the base height).
         resolution: Voxel edge [m], > 0.
         orientations: Orientations per voxel (uniform set), >= 1.
+        redundancy_samples: Seven-axis arms: K
+            (:func:`~workbench.workspace.redundant.redundancy_values`),
+            default :data:`TASK_MAP_REDUNDANCY_SAMPLES`; None for others.
 
     Returns:
         The map over the arm's reach in x and y
@@ -74,8 +92,23 @@ def build_task_map(
 
     Raises:
         UnsupportedRobotError: If the robot has no closed form.
-        InputError: On a bad resolution or orientation count.
+        InputError: On a bad resolution or orientation count, or
+            ``redundancy_samples`` out of range or given for a six-axis arm.
     """
+    try:
+        solver = get_redundant_solver(robot)
+    except UnsupportedRobotError:
+        if redundancy_samples is not None:
+            raise InputError(
+                f"redundancy samples are for seven-axis arms, not {robot.name}"
+            ) from None
+        keys: tuple[str, ...] = TASK_MAP_KEYS
+        values, count = None, 0
+    else:
+        count = TASK_MAP_REDUNDANCY_SAMPLES
+        count = count if redundancy_samples is None else redundancy_samples
+        values = redundancy_values(solver.parameter_range, count)
+        keys = TASK_MAP_REDUNDANT_KEYS
     z = np.asarray(heights, dtype=np.float64).reshape(-1)
     box = default_bounds(robot)
     low = max(float(z.min()), float(box[0, 2]))
@@ -89,18 +122,22 @@ def build_task_map(
 
     def block(start: int) -> dict[str, npt.NDArray[Any]]:
         stop = min(start + _BLOCK_VOXELS, grid.voxel_count)
+        if values is not None:
+            return evaluate_redundant_block(robot, grid, start, stop, count=count)
         return evaluate_block(robot, grid, start, stop)
 
     starts = range(0, grid.voxel_count, _BLOCK_VOXELS)
     with ThreadPoolExecutor(get_core_count()) as pool:
         blocks = list(pool.map(block, starts))
-    arrays = {k: np.concatenate([b[k] for b in blocks]) for k in TASK_MAP_KEYS}
-    return TaskMap(grid, arrays)
+    arrays = {k: np.concatenate([b[k] for b in blocks]) for k in keys}
+    return TaskMap(grid, arrays, values)
 
 
 __all__ = [
     "TASK_MAP_KEYS",
     "TASK_MAP_ORIENTATIONS",
+    "TASK_MAP_REDUNDANCY_SAMPLES",
+    "TASK_MAP_REDUNDANT_KEYS",
     "TASK_MAP_RESOLUTION",
     "TaskMap",
     "build_task_map",
