@@ -14,6 +14,7 @@ from workbench import ik, load_robot
 from workbench.cli import main
 from workbench.collision import CollisionChecker, Obstacle, Scene
 from workbench.errors import InputError
+from workbench.trajectory.csv_io import JointTrajectorySamples, write_trajectory_csv
 from workbench.workspace.placement import (
     PlacementInfeasibleError,
     base_transform,
@@ -249,3 +250,67 @@ def test_cli_place_with_a_seven_axis_map(arm, rng, tmp_path, capsys):
     assert "no base placement reaches all 3" in capsys.readouterr().err
     assert main([*common, "--redundancy-samples", "8"]) == 2
     assert "the map fixes the values" in capsys.readouterr().err
+
+
+def _line_trajectory(robot, values, rng):
+    """Joint samples along a 5 cm line of the tool, one (value, branch) throughout.
+
+    Every sample within the limits, each joint stepping by less than 0.2 rad;
+    the configurations solve the line at one of ``values``.
+    """
+    middle = 0.5 * (robot.lower + robot.upper)
+    for _ in range(100):
+        start = robot.fk(rng.uniform(robot.lower, robot.upper)).homogeneous
+        line = np.repeat(start[None], 11, axis=0)
+        line[:, 0, 3] += np.linspace(0.0, 0.05, 11)
+        for value in values:
+            q, valid = ik.analytic_batch(robot, line, redundancy=float(value))
+            for b in range(q.shape[1]):
+                if not valid[:, b].all():
+                    continue
+                path = q[:, b] + TAU * np.round((middle - q[:, b]) / TAU)
+                inside = np.all((robot.lower <= path) & (path <= robot.upper))
+                if inside and np.max(np.abs(np.diff(path, axis=0))) < 0.2:
+                    zeros = np.zeros_like(path)
+                    times = np.linspace(0.0, 1.0, len(path))
+                    return JointTrajectorySamples(times, path, zeros, zeros)
+    raise AssertionError("no line found")
+
+
+def test_cli_place_a_trajectory_of_a_seven_axis_arm(arm, rng, tmp_path, capsys):
+    """A joint trajectory (world frame = its base frame): a base at the origin
+    follows it with a chain over the map's (value, branch) solutions."""
+    robot, path, values = arm
+    samples = _line_trajectory(robot, values, rng)
+    csv = tmp_path / "path.csv"
+    write_trajectory_csv(csv, samples)
+    code = main([
+        "workspace", "place", "--robot", robot.name, "--trajectory", str(csv),
+        "--map", str(path), "--region", "-0.1", "0.1", "-0.1", "0.1",
+        "--resolution", "0.1", "--yaw-step", "90", "--top", "3", "--json",
+    ])  # fmt: skip
+    assert code == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["path"] is True and out["feasible"]
+    at_origin = [
+        p for p in out["placements"] if (p["x"], p["y"], p["yaw"]) == (0.0, 0.0, 0.0)
+    ]
+    for p in out["placements"]:
+        assert p["all_reachable"] and p["branch"]
+        assert len(p["redundancy"]) == len(samples.q)
+        assert set(p["redundancy"]) <= set(values.tolist())
+    # the origin is a candidate; the chain it has kept is at least as good as
+    # the constant one the trajectory was made of
+    (origin,) = place_base(
+        robot,
+        TaskPoses(
+            poses=np.array([robot.fk(q).homogeneous for q in samples.q]), ordered=True
+        ),
+        mounts=[(0.0, 0.0, 0.0, 0.0)],
+        map=path,
+    )
+    worst = min(_manipulability(robot, q) for q in samples.q)
+    assert origin.all_reachable and origin.min_dexterity >= worst * (1 - RTOL_DEXTERITY)
+    assert not at_origin or at_origin[0]["min_dexterity"] == pytest.approx(
+        origin.min_dexterity, rel=RTOL_DEXTERITY
+    )
