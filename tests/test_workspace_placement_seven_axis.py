@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
 
+from tests.test_workspace_placement import _write_task_csv
 from workbench import ik, load_robot
 from workbench.cli import main
 from workbench.collision import CollisionChecker, Obstacle, Scene
@@ -216,15 +216,6 @@ def test_evaluator_needs_the_values_of_seven_axis_arms_only(puma):
 
 
 # -- CLI ----------------------------------------------------------------------
-def _write_task_csv(path: Path, poses: np.ndarray) -> Path:
-    lines = ["x,y,z,qx,qy,qz,qw"]
-    for pose in poses:
-        quat = pin.Quaternion(pose[:3, :3]).coeffs()
-        lines.append(",".join(repr(float(v)) for v in [*pose[:3, 3], *quat]))
-    path.write_text("\n".join(lines) + "\n")
-    return path
-
-
 def test_cli_place_with_a_seven_axis_map(arm, rng, tmp_path, capsys):
     robot, path, values = arm
     task = _task(robot, values, rng, count=3)
