@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from typing import ClassVar
 
 import numpy as np
 import pinocchio as pin
@@ -213,6 +214,23 @@ def test_evaluator_needs_the_values_of_seven_axis_arms_only(puma):
         PlacementEvaluator(puma, task, None, False, redundancy=[0.0])
     with pytest.raises(InputError, match="redundancy samples are for seven-axis"):
         place_base(puma, task, mounts=[BASE], redundancy_samples=4)
+
+
+def test_a_map_without_redundancy_values_is_refused(arm):
+    """A map of the arm whose attributes lack the values (damaged or foreign)."""
+    robot, path, _ = arm
+    stored = open_map(path)
+
+    class Stripped:
+        grid = stored.grid
+        attrs: ClassVar = {**stored.attrs, "redundancy": None}
+
+        def __getitem__(self, name):
+            return stored[name]
+
+    task = robot.fk(np.zeros(7)).homogeneous[None]
+    with pytest.raises(InputError, match=r"holds no values of .* redundancy"):
+        place_base(robot, task, region=REGION, map=Stripped())
 
 
 # -- CLI ----------------------------------------------------------------------
