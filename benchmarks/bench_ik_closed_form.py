@@ -121,14 +121,14 @@ def bench_rtb(poses: int, quick: bool) -> dict[str, float] | str:
 
 
 def _chain(robot):
-    """Axes H (6, 3), offsets P (7, 3) and the tool rotation at q = 0."""
+    """Axes H (n, 3), offsets P (n + 1, 3) and the tool rotation at q = 0."""
     import pinocchio as pin
 
     from workbench.ik.structure import axis_lines
 
     directions, points = axis_lines(robot)
     data = robot.model.createData()
-    pin.framesForwardKinematics(robot.model, data, np.zeros(6))
+    pin.framesForwardKinematics(robot.model, data, np.zeros(robot.nq))
     tool = data.oMf[robot.tool_frame_id]
     offsets = np.diff(np.vstack([np.zeros(3), points, tool.translation]), axis=0)
     return directions, offsets, tool.rotation

@@ -37,13 +37,12 @@ from __future__ import annotations
 import argparse
 import importlib
 import math
-import statistics
-import time
 from collections.abc import Callable
 
 import numpy as np
 import pinocchio as pin
 
+from benchmarks.bench_ik_closed_form import _chain, _median_us, _rate, _reference_us
 from workbench import Robot, load_robot
 from workbench.ik import (
     analytic,
@@ -51,7 +50,6 @@ from workbench.ik import (
     numeric,
     redundancy_parameter,
 )
-from workbench.ik.structure import axis_lines
 
 Bench = Callable[[Robot, int, bool], "dict[str, float] | str"]
 
@@ -69,32 +67,6 @@ _HAND = np.array(
         [0.0, 0.0, 0.0, 1.0],
     ]
 )
-
-
-def _median_us(call: Callable[[], object], *, repeat: int, number: int) -> float:
-    call()  # warm up
-    times = []
-    for _ in range(repeat):
-        start = time.process_time()
-        for _ in range(number):
-            call()
-        times.append((time.process_time() - start) / number)
-    return statistics.median(times) * 1e6
-
-
-def _rate(call: Callable[[], object], count: int, repeat: int) -> float:
-    call()
-    best = math.inf
-    for _ in range(repeat):
-        start = time.process_time()
-        call()
-        best = min(best, time.process_time() - start)
-    return count / best
-
-
-def _reference_us() -> float:
-    """The reference loop's median [µs]: the machine's speed at this moment."""
-    return _median_us(lambda: sum(range(1000)), repeat=15, number=2000)
 
 
 def _problem(robot: Robot, count: int, seed: int = 0):
@@ -163,12 +135,8 @@ def bench_frankik(robot: Robot, poses: int, quick: bool) -> dict[str, float] | s
 def _eaik_peer(robot: Robot, locked: int, value: float):
     """EAIK's solver of the 6R arm left by locking joint ``locked`` at ``value``."""
     hp = importlib.import_module("eaik.IK_HP")
-    directions, points = axis_lines(robot)
-    data = robot.model.createData()
-    pin.framesForwardKinematics(robot.model, data, np.zeros(robot.nq))
-    tool = data.oMf[robot.tool_frame_id]
-    offsets = np.diff(np.vstack([np.zeros(3), points, tool.translation]), axis=0)
-    return hp.HPRobot(directions, offsets, fixed_axes=[(locked, value)]), tool.rotation
+    directions, offsets, rotation0 = _chain(robot)
+    return hp.HPRobot(directions, offsets, fixed_axes=[(locked, value)]), rotation0
 
 
 def bench_eaik(robot: Robot, poses: int, quick: bool) -> dict[str, float] | str:
