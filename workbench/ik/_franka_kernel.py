@@ -161,22 +161,8 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     wrist = s[4] * s[5] * sigma[4]
     elbow = s[3]
     g["label"] = [shoulder, wrist, elbow]
-    offsets = [x.theta_offset for x in j]
-    g["theta_offset"], g["joint_sign"] = offsets, s
-    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
-    g["plain"] = [
-        o == 0.0
-        and js == 1.0
-        and (
-            (-common.PI <= lo and hi <= common.PI) or lo <= -common.PI < common.PI <= hi
-        )
-        for o, js, lo, hi in zip(offsets, s, lower, upper, strict=True)
-    ]
-    g["lower"], g["upper"] = lower - LIMIT_TOL, upper + LIMIT_TOL
+    common.pack_joint_fields(g, structure, lower, upper, LIMIT_TOL)
     g["q7_low"], g["q7_high"] = lower[6], upper[6]
-    g["base_inv"] = np.linalg.inv(structure.base)
-    g["based"] = not np.array_equal(g["base_inv"][0], np.eye(4))
-    g["tool_inv"] = np.linalg.inv(structure.tool)
     g.setflags(write=False)
     return g
 
@@ -184,15 +170,6 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
 def parameter_range(geometry: np.ndarray) -> tuple[float, float]:
     """The limits of q7 [rad]: the range of the redundancy parameter."""
     return float(geometry["q7_low"][0]), float(geometry["q7_high"][0])
-
-
-@common.inline
-def _within(geo, q: FloatArray, b: int) -> bool:
-    """Whether branch ``b`` of ``q`` (8, 7) is within ``geo``'s widened limits."""
-    ok = True
-    for j in range(7):
-        ok &= geo.lower[j] <= q[b, j] <= geo.upper[j]
-    return ok
 
 
 @common.inline
@@ -384,7 +361,7 @@ def _solve(geo, f0, f1, f2, value, prev, has_prev, q, flags) -> int:
                 q[b, 4] = common.joint_value(geo, 4, t5, prev, has_prev)
                 q[b, 5] = common.joint_value(geo, 5, t6, prev, has_prev)
                 q[b, 6] = value
-                within = WITHIN_LIMITS if _within(geo, q, b) else 0
+                within = WITHIN_LIMITS if common.row_within_limits(geo, q, b) else 0
                 flags[b] = singular | within
             reached = True
     return OK if reached else OUT_OF_REACH

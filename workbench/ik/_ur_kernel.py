@@ -140,23 +140,7 @@ def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
     g["cylinder2"] = radius**2 * (1.0 - 1e-12)
     # a model that differs from the idealised chain moves θ6 by its error / s5
     g["turn_tol"] = NEAR_SINGULAR_TOL + model_slack
-    offsets = [x.theta_offset for x in j]
-    g["theta_offset"], g["joint_sign"] = offsets, structure.joint_sign
-    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
-    g["plain"] = [  # as PumaGeometry.plain
-        o == 0.0
-        and s == 1.0
-        and (
-            (-common.PI <= lo and hi <= common.PI) or lo <= -common.PI < common.PI <= hi
-        )
-        for o, s, lo, hi in zip(
-            offsets, structure.joint_sign, lower, upper, strict=True
-        )
-    ]
-    g["lower"], g["upper"] = lower - LIMIT_TOL, upper + LIMIT_TOL
-    g["base_inv"] = np.linalg.inv(structure.base)
-    g["based"] = not np.array_equal(g["base_inv"][0], np.eye(4))
-    g["tool_inv"] = np.linalg.inv(structure.tool)
+    common.pack_joint_fields(g, structure, lower, upper, LIMIT_TOL)
     g.setflags(write=False)
     return g
 
