@@ -278,12 +278,25 @@ class SingularityConditions:
         return {"shoulder": self.shoulder, "elbow": self.elbow, "wrist": self.wrist}
 
 
-def _angles(fac: PumaFactorisation, q: npt.ArrayLike) -> FloatArray:
+def dh_angles(
+    q: npt.ArrayLike, joint_sign: tuple[float, ...], theta_offset: tuple[float, ...]
+) -> FloatArray:
+    """DH angles θ = s q + θ0 (..., n) of robot joint values ``q`` (..., n).
+
+    Raises:
+        InputError: If the last axis of ``q`` is not n = ``len(joint_sign)``;
+            ``NonFiniteError`` for a NaN or infinite entry.
+    """
+    count = len(joint_sign)
     q = np.asarray(q, dtype=np.float64)
-    if q.ndim == 0 or q.shape[-1] != 6:
-        raise InputError(f"q must have shape (..., 6), got shape {q.shape}")
+    if q.ndim == 0 or q.shape[-1] != count:
+        raise InputError(f"q must have shape (..., {count}), got shape {q.shape}")
     q = as_finite_array(q, q.shape, "q")
-    return q * np.asarray(fac.joint_sign) + np.asarray(fac.theta_offset)
+    return q * np.asarray(joint_sign) + np.asarray(theta_offset)
+
+
+def _angles(fac: PumaFactorisation, q: npt.ArrayLike) -> FloatArray:
+    return dh_angles(q, fac.joint_sign, fac.theta_offset)
 
 
 def compute_conditions(

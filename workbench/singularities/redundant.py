@@ -65,7 +65,7 @@ import numpy.typing as npt
 from workbench.errors import InputError
 from workbench.ik.structure import UnsupportedRobotError, get_structure
 from workbench.model.robot import Robot
-from workbench.validation import as_finite_array
+from workbench.singularities.conditions import dh_angles
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -182,11 +182,7 @@ def get_srs_factorisation(robot: Robot) -> SRSFactorisation:
 
 def _angles(fac: SRSFactorisation, q: npt.ArrayLike) -> FloatArray:
     """DH angles θ (..., 7) of robot joint values q (..., 7)."""
-    q = np.asarray(q, dtype=np.float64)
-    if q.ndim == 0 or q.shape[-1] != 7:
-        raise InputError(f"q must have shape (..., 7), got shape {q.shape}")
-    q = as_finite_array(q, q.shape, "q")
-    return q * np.asarray(fac.joint_sign) + np.asarray(fac.theta_offset)
+    return dh_angles(q, fac.joint_sign, fac.theta_offset)
 
 
 def _frames(fac: SRSFactorisation, theta: FloatArray) -> list[FloatArray]:
