@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from workbench.atomic_files import write_text_atomic
 from workbench.model.robot import Robot
 from workbench.reports.html_report import HtmlReport
 from workbench.singularities.along_path import find_closest_approaches
@@ -188,9 +189,12 @@ def build_singularity_report(
 def write_singularity_report(
     robot: Robot, path: str | Path, **options: Any
 ) -> SingularityReport:
-    """Build the report (see :func:`build_singularity_report`) and write it."""
+    """Build the report (see :func:`build_singularity_report`) and write it.
+
+    The file is written whole or not at all (``atomic_files.write_text_atomic``).
+    """
     report = build_singularity_report(robot, **options)
-    Path(path).write_text(report.html, encoding="utf-8")
+    write_text_atomic(path, report.html)
     return report
 
 
