@@ -473,7 +473,7 @@ def seven_axis_run(request):
 def test_seven_axis_cell_scale(seven_axis_run):
     robot, result = seven_axis_run
     reach, scale = SEVEN_AXIS_SCALES[robot.name]
-    assert get_arm_reach(get_structure(robot)) == pytest.approx(reach, abs=1e-12)
+    assert get_arm_reach(robot) == pytest.approx(reach, abs=1e-12)
     assert get_cell_scale(robot) == scale == result.setup.scale
 
 

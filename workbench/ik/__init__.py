@@ -1,6 +1,7 @@
 """Inverse kinematics: closed form for OPW, UR, SRS and Franka arms, numerical for any.
 
-Public entry points (see docs/interface.md): ``analytic``, ``analytic_batch``,
+Public entry points (see docs/interface.md): the closed-form families
+(``Family``, ``FAMILIES``, ``get_family``), ``analytic``, ``analytic_batch``,
 ``numeric``, ``numeric_batch``, each robot's ``ClosedFormSolver``
 (``get_closed_form``) or, for seven-axis arms, ``RedundantSolver``
 (``get_redundant_solver``) with the redundancy tools (``redundancy_parameter``,
@@ -32,6 +33,13 @@ from workbench.ik.damped import (
     solve_null_space_velocity,
     solve_velocity,
 )
+from workbench.ik.families import (
+    FAMILIES,
+    Family,
+    get_family,
+    get_family_refusal,
+    require_family,
+)
 from workbench.ik.numerical import IKResult, numeric
 from workbench.ik.numerical_batch import IKBatchResult, numeric_batch
 from workbench.ik.qp import QP_DAMPING, DifferentialIKError, qp_step
@@ -60,6 +68,7 @@ __all__ = [
     "BRANCHES",
     "DLS_EPSILON",
     "DLS_LAMBDA_MAX",
+    "FAMILIES",
     "FRANKA_BRANCHES",
     "QP_DAMPING",
     "SRS_BRANCHES",
@@ -68,6 +77,7 @@ __all__ = [
     "WRIST_SINGULAR_TOL",
     "ClosedFormSolver",
     "DifferentialIKError",
+    "Family",
     "FeasibleRedundancy",
     "IKBatchResult",
     "IKResult",
@@ -88,6 +98,8 @@ __all__ = [
     "feasible_redundancy",
     "get_branches",
     "get_closed_form",
+    "get_family",
+    "get_family_refusal",
     "get_redundant_solver",
     "get_structure",
     "nearest",
@@ -95,6 +107,7 @@ __all__ = [
     "numeric_batch",
     "qp_step",
     "redundancy_parameter",
+    "require_family",
     "solve_null_space_velocity",
     "solve_velocity",
 ]

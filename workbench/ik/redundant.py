@@ -31,19 +31,14 @@ import math
 import types
 import weakref
 from dataclasses import FrozenInstanceError, dataclass
+from typing import cast
 
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InputError, NonFiniteError
-from workbench.ik import (
-    _franka_intervals,
-    _franka_kernel,
-    _refine_redundant_kernel,
-    _srs_intervals,
-    _srs_kernel,
-)
+from workbench.ik import _franka_kernel, _refine_redundant_kernel, _srs_kernel
 from workbench.ik._kernel_common import nearest_or_kept
 from workbench.ik._puma import UnreachableError
 from workbench.ik._redundant_common import (
@@ -57,7 +52,8 @@ from workbench.ik._redundant_common import (
 )
 from workbench.ik._refine_kernel import refinement_chain
 from workbench.ik._targets import as_targets, check_poses, pose_rows
-from workbench.ik.structure import UnsupportedRobotError, get_structure
+from workbench.ik.families import Family, IntervalFunction, require_family
+from workbench.ik.structure import UnsupportedRobotError
 from workbench.model.per_robot import per_robot
 from workbench.model.robot import Robot
 from workbench.validation import as_finite_array
@@ -69,14 +65,6 @@ BoolArray = npt.NDArray[np.bool_]
 SRS_BRANCHES: tuple[str, ...] = _srs_kernel.BRANCHES
 #: Branch labels of Franka arms (index order: ``_franka_kernel``'s module docs).
 FRANKA_BRANCHES: tuple[str, ...] = _franka_kernel.BRANCHES
-
-_KERNELS: dict[str, types.ModuleType] = {"srs": _srs_kernel, "franka": _franka_kernel}
-#: Per family, the feasible intervals of the parameter per branch, from the
-#: kernel's geometry record and a pose (these modules call the kernels).
-_INTERVALS = {
-    "srs": _srs_intervals.compute_feasible_intervals,
-    "franka": _franka_intervals.compute_feasible_intervals,
-}
 
 #: Poses per chunk of the rigidity check of :meth:`RedundantSolver.solve_batch`
 #: (4096: 50 ns a pose, in cache; 65536 and more were 30 % slower).
@@ -267,8 +255,9 @@ class RedundantSolver:
     """
 
     __slots__ = (
-        "__weakref__", "_arm_angle_geometry", "_indices", "_kernel", "_refine",
-        "_robot", "branches", "family", "geometry", "parameter", "parameter_range",
+        "__weakref__", "_arm_angle_geometry", "_family", "_indices", "_kernel",
+        "_refine", "_robot", "branches", "family", "geometry", "parameter",
+        "parameter_range",
     )  # fmt: skip
 
     def __init__(self, robot: Robot):
@@ -279,17 +268,18 @@ class RedundantSolver:
                 supported family (the message says which axes fail which
                 test, or points a six-axis arm to ``get_closed_form``).
         """
-        structure = get_structure(robot)
-        kernel = _KERNELS.get(structure.family)
-        if kernel is None:
+        family = require_family(robot)
+        if not family.redundant:
             raise UnsupportedRobotError(
-                f"robot {robot.name!r} is a six-axis arm ({structure.family.upper()} "
+                f"robot {robot.name!r} is a six-axis arm ({family.name.upper()} "
                 "family) with no redundancy: use ik.get_closed_form(robot), or "
                 "ik.analytic without redundancy="
             )
-        geometry = kernel.pack_geometry(structure, robot.lower, robot.upper)
+        kernel = family.kernel
+        geometry = family.pack(robot)
         geometry.setflags(write=False)
-        self.family: str = structure.family
+        self.family: str = family.name
+        self._family: Family = family
         self.branches: tuple[str, ...] = kernel.BRANCHES
         self.parameter: str = kernel.PARAMETER
         lo, hi = kernel.parameter_range(geometry)
@@ -646,7 +636,8 @@ class RedundantSolver:
             DimensionError, NonFiniteError, InputError: Bad target.
         """
         pose = np.array(pose_rows(target))
-        found = _INTERVALS[self.family](self.geometry, pose)
+        intervals_of = cast(IntervalFunction, self._family.feasible_intervals)
+        found = intervals_of(self.geometry, pose)
         intervals = tuple(
             tuple((float(lo), float(hi)) for lo, hi in branch) for branch in found
         )

@@ -44,8 +44,6 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import DimensionError, InputError
-from workbench.ik import _puma_kernel as opw_kernel
-from workbench.ik import _ur_kernel as ur_kernel
 from workbench.ik._atan2_kernel import atan2_into
 from workbench.ik._kernel_common import (
     FLAG_COUNT,
@@ -58,31 +56,15 @@ from workbench.ik._kernel_common import (
     OK,
     continuing_branch,
 )
-from workbench.ik._puma import UnreachableError, UnsupportedRobotError, get_geometry
+from workbench.ik._puma import UnreachableError, UnsupportedRobotError
 from workbench.ik._refine_kernel import refine_batch, refine_pose, refinement_chain
 from workbench.ik._targets import as_targets, check_poses, pose_rows
-from workbench.ik.structure import get_structure
+from workbench.ik.families import BRANCHES, UR_BRANCHES, require_family
 from workbench.model.per_robot import per_robot
 from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
-
-#: Branch names; index = 4·left + 2·down + flip.
-BRANCHES: tuple[str, ...] = tuple(
-    f"{arm}/elbow-{elbow}/{wrist}"
-    for arm in ("right", "left")
-    for elbow in ("up", "down")
-    for wrist in ("no-flip", "flip")
-)
-
-#: Branch names of UR-type arms; index = 4·left + 2·down + wrist-down.
-UR_BRANCHES: tuple[str, ...] = tuple(
-    f"shoulder-{arm}/elbow-{elbow}/wrist-{wrist}"
-    for arm in ("right", "left")
-    for elbow in ("up", "down")
-    for wrist in ("up", "down")
-)
 
 #: Poses per chunk of :meth:`ClosedFormSolver.solve_batch` (its three
 #: (N, N_ANGLES) buffers take 1.1–1.2 MB; chunks of 256 to 4096 poses were no
@@ -113,10 +95,10 @@ class ClosedFormSolver:
             UnsupportedRobotError: If the robot has no closed form (the message
                 says which axes fail which test).
         """
-        family, kernel, geometry = _family(robot)
+        family, branches, kernel, geometry = _family(robot)
         geometry.setflags(write=False)
         self.family: str = family
-        self.branches = UR_BRANCHES if family == "ur" else BRANCHES
+        self.branches = branches
         self.geometry: np.ndarray = geometry
         self._kernel: types.ModuleType = kernel
         self._robot = weakref.ref(robot)
@@ -333,30 +315,20 @@ class ClosedFormSolver:
         return work
 
 
-def _family(robot: Robot) -> tuple[str, types.ModuleType, np.ndarray]:
-    """Family, kernel module and packed constants of a robot's closed form.
+def _family(robot: Robot) -> tuple[str, tuple[str, ...], types.ModuleType, np.ndarray]:
+    """Family name, branch labels, kernel module and packed constants of a 6R arm.
 
-    From the robot's DH table when it has one and the tool frame is the
-    table's last frame (the PUMA models), else from the DH chain fitted to its
-    joint axes (:func:`~workbench.ik.structure.get_structure`).
+    From the robot's :class:`~workbench.ik.families.Family`
+    (:func:`~workbench.ik.families.require_family`).
     """
-    table = robot.dh_table
-    if table is not None and robot.tool_frame == table.tool_frame:
-        try:
-            return "opw", opw_kernel, opw_kernel.pack_geometry(get_geometry(robot))
-        except UnsupportedRobotError:  # the table is not PUMA-type: the axes
-            pass
-    structure = get_structure(robot)
-    if structure.table.nq != 6:
+    family = require_family(robot)
+    if family.redundant:
         raise UnsupportedRobotError(
-            f"robot {robot.name!r} is a seven-axis arm ({structure.family.upper()} "
+            f"robot {robot.name!r} is a seven-axis arm ({family.name.upper()} "
             "family): its closed form takes a redundancy parameter, use "
             "ik.get_redundant_solver(robot) or ik.analytic(..., redundancy=...)"
         )
-    if structure.family == "ur":
-        packed = ur_kernel.pack_geometry(structure, robot.lower, robot.upper)
-        return "ur", ur_kernel, packed
-    return "opw", opw_kernel, opw_kernel.pack_geometry(get_geometry(robot))
+    return family.name, family.branches, family.kernel, family.pack(robot)
 
 
 @per_robot

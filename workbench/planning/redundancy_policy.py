@@ -62,6 +62,7 @@ from workbench.ik import (
     DLS_LAMBDA_MAX,
     RedundantSolver,
     compute_tool_poses,
+    require_family,
     solve_null_space_velocity,
 )
 from workbench.model.robot import Robot
@@ -261,7 +262,8 @@ class RedundancyTracker:
         self.policy = check_policy(policy)
         self._lower, self._upper = robot.lower, robot.upper
         self._range = solver.parameter_range
-        self._periodic = solver.family == "srs"  # the arm angle, mod 2π
+        # the arm angle is taken mod 2π; q7 is a joint value with limits
+        self._periodic = require_family(robot).parameter_periodic
         self._period = period
         self._max_rate = max_rate
         self._max_step = max_rate * period

@@ -290,8 +290,10 @@ def plot_singular_arms(
         The Figure, one 3D panel per example.
     """
     from workbench.plots.arm import compute_arm_points, plot_arm, set_equal_axes
+    from workbench.singularities.conditions import get_factorisation
     from workbench.singularities.directions import compute_joint_axes
 
+    spherical_wrist = get_factorisation(robot).spherical_wrist
     names = [n for n in examples if not n.startswith("wrist")]
     rows = (len(names) + 1) // 2
     fig = _figure(fig, (9.0, 4.3 * rows))
@@ -308,7 +310,7 @@ def plot_singular_arms(
         ax.plot(*base.T, color="grey", lw=1, ls="-.", label="axis 1")
         if d.kind == "shoulder":
             _plane(ax, _foot(o[0], z[0], o[1], z[1]), z[0], z[1], scale)
-        elif d.family == "opw":
+        elif spherical_wrist:  # the line of u, from axis 2 to the wrist centre
             start = _foot(o[1], z[1], centre, d.direction[:3])
             line = np.stack([start, centre]).T
             ax.plot(*line, color="crimson", lw=1, ls=":", label="line of u")
@@ -337,8 +339,7 @@ def _arm_scale(robot: Robot) -> float:
     from workbench.singularities.conditions import get_factorisation
 
     fac = get_factorisation(robot)
-    forearm = abs(fac.a3) if fac.family == "ur" else fac.forearm
-    return (abs(fac.a2) + forearm) / 0.864
+    return (abs(fac.a2) + fac.wrist_reach) / 0.864
 
 
 def _foot(o1: FloatArray, z1: FloatArray, o2: FloatArray, z2: FloatArray) -> FloatArray:

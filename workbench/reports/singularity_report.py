@@ -62,8 +62,6 @@ SUBGRID_STRIDE = 50
 MAP_HALF_WIDTH = np.radians(200.0)
 #: Maps drawn from the σmin grid for robots without an analytic factorisation.
 NUMERIC_MAPS = ("manipulability", "condition_number")
-#: Families whose det J the report factorises (6R closed forms).
-SIX_AXIS_FAMILIES = ("opw", "ur")
 
 
 @dataclass(frozen=True, slots=True)
@@ -211,8 +209,6 @@ def _family_data(
     try:
         fac = get_factorisation(robot)
     except NotPumaTypeError:
-        return None
-    if fac.family not in SIX_AXIS_FAMILIES:
         return None
     rng = np.random.default_rng(seed)
     q = rng.uniform(robot.lower, robot.upper, (samples, 6))

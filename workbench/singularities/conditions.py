@@ -57,6 +57,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
+from workbench.ik import Family, get_family, get_family_refusal, get_structure
 from workbench.model.dh import DHTable
 from workbench.model.robot import Robot
 from workbench.validation import as_finite_array
@@ -85,7 +86,13 @@ class NotPumaTypeError(InputError):
 
 @dataclass(frozen=True, slots=True)
 class PumaFactorisation:
-    r"""Constants of :math:`\det J = K\, s\, e\, w` read off a PUMA-type DH table.
+    r"""Constants of :math:`\det J = K\, s\, e\, w` of an OPW (PUMA-type) arm.
+
+    The formulas differ between the arm geometries they are derived for: this
+    class holds those of an OPW arm (axes 2 ∥ 3, spherical wrist),
+    :class:`URFactorisation` those of a UR-type arm; each states its geometry
+    (:attr:`parallel_axes`, :attr:`wrist_axes`) and is chosen for an arm whose
+    :class:`~workbench.ik.Family` has it (:meth:`fits`).
 
     Attributes:
         robot: Robot (table) name.
@@ -98,12 +105,16 @@ class PumaFactorisation:
         forearm: :math:`L_3 = \sqrt{a_3^2 + d_4^2}` [m].
         constant: :math:`K` [m²], so that det J [m³] = K · s [m] · e · w.
         theta_offset: Offsets of the six joint angles, shape (6,) [rad].
-        family: ``"opw"`` or ``"ur"``.
         a1: Shoulder offset [m] (0 for the PUMA tables).
         a4: UR: offset of axis 5 along the arm [m]; 0 for OPW.
         d5: UR: distance from axis 4 to the wrist point along axis 5 [m].
         sigma4: :math:`\sin\alpha_4` (±1).
         joint_sign: (6,) ±1: DH angle θ_i = s_i q_i + θ_{0,i}.
+        family: ``"opw"`` (class constant), the family's name for display.
+        parallel_axes: (2, 3), the parallel axes (1-based) the formulas need.
+        wrist_axes: (4, 5, 6), the axes meeting at the reference point C.
+        measure_formula: The formula selector of the compiled measures
+            (``workspace._measure_kernel``): 0.0 OPW, 1.0 UR.
     """
 
     robot: str
@@ -116,25 +127,93 @@ class PumaFactorisation:
     forearm: float
     constant: float
     theta_offset: tuple[float, ...]
-    family: str = "opw"
     a1: float = 0.0
     a4: float = 0.0
     d5: float = 0.0
     sigma4: float = 1.0
     joint_sign: tuple[float, ...] = (1.0,) * 6
     kinds: ClassVar[tuple[str, ...]] = SINGULARITY_KINDS
+    family: ClassVar[str] = "opw"
+    parallel_axes: ClassVar[tuple[int, ...]] = (2, 3)
+    wrist_axes: ClassVar[tuple[int, ...]] = (4, 5, 6)
+    measure_formula: ClassVar[float] = 0.0
+
+    @classmethod
+    def fits(cls, family: Family) -> bool:
+        """Whether the formulas of this class hold for arms of ``family``."""
+        return (
+            family.joint_count == 6
+            and family.parallel_axes == cls.parallel_axes
+            and family.wrist_axes == cls.wrist_axes
+        )
+
+    @classmethod
+    def arm_lengths(cls, a3: float, d4: float) -> tuple[float, float]:
+        """``(forearm, length)`` [m] from DH lengths ``a3``, ``d4`` [m].
+
+        ``forearm`` is the reach from axis 3 to the wrist point in the arm
+        plane, ``length`` the factor of K besides a2.
+        """
+        forearm = math.hypot(a3, d4)
+        return forearm, forearm
+
+    @property
+    def spherical_wrist(self) -> bool:
+        """True if the reference point is a wrist centre (three axes meet)."""
+        return len(self.wrist_axes) == 3
+
+    @property
+    def reference(self) -> str:
+        """What the reference point C is: ``"wrist centre (axes 4, 5, 6 meet)"``."""
+        axes = self.wrist_axes
+        named = ", ".join(map(str, axes[:-1])) + f" and {axes[-1]}"
+        if self.spherical_wrist:
+            return f"wrist centre (axes {', '.join(map(str, axes))} meet)"
+        return f"wrist point (axes {named} meet)"
+
+    @property
+    def wrist_reach(self) -> float:
+        """Distance [m] from axis 3 to the wrist point in the arm plane."""
+        return self.forearm
+
+    @property
+    def elbow_angle(self) -> float:
+        """The angle β [rad] with elbow sine ∝ sin(θ3 − β)."""
+        return math.atan2(self.sigma3 * self.d4, self.a3)
+
+    @property
+    def wrist_offset(self) -> complex:
+        """The wrist point from the end of the arm in the arm plane [m]: 0."""
+        return 0j
+
+    def wrist_plane_point(
+        self, t2: npt.ArrayLike, t3: npt.ArrayLike, t4: npt.ArrayLike
+    ) -> npt.NDArray[np.complex128]:
+        """The wrist centre in the arm plane as x1 + i y1 (from frame 1) [m].
+
+        DH angles, broadcast together; θ4 does not move the wrist centre.
+        """
+        t2, t3 = (np.asarray(t, dtype=np.float64) for t in (t2, t3))
+        arm = self.a2 + (self.a3 - 1j * self.sigma3 * self.d4) * np.exp(1j * t3)
+        return np.exp(1j * t2) * arm
+
+    def example_theta4(self, theta2: float, theta3: float) -> float:
+        """θ4 [rad] of the shoulder examples (``loci``): 0, it moves no wrist centre."""
+        return 0.0
+
+    def conditions(self, theta: FloatArray) -> SingularityConditions:
+        """The signed distances at DH angles ``theta`` (..., 6) [rad]."""
+        t2, t3, t5 = theta[..., 1], theta[..., 2], theta[..., 4]
+        t23 = t2 + t3
+        shoulder = self.a1 + self.a2 * np.cos(t2) + self.a3 * np.cos(t23)
+        shoulder = shoulder + self.sigma3 * self.d4 * np.sin(t23)
+        elbow = (
+            self.a3 * np.sin(t3) - self.sigma3 * self.d4 * np.cos(t3)
+        ) / self.forearm
+        return SingularityConditions(shoulder, elbow, np.sin(t5))
 
     def describe(self) -> dict[str, str]:
         """The factors as plain-text formulas with this table's signs."""
-        if self.family == "ur":
-            sign = "+" if self.sigma4 > 0 else "−"
-            return {
-                "det_j": "det J = K · shoulder · elbow · wrist  [m³]",
-                "constant": f"K = ±a2 · a3 = {self.constant:+.6f} m²",
-                "shoulder": f"a1 + a2 c2 + a3 c23 + a4 c234 {sign} d5 s234  [m]",
-                "elbow": "s3",
-                "wrist": "s5",
-            }
         sign = "+" if self.sigma3 > 0 else "−"
         offsets = any(abs(o) > 0.0 for o in self.theta_offset)
         note = " (θi includes its DH theta offset)" if offsets else ""
@@ -150,6 +229,78 @@ class PumaFactorisation:
             "elbow": f"(a3 s3 {'−' if self.sigma3 > 0 else '+'} d4 c3) / √(a3² + d4²)",
             "wrist": "s5",
         }
+
+
+@dataclass(frozen=True, slots=True)
+class URFactorisation(PumaFactorisation):
+    r"""Constants of :math:`\det J = K\, s\, e\, w` of a UR-type arm.
+
+    Axes 2, 3, 4 parallel, axes 5 and 6 meeting at the wrist point:
+    :math:`K = -\sigma_1 \sigma_4 \sigma_5 a_2 a_3`, shoulder :math:`s = a_1 +
+    a_2 c_2 + a_3 c_{23} + a_4 c_{234} + \sigma_4 d_5 s_{234}`, elbow
+    :math:`e = s_3`, wrist :math:`w = s_5` (fields: :class:`PumaFactorisation`).
+    """
+
+    family: ClassVar[str] = "ur"
+    parallel_axes: ClassVar[tuple[int, ...]] = (2, 3, 4)
+    wrist_axes: ClassVar[tuple[int, ...]] = (5, 6)
+    measure_formula: ClassVar[float] = 1.0
+
+    @classmethod
+    def arm_lengths(cls, a3: float, d4: float) -> tuple[float, float]:
+        """``(|a3|, a3)`` [m]: axis 3 to axis 4, and K's length besides a2."""
+        return abs(a3), a3
+
+    @property
+    def elbow_angle(self) -> float:
+        """0: the elbow sine is sin θ3."""
+        return 0.0
+
+    @property
+    def wrist_offset(self) -> complex:
+        """The wrist point from axis 4 in the arm plane at θ2 + θ3 + θ4 = 0 [m]."""
+        return self.a4 - 1j * self.sigma4 * self.d5
+
+    def wrist_plane_point(
+        self, t2: npt.ArrayLike, t3: npt.ArrayLike, t4: npt.ArrayLike
+    ) -> npt.NDArray[np.complex128]:
+        """The wrist point (axes 5 and 6 meet) as x1 + i y1 (from frame 1) [m]."""
+        t2, t3, t4 = (np.asarray(t, dtype=np.float64) for t in (t2, t3, t4))
+        wrist = self.wrist_offset * np.exp(1j * (t3 + t4))
+        arm = self.a2 + self.a3 * np.exp(1j * t3) + wrist
+        return np.exp(1j * t2) * arm
+
+    def example_theta4(self, theta2: float, theta3: float) -> float:
+        """θ4 [rad] that keeps θ2 + θ3 + θ4 = 0 (the wrist offset along x1)."""
+        return -theta2 - theta3
+
+    def conditions(self, theta: FloatArray) -> SingularityConditions:
+        """The signed distances at DH angles ``theta`` (..., 6) [rad]."""
+        t2, t3, t5 = theta[..., 1], theta[..., 2], theta[..., 4]
+        t23 = t2 + t3
+        t234 = t23 + theta[..., 3]
+        shoulder = self.a1 + self.a2 * np.cos(t2) + self.a3 * np.cos(t23)
+        shoulder = shoulder + self.a4 * np.cos(t234)
+        shoulder = shoulder + self.sigma4 * self.d5 * np.sin(t234)
+        return SingularityConditions(shoulder, np.sin(t3), np.sin(t5))
+
+    def describe(self) -> dict[str, str]:
+        """The factors as plain-text formulas with this arm's signs."""
+        sign = "+" if self.sigma4 > 0 else "−"
+        return {
+            "det_j": "det J = K · shoulder · elbow · wrist  [m³]",
+            "constant": f"K = ±a2 · a3 = {self.constant:+.6f} m²",
+            "shoulder": f"a1 + a2 c2 + a3 c23 + a4 c234 {sign} d5 s234  [m]",
+            "elbow": "s3",
+            "wrist": "s5",
+        }
+
+
+#: The factorisations, each chosen for the arms whose family it fits.
+FACTORISATIONS: tuple[type[PumaFactorisation], ...] = (
+    PumaFactorisation,
+    URFactorisation,
+)
 
 
 def get_puma_factorisation(robot: Robot | DHTable) -> PumaFactorisation:
@@ -218,28 +369,23 @@ def get_factorisation(robot: Robot | DHTable) -> PumaFactorisation:
             return get_puma_factorisation(robot)
         except NotPumaTypeError:
             pass
-    from workbench.ik.structure import UnsupportedRobotError, get_structure
-
-    try:
-        structure = get_structure(robot)
-    except UnsupportedRobotError as err:
-        raise NotPumaTypeError(str(err)) from err
-    if structure.family not in ("opw", "ur"):
+    family = get_family(robot)
+    if family is None:
+        raise NotPumaTypeError(str(get_family_refusal(robot)))
+    kind = next((f for f in FACTORISATIONS if f.fits(family)), None)
+    if kind is None:
         raise NotPumaTypeError(
-            f"robot {robot.name!r} is a seven-axis arm ({structure.family.upper()} "
-            "family), not a 6R arm with a PUMA-type factorisation"
+            f"robot {robot.name!r} is a {family.joint_count}-axis arm "
+            f"({family.name.upper()} family: {family.title}), not a 6R arm with "
+            "a PUMA-type factorisation"
         )
+    structure = get_structure(robot)
     j = structure.table.joints
     sigma = [math.copysign(1.0, joint.alpha) for joint in j]
     signs = structure.joint_sign
     product = float(np.prod(signs))
-    if structure.family == "ur":
-        constant = -sigma[0] * sigma[3] * sigma[4] * j[1].a * j[2].a * product
-        forearm = abs(j[2].a)
-    else:
-        forearm = math.hypot(j[2].a, j[3].d)
-        constant = -sigma[0] * sigma[3] * sigma[4] * j[1].a * forearm * product
-    return PumaFactorisation(
+    forearm, length = kind.arm_lengths(j[2].a, j[3].d)
+    return kind(
         robot=robot.name,
         sigma1=sigma[0],
         sigma3=sigma[2],
@@ -248,9 +394,8 @@ def get_factorisation(robot: Robot | DHTable) -> PumaFactorisation:
         a3=j[2].a,
         d4=j[3].d,
         forearm=forearm,
-        constant=constant,
+        constant=-sigma[0] * sigma[3] * sigma[4] * j[1].a * length * product,
         theta_offset=tuple(joint.theta_offset for joint in j),
-        family=structure.family,
         a1=j[0].a,
         a4=j[3].a,
         d5=j[4].d,
@@ -316,18 +461,7 @@ def compute_conditions(
         InputError: If ``q`` is not (..., 6) or not finite.
     """
     fac = get_factorisation(robot)
-    theta = _angles(fac, q)
-    t2, t3, t5 = theta[..., 1], theta[..., 2], theta[..., 4]
-    t23 = t2 + t3
-    shoulder = fac.a1 + fac.a2 * np.cos(t2) + fac.a3 * np.cos(t23)
-    if fac.family == "ur":
-        t234 = t23 + theta[..., 3]
-        shoulder = shoulder + fac.a4 * np.cos(t234)
-        shoulder = shoulder + fac.sigma4 * fac.d5 * np.sin(t234)
-        return SingularityConditions(shoulder, np.sin(t3), np.sin(t5))
-    shoulder = shoulder + fac.sigma3 * fac.d4 * np.sin(t23)
-    elbow = (fac.a3 * np.sin(t3) - fac.sigma3 * fac.d4 * np.cos(t3)) / fac.forearm
-    return SingularityConditions(shoulder, elbow, np.sin(t5))
+    return fac.conditions(_angles(fac, q))
 
 
 def compute_det_j_analytic(robot: Robot | DHTable, q: npt.ArrayLike) -> FloatArray:

@@ -68,6 +68,7 @@ from workbench.singularities.conditions import (
     SINGULARITY_KINDS,
     NotPumaTypeError,
     PumaFactorisation,
+    URFactorisation,
     compute_conditions,
     get_factorisation,
     get_puma_factorisation,
@@ -76,11 +77,6 @@ from workbench.singularities.conditions import (
 FloatArray = npt.NDArray[np.float64]
 
 _PAPER_AXES = {"shoulder": "z1", "elbow": "x1", "wrist": None}
-#: What the reference point C is, per family.
-REFERENCE_POINTS = {
-    "opw": "wrist centre (axes 4, 5, 6 meet)",
-    "ur": "wrist point (axes 5 and 6 meet)",
-}
 _TINY = 1e-12  # [m, 1]: a vector this short has no direction
 
 
@@ -105,7 +101,8 @@ class DegenerateDirection:
         angle_to_paper_deg: Angle [deg] in [0, 90] between the line of u's
             linear part and the paper's axis, or None.
         family: ``"opw"`` or ``"ur"``.
-        reference: What the reference point is (:data:`REFERENCE_POINTS`).
+        reference: What the reference point is
+            (:attr:`~workbench.singularities.conditions.PumaFactorisation.reference`).
         reference_point: The reference point C in base coordinates, (3,) [m].
         condition: Signed distance of q from this locus (unit per kind, see
             :data:`~workbench.singularities.conditions.CONDITION_UNITS`).
@@ -162,7 +159,7 @@ def _meet(o1: FloatArray, z1: FloatArray, o2: FloatArray, z2: FloatArray) -> Flo
 
 
 def _wrist_point(fac: PumaFactorisation, z: FloatArray, o: FloatArray) -> FloatArray:
-    i = 3 if fac.family == "opw" else 4  # axes 4, 5 (OPW) or 5, 6 (UR)
+    i = fac.wrist_axes[0] - 1  # the first two wrist axes meet at the point
     return _meet(o[i], z[i], o[i + 1], z[i + 1])
 
 
@@ -247,6 +244,10 @@ def _ur_direction(
     return _unit(u, kind)
 
 
+#: The analytic degenerate direction of each factorisation's arm geometry.
+_DIRECTIONS = {PumaFactorisation: _opw_direction, URFactorisation: _ur_direction}
+
+
 def _paper_axis(
     robot: Robot, q: FloatArray, kind: str, u: FloatArray
 ) -> tuple[str | None, FloatArray | None, float | None]:
@@ -292,8 +293,7 @@ def compute_degenerate_direction(
     q = robot.check_configuration(q)
     z, o = compute_joint_axes(robot, q)
     point = _wrist_point(fac, z, o)
-    solve = _opw_direction if fac.family == "opw" else _ur_direction
-    u = solve(kind, z, o, point, fac.sigma4)
+    u = _DIRECTIONS[type(fac)](kind, z, o, point, fac.sigma4)
     tool_jac = robot.jacobian(q)
     offset = point - robot.fk(q).translation
     jac = tool_jac.copy()
@@ -317,7 +317,7 @@ def compute_degenerate_direction(
         paper_direction=paper,
         angle_to_paper_deg=angle,
         family=fac.family,
-        reference=REFERENCE_POINTS[fac.family],
+        reference=fac.reference,
         reference_point=point,
         condition=float(compute_conditions(robot, q).as_dict()[kind]),
         tool_direction=u_tool,

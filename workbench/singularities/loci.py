@@ -58,18 +58,6 @@ def _q(fac: PumaFactorisation, joint: int, theta: npt.ArrayLike) -> FloatArray:
     return fac.joint_sign[joint] * (theta - fac.theta_offset[joint])
 
 
-def _elbow_angle(fac: PumaFactorisation) -> float:
-    """The angle β with elbow sine ∝ sin(θ3 − β) (OPW); 0 for UR."""
-    if fac.family == "ur":
-        return 0.0
-    return math.atan2(fac.sigma3 * fac.d4, fac.a3)
-
-
-def _forearm(fac: PumaFactorisation) -> float:
-    """Distance [m] from axis 3 to the wrist point in the arm plane (UR: to axis 4)."""
-    return abs(fac.a3) if fac.family == "ur" else fac.forearm
-
-
 def get_elbow_singular_theta3(robot: Robot | DHTable) -> FloatArray:
     """The two elbow-singular values of q3 [rad] in (−π, π]: extended, retracted.
 
@@ -77,29 +65,8 @@ def get_elbow_singular_theta3(robot: Robot | DHTable) -> FloatArray:
     centre from axis 2 (UR: of axis 4 from axis 2), where the elbow sine vanishes.
     """
     fac = get_factorisation(robot)
-    extended = _elbow_angle(fac)
+    extended = fac.elbow_angle
     return _wrap(_q(fac, 2, np.array([extended, extended + math.pi])))
-
-
-def _wrist_offset(fac: PumaFactorisation) -> complex:
-    """UR: the wrist point from axis 4 in the arm plane at θ2 + θ3 + θ4 = 0; OPW: 0."""
-    return fac.a4 - 1j * fac.sigma4 * fac.d5 if fac.family == "ur" else 0j
-
-
-def _wrist_plane_point(
-    fac: PumaFactorisation, t2: npt.ArrayLike, t3: npt.ArrayLike, t4: npt.ArrayLike
-) -> npt.NDArray[np.complex128]:
-    """The wrist point in the arm plane as x1 + i y1 (from DH frame 1) [m].
-
-    OPW: the wrist centre; UR: the point where axes 5 and 6 meet. DH angles.
-    """
-    t2, t3, t4 = (np.asarray(t, dtype=np.float64) for t in (t2, t3, t4))
-    if fac.family == "ur":
-        wrist = _wrist_offset(fac) * np.exp(1j * (t3 + t4))
-        arm = fac.a2 + fac.a3 * np.exp(1j * t3) + wrist
-    else:
-        arm = fac.a2 + (fac.a3 - 1j * fac.sigma3 * fac.d4) * np.exp(1j * t3)
-    return np.exp(1j * t2) * arm
 
 
 def solve_shoulder_theta2(
@@ -123,7 +90,7 @@ def solve_shoulder_theta2(
         Shape ``broadcast(theta3, theta4).shape + (2,)`` [rad] in (−π, π].
     """
     fac = get_factorisation(robot)
-    big_z = _wrist_plane_point(fac, 0.0, _theta(fac, 2, theta3), _theta(fac, 3, theta4))
+    big_z = fac.wrist_plane_point(0.0, _theta(fac, 2, theta3), _theta(fac, 3, theta4))
     with np.errstate(invalid="ignore"):
         spread = np.arccos(-fac.a1 / np.abs(big_z))
     first = -np.angle(big_z) + spread
@@ -160,7 +127,7 @@ def compute_example_configurations(
             get_puma_factorisation(robot)
             height = PUMA_HEIGHT
         except NotPumaTypeError:
-            height = HEIGHT_FRACTION * (abs(fac.a2) + _forearm(fac))
+            height = HEIGHT_FRACTION * (abs(fac.a2) + fac.wrist_reach)
     raised = math.radians(30.0) * fac.sigma1  # θ2 raising x2 above x1
     theta = np.array([0.0, raised, 0.0, 0.0, math.pi / 2, 0.0])
 
@@ -168,7 +135,7 @@ def compute_example_configurations(
         return _wrap(np.array([_q(fac, i, th[i]) for i in range(6)]))
 
     out: dict[str, FloatArray] = {}
-    beta, forearm, offset = _elbow_angle(fac), _forearm(fac), _wrist_offset(fac)
+    beta, forearm, offset = fac.elbow_angle, fac.wrist_reach, fac.wrist_offset
     # The wrist point at (x1, y1) = (−a1, σ1·height) (y1 = σ1 z0); axis 4 (UR)
     # is then at that point minus the wrist offset, with θ2 + θ3 + θ4 = 0.
     axis4 = -fac.a1 + 1j * fac.sigma1 * height - offset
@@ -179,11 +146,11 @@ def compute_example_configurations(
         planar = float(np.angle(axis4) - np.angle(elbow_to_wrist))
         th = theta.copy()
         th[2] = t3
-        th[3] = -planar - t3 if fac.family == "ur" else 0.0
+        th[3] = fac.example_theta4(planar, t3)
         q = joint_values(th)
         for q2 in solve_shoulder_theta2(robot, q[2], q[3]):
             th[1] = float(_theta(fac, 1, q2))
-            wrist = complex(_wrist_plane_point(fac, th[1], th[2], th[3]))
+            wrist = complex(fac.wrist_plane_point(th[1], th[2], th[3]))
             if wrist.imag * fac.sigma1 <= 0.0:
                 continue
             to = wrist - offset * np.exp(1j * (th[1] + th[2] + th[3]))  # UR: axis 4

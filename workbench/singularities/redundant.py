@@ -58,12 +58,13 @@ the lost directions against its left null space (``tests/test_singularities_srs.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
-from workbench.ik.structure import UnsupportedRobotError, get_structure
+from workbench.ik import Family, get_family, get_family_refusal, get_structure
 from workbench.model.robot import Robot
 from workbench.singularities.conditions import dh_angles
 
@@ -109,6 +110,19 @@ class SRSFactorisation:
     joint_sign: tuple[float, ...]
     theta_offset: tuple[float, ...]
     base: FloatArray
+    #: The axes (1-based) meeting at the shoulder S, the elbow E and the wrist W.
+    shoulder_axes: ClassVar[tuple[int, ...]] = (1, 2, 3)
+    elbow_axes: ClassVar[tuple[int, ...]] = (3, 4, 5)
+    wrist_axes: ClassVar[tuple[int, ...]] = (5, 6, 7)
+
+    @classmethod
+    def fits(cls, family: Family) -> bool:
+        """Whether arms of ``family`` have this geometry (three spherical joints)."""
+        return (
+            family.shoulder_axes == cls.shoulder_axes
+            and family.elbow_axes == cls.elbow_axes
+            and family.wrist_axes == cls.wrist_axes
+        )
 
 
 @dataclass(frozen=True, slots=True)
@@ -158,15 +172,16 @@ def get_srs_factorisation(robot: Robot) -> SRSFactorisation:
     Raises:
         NotSRSArmError: If the robot is not an SRS seven-axis arm.
     """
-    try:
-        structure = get_structure(robot)
-    except UnsupportedRobotError as err:
-        raise NotSRSArmError(f"robot {robot.name!r} is not an SRS arm: {err}") from err
-    if structure.family != "srs":
+    family = get_family(robot)
+    if family is None:
+        reason = get_family_refusal(robot)
+        raise NotSRSArmError(f"robot {robot.name!r} is not an SRS arm: {reason}")
+    if not SRSFactorisation.fits(family):
         raise NotSRSArmError(
-            f"robot {robot.name!r} is a {structure.family!r} arm, not an SRS "
+            f"robot {robot.name!r} is a {family.name!r} arm, not an SRS "
             "seven-axis arm (spherical shoulder, elbow and wrist)"
         )
+    structure = get_structure(robot)
     j = structure.table.joints
     return SRSFactorisation(
         robot=robot.name,

@@ -27,12 +27,12 @@ import pinocchio as pin
 
 from workbench.errors import InfeasibleError, InputError
 from workbench.ik import (
-    KinematicStructure,
     analytic,
     choose_redundancy,
     feasible_redundancy,
     get_structure,
     nearest,
+    require_family,
 )
 from workbench.model.robot import Robot
 from workbench.planning.cartesian_paths import CartesianLimits
@@ -82,10 +82,6 @@ KANG_START_FOLD = math.hypot(KANG_START_POSITION[1], KANG_BASE_HEIGHT - 0.35)
 #: limits at Kang's start pose, which sets its smallest cell scale
 #: (:func:`get_cell_scale`).
 FOLD_MARGIN = 0.1
-
-#: The families of seven-axis arms (their closed form takes a redundancy
-#: parameter, ``workbench.ik.get_redundant_solver``).
-REDUNDANT_FAMILIES = ("srs", "franka")
 
 #: The cell scale is rounded to this many decimals (1 %): models of one arm
 #: whose lengths differ by a fraction of a millimetre (the two PUMA tables:
@@ -167,13 +163,14 @@ class FishCuttingSetup:
         return self.cutting_speed_ratio * self.max_velocity
 
 
-def get_arm_reach(structure: KinematicStructure) -> float:
+def get_arm_reach(robot: Robot) -> float:
     """Reach [m] of an arm: shoulder axis to wrist point, arm stretched.
 
     The wrist point is where the last wrist axes meet: the wrist centre of an
     OPW arm (axes 4, 5, 6), the point of axes 5 and 6 of a UR arm. Its
     largest distance from axis 2, in the plane normal to axis 2, is, with
-    ``a_k``, ``d_k`` of DH row k (1-based) of the fitted table:
+    ``a_k``, ``d_k`` of DH row k (1-based) of the fitted table
+    (:attr:`workbench.ik.Family.reach`):
 
     * OPW: ``|a2| + hypot(a3, d4)`` (upper arm, then elbow to wrist centre);
     * UR: ``|a2| + |a3| + |d5|`` (upper arm, forearm, then wrist 1 to the
@@ -185,13 +182,11 @@ def get_arm_reach(structure: KinematicStructure) -> float:
     to its wrist point (axes 5 and 6 meet), both segments normal to axis 4,
     which stretches them into line: ``hypot(a3, d3) + hypot(a4, d5)``
     (``d3 + d5`` for an SRS arm, whose offsets a3, a4 are zero).
+
+    Raises:
+        UnsupportedRobotError: If the robot has no closed-form IK.
     """
-    rows = structure.table.joints
-    if structure.family == "ur":
-        return abs(rows[1].a) + abs(rows[2].a) + abs(rows[4].d)
-    if structure.family in REDUNDANT_FAMILIES:
-        return math.hypot(rows[2].a, rows[2].d) + math.hypot(rows[3].a, rows[4].d)
-    return abs(rows[1].a) + math.hypot(rows[2].a, rows[3].d)
+    return require_family(robot).reach(get_structure(robot).table)
 
 
 def get_shortest_fold(robot: Robot) -> float:
@@ -206,9 +201,9 @@ def get_shortest_fold(robot: Robot) -> float:
         UnsupportedRobotError: If the robot has no closed-form IK.
         InputError: If it is not a seven-axis arm.
     """
-    structure = get_structure(robot)
-    if structure.family not in REDUNDANT_FAMILIES:
+    if not require_family(robot).redundant:
         raise InputError(f"robot {robot.name!r} is not a seven-axis arm")
+    structure = get_structure(robot)
 
     def fold2(theta: float) -> float:
         x = np.zeros(7)
@@ -235,7 +230,7 @@ def get_shortest_fold(robot: Robot) -> float:
 def get_cell_scale(robot: Robot) -> float:
     """Scale of Kang's cell for ``robot``: its reach over the PUMA's.
 
-    ``round(get_arm_reach(structure) / KANG_REACH, 2)``: 1.0 for both PUMA
+    ``round(get_arm_reach(robot) / KANG_REACH, 2)``: 1.0 for both PUMA
     models, 0.63 for the UR3, 1.06 for the UR5, 1.5 for the UR10, 0.79 for
     the KUKA KR 6 R700, 1.7 for the ABB IRB 2400 (the table in
     ``docs/closed-form-ik.md``, section 6). A seven-axis arm's cell is at
@@ -250,9 +245,8 @@ def get_cell_scale(robot: Robot) -> float:
     Raises:
         UnsupportedRobotError: If the robot has no closed-form IK.
     """
-    structure = get_structure(robot)
-    ratio = get_arm_reach(structure) / KANG_REACH
-    if structure.family in REDUNDANT_FAMILIES:
+    ratio = get_arm_reach(robot) / KANG_REACH
+    if require_family(robot).redundant:
         ratio = max(ratio, get_shortest_fold(robot) / KANG_START_FOLD)
     return round(ratio, CELL_SCALE_DECIMALS)
 
@@ -281,7 +275,7 @@ def get_base_placement(robot: Robot, setup: FishCuttingSetup) -> pin.SE3:
     """
     structure = get_structure(robot)
     height = setup.scale * KANG_BASE_HEIGHT - structure.table.joints[0].d
-    if structure.family in REDUNDANT_FAMILIES:
+    if require_family(robot).redundant:
         height += structure.table.joints[6].d + structure.tool[2, 3]
     frame0 = pin.SE3(np.eye(3), np.array([0.0, 0.0, height]))  # in the world
     return frame0 * pin.SE3(structure.base).inverse()
@@ -375,7 +369,7 @@ def is_redundant(robot: Robot) -> bool:
     Raises:
         UnsupportedRobotError: If the robot has no closed-form IK.
     """
-    return get_structure(robot).family in REDUNDANT_FAMILIES
+    return require_family(robot).redundant
 
 
 def check_waypoints(
@@ -509,7 +503,6 @@ __all__ = [
     "KANG_START_FOLD",
     "KANG_START_POSITION",
     "KANG_START_ROTATION",
-    "REDUNDANT_FAMILIES",
     "FishCuttingSetup",
     "build_program",
     "check_waypoints",

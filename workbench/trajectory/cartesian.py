@@ -172,15 +172,13 @@ def select_ik_solution(
     """
     target = as_target_pose(pose, angeles7_tol=angeles7_tol)
     near = None if q_near is None else robot.check_configuration(q_near)
-    from workbench.ik import closed_form
+    from workbench.ik import closed_form, get_family
 
-    try:  # any OPW, UR, SRS or Franka-type arm, recognised from its joint axes
-        if near is None and robot.nq == 7:  # a redundant arm: choose its value
+    family = get_family(robot)  # any arm of a closed-form family, else None
+    if family is not None:
+        if near is None and family.redundant:  # a seven-axis arm: choose its value
             return _most_inside(robot, target, branch)
         solutions = closed_form.analytic(robot, target, q_previous=near)
-    except closed_form.UnsupportedRobotError:
-        solutions = None
-    if solutions is not None:
         return _choose(robot, solutions, branch, near, closed_form)
     if branch is not None:
         raise InputError(

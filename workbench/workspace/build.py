@@ -42,7 +42,7 @@ import numpy as np
 from workbench.atomic_files import check_output
 from workbench.collision import Scene
 from workbench.errors import InputError
-from workbench.ik import UnsupportedRobotError, get_closed_form, get_redundant_solver
+from workbench.ik import Family, get_family, get_redundant_solver
 from workbench.model.robot import Robot
 from workbench.workspace._block_runner import run_tasks
 from workbench.workspace._block_tasks import SAMPLES_PER_BLOCK, BlockJob, compute_block
@@ -79,8 +79,6 @@ logger = logging.getLogger(__name__)
 DEFAULT_BLOCK_VOXELS = 1024
 #: Configurations of a sampled map when none is given.
 DEFAULT_SAMPLES = 10_000_000
-#: Families of seven-axis arms, mapped in closed form at K parameter values.
-REDUNDANT_FAMILIES = ("srs", "franka")
 #: ``progress(done, total)``: blocks done so far (those of an earlier run
 #: included) and in all.
 ProgressCallback = Callable[[int, int], None]
@@ -194,7 +192,7 @@ def build_map(
     path = Path(path).absolute()
     threads = _check_arguments(workers, scheduler, samples, block_voxels)
     check_output(path, folder=True)
-    family = _get_family(robot)
+    family = get_family(robot)
     sampled = samples is not None or family is None
     if sampled and scene is not None:
         raise InputError(
@@ -209,7 +207,14 @@ def build_map(
     count = (samples or DEFAULT_SAMPLES) if sampled else 0
     spec = get_robot_spec(robot)
     attrs = map_attributes(
-        robot, spec, grid, family, scene, block_voxels, count, redundancy
+        robot,
+        spec,
+        grid,
+        None if family is None else family.name,
+        scene,
+        block_voxels,
+        count,
+        redundancy,
     )
     if sampled:
         names = list(SAMPLED_KEYS)
@@ -327,20 +332,8 @@ def _check_arguments(
     return int(workers) if workers is not None else get_core_count()
 
 
-def _get_family(robot: Robot) -> str | None:
-    """The family of an arm with a closed form (6R or seven-axis), else None."""
-    try:
-        return get_closed_form(robot).family
-    except UnsupportedRobotError:
-        pass
-    try:
-        return get_redundant_solver(robot).family
-    except UnsupportedRobotError:
-        return None
-
-
 def _redundancy_attributes(
-    robot: Robot, family: str | None, sampled: bool, count: int | None
+    robot: Robot, family: Family | None, sampled: bool, count: int | None
 ) -> dict[str, Any] | None:
     """The ``redundancy`` attribute of a seven-axis exact map, else None.
 
@@ -348,7 +341,7 @@ def _redundancy_attributes(
         InputError: If ``count`` is given for a sampled map or an arm without
             a redundancy parameter, or is out of range.
     """
-    seven_axis = family in REDUNDANT_FAMILIES
+    seven_axis = family is not None and family.redundant
     if count is not None and (sampled or not seven_axis):
         what = "a sampled map" if sampled else f"{robot.name} (no seven-axis family)"
         raise InputError(

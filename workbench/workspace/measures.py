@@ -103,7 +103,7 @@ def _constants(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
     """The packed constants of :func:`kernel.measure_poses` for ``robot``."""
     fac = get_factorisation(robot)
     values = {
-        "ur": 1.0 if fac.family == "ur" else 0.0,
+        "ur": fac.measure_formula,
         "constant": fac.constant,
         "a1": fac.a1,
         "a2": fac.a2,

@@ -50,7 +50,7 @@ import numpy.typing as npt
 
 from workbench.collision import Scene
 from workbench.errors import InfeasibleError, InputError
-from workbench.ik import UnsupportedRobotError, get_redundant_solver
+from workbench.ik import get_family, get_redundant_solver
 from workbench.model.robot import Robot
 from workbench.validation import as_finite_array
 from workbench.workspace._placement_screen import CandidateLattice, Screening
@@ -216,12 +216,8 @@ def _check_samples(robot: Robot, given: object, samples: int | None) -> bool:
     Raises:
         InputError: If ``samples`` is given for a six-axis arm or with a map.
     """
-    try:
-        get_redundant_solver(robot)
-    except UnsupportedRobotError:
-        seven_axis = False
-    else:
-        seven_axis = True
+    family = get_family(robot)
+    seven_axis = family is not None and family.redundant
     if samples is not None and not seven_axis:
         raise InputError(
             f"redundancy samples are for seven-axis arms, not {robot.name}"

@@ -57,12 +57,15 @@ import pinocchio as pin
 from workbench.collision import CollisionChecker, Scene
 from workbench.errors import InputError
 from workbench.ik import (
+    FAMILIES,
     ClosedFormSolver,
     RedundantSolver,
     UnsupportedRobotError,
     analytic_batch,
     compute_tool_poses,
     get_closed_form,
+    get_family,
+    get_family_refusal,
     get_redundant_solver,
 )
 from workbench.model.robot import Robot
@@ -388,18 +391,22 @@ class PlacementEvaluator:
 
 
 def _closed_form(robot: Robot) -> ClosedFormSolver | RedundantSolver:
-    """The six-axis closed form of ``robot``, else its seven-axis one."""
-    try:
-        return get_closed_form(robot)
-    except UnsupportedRobotError as six_axis:
-        try:
-            return get_redundant_solver(robot)
-        except UnsupportedRobotError:
-            raise UnsupportedRobotError(
-                f"base placement needs a six-axis arm of the OPW or UR family or "
-                f"a seven-axis arm of the SRS or Franka family, which "
-                f"{robot.name} is not ({str(six_axis).split(':')[0]})"
-            ) from six_axis
+    """The closed form of ``robot``: six-axis, or seven-axis.
+
+    Raises:
+        UnsupportedRobotError: If the robot has no closed form.
+    """
+    family = get_family(robot)
+    if family is None:
+        reason = str(get_family_refusal(robot))
+        names = ", ".join(name.upper() for name in FAMILIES)
+        raise UnsupportedRobotError(
+            f"base placement needs an arm of a closed-form family ({names}), "
+            f"which {robot.name} is not ({reason.split(':')[0]})"
+        )
+    if family.redundant:
+        return get_redundant_solver(robot)
+    return get_closed_form(robot)
 
 
 def _touches_nothing(checker: CollisionChecker, q: FloatArray) -> bool:

@@ -22,7 +22,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
-from workbench.ik import UnsupportedRobotError, get_redundant_solver
+from workbench.ik import get_family, get_redundant_solver
 from workbench.model.robot import Robot
 from workbench.workspace.grid import PoseGrid, default_bounds, make_pose_grid
 from workbench.workspace.measures import evaluate_block, get_core_count
@@ -95,16 +95,16 @@ def build_task_map(
         InputError: On a bad resolution or orientation count, or
             ``redundancy_samples`` out of range or given for a six-axis arm.
     """
-    try:
-        solver = get_redundant_solver(robot)
-    except UnsupportedRobotError:
+    family = get_family(robot)
+    if family is None or not family.redundant:
         if redundancy_samples is not None:
             raise InputError(
                 f"redundancy samples are for seven-axis arms, not {robot.name}"
-            ) from None
+            )
         keys: tuple[str, ...] = TASK_MAP_KEYS
         values, count = None, 0
     else:
+        solver = get_redundant_solver(robot)
         count = TASK_MAP_REDUNDANCY_SAMPLES
         count = count if redundancy_samples is None else redundancy_samples
         values = redundancy_values(solver.parameter_range, count)
