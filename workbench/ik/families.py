@@ -108,9 +108,10 @@ class Family:
             empty if none (a Franka arm's elbow offsets a3, a4).
         wrist_axes: Axes that meet in the wrist point, e.g. (4, 5, 6) (OPW,
             the wrist centre) or (5, 6) (UR).
-        reach: ``reach(table)`` -> the largest distance [m] from the shoulder
-            to the wrist point of an arm with the fitted DH table ``table``
-            (the makers' "reach to the wrist point").
+        reach: ``reach(table)`` -> the largest distance [m] of the wrist point
+            from the shoulder of an arm with the fitted DH table ``table`` (the
+            makers' "reach to the wrist point"): from axis 2, in the plane
+            normal to it (six axes), or from the shoulder point S (seven axes).
     """
 
     name: str
