@@ -20,6 +20,7 @@ from workbench.collision import Obstacle, Scene
 from workbench.errors import InputError
 from workbench.trajectory.csv_io import JointTrajectorySamples, write_trajectory_csv
 from workbench.workspace._placement_screen import CandidateLattice, Screening
+from workbench.workspace.grid import default_bounds
 from workbench.workspace.measures import singularity_margin
 from workbench.workspace.placement import (
     PlacementInfeasibleError,
@@ -28,6 +29,7 @@ from workbench.workspace.placement import (
     place_base,
 )
 from workbench.workspace.placement_check import PATH_STEP_MAX, PlacementEvaluator
+from workbench.workspace.placement_region import default_region
 from workbench.workspace.task_map import build_task_map
 from workbench.workspace.task_poses import (
     TASK_QUAT_NORM_TOL,
@@ -186,7 +188,6 @@ def test_mounts_are_each_verified(puma, rng):
         ({"region": (1.0, 0.0, 0.0, 1.0)}, "max below min"),
         ({"region": (0, 1, 0, 1), "top": 0}, "top must be"),
         ({"region": (0, 1, 0, 1), "mounts": [BASE]}, "not both"),
-        ({}, "needs a region"),
         ({"region": (0, 1, 0, 1), "resolution": 0.0}, "resolution"),
     ],
 )
@@ -194,6 +195,50 @@ def test_bad_arguments_raise_input_error(puma, rng, kwargs, message):
     task, _ = _task(puma, rng, count=2)
     with pytest.raises(InputError, match=message):
         place_base(puma, task, **kwargs)
+
+
+def test_default_region_is_the_task_extent_widened_by_the_reach(puma, rng):
+    task, _ = _task(puma, rng, count=5)
+    region = default_region(puma, task, resolution=RESOLUTION)
+    box = default_bounds(puma)
+    reach = 0.5 * float(np.max(box[1, :2] - box[0, :2]))
+    low, high = task[:, :2, 3].min(axis=0), task[:, :2, 3].max(axis=0)
+    xmin, xmax, ymin, ymax = region
+    assert xmin <= low[0] - reach and xmax >= high[0] + reach
+    assert ymin <= low[1] - reach and ymax >= high[1] + reach
+    assert max(xmax - high[0], low[0] - xmin) - reach < RESOLUTION
+    for edge in region:  # on multiples of the resolution: the origin is a candidate
+        assert abs(edge / RESOLUTION - round(edge / RESOLUTION)) < 1e-9
+    rows = np.concatenate([task[:, :3, 3], np.tile([0, 0, 0, 1.0], (5, 1))], axis=1)
+    assert default_region(puma, rows, resolution=RESOLUTION) == region
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"resolution": 0.0}, "resolution must be a finite number > 0"),
+        ({"resolution": math.nan}, "resolution must be a finite number > 0"),
+        ({"resolution": True}, "resolution must be a finite number > 0"),
+    ],
+)
+def test_default_region_refuses_a_bad_resolution(puma, kwargs, message):
+    with pytest.raises(InputError, match=message):
+        default_region(puma, np.eye(4)[None], **kwargs)
+
+
+def test_default_region_refuses_malformed_targets(puma):
+    with pytest.raises(InputError, match="shape"):
+        default_region(puma, np.zeros((2, 3)), resolution=RESOLUTION)
+
+
+def test_place_base_without_a_region_searches_the_default_region(puma, rng, coarse_map):
+    task, _ = _task(puma, rng, count=6)
+    options = {"resolution": 0.2, "yaw_step": YAW_STEP, "map": coarse_map, "top": 3}
+    region = default_region(puma, task, resolution=0.2)
+    found = place_base(puma, task, **options)
+    assert [p.as_dict() for p in found] == [
+        p.as_dict() for p in place_base(puma, task, region=region, **options)
+    ]
 
 
 def test_map_of_another_robot_is_refused(puma, rng, coarse_map):
@@ -442,6 +487,24 @@ def test_cli_place_json(puma, rng, tmp_path, capsys):
     keys = {"x", "y", "z", "yaw", "all_reachable", "min_dexterity",
             "min_singularity_margin", "branch", "missed", "redundancy"}  # fmt: skip
     assert all(set(p) == keys and p["all_reachable"] for p in out["placements"])
+
+
+def test_cli_place_default_region_is_python_place_base_default(
+    puma, rng, tmp_path, capsys
+):
+    """Without --region, the command and place_base without a region agree."""
+    task, _ = _task(puma, rng, count=4)
+    path = _write_task_csv(tmp_path / "task.csv", task)
+    code = main([
+        "workspace", "place", "--robot", "puma560", "--targets", str(path),
+        "--resolution", "0.25", "--yaw-step", "45", "--top", "2", "--json",
+    ])  # fmt: skip
+    assert code == 0
+    out = json.loads(capsys.readouterr().out)
+    poses = read_task_poses(path)
+    assert out["region"] == list(default_region(puma, poses, resolution=0.25))
+    python = place_base(puma, poses, resolution=0.25, yaw_step=math.pi / 4, top=2)
+    assert out["placements"] == [p.as_dict() for p in python]
 
 
 def test_cli_place_nothing_reaches_exits_3(puma, rng, tmp_path, capsys):

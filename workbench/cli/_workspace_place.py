@@ -22,8 +22,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from workbench.cli._common import (
     EXIT_INFEASIBLE,
     add_json_flag,
@@ -35,8 +33,6 @@ from workbench.cli._common import (
     print_json,
 )
 from workbench.collision import read_scene
-from workbench.model.robot import Robot
-from workbench.workspace.grid import default_bounds
 from workbench.workspace.placement import (
     DEFAULT_RESOLUTION,
     DEFAULT_YAW_STEP,
@@ -44,10 +40,10 @@ from workbench.workspace.placement import (
     PlacementInfeasibleError,
     place_base,
 )
+from workbench.workspace.placement_region import default_region
 from workbench.workspace.redundant import MAX_REDUNDANCY_SAMPLES
 from workbench.workspace.task_map import TASK_MAP_REDUNDANCY_SAMPLES
 from workbench.workspace.task_poses import (
-    TaskPoses,
     read_task_poses,
     read_trajectory_task_poses,
 )
@@ -157,8 +153,8 @@ def run_place(args: argparse.Namespace) -> int:
         task = read_trajectory_task_poses(robot, args.trajectory)
     scene = read_scene(args.scene) if args.scene is not None else None
     region = args.region
-    if region is None:
-        region = default_region(robot, task, args.resolution)
+    if region is None:  # the one place_base takes by default, for the summary
+        region = default_region(robot, task, resolution=args.resolution)
     started = time.perf_counter()
     try:
         placements = place_base(
@@ -204,22 +200,6 @@ def run_place(args: argparse.Namespace) -> int:
         return 0
     _print_placements(summary, placements)
     return 0
-
-
-def default_region(robot: Robot, task: TaskPoses, resolution: float) -> list[float]:
-    """``[xmin, xmax, ymin, ymax]`` [m]: the task's x, y extent widened by the reach.
-
-    The arm's horizontal reach is half the width of its
-    :func:`~workbench.workspace.grid.default_bounds`; the edges are rounded
-    outwards to multiples of ``resolution``, so the lattice holds the world
-    origin's multiples (a base at the origin is a candidate).
-    """
-    box = default_bounds(robot)
-    reach = 0.5 * float(np.max(box[1, :2] - box[0, :2]))
-    xy = task.poses[:, :2, 3]
-    low = np.floor((xy.min(axis=0) - reach) / resolution) * resolution
-    high = np.ceil((xy.max(axis=0) + reach) / resolution) * resolution
-    return [float(low[0]), float(high[0]), float(low[1]), float(high[1])]
 
 
 def _print_placements(summary: dict[str, Any], placements: list[Placement]) -> None:

@@ -5,7 +5,8 @@ per-pose measures of a block of it in closed form (:mod:`.measures`; seven-axis
 arms at K values of their redundancy parameter, :mod:`.redundant`) and the
 sampled maps of arms without a closed form (:mod:`.sampled`); the joint-space
 singularity map (:mod:`.joint_space`); base placement for a task
-(:mod:`.placement`, task poses from :mod:`.task_poses`); maps built on Dask
+(:mod:`.placement`, its default region :mod:`.placement_region`, task poses
+from :mod:`.task_poses`); maps built on Dask
 (:mod:`.build`) into a Zarr store, opened and queried (:mod:`.store`).
 """
 
@@ -30,6 +31,7 @@ from workbench.workspace.placement import (
     PlacementInfeasibleError,
     place_base,
 )
+from workbench.workspace.placement_region import default_region
 from workbench.workspace.redundant import evaluate_redundant_block, redundancy_values
 from workbench.workspace.sampled import accumulate, sample_block
 from workbench.workspace.store import WorkspaceMap, open_map
@@ -55,6 +57,7 @@ __all__ = [
     "compute_joint_space_map",
     "cone_orientations",
     "default_bounds",
+    "default_region",
     "evaluate_block",
     "evaluate_redundant_block",
     "make_pose_grid",

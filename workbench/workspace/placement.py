@@ -26,7 +26,10 @@ Method, for a region of candidates (yaws × a square lattice at one height):
    :data:`MAX_VERIFIED` were verified. Every returned :class:`Placement` holds
    the exact values and is ranked by them.
 
-Explicit candidates (``mounts``) skip the screening: each is verified exactly.
+Without a region, the region is
+:func:`~workbench.workspace.placement_region.default_region` (the task's x, y
+extent widened by the arm's horizontal reach). Explicit candidates
+(``mounts``) skip the screening: each is verified exactly.
 
 Seven-axis arms (SRS, Franka) are verified exactly at the K values of the
 redundancy parameter of their map (its attribute ``redundancy``; a map built
@@ -62,9 +65,10 @@ from workbench.workspace.placement_check import (
     base_transform,
     follow_path,
 )
+from workbench.workspace.placement_region import default_region, task_matrices
 from workbench.workspace.redundant import redundancy_values
 from workbench.workspace.task_map import TASK_MAP_REDUNDANCY_SAMPLES, build_task_map
-from workbench.workspace.task_poses import TaskPoses, matrices_from_xyz_quat_xyzw
+from workbench.workspace.task_poses import TaskPoses
 
 FloatArray = npt.NDArray[np.float64]
 Progress = Callable[[int, int], None]
@@ -134,7 +138,10 @@ def place_base(
             (N, 7) rows ``x y z qx qy qz qw``.
         region: ``(xmin, xmax, ymin, ymax)`` [m]: candidate base positions on
             a square lattice of spacing ``resolution`` from ``(xmin, ymin)``
-            at height ``height``; required unless ``mounts`` is given.
+            at height ``height``; None (without ``mounts``) is
+            :func:`~workbench.workspace.placement_region.default_region`, the
+            task's x, y extent widened by the arm's reach, as on the command
+            line.
         height: z of the base [m] for the region's candidates.
         yaw_step: Step of the candidate yaws [rad]: ``0, step, ...`` below 2π.
         resolution: Spacing of the candidate positions [m].
@@ -168,7 +175,7 @@ def place_base(
             ``redundancy_samples`` with a map or for a six-axis arm.
         UnsupportedRobotError: If the robot has no closed form.
     """
-    task = _as_task(targets)
+    task = task_matrices(targets)
     ordered = targets.ordered if isinstance(targets, TaskPoses) else False
     ordered = ordered if path is None else bool(path)
     if isinstance(top, bool) or not isinstance(top, int) or top < 1:
@@ -190,7 +197,7 @@ def place_base(
             placements += evaluator.evaluate(rows[start : start + size])
         return _best(placements, top, len(task))
     if region is None:
-        raise InputError("place_base needs a region (xmin, xmax, ymin, ymax) or mounts")
+        region = default_region(robot, task, resolution=resolution)
     lattice = CandidateLattice.make(region, float(height), yaw_step, resolution)
     the_map = _get_map(robot, map, task, lattice.height, redundancy_samples)
     values = _values(robot, the_map, redundancy_samples) if seven_axis else None
@@ -283,21 +290,6 @@ def _candidates(
             given[batch] = True
             count += len(batch)
             yield batch
-
-
-def _as_task(targets: TaskPoses | npt.ArrayLike) -> FloatArray:
-    """The task poses as a (N, 4, 4) array, world frame [m]."""
-    if isinstance(targets, TaskPoses):
-        return np.asarray(targets.poses)
-    poses = np.asarray(targets, dtype=np.float64)
-    if poses.ndim == 2 and poses.shape[1] == 7:
-        rows = as_finite_array(poses, poses.shape, "targets")
-        poses = matrices_from_xyz_quat_xyzw(rows)
-    if poses.ndim != 3 or poses.shape[1:] != (4, 4) or len(poses) == 0:
-        raise InputError(
-            f"targets must have shape (N, 4, 4) or (N, 7), N >= 1, got {poses.shape}"
-        )
-    return as_finite_array(poses, poses.shape, "targets")
 
 
 def _get_map(
