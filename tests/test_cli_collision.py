@@ -5,11 +5,13 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from tests.conftest import run_cli as run
 from workbench import paper_data
 from workbench.cli import EXIT_BAD_INPUT, EXIT_INFEASIBLE
+from workbench.json_numbers import to_json_ready
 
 PICK = [str(x) for x in paper_data.ANGELES_PICK_Q_DEG]
 PLACE = [str(x) for x in paper_data.ANGELES_PLACE_Q_DEG]
@@ -41,6 +43,44 @@ def test_paper_scene_reports_the_pedestal_and_exits_3(capsys) -> None:
     assert set(first) >= {"t", "body_a", "body_b", "distance"}
     assert result["min_clearance"] < 0.0 and result["first_contact"] == first
     assert err.count("\n") == 1 and "collision of link2 with pedestal" in err
+
+
+def test_plan_default_scene_is_the_python_default(capsys) -> None:
+    """The command's default check is JointTrajectory.check_collisions()."""
+    from workbench import load_robot
+    from workbench.collision import get_pick_and_place_scene
+    from workbench.trajectory import pick_and_place
+
+    code, out, _ = run(capsys, *PLAN, "--json")
+    assert code == EXIT_INFEASIBLE
+    result = json.loads(out)
+    robot = load_robot("puma560")
+    traj = pick_and_place(
+        robot,
+        np.deg2rad(paper_data.ANGELES_PICK_Q_DEG),
+        np.deg2rad(paper_data.ANGELES_PLACE_Q_DEG),
+        10.0,
+    )
+    python = json.loads(json.dumps(to_json_ready(traj.check_collisions().as_dict())))
+    assert {key: result[key] for key in python} == python
+    assert result["scene"] == get_pick_and_place_scene(robot).name
+
+
+@pytest.mark.parametrize(
+    ("name", "scene", "obstacles"),
+    [
+        ("puma560", "angeles-pick-and-place", ("pedestal", "pick_table")),
+        ("puma560-kang", "pedestal", ("pedestal",)),
+        ("ur5", "empty", ()),
+    ],
+)
+def test_pick_and_place_scene_of_each_kind_of_arm(name, scene, obstacles) -> None:
+    from workbench import load_robot
+    from workbench.collision import get_pick_and_place_scene
+
+    found = get_pick_and_place_scene(load_robot(name))
+    assert found.name == scene
+    assert tuple(o.name for o in found.obstacles) == obstacles
 
 
 def test_human_output_lists_the_contacts(capsys) -> None:
@@ -114,6 +154,20 @@ def test_fishcut_default_scene_is_clear(capsys) -> None:
     assert result["scene"] == "kang-fish-cutting"
     assert result["collisions"] == []
     assert 0.0 < result["clearance_lower_bound"] <= result["min_clearance"] < 0.05
+
+
+def test_fishcut_default_check_is_the_python_default(capsys) -> None:
+    """The command's default check is compute_fish_cutting_clearance()."""
+    from workbench import load_robot
+    from workbench.tasks import compute_fish_cutting_clearance, run_fish_cutting
+
+    code, out, _ = run(capsys, "fishcut", "--json")
+    assert code == 0
+    result = json.loads(out)
+    robot = load_robot("puma560-kang")
+    clearance = compute_fish_cutting_clearance(robot, run_fish_cutting(robot))
+    python = json.loads(json.dumps(to_json_ready(clearance.as_dict())))
+    assert {key: result[key] for key in python} == python
 
 
 def test_fishcut_obstacle_in_the_way_exits_3(capsys, tmp_path: Path) -> None:

@@ -151,6 +151,7 @@ def test_free_path_reports_its_clearance(puma) -> None:
     report = check_path(checker, t, q)
     brute = np.array([checker.compute_distances(qk) for qk in q])
     assert report.contacts == () and report.collision_free
+    assert report.describe_first_contact() is None
     assert report.min_clearance == pytest.approx(brute.min(), abs=ATOL_COAL)
     k = int(np.flatnonzero(t == report.t)[0])  # where it says: a minimum (ties)
     at = [d for d, pair in zip(brute[k], checker.body_pairs, strict=True)
@@ -173,6 +174,9 @@ def test_paper_path_contacts_with_pedestal_and_table(puma, angeles_checker) -> N
     first = report.first_contact
     assert (first.body_a, first.body_b, first.t_start) == ("link2", "pedestal", 0.0)
     assert first.distance == pytest.approx(-0.02957, abs=1e-4)
+    message = report.describe_first_contact()
+    assert message.startswith("collision of link2 with pedestal from t = 0 s")
+    assert message.endswith(f"(and {len(report.contacts) - 1} more contact(s))")
     bodies = {(c.body_a, c.body_b) for c in report.contacts}
     assert ("link6", "pick_table") in bodies
     brute = np.array([angeles_checker.compute_distances(qk) for qk in q])

@@ -12,15 +12,13 @@ from workbench.collision import (
     CollisionChecker,
     PathClearance,
     Scene,
-    check_path,
-    get_angeles_scene,
-    get_pedestal,
+    get_pick_and_place_scene,
     read_scene,
 )
 from workbench.errors import InputError
 from workbench.model.robot import Robot
+from workbench.tasks import compute_fish_cutting_clearance, get_fish_cutting_scene
 from workbench.tasks.fish_cutting import FishCuttingResult
-from workbench.tasks.fish_scene import get_fish_cutting_scene
 from workbench.trajectory.pick_and_place import JointTrajectory
 
 
@@ -73,15 +71,6 @@ def build_checker(
     return CollisionChecker(robot, scene)
 
 
-def get_pick_place_scene(robot: Robot) -> Scene:
-    """Angeles' cell for his PUMA, the pedestal for other DH arms, else none."""
-    if robot.dh_table is None:
-        return Scene("empty")
-    if robot.dh_table.name == "puma560":
-        return get_angeles_scene(robot)
-    return Scene("pedestal", (get_pedestal(robot),), "the pedestal under the base")
-
-
 def check_pick_and_place_path(
     robot: Robot, traj: JointTrajectory, args: argparse.Namespace, rate: float
 ) -> tuple[Scene | None, PathClearance | None]:
@@ -94,10 +83,11 @@ def check_pick_and_place_path(
         rate: Samples per second [Hz] of the check (proven between samples).
 
     Returns:
-        The scene (``--scene``, else :func:`get_pick_place_scene`; None with
+        The scene (``--scene``, else
+        :func:`workbench.collision.get_pick_and_place_scene`; None with
         ``--no-collision``) and the clearance (None when skipped).
     """
-    scene = load_scene(args, lambda: get_pick_place_scene(robot))
+    scene = load_scene(args, lambda: get_pick_and_place_scene(robot))
     checker = build_checker(robot, scene, explicit=args.scene is not None)
     return scene, None if checker is None else traj.check_collisions(checker, rate)
 
@@ -116,8 +106,8 @@ def check_fish_cutting_path(
         given: The scene of ``--scene`` (read before the run), or None.
         args: With ``scene`` and ``no_collision``.
 
-    The scene is ``given``, else Kang's cell scaled to the arm; distances at
-    the planning cycles, bound over the servo samples between them.
+    The scene is ``given``, else Kang's cell scaled to the arm; the check is
+    :func:`workbench.tasks.compute_fish_cutting_clearance`.
 
     Returns:
         The scene (None with ``--no-collision``), the checker and the clearance
@@ -129,9 +119,7 @@ def check_fish_cutting_path(
     checker = build_checker(robot, scene, explicit=args.scene is not None)
     if checker is None:
         return scene, None, None
-    setup = result.setup
-    stride = max(1, round(setup.servo_rate / setup.planning_rate))
-    clearance = check_path(checker, result.servo.t, result.servo.q, stride=stride)
+    clearance = compute_fish_cutting_clearance(robot, result, checker=checker)
     return scene, checker, clearance
 
 
@@ -172,13 +160,4 @@ def report_collision_error(report: PathClearance | None) -> bool:
 
 def get_collision_error(report: PathClearance | None) -> str | None:
     """The one-line message of the first contact, or None without contact."""
-    if report is None or not report.contacts:
-        return None
-    first = report.contacts[0]
-    more = len(report.contacts) - 1
-    extra = f" (and {more} more contact(s))" if more else ""
-    return (
-        f"collision of {first.body_a} with {first.body_b} "
-        f"from t = {first.t_start:.6g} s, distance {first.distance:.6g} m at "
-        f"t = {first.t:.6g} s{extra}"
-    )
+    return None if report is None else report.describe_first_contact()

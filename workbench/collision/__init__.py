@@ -14,7 +14,11 @@ Example::
 from workbench.collision.along_path import check_path
 from workbench.collision.checker import CollisionChecker, PairInfo
 from workbench.collision.clearance_report import Contact, PathClearance
-from workbench.collision.paper_scenes import get_angeles_scene, get_pedestal
+from workbench.collision.paper_scenes import (
+    get_angeles_scene,
+    get_pedestal,
+    get_pick_and_place_scene,
+)
 from workbench.collision.scene import Obstacle, Scene
 from workbench.collision.scene_file import parse_scene, read_scene, write_scene
 from workbench.collision.self_filter import (
@@ -36,6 +40,7 @@ __all__ = [
     "compute_self_collision_filter",
     "get_angeles_scene",
     "get_pedestal",
+    "get_pick_and_place_scene",
     "parse_scene",
     "read_scene",
     "write_scene",

@@ -77,6 +77,23 @@ class PathClearance:
         """The contact that starts first, or None."""
         return self.contacts[0] if self.contacts else None
 
+    def describe_first_contact(self) -> str | None:
+        """One line on the first contact (the commands' error), or None without one.
+
+        ``collision of A with B from t = ... s, distance ... m at t = ... s``
+        and, when there are more, how many.
+        """
+        first = self.first_contact
+        if first is None:
+            return None
+        more = len(self.contacts) - 1
+        extra = f" (and {more} more contact(s))" if more else ""
+        return (
+            f"collision of {first.body_a} with {first.body_b} "
+            f"from t = {first.t_start:.6g} s, distance {first.distance:.6g} m at "
+            f"t = {first.t:.6g} s{extra}"
+        )
+
     def as_dict(self) -> dict[str, Any]:
         """JSON form (the ``collision`` keys of ``plan pick-place`` and ``fishcut``)."""
         first = self.first_contact

@@ -11,6 +11,12 @@ so the scene is an assumption built from the model and Table III:
   (room for a gripper), centred :data:`PICK_TABLE_REACH` further out from the
   base axis than the wrist centre, square to that direction.
 
+:func:`get_pick_and_place_scene` is the default scene of a pick-and-place
+(``workbench plan pick-place``, ``workbench export --pick-place`` and
+:meth:`workbench.trajectory.JointTrajectory.check_collisions`): Angeles' cell
+for his PUMA, the pedestal for other arms generated from a DH table, an empty
+scene (self-collisions only) for any other arm.
+
 Kang's fish-cutting scene (pedestal, table, fish) is built by
 :func:`workbench.tasks.fish_scene.get_fish_cutting_scene`.
 """
@@ -83,4 +89,29 @@ def get_angeles_scene(robot: Robot) -> Scene:
     return Scene("angeles-pick-and-place", (pedestal, table), "Angeles 1988, Sec. V")
 
 
-__all__ = ["PICK_TABLE_DROP", "PICK_TABLE_REACH", "get_angeles_scene", "get_pedestal"]
+def get_pick_and_place_scene(robot: Robot) -> Scene:
+    """The default scene of a pick-and-place of ``robot`` (base frame).
+
+    Args:
+        robot: Any arm.
+
+    Returns:
+        :func:`get_angeles_scene` for Angeles' PUMA (the ``puma560`` DH
+        table), the pedestal of :func:`get_pedestal` (scene ``"pedestal"``)
+        for another arm generated from a DH table, else the empty scene
+        ``"empty"`` (only self-collisions are checked).
+    """
+    if robot.dh_table is None:
+        return Scene("empty")
+    if robot.dh_table.name == "puma560":
+        return get_angeles_scene(robot)
+    return Scene("pedestal", (get_pedestal(robot),), "the pedestal under the base")
+
+
+__all__ = [
+    "PICK_TABLE_DROP",
+    "PICK_TABLE_REACH",
+    "get_angeles_scene",
+    "get_pedestal",
+    "get_pick_and_place_scene",
+]

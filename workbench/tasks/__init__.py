@@ -8,7 +8,10 @@ from workbench.tasks.cuts import HorizontalCut, VerticalDownCut
 from workbench.tasks.fish import SimulatedFish
 from workbench.tasks.fish_cutting import FishCuttingResult, FishEvent, run_fish_cutting
 from workbench.tasks.fish_program import FishCuttingSetup, build_program, get_cell_scale
-from workbench.tasks.fish_scene import get_fish_cutting_scene
+from workbench.tasks.fish_scene import (
+    compute_fish_cutting_clearance,
+    get_fish_cutting_scene,
+)
 
 __all__ = [
     "FishCuttingResult",
@@ -18,6 +21,7 @@ __all__ = [
     "SimulatedFish",
     "VerticalDownCut",
     "build_program",
+    "compute_fish_cutting_clearance",
     "get_cell_scale",
     "get_fish_cutting_scene",
     "run_fish_cutting",

@@ -17,6 +17,9 @@ Sizes are those of Kang's cell times the setup's ``scale`` (1 for the PUMA):
   design, so the wrist links that carry the knife (:func:`get_knife_links`,
   :data:`KNIFE_LINKS` for the PUMA) are allowed to touch it; every other link
   is checked.
+
+:func:`compute_fish_cutting_clearance` checks a run's servo path in that cell
+(or any scene), as ``workbench fishcut`` does.
 """
 
 from __future__ import annotations
@@ -27,10 +30,12 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from workbench.collision import CollisionChecker, PathClearance, check_path
 from workbench.collision.paper_scenes import TABLE_COLOR, get_pedestal
 from workbench.collision.scene import Obstacle, Scene
 from workbench.model.robot import Robot
 from workbench.tasks.fish import SimulatedFish
+from workbench.tasks.fish_cutting import FishCuttingResult
 from workbench.tasks.fish_program import (
     FishCuttingSetup,
     get_cell_scale,
@@ -162,9 +167,45 @@ def get_fish_cutting_scene(
     )
 
 
+def compute_fish_cutting_clearance(
+    robot: Robot,
+    result: FishCuttingResult,
+    *,
+    checker: CollisionChecker | None = None,
+) -> PathClearance:
+    """Clearance of a fish-cutting run's servo path to the scene and between links.
+
+    Distances are computed at the planning cycles (every
+    ``round(servo_rate / planning_rate)``-th servo sample) and bound over the
+    servo samples between them (:func:`workbench.collision.check_path`), as
+    ``workbench fishcut`` checks its run.
+
+    Args:
+        robot: The arm that ran it.
+        result: The run (:func:`~workbench.tasks.run_fish_cutting`).
+        checker: Robot, scene and body pairs; None checks Kang's cell of the
+            run, :func:`get_fish_cutting_scene` with its fish and setup (the
+            command's default).
+
+    Returns:
+        The clearance along ``result.servo``.
+
+    Raises:
+        InputError: If ``checker`` is None and the robot has no collision
+            geometry.
+    """
+    if checker is None:
+        scene = get_fish_cutting_scene(robot, result.fish, result.setup)
+        checker = CollisionChecker(robot, scene)
+    setup = result.setup
+    stride = max(1, round(setup.servo_rate / setup.planning_rate))
+    return check_path(checker, result.servo.t, result.servo.q, stride=stride)
+
+
 __all__ = [
     "KNIFE_LINKS",
     "build_fish_mesh",
+    "compute_fish_cutting_clearance",
     "get_fish_cutting_scene",
     "get_knife_links",
 ]

@@ -24,7 +24,12 @@ from typing import Protocol
 import numpy as np
 import numpy.typing as npt
 
-from workbench.collision import CollisionChecker, PathClearance, check_path
+from workbench.collision import (
+    CollisionChecker,
+    PathClearance,
+    check_path,
+    get_pick_and_place_scene,
+)
 from workbench.errors import InputError
 from workbench.model.robot import Robot
 from workbench.trajectory.csv_io import JointTrajectorySamples
@@ -43,6 +48,10 @@ from workbench.trajectory.normal_spline import (
 from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]
+
+#: Default rate [Hz] of :meth:`JointTrajectory.check_collisions`'s distance
+#: samples (``workbench plan pick-place --rate``'s default).
+COLLISION_RATE_HZ = 100.0
 
 
 class _Sampleable(Protocol):
@@ -169,7 +178,9 @@ class JointTrajectory:
         return check_limits(self)
 
     def check_collisions(
-        self, checker: CollisionChecker, rate_hz: float
+        self,
+        checker: CollisionChecker | None = None,
+        rate_hz: float = COLLISION_RATE_HZ,
     ) -> PathClearance:
         """Clearance along the whole motion, not only at the samples.
 
@@ -178,9 +189,19 @@ class JointTrajectory:
         can move (:func:`workbench.collision.check_path`).
 
         Args:
-            checker: Robot (this trajectory's), scene and body pairs.
-            rate_hz: Sampling rate of the distance computations [Hz], > 0.
+            checker: Robot (this trajectory's), scene and body pairs; None
+                checks the default scene of a pick-and-place,
+                :func:`workbench.collision.get_pick_and_place_scene` (as
+                ``workbench plan pick-place`` without ``--scene``).
+            rate_hz: Sampling rate of the distance computations [Hz], > 0
+                (default :data:`COLLISION_RATE_HZ`, the command's ``--rate``).
+
+        Raises:
+            InputError: If ``checker`` is None and the robot has no collision
+                geometry.
         """
+        if checker is None:
+            checker = CollisionChecker(self.robot, get_pick_and_place_scene(self.robot))
         grid = self.sample_uniform(rate_hz)
         speed, accel = self.get_extrema(1), self.get_extrema(2)
         return check_path(
