@@ -22,6 +22,33 @@ SMALL_GRID = ["--grid", "40", "--svd-grid", "12"]
 KEYS = {"robot", "det_j", "sigma_min", "manipulability", "condition_number", "near"}
 
 
+@pytest.mark.parametrize(
+    ("name", "q_deg"),
+    [
+        ("puma560-kang", [10.0, 30.0, 87.3083636611, -20.0, 0.0, 5.0]),  # two loci
+        ("ur5", [20.0, -60.0, 45.0, 10.0, 30.0, -15.0]),
+        ("iiwa14", [10.0, 40.0, -20.0, 60.0, 15.0, -30.0, 5.0]),
+        ("panda", [0.0, -30.0, 0.0, -120.0, 0.0, 90.0, 45.0]),
+    ],
+)
+def test_singularities_json_is_analyse_configuration_as_dict(
+    capsys, name, q_deg
+) -> None:
+    """The command prints what the library computes, key for key."""
+    from workbench.json_numbers import to_json_ready
+    from workbench.singularities import analyse_configuration
+
+    code, out, _ = run(
+        capsys, "singularities", "--robot", name, "--deg", *map(str, q_deg), "--json"
+    )
+    assert code == 0
+    analysis = analyse_configuration(load_robot(name), np.deg2rad(q_deg))
+    assert json.loads(out) == json.loads(json.dumps(to_json_ready(analysis.as_dict())))
+    assert analysis.q.flags.writeable is False
+    assert (analysis.family is None) == (name in ("iiwa14", "panda"))
+    assert (analysis.srs is None) == (name != "iiwa14")
+
+
 def test_singularities_json_at_kang_elbow_singularity(capsys) -> None:
     q_deg = [10.0, 30.0, 87.3083636611, -20.0, 45.0, 5.0]
     code, out, err = run(

@@ -1,10 +1,12 @@
-"""``workbench singularities``: singularity analysis at one configuration."""
+"""``workbench singularities``: singularity analysis at one configuration.
+
+The analysis is :func:`workbench.singularities.analyse_configuration`; its
+``as_dict()`` is the ``--json`` output.
+"""
 
 from __future__ import annotations
 
 import argparse
-import math
-from typing import Any
 
 import numpy as np
 
@@ -17,27 +19,12 @@ from workbench.cli._common import (
     load_robot_from_args,
     print_json,
 )
-from workbench.errors import InputError
-from workbench.model.robot import Robot
-from workbench.singularities.conditions import (
+from workbench.singularities import (
     CONDITION_UNITS,
-    ELBOW_TOL,
-    SHOULDER_TOL,
     SINGULARITY_KINDS,
-    WRIST_TOL,
-    NotPumaTypeError,
-    classify_configuration,
-    compute_conditions,
-    get_factorisation,
-)
-from workbench.singularities.directions import compute_degenerate_direction
-from workbench.singularities.measures import compute_measures
-from workbench.singularities.redundant import (
     SRS_CONDITION_UNITS,
     SRS_SINGULARITY_KINDS,
-    NotSRSArmError,
-    compute_srs_conditions,
-    compute_srs_det_jjt,
+    analyse_configuration,
 )
 
 
@@ -67,86 +54,11 @@ def register(commands: argparse._SubParsersAction) -> None:
     )
 
 
-def analyse_configuration(robot: Robot, q: np.ndarray) -> dict[str, Any]:
-    """The JSON payload of the command for a validated ``q`` [rad]."""
-    measures = compute_measures(robot, q)
-    result: dict[str, Any] = {
-        "robot": robot.name,
-        "q": q,
-        "det_j": None if measures.det_j is None else float(measures.det_j),
-        "sigma_min": float(measures.sigma_min),
-        "manipulability": float(measures.manipulability),
-        "condition_number": _finite_or_none(float(measures.condition_number)),
-        "singular_values": measures.singular_values,
-        "near": dict.fromkeys(SINGULARITY_KINDS),
-        "near_units": CONDITION_UNITS,
-        "singular": None,
-        "tolerances": {
-            "shoulder": SHOULDER_TOL,
-            "elbow": ELBOW_TOL,
-            "wrist": WRIST_TOL,
-        },
-        "det_j_constant": None,
-        "directions": None,
-        "srs": _srs(robot, q, measures.singular_values),
-    }
-    try:
-        conditions = compute_conditions(robot, q).as_dict()
-    except NotPumaTypeError:
-        return result
-    result["near"] = {kind: float(value) for kind, value in conditions.items()}
-    result["singular"] = list(classify_configuration(robot, q))
-    factorisation = get_factorisation(robot)
-    result["det_j_constant"] = factorisation.constant
-    result["family"] = factorisation.family
-    result["directions"] = {
-        kind: _direction(robot, q, kind) for kind in result["singular"]
-    }
-    return result
-
-
-def _srs(
-    robot: Robot, q: np.ndarray, singular_values: np.ndarray
-) -> dict[str, Any] | None:
-    """An SRS seven-axis arm's distances to its loci and det(J Jᵀ); else None."""
-    try:
-        conditions = compute_srs_conditions(robot, q).as_dict()
-    except NotSRSArmError:
-        return None
-    return {
-        "near": {kind: float(value) for kind, value in conditions.items()},
-        "units": SRS_CONDITION_UNITS,
-        "det_jjt": float(compute_srs_det_jjt(robot, q)),
-        "det_jjt_pinocchio": float(np.prod(np.square(singular_values))),
-    }
-
-
-def _direction(robot: Robot, q: np.ndarray, kind: str) -> dict[str, Any] | None:
-    """JSON of the degenerate direction of ``kind`` at ``q``; None if not unique."""
-    try:
-        d = compute_degenerate_direction(robot, q, kind)
-    except InputError:  # on two loci at once, in a way the formula cannot resolve
-        return None
-    return {
-        "reference": d.reference,
-        "reference_point": d.reference_point,
-        "u": d.direction,
-        "residual": d.residual,
-        "u_tool": d.tool_direction,
-        "residual_tool": d.tool_residual,
-        "self_motion": d.self_motion,
-    }
-
-
-def _finite_or_none(value: float) -> float | None:
-    return value if math.isfinite(value) else None
-
-
 def run(args: argparse.Namespace) -> int:
     """Print the analysis; returns the exit code."""
     robot = load_robot_from_args(args)
     q = configuration_from_args(robot, args, args.q)
-    result = analyse_configuration(robot, q)
+    result = analyse_configuration(robot, q).as_dict()
     if args.json:
         print_json(result)
         return 0

@@ -14,10 +14,17 @@ Modules, in the order they build on each other:
 - ``along_path``: the closest approaches of a joint trajectory to each singularity;
 - ``redundant``: SRS seven-axis arms (KUKA LBR iiwa): det(J Jᵀ) of the 6 × 7
   Jacobian factorised, the elbow, shoulder, wrist and shoulder-wrist loci, the lost
-  directions, and the arm angle's algorithmic singularity.
+  directions, and the arm angle's algorithmic singularity;
+- ``analysis``: all of the above at one configuration, in one result
+  (``workbench singularities``).
 """
 
 from workbench.singularities.along_path import ClosestApproach, find_closest_approaches
+from workbench.singularities.analysis import (
+    ConfigurationAnalysis,
+    SRSAnalysis,
+    analyse_configuration,
+)
 from workbench.singularities.conditions import (
     CONDITION_UNITS,
     ELBOW_TOL,
@@ -79,6 +86,7 @@ __all__ = [
     "SRS_SINGULARITY_KINDS",
     "WRIST_TOL",
     "ClosestApproach",
+    "ConfigurationAnalysis",
     "DegenerateDirection",
     "DetCrossCheck",
     "JacobianMeasures",
@@ -86,11 +94,13 @@ __all__ = [
     "NotPumaTypeError",
     "NotSRSArmError",
     "PumaFactorisation",
+    "SRSAnalysis",
     "SRSConditions",
     "SRSDegenerateDirection",
     "SRSFactorisation",
     "SingularityConditions",
     "URFactorisation",
+    "analyse_configuration",
     "classify_configuration",
     "compute_conditions",
     "compute_degenerate_direction",
