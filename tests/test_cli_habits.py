@@ -14,9 +14,9 @@ import pytest
 
 import workbench
 from tests.conftest import run_cli as run
+from workbench import progress as progress_module
 from workbench.cli import EXIT_BROKEN_PIPE, fk
-from workbench.cli import _progress as progress_module
-from workbench.cli._progress import COMPILING, Progress
+from workbench.progress import COMPILING, Progress
 
 IK_ARGS = (
     "ik",

@@ -10,10 +10,10 @@ import pytest
 
 from tests.conftest import run_cli as run
 from workbench import load_robot
+from workbench import progress as progress_module
 from workbench.cli import EXIT_BAD_INPUT
-from workbench.cli import _progress as progress_module
-from workbench.cli._progress import Progress
 from workbench.collision import Obstacle, Scene, write_scene
+from workbench.progress import Progress
 from workbench.workspace import make_pose_grid
 from workbench.workspace.store import open_map
 
@@ -198,6 +198,21 @@ def test_progress_count_on_a_terminal_redraws_one_line(monkeypatch) -> None:
     with Progress("work", delay=60.0, stream=log) as progress:
         progress.count(1, 2)
     assert log.getvalue() == ""  # a quick command prints nothing
+
+
+def test_progress_estimates_each_stage_from_its_own_counts(monkeypatch) -> None:
+    """A new label starts a new estimate: the first count of a stage has none."""
+    monkeypatch.setattr(progress_module, "COUNT_INTERVAL", 0.0)
+    log = io.StringIO()
+    with Progress("work", delay=0.0, stream=log) as progress:
+        for label in ("first", "second"):
+            for done in range(3):
+                progress.count(done, 4, unit="points", label=label)
+    lines = [line for line in log.getvalue().splitlines() if "points" in line]
+    assert [line.split(":")[1].strip() for line in lines] == ["first"] * 3 + [
+        "second"
+    ] * 3
+    assert ["left" in line for line in lines] == [False, True, True] * 2
 
 
 def test_seconds_are_formatted_for_people() -> None:

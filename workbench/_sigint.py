@@ -4,7 +4,9 @@ Imported first by ``workbench/__init__.py``. When the process is the
 ``workbench`` command (the console script or ``python -m workbench``), SIGINT
 exits with 130 until :func:`workbench.cli.main` takes over (it turns SIGINT
 back into ``KeyboardInterrupt``, so that writers remove their temporary
-files). Imported as a library, nothing changes.
+files). Imported as a library, nothing changes. Helper threads (the progress
+reporter's timer, :mod:`workbench.progress`) leave SIGINT to the main thread
+(:func:`block_interrupts_in_this_thread`).
 """
 
 from __future__ import annotations
@@ -26,6 +28,12 @@ def is_workbench_command() -> bool:
     return script in ("workbench", "workbench.exe") or (
         list(argv[1:3]) == ["-m", "workbench"]
     )
+
+
+def block_interrupts_in_this_thread() -> None:
+    """For a helper thread: leave SIGINT to the main thread (Python's handler)."""
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
 
 
 def _exit_interrupted(signum: int, frame: FrameType | None) -> None:

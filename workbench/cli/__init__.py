@@ -44,8 +44,8 @@ from workbench.cli import (
 )
 from workbench.cli._common import EXIT_INFEASIBLE, print_json
 from workbench.cli._interrupt_guard import interrupts_wait_for_compiler
-from workbench.cli._progress import Progress
 from workbench.errors import InfeasibleError, InputError, WorkbenchError
+from workbench.progress import Progress
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1

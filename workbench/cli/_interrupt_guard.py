@@ -38,12 +38,6 @@ class _BlockWhileLocked:
             signal.pthread_sigmask(signal.SIG_SETMASK, self._local.mask)
 
 
-def block_interrupts_in_this_thread() -> None:
-    """For a helper thread: leave SIGINT to the main thread (Python's handler)."""
-    if hasattr(signal, "pthread_sigmask"):
-        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-
-
 @contextlib.contextmanager
 def interrupts_wait_for_compiler() -> Iterator[None]:
     """Within the block, a Ctrl-C during a Numba compilation waits for its end."""

@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import TextIO
 
 from workbench.atomic_files import check_outputs, write_text_atomic
 from workbench.cli._common import (
@@ -16,10 +15,9 @@ from workbench.cli._common import (
     load_robot_from_args,
     print_json,
 )
+from workbench.progress import Progress
 from workbench.trajectory.csv_io import read_trajectory_csv
 
-#: Width of the progress bar [characters].
-BAR_WIDTH = 30
 #: Largest ``--grid`` (points per axis of the det J map).
 MAX_GRID = 4000
 #: Largest ``--svd-grid`` (points per axis of the σmin map: one SVD each).
@@ -70,7 +68,7 @@ def register(commands: argparse._SubParsersAction) -> None:
     sing.add_argument(
         "--no-progress",
         action="store_true",
-        help="no progress bar on stderr (nor with -q or WORKBENCH_PROGRESS=0)",
+        help="no progress lines on stderr (nor with -q or WORKBENCH_PROGRESS=0)",
     )
     add_json_flag(sing)
     sing.set_defaults(
@@ -79,22 +77,14 @@ def register(commands: argparse._SubParsersAction) -> None:
     )
 
 
-class ProgressBar:
-    """A one-line progress bar on a stream, redrawn in place (carriage return)."""
+def _per_stage(progress: Progress) -> Callable[[str, int, int], None]:
+    """The report's ``progress(stage, done, total)``: counts of each map's points."""
 
-    def __init__(self, stream: TextIO):
-        self.stream = stream
-        self._stage: str | None = None
+    def count(stage: str, done: int, total: int) -> None:
+        label = f"report singularities: {stage}"
+        progress.count(done, total, unit="points", label=label)
 
-    def __call__(self, stage: str, done: int, total: int) -> None:
-        """Draw ``done / total`` of ``stage``; a new line when a stage ends."""
-        filled = BAR_WIDTH * done // max(total, 1)
-        bar = "#" * filled + "." * (BAR_WIDTH - filled)
-        percent = 100 * done // max(total, 1)
-        self.stream.write(f"\r{stage:<10} [{bar}] {percent:3d}% ({done}/{total})")
-        if done >= total:
-            self.stream.write("\n")
-        self.stream.flush()
+    return count
 
 
 def run_singularities(args: argparse.Namespace) -> int:
@@ -103,8 +93,8 @@ def run_singularities(args: argparse.Namespace) -> int:
 
     out = args.out
     check_outputs([out], get_input_paths(args))
-    bar = args.progress.enabled and not args.no_progress  # -q, WORKBENCH_PROGRESS=0
-    args.progress.finish()  # the command draws its own progress bar (or none)
+    if args.no_progress:
+        args.progress.finish()  # no line at all
     robot = load_robot_from_args(args)
     trajectory = None
     if args.trajectory is not None:
@@ -115,7 +105,7 @@ def run_singularities(args: argparse.Namespace) -> int:
         grid_size=args.grid,
         svd_grid_size=args.svd_grid,
         trajectory=trajectory,
-        progress=ProgressBar(sys.stderr) if bar else None,
+        progress=None if args.no_progress else _per_stage(args.progress),
     )
     write_text_atomic(out, report.html)
     summary = {"out": str(out), **report.summary}

@@ -1,16 +1,29 @@
-"""One progress line on stderr for commands that take a while.
+"""The progress reporter of long jobs: one line on stderr, counts with time left.
 
-A command that is still running after :data:`PROGRESS_DELAY` seconds prints
-one line saying what it is doing; the first Numba compilation of the process
-(a cold cache: the first run after an install or an upgrade) prints one line
-saying so as soon as it starts. A command that counts its steps
-(:meth:`Progress.count`) adds a line with the steps done, the time elapsed
-and an estimate of the time left: on a terminal one line redrawn in place,
-elsewhere (a log) a new line every :data:`COUNT_INTERVAL` seconds. ``-q``
-silences them all. Nothing is printed for a command that finishes quickly, so
-scripted output stays clean. A process forked
-by the command (``workbench demo`` runs a section in one) prints nothing: the
-command's own process speaks for it.
+Every long job of the library takes a ``progress`` callable
+(:data:`ProgressCallback`, ``progress(done, total)``:
+:func:`~workbench.workspace.build_map` in blocks,
+:func:`~workbench.workspace.place_base` in yaws and candidates,
+:func:`~workbench.workspace.compute_joint_space_map` and
+:func:`~workbench.singularities.compute_joint_grid` in configurations; the
+singularity report ``progress(stage, done, total)`` per map). :class:`Progress`
+is the reporter the command line gives them, and Python callers can give it
+too::
+
+    with Progress("workspace map: building") as progress:
+        build_map(robot, grid, "map.zarr", progress=progress.count)
+
+A job still running after :data:`PROGRESS_DELAY` seconds prints one line
+saying what it is doing; the first Numba compilation of the process (a cold
+cache: the first run after an install or an upgrade) prints one line saying
+so as soon as it starts. A job that counts its steps (:meth:`Progress.count`)
+adds a line with the steps done, the time elapsed and an estimate of the time
+left: on a terminal one line redrawn in place, elsewhere (a log) a new line
+every :data:`COUNT_INTERVAL` seconds. ``enabled=False`` (the command line's
+``-q``) silences them all. Nothing is printed for a job that finishes
+quickly, so scripted output stays clean. A process forked by the job
+(``workbench demo`` runs a section in one) prints nothing: the job's own
+process speaks for it.
 """
 
 from __future__ import annotations
@@ -21,19 +34,24 @@ import sys
 import threading
 import time
 import weakref
+from collections.abc import Callable
 from types import TracebackType
 from typing import TextIO
 
-from workbench.cli._interrupt_guard import block_interrupts_in_this_thread
+from workbench._sigint import block_interrupts_in_this_thread
 
-PROGRESS_DELAY = 1.0  # [s] before a running command prints its line
+#: ``progress(done, total)``: what every long job calls after each chunk of
+#: work (``done`` of ``total`` steps); :meth:`Progress.count` is one.
+ProgressCallback = Callable[[int, int], None]
+
+PROGRESS_DELAY = 1.0  # [s] before a running job prints its line
 #: Seconds between two count lines on a stream that is no terminal (a log file).
 COUNT_INTERVAL = 10.0
 #: Seconds between two redraws of the count line on a terminal.
 REDRAW_INTERVAL = 0.25
 COMPILING = "compiling the Numba kernels on first use (cached for later runs)…"
 #: The environment variable that turns progress lines off (``0``); set while a
-#: command runs, so that ``workbench._compiled`` leaves its compile line to it.
+#: reporter runs, so that ``workbench._compiled`` leaves its compile line to it.
 _ENVIRON = "WORKBENCH_PROGRESS"
 
 
@@ -41,8 +59,8 @@ class Progress:
     """Context manager printing at most one line per phase on ``stream``.
 
     Args:
-        message: What the command does, e.g. ``"demo: running the examples"``.
-        enabled: False prints nothing (``-q``).
+        message: What the job does, e.g. ``"demo: running the examples"``.
+        enabled: False prints nothing (the command line's ``-q``).
         delay: Seconds [s] after which the line is printed if still running;
             None means :data:`PROGRESS_DELAY`.
         stream: Where to print; None means ``sys.stderr`` at print time.
@@ -67,13 +85,14 @@ class Progress:
         self._listener: object | None = None
         self._environ: str | None = None
         self._started = time.monotonic()
-        self._first_count: tuple[float, int] | None = None  # (time [s], done)
+        #: (label, time [s], done) at the first count of the current label
+        self._first_count: tuple[str, float, int] | None = None
         self._last_count = -math.inf  # time [s] of the last count line
         self._open_line = False  # a count line redrawn in place, not ended
         _LIVE.add(self)
 
     def __enter__(self) -> Progress:
-        # the command speaks for compiles: the library's own line is off
+        # the reporter speaks for compiles: the library's own line is off
         self._started = time.monotonic()
         self._environ = os.environ.get(_ENVIRON)
         os.environ[_ENVIRON] = "0"
@@ -103,7 +122,7 @@ class Progress:
             self._listener = None
 
     def finish(self) -> None:
-        """No more lines: the command is done or now waits on the user (a server)."""
+        """No more lines: the job is done or now waits on the user (a server)."""
         with self._lock:
             self._finished = True
             if self._open_line:
@@ -117,20 +136,21 @@ class Progress:
         """``done`` of ``total`` steps finished: a line with the time elapsed and left.
 
         Nothing within the first ``delay`` seconds. The estimate of the time
-        left extrapolates the rate of the steps done since the first call (a
-        resumed command starts with some already done).
+        left extrapolates the rate of the steps done since the first call
+        with this ``label`` (a resumed job starts with some already done; a
+        job of several stages counts each under its own label).
 
         Args:
             done: Steps done so far.
             total: Steps in all.
             unit: What a step is, for the line (``"blocks"``).
-            label: What the command does, before the count (``"workspace
+            label: What the job does, before the count (``"workspace
                 map"``).
         """
         now = time.monotonic()
         with self._lock:
-            if self._first_count is None:
-                self._first_count = (now, done)
+            if self._first_count is None or self._first_count[0] != label:
+                self._first_count = (label, now, done)
             if not self.enabled or self._finished or now - self._started < self.delay:
                 return
             stream = self._get_stream()
@@ -144,7 +164,7 @@ class Progress:
             line = f"workbench: {label}{': ' if label else ''}{done}/{total} {unit}"
             line += f" ({percent}%)"
             line += f", {_format_seconds(now - self._started)} elapsed"
-            start, first = self._first_count
+            _, start, first = self._first_count
             if done > first and not last:
                 left = (now - start) / (done - first) * (total - done)
                 line += f", about {_format_seconds(left)} left"
@@ -241,3 +261,13 @@ def _listen_to_numba(progress: Progress) -> object | None:
     listener = _Listener()
     event.register("numba:compile", listener)
     return listener
+
+
+__all__ = [
+    "COMPILING",
+    "COUNT_INTERVAL",
+    "PROGRESS_DELAY",
+    "REDRAW_INTERVAL",
+    "Progress",
+    "ProgressCallback",
+]
