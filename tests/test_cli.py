@@ -15,6 +15,7 @@ from tests.conftest import run_cli as run
 from workbench import paper_data
 from workbench.cli import EXIT_BAD_INPUT, main
 from workbench.cli import demo as demo_command
+from workbench.demo.summary_text import format_demo_summary
 from workbench.model.catalog import get_own_urdf_dir
 
 # Table II is printed to two decimals: a computed value matches when it rounds to it.
@@ -121,8 +122,9 @@ def test_urdf_from_dh_regenerates_the_committed_file(capsys, tmp_path: Path) -> 
 def demo_run(tmp_path_factory) -> tuple[Path, dict]:
     """``workbench demo --json`` run once: (output folder, printed summary).
 
-    The text mode prints the same summary formatted (``format_summary``), so the
-    other demo tests check that wiring with this summary instead of a second run.
+    The text mode prints the same summary formatted (``format_demo_summary``), so
+    the other demo tests check that wiring with this summary instead of a second
+    run.
     """
     out = tmp_path_factory.mktemp("demo")
     printed, err = io.StringIO(), io.StringIO()
@@ -170,7 +172,7 @@ def test_demo_text_and_flags(capsys, monkeypatch, demo_run, tmp_path: Path) -> N
 
     monkeypatch.setattr(demo_command, "run_demo", recorded_demo)
     code, out, _ = run(capsys, "demo", "--out", str(tmp_path))
-    assert code == 0 and out == demo_command.format_summary(summary, tmp_path) + "\n"
+    assert code == 0 and out == format_demo_summary(summary, tmp_path) + "\n"
     assert "match Table II" in out and "DO NOT" not in out
     assert "Pick and place (Sec. V), T = 10 s" in out and "minimum duration" in out
     assert "3D preview (open in a browser)" in out
