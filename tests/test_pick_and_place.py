@@ -22,6 +22,8 @@ from workbench import (
 
 ATOL_EXACT = 1e-12
 ATOL_FD = 1e-6
+#: A peak seen on a 1 ms grid of the 10 s trajectory (a curvature term off).
+RTOL_SAMPLED_PEAK = 1e-5
 PAPER_RANGES_DEG = np.array(  # Angeles et al. Sec. V, from Paul et al. [14]
     [[-160, 160], [-225, 45], [-45, 225], [-170, 170], [-135, 135], [-170, 170]]
 )
@@ -55,6 +57,20 @@ def test_table3_trajectory_stays_within_the_papers_joint_ranges(puma, paper_traj
         rtol=0,
         atol=1e-9,
     )
+
+
+def test_peaks_bound_every_sample_and_are_reached(paper_traj) -> None:
+    t = np.linspace(0.0, T_PAPER, 10_001)
+    for order, values in zip((1, 2), paper_traj.sample(t)[1:], strict=True):
+        ext = paper_traj.get_extrema(order)
+        peak = ext.peak
+        np.testing.assert_array_equal(
+            peak, np.maximum(np.abs(ext.minimum), np.abs(ext.maximum))
+        )
+        assert np.all(np.abs(values) <= peak * (1 + ATOL_EXACT))
+        np.testing.assert_allclose(
+            np.max(np.abs(values), axis=0), peak, rtol=RTOL_SAMPLED_PEAK, atol=0
+        )
 
 
 def test_sample_shapes_and_end_conditions(paper_traj) -> None:

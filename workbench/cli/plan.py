@@ -176,8 +176,6 @@ def run_pick_place(args: argparse.Namespace) -> int:
                 title=f"{robot.name}: pick-and-place, T = {traj.duration:g} s "
                 f"(minimum {t_min:.4g} s)",
             )
-    speed = traj.get_extrema(1)
-    acc = traj.get_extrema(2)
     result = {
         "robot": robot.name,
         "joint_names": robot.joint_names,
@@ -187,8 +185,8 @@ def run_pick_place(args: argparse.Namespace) -> int:
         "amplitude": traj.spline.amplitude,
         "q_pick": traj.q_pick,
         "q_place": traj.q_place,
-        "peak_velocity": np.maximum(np.abs(speed.minimum), np.abs(speed.maximum)),
-        "peak_acceleration": np.maximum(np.abs(acc.minimum), np.abs(acc.maximum)),
+        "peak_velocity": traj.get_extrema(1).peak,
+        "peak_acceleration": traj.get_extrema(2).peak,
         "violations": [v.as_dict() for v in violations],
         "csv": None if args.csv is None else str(args.csv),
         "samples": 0 if samples is None else int(samples.t.size),

@@ -60,6 +60,15 @@ class JointExtrema:
     maximum: FloatArray
     t_maximum: FloatArray
 
+    @property
+    def peak(self) -> FloatArray:
+        """Largest magnitude of each joint, ``max(|minimum|, |maximum|)``, shape (nq,).
+
+        Of q̇ or q̈: the peak joint speed [rad/s] or acceleration [rad/s²],
+        what the limits are checked against.
+        """
+        return np.maximum(np.abs(self.minimum), np.abs(self.maximum))
+
     @staticmethod
     def combine(parts: list[JointExtrema]) -> JointExtrema:
         """Extremes over the union of several time intervals."""

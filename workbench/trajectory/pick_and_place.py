@@ -203,14 +203,13 @@ class JointTrajectory:
         if checker is None:
             checker = CollisionChecker(self.robot, get_pick_and_place_scene(self.robot))
         grid = self.sample_uniform(rate_hz)
-        speed, accel = self.get_extrema(1), self.get_extrema(2)
         return check_path(
             checker,
             grid.t,
             grid.q,
             sample=lambda t: self.sample(t)[0],
-            max_joint_speed=np.maximum(-speed.minimum, speed.maximum),
-            max_joint_acceleration=np.maximum(-accel.minimum, accel.maximum),
+            max_joint_speed=self.get_extrema(1).peak,
+            max_joint_acceleration=self.get_extrema(2).peak,
         )
 
 
