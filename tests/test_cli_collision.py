@@ -232,3 +232,15 @@ def test_urdf_srdf(capsys, tmp_path: Path) -> None:
     code, _, err = run(capsys, "urdf", "srdf", "--robot", "ur5", "--out",
                        str(tmp_path / "no" / "x.srdf"))  # fmt: skip
     assert code == EXIT_BAD_INPUT and err.count("\n") == 1
+
+
+def test_urdf_srdf_json_is_the_library_filter(capsys) -> None:
+    from workbench import load_robot
+    from workbench.collision import compute_self_collision_filter
+
+    code, out, _ = run(capsys, "urdf", "srdf", "--robot", "puma560", "--json")
+    assert code == 0
+    found = compute_self_collision_filter(load_robot("puma560"))
+    result = json.loads(out)
+    assert result["disabled"] == [d.as_dict() for d in found.disabled]
+    assert result["srdf"] == found.to_srdf() and result["out"] is None

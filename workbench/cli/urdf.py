@@ -93,10 +93,7 @@ def run_srdf(args: argparse.Namespace) -> int:
             {
                 "robot": robot.name,
                 "out": None if args.out is None else str(args.out),
-                "disabled": [
-                    {"link_a": d.link_a, "link_b": d.link_b, "reason": d.reason}
-                    for d in pairs.disabled
-                ],
+                "disabled": [d.as_dict() for d in pairs.disabled],
                 "srdf": text,
             }
         )

@@ -42,6 +42,10 @@ class DisabledPair:
     link_b: str
     reason: str
 
+    def as_dict(self) -> dict[str, str]:
+        """JSON form: ``{link_a, link_b, reason}`` (``workbench urdf srdf --json``)."""
+        return {"link_a": self.link_a, "link_b": self.link_b, "reason": self.reason}
+
 
 @dataclass(frozen=True, slots=True)
 class SelfCollisionFilter:
