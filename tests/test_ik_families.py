@@ -235,12 +235,17 @@ def _names_a_family(node: ast.AST) -> bool:
     return False
 
 
+#: The errors that say an arm is not of a family (or has no factorisation of
+#: it): catching one to find out which arm it is, is a probe.
+FAMILY_ERRORS = ("UnsupportedRobotError", "NotPumaTypeError", "NotSRSArmError")
+
+
 def _catches_unsupported(handler: ast.ExceptHandler) -> bool:
     caught = handler.type
     kinds = caught.elts if isinstance(caught, ast.Tuple) else [caught]
     return any(
-        (isinstance(k, ast.Name) and k.id == "UnsupportedRobotError")
-        or (isinstance(k, ast.Attribute) and k.attr == "UnsupportedRobotError")
+        (isinstance(k, ast.Name) and k.id in FAMILY_ERRORS)
+        or (isinstance(k, ast.Attribute) and k.attr in FAMILY_ERRORS)
         for k in kinds
     )
 
@@ -251,7 +256,7 @@ def find_family_leaks(source: str, *, probes: bool = True) -> list[str]:
     Returns one ``"line N: what"`` per finding: comparisons of a family value
     (other than ``is None``) or of a family-name string,
     ``getattr(..., "family")``, a ``*_FAMILIES`` name and
-    (``probes``) every ``except`` that catches ``UnsupportedRobotError``.
+    (``probes``) every ``except`` that catches one of :data:`FAMILY_ERRORS`.
     """
     found: list[str] = []
     for node in ast.walk(ast.parse(source)):
@@ -294,6 +299,8 @@ def find_family_leaks(source: str, *, probes: bool = True) -> list[str]:
         "try:\n    f()\nexcept UnsupportedRobotError:\n    pass",
         "try:\n    f()\nexcept ik.UnsupportedRobotError as err:\n    pass",
         "try:\n    f()\nexcept (InputError, UnsupportedRobotError):\n    pass",
+        "try:\n    f()\nexcept NotPumaTypeError:\n    pass",
+        "try:\n    f()\nexcept singularities.NotSRSArmError:\n    pass",
     ],
 )
 def test_the_leak_finder_finds_each_form(snippet: str) -> None:

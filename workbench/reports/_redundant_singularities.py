@@ -33,11 +33,10 @@ from workbench.singularities.measures import compute_measures
 from workbench.singularities.redundant import (
     SRS_CONDITION_UNITS,
     SRS_SINGULARITY_KINDS,
-    NotSRSArmError,
     compute_srs_conditions,
     compute_srs_degenerate_direction,
     compute_srs_det_jjt,
-    get_srs_factorisation,
+    find_srs_factorisation,
 )
 
 FloatArray = npt.NDArray[np.float64]
@@ -81,9 +80,8 @@ def compute_redundant_data(
         "max": float(sigma.max()),
     }
     data: dict[str, Any] = {"sigma_samples": sigma, "srs": None}
-    try:
-        fac = get_srs_factorisation(robot)
-    except NotSRSArmError:
+    fac = find_srs_factorisation(robot)
+    if fac is None:
         return data
     check = q[:samples]
     measures = compute_measures(robot, check)

@@ -31,12 +31,11 @@ from workbench.model.robot import Robot
 from workbench.reports.html_report import HtmlReport
 from workbench.singularities.along_path import find_closest_approaches
 from workbench.singularities.conditions import (
-    NotPumaTypeError,
     PumaFactorisation,
     classify_configuration,
     compute_conditions,
-    get_factorisation,
-    get_puma_factorisation,
+    find_factorisation,
+    find_puma_factorisation,
 )
 from workbench.singularities.directions import compute_degenerate_direction
 from workbench.singularities.loci import (
@@ -98,10 +97,7 @@ def build_singularity_report(
     from workbench.reports import _singularity_figures as figs
     from workbench.reports._singularity_html import render
 
-    try:
-        fac: PumaFactorisation | None = get_puma_factorisation(robot)
-    except NotPumaTypeError:
-        fac = None
+    fac: PumaFactorisation | None = find_puma_factorisation(robot)
     if fac is None:
         grid_size = min(grid_size, NUMERIC_GRID_MAX)
         svd_grid_size = min(svd_grid_size, NUMERIC_GRID_MAX)
@@ -206,9 +202,8 @@ def _family_data(
     """
     if robot.nv != 6:  # a seven-axis family has no 6R factorisation of det J
         return None
-    try:
-        fac = get_factorisation(robot)
-    except NotPumaTypeError:
+    fac = find_factorisation(robot)
+    if fac is None:
         return None
     rng = np.random.default_rng(seed)
     q = rng.uniform(robot.lower, robot.upper, (samples, 6))

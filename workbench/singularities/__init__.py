@@ -38,6 +38,8 @@ from workbench.singularities.conditions import (
     classify_configuration,
     compute_conditions,
     compute_det_j_analytic,
+    find_factorisation,
+    find_puma_factorisation,
     get_factorisation,
     get_puma_factorisation,
 )
@@ -74,6 +76,7 @@ from workbench.singularities.redundant import (
     compute_srs_conditions,
     compute_srs_degenerate_direction,
     compute_srs_det_jjt,
+    find_srs_factorisation,
     get_srs_factorisation,
 )
 
@@ -119,6 +122,9 @@ __all__ = [
     "compute_wrist_point",
     "cross_check_det_j",
     "find_closest_approaches",
+    "find_factorisation",
+    "find_puma_factorisation",
+    "find_srs_factorisation",
     "get_elbow_singular_theta3",
     "get_factorisation",
     "get_puma_factorisation",

@@ -18,8 +18,8 @@ from workbench.errors import InputError
 from workbench.model.robot import Robot
 from workbench.singularities.conditions import (
     CONDITION_UNITS,
-    NotPumaTypeError,
     compute_conditions,
+    find_factorisation,
 )
 from workbench.singularities.measures import compute_measures
 from workbench.validation import as_finite_array
@@ -81,10 +81,11 @@ def find_closest_approaches(
     if np.any(np.diff(t) <= 0.0):
         raise InputError("trajectory times must increase strictly")
     signals: dict[str, tuple[FloatArray, str]] = {}
-    try:
-        conditions = compute_conditions(robot, q).as_dict()
-    except NotPumaTypeError:
-        conditions = {}
+    conditions = (
+        {}
+        if find_factorisation(robot) is None
+        else compute_conditions(robot, q).as_dict()
+    )
     for kind, values in conditions.items():
         signals[kind] = (values, CONDITION_UNITS[kind])
     sigma = compute_measures(robot, q).sigma_min

@@ -28,10 +28,9 @@ from workbench.singularities.conditions import (
     SHOULDER_TOL,
     SINGULARITY_KINDS,
     WRIST_TOL,
-    NotPumaTypeError,
     classify_configuration,
     compute_conditions,
-    get_factorisation,
+    find_factorisation,
 )
 from workbench.singularities.directions import (
     DegenerateDirection,
@@ -40,9 +39,9 @@ from workbench.singularities.directions import (
 from workbench.singularities.measures import JacobianMeasures, compute_measures
 from workbench.singularities.redundant import (
     SRS_CONDITION_UNITS,
-    NotSRSArmError,
     compute_srs_conditions,
     compute_srs_det_jjt,
+    find_srs_factorisation,
 )
 
 FloatArray = npt.NDArray[np.float64]
@@ -162,14 +161,13 @@ def analyse_configuration(robot: Robot, q: npt.ArrayLike) -> ConfigurationAnalys
     q.setflags(write=False)
     measures = compute_measures(robot, q)
     srs = _srs(robot, q, measures.singular_values)
-    try:
-        conditions = compute_conditions(robot, q).as_dict()
-    except NotPumaTypeError:
+    factorisation = find_factorisation(robot)
+    if factorisation is None:
         return ConfigurationAnalysis(
             robot.name, q, measures, None, None, None, None, None, srs
         )
+    conditions = compute_conditions(robot, q).as_dict()
     singular = tuple(classify_configuration(robot, q))
-    factorisation = get_factorisation(robot)
     return ConfigurationAnalysis(
         robot.name,
         q,
@@ -187,10 +185,9 @@ def _srs(
     robot: Robot, q: FloatArray, singular_values: FloatArray
 ) -> SRSAnalysis | None:
     """An SRS seven-axis arm's distances to its loci and det(J Jᵀ); else None."""
-    try:
-        conditions = compute_srs_conditions(robot, q).as_dict()
-    except NotSRSArmError:
+    if find_srs_factorisation(robot) is None:
         return None
+    conditions = compute_srs_conditions(robot, q).as_dict()
     return SRSAnalysis(
         {kind: float(value) for kind, value in conditions.items()},
         float(compute_srs_det_jjt(robot, q)),

@@ -303,6 +303,29 @@ FACTORISATIONS: tuple[type[PumaFactorisation], ...] = (
 )
 
 
+def _puma_table_problem(table: DHTable | None, name: str) -> str | None:
+    """Why ``table`` is not a PUMA-type DH table; None when it is one."""
+    if table is None:
+        return (
+            f"{name}: no DH table, so no analytic singularity conditions "
+            "(the numeric measures still apply)"
+        )
+    if table.nq != 6:
+        return f"{table.name}: PUMA type needs 6 joints, got {table.nq}"
+    j = table.joints
+    must_be_zero = {"a1": j[0].a, "α2": j[1].alpha, "a4": j[3].a}
+    must_be_zero |= {"a5": j[4].a, "d5": j[4].d}
+    for label, value in must_be_zero.items():
+        if abs(value) > _DH_TOL:
+            return f"{table.name}: PUMA type needs {label} = 0"
+    for index in (0, 2, 3, 4):
+        if abs(abs(math.sin(j[index].alpha)) - 1.0) > _DH_TOL:
+            return f"{table.name}: PUMA type needs α{index + 1} = ±90°"
+    if j[1].a == 0.0 or math.hypot(j[2].a, j[3].d) == 0.0:
+        return f"{table.name}: PUMA type needs a2 ≠ 0 and (a3, d4) ≠ 0"
+    return None
+
+
 def get_puma_factorisation(robot: Robot | DHTable) -> PumaFactorisation:
     """Derive the factorisation of det J from the robot's DH table.
 
@@ -311,25 +334,10 @@ def get_puma_factorisation(robot: Robot | DHTable) -> PumaFactorisation:
             PUMA type (the message says which parameter breaks it).
     """
     table = robot if isinstance(robot, DHTable) else robot.dh_table
-    name = getattr(robot, "name", "robot")
-    if table is None:
-        raise NotPumaTypeError(
-            f"{name}: no DH table, so no analytic singularity conditions "
-            "(the numeric measures still apply)"
-        )
-    if table.nq != 6:
-        raise NotPumaTypeError(
-            f"{table.name}: PUMA type needs 6 joints, got {table.nq}"
-        )
+    problem = _puma_table_problem(table, getattr(robot, "name", "robot"))
+    if problem is not None or table is None:
+        raise NotPumaTypeError(str(problem))
     j = table.joints
-    must_be_zero = {"a1": j[0].a, "α2": j[1].alpha, "a4": j[3].a}
-    must_be_zero |= {"a5": j[4].a, "d5": j[4].d}
-    for label, value in must_be_zero.items():
-        if abs(value) > _DH_TOL:
-            raise NotPumaTypeError(f"{table.name}: PUMA type needs {label} = 0")
-    for index in (0, 2, 3, 4):
-        if abs(abs(math.sin(j[index].alpha)) - 1.0) > _DH_TOL:
-            raise NotPumaTypeError(f"{table.name}: PUMA type needs α{index + 1} = ±90°")
     sigma1, sigma3 = round(math.sin(j[0].alpha)), round(math.sin(j[2].alpha))
     wrist_sign = round(math.sin(j[3].alpha)) * round(math.sin(j[4].alpha))
     a2, a3, d4 = j[1].a, j[2].a, j[3].d
@@ -364,11 +372,8 @@ def get_factorisation(robot: Robot | DHTable) -> PumaFactorisation:
     """
     if isinstance(robot, DHTable):
         return get_puma_factorisation(robot)
-    if robot.dh_table is not None:
-        try:
-            return get_puma_factorisation(robot)
-        except NotPumaTypeError:
-            pass
+    if _puma_table_problem(robot.dh_table, robot.name) is None:
+        return get_puma_factorisation(robot)
     family = get_family(robot)
     if family is None:
         raise NotPumaTypeError(str(get_family_refusal(robot)))
@@ -421,6 +426,33 @@ class SingularityConditions:
     def as_dict(self) -> dict[str, FloatArray]:
         """``{"shoulder": ..., "elbow": ..., "wrist": ...}``."""
         return {"shoulder": self.shoulder, "elbow": self.elbow, "wrist": self.wrist}
+
+
+def find_puma_factorisation(robot: Robot | DHTable) -> PumaFactorisation | None:
+    """The factorisation from a PUMA-type DH table; None for any other robot.
+
+    :func:`get_puma_factorisation` without the error, for callers that ask.
+    """
+    table = robot if isinstance(robot, DHTable) else robot.dh_table
+    if _puma_table_problem(table, robot.name) is not None:
+        return None
+    return get_puma_factorisation(robot)
+
+
+def find_factorisation(robot: Robot) -> PumaFactorisation | None:
+    """The factorisation of det J of an OPW or UR-type arm; None for any other.
+
+    :func:`get_factorisation` without the error: None for an arm with no
+    closed-form family or of a family without a 6R factorisation (seven-axis
+    arms), so that callers ask instead of catching :class:`NotPumaTypeError`.
+    """
+    puma = find_puma_factorisation(robot)
+    if puma is not None:
+        return puma
+    family = get_family(robot)
+    if family is None or not any(f.fits(family) for f in FACTORISATIONS):
+        return None
+    return get_factorisation(robot)
 
 
 def dh_angles(

@@ -66,12 +66,11 @@ from workbench.errors import InputError
 from workbench.model.robot import Robot
 from workbench.singularities.conditions import (
     SINGULARITY_KINDS,
-    NotPumaTypeError,
     PumaFactorisation,
     URFactorisation,
     compute_conditions,
+    find_puma_factorisation,
     get_factorisation,
-    get_puma_factorisation,
 )
 
 FloatArray = npt.NDArray[np.float64]
@@ -252,9 +251,7 @@ def _paper_axis(
     robot: Robot, q: FloatArray, kind: str, u: FloatArray
 ) -> tuple[str | None, FloatArray | None, float | None]:
     """Kang's axis for the PUMA tables (DH frame 1 of the robot's own table)."""
-    try:
-        get_puma_factorisation(robot)
-    except NotPumaTypeError:
+    if find_puma_factorisation(robot) is None:
         return None, None, None
     axis_name = _PAPER_AXES[kind]
     if axis_name is None or robot.dh_table is None:

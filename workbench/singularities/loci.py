@@ -24,10 +24,9 @@ import numpy.typing as npt
 from workbench.model.dh import DHTable
 from workbench.model.robot import Robot
 from workbench.singularities.conditions import (
-    NotPumaTypeError,
     PumaFactorisation,
+    find_puma_factorisation,
     get_factorisation,
-    get_puma_factorisation,
 )
 
 FloatArray = npt.NDArray[np.float64]
@@ -123,10 +122,9 @@ def compute_example_configurations(
     """
     fac = get_factorisation(robot)
     if height is None:
-        try:
-            get_puma_factorisation(robot)
+        if find_puma_factorisation(robot) is not None:
             height = PUMA_HEIGHT
-        except NotPumaTypeError:
+        else:
             height = HEIGHT_FRACTION * (abs(fac.a2) + fac.wrist_reach)
     raised = math.radians(30.0) * fac.sigma1  # θ2 raising x2 above x1
     theta = np.array([0.0, raised, 0.0, 0.0, math.pi / 2, 0.0])

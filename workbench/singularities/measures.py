@@ -32,7 +32,10 @@ from workbench.ik import compute_jacobians_local
 from workbench.model.dh import DHTable
 from workbench.model.robot import Robot
 from workbench.singularities import _svd_kernel
-from workbench.singularities.conditions import NotPumaTypeError, compute_det_j_analytic
+from workbench.singularities.conditions import (
+    compute_det_j_analytic,
+    find_factorisation,
+)
 from workbench.validation import as_finite_array
 
 FloatArray = npt.NDArray[np.float64]
@@ -269,11 +272,7 @@ def _grid_method(
     robot: Robot, quantity: str
 ) -> tuple[str, Callable[[FloatArray], dict[str, FloatArray]]]:
     if quantity == "det_j":
-        try:
-            compute_det_j_analytic(robot, np.zeros(robot.nq))
-        except NotPumaTypeError:
-            pass
-        else:
+        if find_factorisation(robot) is not None:
             return "analytic", lambda q: {"det_j": compute_det_j_analytic(robot, q)}
     try:
         compute_jacobians_local(robot, np.zeros((0, robot.nq)))

@@ -195,6 +195,17 @@ def get_srs_factorisation(robot: Robot) -> SRSFactorisation:
     )
 
 
+def find_srs_factorisation(robot: Robot) -> SRSFactorisation | None:
+    """The SRS constants of an SRS seven-axis arm; None for any other arm.
+
+    :func:`get_srs_factorisation` without the error, for callers that ask.
+    """
+    family = get_family(robot)
+    if family is None or not SRSFactorisation.fits(family):
+        return None
+    return get_srs_factorisation(robot)
+
+
 def _angles(fac: SRSFactorisation, q: npt.ArrayLike) -> FloatArray:
     """DH angles θ (..., 7) of robot joint values q (..., 7)."""
     return dh_angles(q, fac.joint_sign, fac.theta_offset)

@@ -32,9 +32,8 @@ import pinocchio as pin
 
 from workbench.model.robot import Robot
 from workbench.singularities.conditions import (
-    NotPumaTypeError,
     compute_conditions,
-    get_puma_factorisation,
+    find_puma_factorisation,
 )
 
 FloatArray = npt.NDArray[np.float64]
@@ -93,11 +92,8 @@ class SingularityGauge:
     @classmethod
     def from_robot(cls, robot: Robot) -> SingularityGauge:
         """Analytic gauge for PUMA-type arms, Jacobian gauge otherwise."""
-        try:
-            factors = get_puma_factorisation(robot)
-        except NotPumaTypeError:
-            pass
-        else:
+        factors = find_puma_factorisation(robot)
+        if factors is not None:
             return cls(robot, "analytic", abs(factors.a2) + factors.forearm, 1.0)
         length = _characteristic_length(robot)
         rng = np.random.default_rng(0)

@@ -18,7 +18,10 @@ import numpy.typing as npt
 from workbench.errors import WorkbenchError
 from workbench.model.robot import Robot
 from workbench.poses import angeles7_from_se3
-from workbench.singularities.conditions import NotPumaTypeError, compute_conditions
+from workbench.singularities.conditions import (
+    compute_conditions,
+    find_factorisation,
+)
 from workbench.viz.singularity_gauge import SingularityGauge
 from workbench.viz.viewer import Viewer
 
@@ -71,11 +74,8 @@ def compute_readout(
     lines.append(
         f"singularity distance ({gauge.method}) = {gauge.compute_distance(q):.3f}"
     )
-    try:
+    if find_factorisation(robot) is not None:
         c = compute_conditions(robot, q)
-    except NotPumaTypeError:
-        pass
-    else:
         lines.append(
             f"shoulder = {float(c.shoulder): .4f} m  elbow = {float(c.elbow): .4f}"
             f"  wrist = {float(c.wrist): .4f}"

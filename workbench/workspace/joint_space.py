@@ -35,10 +35,9 @@ from workbench.errors import InputError
 from workbench.ik import compute_jacobians_local
 from workbench.model.robot import Robot
 from workbench.singularities.conditions import (
-    NotPumaTypeError,
     PumaFactorisation,
     compute_conditions,
-    get_factorisation,
+    find_factorisation,
 )
 from workbench.singularities.measures import compute_singular_values
 from workbench.workspace.measures import get_core_count, singularity_margin
@@ -165,10 +164,7 @@ def compute_joint_space_map(
     low, high = robot.lower, robot.upper
     if not (np.all(np.isfinite(low)) and np.all(np.isfinite(high))):
         raise InputError(f"{robot.name}: the joint-space map needs finite limits")
-    try:
-        factors: PumaFactorisation | None = get_factorisation(robot)
-    except NotPumaTypeError:
-        factors = None
+    factors: PumaFactorisation | None = find_factorisation(robot)
     start = time.perf_counter()
     compute_jacobians_local(robot, np.zeros((0, robot.nq)))  # chain, kernel loaded
     out = _allocate(total, robot.nq, robot.nv, factors is not None)
