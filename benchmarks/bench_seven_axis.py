@@ -24,7 +24,7 @@ the limits, and random parameter values):
   within the limits that frankik leaves out;
 * iiwa14: every solution that a multi-start Gauss-Newton finds on
   [pose error; ψ(q) − ψ*] (16 random starts per pose) is among our branches;
-* both: ``analytic(fk(q), redundancy=redundancy_parameter(q))`` contains q.
+* both: ``analytic(fk(q), redundancy=solver.parameter_of(q))`` contains q.
 
 frankik's ``fk`` gives the pose of the Franka Hand's TCP (our tool frame
 ``panda_hand_tcp``), but its ``ik`` and ``ik_full`` take the flange pose
@@ -44,12 +44,7 @@ import pinocchio as pin
 
 from benchmarks.bench_ik_closed_form import _chain, _median_us, _rate, _reference_us
 from workbench import Robot, load_robot
-from workbench.ik import (
-    analytic,
-    analytic_batch,
-    numeric,
-    redundancy_parameter,
-)
+from workbench.ik import analytic, analytic_batch, get_solver, numeric
 
 Bench = Callable[[Robot, int, bool], "dict[str, float] | str"]
 
@@ -74,7 +69,7 @@ def _problem(robot: Robot, count: int, seed: int = 0):
     rng = np.random.default_rng(seed)
     qs = rng.uniform(robot.lower, robot.upper, size=(count, robot.nq))
     poses = np.array([robot.fk(q).homogeneous for q in qs])
-    return qs, poses, np.asarray(redundancy_parameter(robot, qs))
+    return qs, poses, np.asarray(get_solver(robot).parameter_of(qs))
 
 
 def _wrapped(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -268,7 +263,8 @@ def _constrained_newton(robot: Robot, pose: pin.SE3, psi: float, q: np.ndarray):
     """Gauss-Newton on [log6(pose⁻¹ FK(q)); ψ(q) − ψ*] from ``q`` (None: diverged)."""
     for _ in range(60):
         error = pin.log6(pose.actInv(robot.fk(q))).vector
-        gap = math.remainder(float(redundancy_parameter(robot, q)) - psi, 2 * math.pi)
+        value = float(get_solver(robot).parameter_of(q))
+        gap = math.remainder(value - psi, 2 * math.pi)
         if np.abs(error).max() < 1e-13 and abs(gap) < 1e-13:
             return q
         jac = pin.Jlog6(pose.actInv(robot.fk(q))) @ _local_jacobian(robot, q)
@@ -276,8 +272,8 @@ def _constrained_newton(robot: Robot, pose: pin.SE3, psi: float, q: np.ndarray):
         for k in range(7):
             step = np.zeros(7)
             step[k] = 1e-7
-            up = float(redundancy_parameter(robot, q + step))
-            down = float(redundancy_parameter(robot, q - step))
+            up = float(get_solver(robot).parameter_of(q + step))
+            down = float(get_solver(robot).parameter_of(q - step))
             row[k] = math.remainder(up - down, 2 * math.pi) / 2e-7
         system = np.vstack([jac, row])
         q = q - np.linalg.lstsq(system, np.append(error, gap), rcond=None)[0]
@@ -323,7 +319,7 @@ def agreement_multistart(robot: Robot, count: int, starts: int = 16) -> dict:
 
 
 def round_trip(robot: Robot, count: int) -> dict[str, float]:
-    """``analytic(fk(q), redundancy=redundancy_parameter(q))`` contains q."""
+    """``analytic(fk(q), redundancy=solver.parameter_of(q))`` contains q."""
     qs, targets, values = _problem(robot, count, seed=3)
     q_all, valid = analytic_batch(robot, targets, redundancy=values)
     gaps = np.where(valid, _wrapped(q_all, qs[:, None, :]).max(axis=2), np.inf)

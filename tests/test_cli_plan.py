@@ -190,7 +190,7 @@ def test_seven_axis_poses_at_a_given_redundancy(capsys) -> None:
     _check_ends("iiwa14", result)
     iiwa = load_robot("iiwa14")
     for key in ("q_pick", "q_place"):  # the closed form at ψ = 1.5 exactly
-        value = ik.redundancy_parameter(iiwa, np.array(result[key]))
+        value = ik.get_solver(iiwa).parameter_of(np.array(result[key]))
         assert value == pytest.approx(1.5, abs=1e-9)
 
 

@@ -3,7 +3,7 @@
 Every branch printed is checked against the library (``ik.analytic`` at the
 same value) and against forward kinematics (its residual); the value chosen
 without ``--redundancy`` is ``ik.choose_redundancy``'s; the intervals printed
-are ``ik.feasible_redundancy``'s. Bad input exits 2 with one line, an
+are ``Solver.feasible``'s. Bad input exits 2 with one line, an
 infeasible value 3 with the feasible intervals.
 """
 
@@ -45,14 +45,14 @@ def _wrapped(a: np.ndarray, b: np.ndarray) -> float:
 @pytest.mark.parametrize("name", ROBOTS)
 def test_every_branch_at_the_given_value(capsys, name) -> None:
     robot = load_robot(name)
-    value = float(ik.redundancy_parameter(robot, Q0[name]))
+    value = float(ik.get_solver(robot).parameter_of(Q0[name]))
     code, out, err = _ik(capsys, name, "--redundancy", repr(value), "--json")
     assert (code, err) == (0, "")
     result = json.loads(out)
     assert result["solver"] == "closed-form" and result["feasible"] is True
     redundancy = result["redundancy"]
     assert redundancy["source"] == "given" and redundancy["value"] == value
-    assert redundancy["parameter"] == ik.get_redundant_solver(robot).parameter
+    assert redundancy["parameter"] == ik.get_solver(robot).parameter
     expected = ik.analytic(robot, robot.fk(Q0[name]), redundancy=value)
     assert [row["branch"] for row in result["solutions"]] == [
         s.branch for s in expected
@@ -76,7 +76,7 @@ def test_every_branch_at_the_given_value(capsys, name) -> None:
 @pytest.mark.parametrize("name", ROBOTS)
 def test_degrees_give_the_same_value(capsys, name) -> None:
     robot = load_robot(name)
-    value = float(ik.redundancy_parameter(robot, Q0[name]))
+    value = float(ik.get_solver(robot).parameter_of(Q0[name]))
     code, out, _ = _ik(
         capsys, name, "--redundancy", repr(math.degrees(value)), "--deg", "--json"
     )
@@ -115,7 +115,7 @@ def test_criterion_manipulability(capsys) -> None:
 @pytest.mark.parametrize("name", ROBOTS)
 def test_feasible_intervals_are_the_library_s(capsys, name) -> None:
     robot = load_robot(name)
-    feasible = ik.feasible_redundancy(robot, robot.fk(Q0[name]))
+    feasible = ik.get_solver(robot).feasible(robot.fk(Q0[name]))
     code, out, _ = _ik(capsys, name, "--feasible", "--json")
     assert code == 0
     printed = json.loads(out)["feasible_redundancy"]
@@ -133,7 +133,7 @@ def test_feasible_intervals_are_the_library_s(capsys, name) -> None:
 def _gap(name: str) -> float:
     """A value of the parameter inside its range where no branch is within limits."""
     robot = load_robot(name)
-    feasible = ik.feasible_redundancy(robot, robot.fk(Q0[name]))
+    feasible = ik.get_solver(robot).feasible(robot.fk(Q0[name]))
     lo, hi = feasible.range
     edges = [lo, *(x for interval in feasible.union for x in interval), hi]
     gaps = [
@@ -147,7 +147,7 @@ def _gap(name: str) -> float:
 @pytest.mark.parametrize("name", ROBOTS)
 def test_infeasible_value_exits_3_with_the_intervals(capsys, name) -> None:
     robot = load_robot(name)
-    parameter = ik.get_redundant_solver(robot).parameter
+    parameter = ik.get_solver(robot).parameter
     value = _gap(name)
     code, out, err = _ik(capsys, name, "--redundancy", repr(value))
     assert code == 3 and out == ""

@@ -13,7 +13,7 @@ import pytest
 from workbench import InfeasibleError, InputError, load_robot
 from workbench.cli import main
 from workbench.collision import CollisionChecker
-from workbench.ik import get_redundant_solver, get_structure
+from workbench.ik import get_solver, get_structure
 from workbench.ik.structure import axis_lines
 from workbench.tasks import (
     FishCuttingSetup,
@@ -526,7 +526,7 @@ def test_seven_axis_run_is_continuous_within_limits_without_flips(seven_axis_run
 
 def test_seven_axis_trace_and_summary(seven_axis_run):
     robot, result = seven_axis_run
-    solver = get_redundant_solver(robot)
+    solver = get_solver(robot)
     trace = solver.parameter_of(result.q)
     wrapped = np.remainder(trace - result.redundancy + np.pi, 2 * np.pi) - np.pi
     np.testing.assert_allclose(wrapped, 0.0, rtol=0, atol=1e-9)

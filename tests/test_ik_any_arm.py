@@ -33,8 +33,7 @@ from workbench.ik import (
     _ur_kernel,
     analytic,
     analytic_batch,
-    get_branches,
-    get_closed_form,
+    get_solver,
     get_structure,
     nearest,
 )
@@ -115,7 +114,7 @@ def check_configurations(robot: Robot, qs: np.ndarray) -> np.ndarray:
 
 def test_family_is_recognised(arm) -> None:
     family = MODELS.get(arm.name, "opw")
-    assert get_branches(arm) == (UR_BRANCHES if family == "ur" else BRANCHES)
+    assert get_solver(arm).branches == (UR_BRANCHES if family == "ur" else BRANCHES)
     structure = get_structure(arm)
     assert structure.family == family
     assert structure.deviation <= STRUCTURE_TOL
@@ -180,7 +179,7 @@ def test_vectorised_batch_stage_equals_angle_arguments(arm) -> None:
     targets = np.concatenate([targets, targets[:2], targets[:2]])
     targets[-4:-2, :3, 3] *= 10.0  # out of reach
     targets[-2:, :2, 3] *= 1e-3  # near the base axis
-    closed_form = get_closed_form(arm)
+    closed_form = get_solver(arm)
     solver = _ur_kernel if closed_form.family == "ur" else _puma_kernel
     geometry = closed_form.geometry
     n, slots = len(targets), solver.N_ANGLES

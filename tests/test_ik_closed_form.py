@@ -21,6 +21,8 @@ from workbench.errors import (
     InfeasibleError,
     InputError,
     NonFiniteError,
+    UnreachableError,
+    UnsupportedRobotError,
 )
 from workbench.ik import _puma_kernel as kernel
 from workbench.ik._atan2_kernel import atan2_into
@@ -28,8 +30,6 @@ from workbench.ik._puma import LIMIT_TOL, geometry_from_dh
 from workbench.ik.closed_form import (
     BRANCHES,
     WRIST_SINGULAR_TOL,
-    UnreachableError,
-    UnsupportedRobotError,
     analytic,
     analytic_batch,
     nearest,

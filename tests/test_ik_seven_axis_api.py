@@ -24,17 +24,14 @@ from workbench.ik import (
     FRANKA_BRANCHES,
     SRS_BRANCHES,
     FeasibleRedundancy,
-    RedundantIKSolution,
+    IKSolution,
     UnreachableError,
     UnsupportedRobotError,
     analytic,
     analytic_batch,
     choose_redundancy,
-    feasible_redundancy,
-    get_branches,
-    get_redundant_solver,
+    get_solver,
     nearest,
-    redundancy_parameter,
 )
 
 #: FK of a closed-form solution against its target [m, rad]: a few roundings
@@ -78,11 +75,11 @@ def _fk_error(robot: Robot, q: np.ndarray, target: np.ndarray) -> float:
 
 
 def test_solver_of_each_family(arm: Robot) -> None:
-    solver = get_redundant_solver(arm)
-    assert solver is get_redundant_solver(arm)  # cached per robot
+    solver = get_solver(arm)
+    assert solver is get_solver(arm)  # cached per robot
     assert solver.family == FAMILY[arm.name]
     labels = SRS_BRANCHES if solver.family == "srs" else FRANKA_BRANCHES
-    assert solver.branches == labels == get_branches(arm)
+    assert solver.branches == labels == get_solver(arm).branches
     assert solver.parameter == ("arm angle" if solver.family == "srs" else "q7")
     if solver.family == "srs":
         assert solver.parameter_range == (-math.pi, math.pi)
@@ -93,17 +90,17 @@ def test_solver_of_each_family(arm: Robot) -> None:
 
 def test_analytic_solves_every_branch_for_the_value(arm: Robot) -> None:
     rng = np.random.default_rng(1)
-    solver = get_redundant_solver(arm)
+    solver = get_solver(arm)
     for q in (_random_q(arm, rng) for _ in range(20)):
         target = arm.fk(q).homogeneous
-        value = redundancy_parameter(arm, q)
+        value = get_solver(arm).parameter_of(q)
         solutions = analytic(arm, target, redundancy=value)
-        assert solutions and all(isinstance(s, RedundantIKSolution) for s in solutions)
+        assert solutions and all(isinstance(s, IKSolution) for s in solutions)
         assert [s.index for s in solutions] == sorted({s.index for s in solutions})
         for s in solutions:
             assert s.branch == solver.branches[s.index] and s.redundancy == value
             assert _fk_error(arm, s.q, target) <= ATOL_FK
-            assert abs(_wrapped(redundancy_parameter(arm, s.q) - value)) <= 1e-9
+            assert abs(_wrapped(get_solver(arm).parameter_of(s.q) - value)) <= 1e-9
             inside = bool(np.all((arm.lower <= s.q) & (s.q <= arm.upper)))
             assert (
                 s.within_limits == inside
@@ -117,7 +114,7 @@ def test_analytic_solves_every_branch_for_the_value(arm: Robot) -> None:
 
 def test_solution_is_immutable_and_pickles(arm: Robot) -> None:
     q = _random_q(arm, np.random.default_rng(2))
-    solution = analytic(arm, arm.fk(q), redundancy=redundancy_parameter(arm, q))[0]
+    solution = analytic(arm, arm.fk(q), redundancy=get_solver(arm).parameter_of(q))[0]
     with pytest.raises(FrozenInstanceError):
         solution.branch = "x"  # type: ignore[misc]
     with pytest.raises(FrozenInstanceError):
@@ -129,7 +126,7 @@ def test_solution_is_immutable_and_pickles(arm: Robot) -> None:
     assert (copy.branch, copy.redundancy, copy.within_limits) == (
         solution.branch, solution.redundancy, solution.within_limits,
     )  # fmt: skip
-    assert "RedundantIKSolution(q=" in repr(solution)
+    assert "IKSolution(q=" in repr(solution)
 
 
 def test_continuity_from_q_previous(arm: Robot) -> None:
@@ -140,7 +137,7 @@ def test_continuity_from_q_previous(arm: Robot) -> None:
         q_next[6] = q[6]  # (Franka: q7 kept, the pose is reached for it)
         target = arm.fk(q_next).homogeneous
         kept = analytic(arm, target, q_previous=q)
-        value = redundancy_parameter(arm, q)
+        value = get_solver(arm).parameter_of(q)
         given_value = analytic(arm, target, q_previous=q, redundancy=value)
         np.testing.assert_array_equal([s.q for s in kept], [s.q for s in given_value])
         assert all(s.redundancy == value for s in kept)
@@ -154,15 +151,17 @@ def test_batch_equals_single_pose(arm: Robot) -> None:
     rng = np.random.default_rng(4)
     qs = np.array([_random_q(arm, rng) for _ in range(64)])
     targets = np.array([arm.fk(q).homogeneous for q in qs])
-    values = redundancy_parameter(arm, qs)
+    values = get_solver(arm).parameter_of(qs)
     assert isinstance(values, np.ndarray) and values.shape == (64,)
-    np.testing.assert_array_equal(values, [redundancy_parameter(arm, q) for q in qs])
+    np.testing.assert_array_equal(values, [get_solver(arm).parameter_of(q) for q in qs])
     q_all, valid = analytic_batch(arm, targets, redundancy=values)
-    count = len(get_branches(arm))
+    count = len(get_solver(arm).branches)
     assert q_all.shape == (64, count, 7) and valid.shape == (64, count)
-    solver = get_redundant_solver(arm)
+    solver = get_solver(arm)
     for i in range(64):
-        single, _ = solver.solve_arrays(targets[i], float(values[i]), np.empty(0))
+        single, _ = solver.solve_arrays(
+            targets[i], np.empty(0), redundancy=float(values[i])
+        )
         np.testing.assert_array_equal(valid[i], np.isfinite(single[:, 0]))
         np.testing.assert_allclose(q_all[i], single, rtol=0, atol=ATOL_EXACT)
     # one value for every pose (Franka: some poses out of reach for that q7)
@@ -170,7 +169,7 @@ def test_batch_equals_single_pose(arm: Robot) -> None:
     q_one, valid_one = analytic_batch(arm, targets, redundancy=value)
     for i in range(64):
         try:
-            single, _ = solver.solve_arrays(targets[i], value, np.empty(0))
+            single, _ = solver.solve_arrays(targets[i], np.empty(0), redundancy=value)
         except UnreachableError:
             assert not valid_one[i].any() and np.isnan(q_one[i]).all()
             continue
@@ -180,13 +179,13 @@ def test_batch_equals_single_pose(arm: Robot) -> None:
 
 def test_track_continues_the_branch(arm: Robot) -> None:
     rng = np.random.default_rng(5)
-    solver = get_redundant_solver(arm)
+    solver = get_solver(arm)
     q = _random_q(arm, rng, 0.3)
-    value = redundancy_parameter(arm, q)
+    value = get_solver(arm).parameter_of(q)
     target = arm.fk(q).homogeneous
     index = next(s.index for s in analytic(arm, target, redundancy=value)
                  if np.abs(s.q - q).max() <= ATOL_ROUND_TRIP)  # fmt: skip
-    q_next, got, within = solver.track(target, value, q + 1e-3, index, 0.01)
+    q_next, got, within = solver.track(target, q + 1e-3, index, 0.01, redundancy=value)
     assert got == index and within
     np.testing.assert_allclose(q_next, q, rtol=0, atol=ATOL_ROUND_TRIP)
 
@@ -199,7 +198,7 @@ def _regularity(robot: Robot, q: np.ndarray) -> float:
     """
     h = 1e-6
     steps = np.concatenate([q + h * np.eye(7), q - h * np.eye(7)])
-    values = redundancy_parameter(robot, steps)
+    values = get_solver(robot).parameter_of(steps)
     gradient = _wrapped(values[:7] - values[7:]) / (2 * h)
     stacked = np.vstack([robot.jacobian_local(q), gradient])
     return float(np.linalg.svd(stacked, compute_uv=False)[-1])
@@ -211,12 +210,12 @@ def _regularity(robot: Robot, q: np.ndarray) -> float:
     unit=st.lists(st.floats(0.02, 0.98), min_size=7, max_size=7),
 )
 def test_round_trip_contains_q(name: str, unit: list[float]) -> None:
-    """analytic(fk(q), redundancy=redundancy_parameter(q)) holds q."""
+    """analytic(fk(q), redundancy=solver.parameter_of(q)) holds q."""
     robot = load_robot(name)
     q = robot.lower + np.asarray(unit) * (robot.upper - robot.lower)
     assume(_regularity(robot, q) > REGULAR)
     target = robot.fk(q).homogeneous
-    value = redundancy_parameter(robot, q)
+    value = get_solver(robot).parameter_of(q)
     solutions = analytic(robot, target, redundancy=value)
     error = min(np.abs(_wrapped(s.q - q)).max() for s in solutions)
     assert error <= ATOL_ROUND_TRIP
@@ -229,8 +228,8 @@ def test_round_trip_contains_q(name: str, unit: list[float]) -> None:
 def test_bad_input_is_refused_with_its_message(arm: Robot) -> None:
     q = _random_q(arm, np.random.default_rng(6))
     target = arm.fk(q).homogeneous
-    value = redundancy_parameter(arm, q)
-    parameter = get_redundant_solver(arm).parameter
+    value = get_solver(arm).parameter_of(q)
+    parameter = get_solver(arm).parameter
     with pytest.raises(InputError, match=f"give redundancy=.*{parameter}") as err:
         analytic(arm, target)
     assert "choose_redundancy" in str(err.value)
@@ -263,9 +262,9 @@ def test_bad_input_is_refused_with_its_message(arm: Robot) -> None:
     with pytest.raises(InputError, match="rigid transforms: pose 0"):
         analytic_batch(arm, sheared[None], redundancy=value)
     with pytest.raises(NonFiniteError):
-        redundancy_parameter(arm, np.full(7, np.nan))
+        get_solver(arm).parameter_of(np.full(7, np.nan))
     with pytest.raises(DimensionError):
-        redundancy_parameter(arm, np.zeros((3, 6)))
+        get_solver(arm).parameter_of(np.zeros((3, 6)))
 
 
 def test_six_axis_arm_has_no_redundancy() -> None:
@@ -275,8 +274,8 @@ def test_six_axis_arm_has_no_redundancy() -> None:
         analytic(robot, target, redundancy=0.0)
     with pytest.raises(InputError, match="no redundancy"):
         analytic_batch(robot, target[None], redundancy=0.0)
-    with pytest.raises(UnsupportedRobotError, match="get_closed_form"):
-        get_redundant_solver(robot)
+    with pytest.raises(UnsupportedRobotError, match="get_solver"):
+        get_solver(robot)
     assert len(analytic(robot, target)) == 8  # unchanged without redundancy
     with pytest.raises(UnsupportedRobotError, match="9 joint variables"):
         analytic(load_robot("kinova"), np.eye(4), redundancy=0.0)
@@ -294,17 +293,19 @@ def test_unreachable_srs_says_why() -> None:
     assert err.value.bounds == pytest.approx((0.02, 0.82), abs=1e-12)
     with pytest.raises(UnreachableError):
         choose_redundancy(robot, target)
-    assert feasible_redundancy(robot, target).union == ()
+    assert get_solver(robot).feasible(target).union == ()
 
 
 def test_unreachable_franka_names_the_feasible_q7() -> None:
     robot = load_robot("panda")
-    solver = get_redundant_solver(robot)
+    solver = get_solver(robot)
     rng = np.random.default_rng(7)
     grid = np.linspace(*solver.parameter_range, 41)
     for q in (_random_q(robot, rng) for _ in range(50)):
         target = robot.fk(q).homogeneous
-        _, valid = solver.solve_batch(np.broadcast_to(target, (41, 4, 4)), grid)
+        _, valid = solver.solve_batch(
+            np.broadcast_to(target, (41, 4, 4)), redundancy=grid
+        )
         missing = np.flatnonzero(~valid.any(axis=1))
         if len(missing):
             break
@@ -315,7 +316,7 @@ def test_unreachable_franka_names_the_feasible_q7() -> None:
         analytic(robot, target, redundancy=value)
     message = str(err.value)
     assert message.startswith(f"out of reach for q7 = {value:.6g} rad: ")
-    union = feasible_redundancy(robot, target).union
+    union = get_solver(robot).feasible(target).union
     assert union and any(lo <= q[6] <= hi for lo, hi in union)
     assert f"feasible q7 (every joint within its limits): [{union[0][0]:.6g}, " in (
         message
@@ -330,7 +331,7 @@ def test_an_arc_through_pi_is_said_to_join() -> None:
     target = np.eye(4)
     target[:3, :3] = np.diag([-1.0, 1.0, -1.0])
     target[:3, 3] = [0.5, 0.2, 0.7]
-    feasible = feasible_redundancy(robot, target)
+    feasible = get_solver(robot).feasible(target)
     assert feasible.circular and len(feasible.union) == 2
     assert feasible.union[0][0] == -math.pi and feasible.union[-1][1] == math.pi
     for value in (math.pi - 1e-6, -math.pi + 1e-6):  # both sides of ±π serve
@@ -353,9 +354,9 @@ def test_choose_redundancy_says_why_no_value_serves() -> None:
     low = np.eye(4)  # the hand in the base: reached, never within the limits
     low[:3, :3] = np.diag([1.0, -1.0, -1.0])
     low[2, 3] = 0.2
-    solver = get_redundant_solver(robot)
+    solver = get_solver(robot)
     grid = np.linspace(*solver.parameter_range, 721)
-    _, valid = solver.solve_batch(np.broadcast_to(low, (721, 4, 4)), grid)
+    _, valid = solver.solve_batch(np.broadcast_to(low, (721, 4, 4)), redundancy=grid)
     assert valid.any()
     with pytest.raises(InfeasibleError, match="reached outside them"):
         choose_redundancy(robot, low)
@@ -366,15 +367,15 @@ def test_choose_redundancy_says_why_no_value_serves() -> None:
 
 def test_feasible_intervals_are_feasible(arm: Robot) -> None:
     rng = np.random.default_rng(8)
-    solver = get_redundant_solver(arm)
+    solver = get_solver(arm)
     q = _random_q(arm, rng, 0.2)
-    feasible = feasible_redundancy(arm, arm.fk(q))
+    feasible = get_solver(arm).feasible(arm.fk(q))
     assert isinstance(feasible, FeasibleRedundancy)
     assert feasible.parameter == solver.parameter
     assert feasible.circular is (solver.family == "srs")
     assert feasible.branches == solver.branches
     assert len(feasible.intervals) == len(solver.branches)
-    value = redundancy_parameter(arm, q)
+    value = get_solver(arm).parameter_of(q)
     assert any(lo - 1e-9 <= value <= hi + 1e-9 for lo, hi in feasible.union)
     for b, intervals in enumerate(feasible.intervals):
         for lo, hi in intervals:
@@ -394,9 +395,11 @@ def test_feasible_intervals_are_feasible(arm: Robot) -> None:
 
 def _brute_force(robot: Robot, target: np.ndarray, criterion: str, q_previous):
     """Best score over a grid of GRID values of the parameter, every branch."""
-    solver = get_redundant_solver(robot)
+    solver = get_solver(robot)
     grid = np.linspace(*solver.parameter_range, GRID)
-    q, valid = solver.solve_batch(np.broadcast_to(target, (GRID, 4, 4)), grid)
+    q, valid = solver.solve_batch(
+        np.broadcast_to(target, (GRID, 4, 4)), redundancy=grid
+    )
     q = q[valid]
     ok = np.all((q >= robot.lower - LIMIT_SLACK) & (q <= robot.upper + LIMIT_SLACK),
                 axis=1)  # fmt: skip
@@ -447,8 +450,8 @@ def test_choice_beats_brute_force(arm: Robot, criterion: str) -> None:
 def test_choice_of_one_branch_and_bad_choices(arm: Robot) -> None:
     q = _random_q(arm, np.random.default_rng(10), 0.3)
     target = arm.fk(q).homogeneous
-    solver = get_redundant_solver(arm)
-    feasible = feasible_redundancy(arm, target)
+    solver = get_solver(arm)
+    feasible = get_solver(arm).feasible(target)
     b = next(i for i, intervals in enumerate(feasible.intervals) if intervals)
     by_label = choose_redundancy(arm, target, branch=solver.branches[b])
     by_index = choose_redundancy(arm, target, branch=b)

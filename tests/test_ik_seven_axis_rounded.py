@@ -76,7 +76,7 @@ def test_xarm7_is_franka_within_the_tolerance() -> None:
     assert structure.family == "franka"
     assert 1e-6 < structure.deviation <= STRUCTURE_TOL  # refused at 1e-6 before
     assert refinement_chain(robot) is not None
-    assert ik.get_redundant_solver(robot).parameter == "q7"
+    assert ik.get_solver(robot).parameter == "q7"
 
 
 @pytest.mark.parametrize("name", ["iiwa14", "panda"])
@@ -94,7 +94,7 @@ def test_rounded_models_keep_their_family(robot: Robot) -> None:
 
 def _round_trip(robot: Robot, q: np.ndarray) -> None:
     target = robot.fk(q)
-    value = ik.redundancy_parameter(robot, q)
+    value = ik.get_solver(robot).parameter_of(q)
     solutions = ik.analytic(robot, target, redundancy=value)
     assert min(_wrapped(s.q - q).max() for s in solutions) <= ATOL_SAME_Q
     for s in solutions:
@@ -103,11 +103,11 @@ def _round_trip(robot: Robot, q: np.ndarray) -> None:
         if ik.get_structure(robot).family == "franka":
             assert s.q[6] == value  # q7 held
         else:  # the arm angle held, on the idealised chain
-            assert abs(ik.redundancy_parameter(robot, s.q) - value) <= ATOL_RESIDUAL
+            assert abs(ik.get_solver(robot).parameter_of(s.q) - value) <= ATOL_RESIDUAL
 
 
 def test_round_trip_of_random_configurations(robot: Robot) -> None:
-    """analytic(fk(q), redundancy_parameter(q)) holds q, each branch exact."""
+    """analytic(fk(q), redundancy=solver.parameter_of(q)) holds q, each branch exact."""
     rng = np.random.default_rng(2026)
     for q in rng.uniform(robot.lower, robot.upper, size=(SAMPLES, 7)):
         _round_trip(robot, q)
@@ -125,7 +125,7 @@ def test_batch_equals_single_poses(robot: Robot) -> None:
     rng = np.random.default_rng(7)
     qs = rng.uniform(robot.lower, robot.upper, size=(300, 7))
     targets = np.array([robot.fk(q).homogeneous for q in qs])
-    values = ik.redundancy_parameter(robot, qs)
+    values = ik.get_solver(robot).parameter_of(qs)
     q_batch, valid = ik.analytic_batch(robot, targets, redundancy=values)
     for i in range(len(qs)):
         try:
@@ -141,7 +141,7 @@ def test_batch_equals_single_poses(robot: Robot) -> None:
 def test_track_follows_a_motion_exactly() -> None:
     """track / try_track on the model: exact, continuous, None out of reach."""
     robot = load_robot("xarm7")
-    solver = ik.get_redundant_solver(robot)
+    solver = ik.get_solver(robot)
     start = np.array([0.3, -0.4, 0.2, 0.9, 0.1, 1.2, 0.4])
     end = start + np.array([0.2, 0.3, -0.1, 0.2, 0.3, -0.2, 0.0])
     first = ik.analytic(robot, robot.fk(start), redundancy=float(start[6]))
@@ -150,17 +150,21 @@ def test_track_follows_a_motion_exactly() -> None:
     for t in np.linspace(0.0, 1.0, 51):
         q_true = start + t * (end - start)
         pose = robot.fk(q_true).homogeneous
-        q, index, _ = solver.track(pose, float(q_true[6]), previous, branch, 0.01)
+        q, index, _ = solver.track(
+            pose, previous, branch, 0.01, redundancy=float(q_true[6])
+        )
         assert index == branch
         assert _wrapped(q - q_true).max() <= ATOL_SAME_Q
-        tried = solver.try_track(pose, float(q_true[6]), previous, branch, 0.01)
+        tried = solver.try_track(
+            pose, previous, branch, 0.01, redundancy=float(q_true[6])
+        )
         assert tried is not None and np.array_equal(tried[0], q)
         previous = q
     far = np.eye(4)
     far[:3, 3] = (5.0, 0.0, 0.0)
-    assert solver.try_track(far, 0.0, previous, branch, 0.01) is None
+    assert solver.try_track(far, previous, branch, 0.01, redundancy=0.0) is None
     with pytest.raises(ik.UnreachableError):
-        solver.track(far, 0.0, previous, branch, 0.01)
+        solver.track(far, previous, branch, 0.01, redundancy=0.0)
 
 
 def test_fold_twins_are_both_found() -> None:
@@ -198,7 +202,7 @@ def test_broken_structure_is_refused() -> None:
     with pytest.raises(UnsupportedRobotError, match=r"tolerance 1e-05 rad/m"):
         ik.get_structure(broken)
     with pytest.raises(UnsupportedRobotError):
-        ik.get_redundant_solver(broken)
+        ik.get_solver(broken)
 
 
 def test_cli_ik_solves_the_xarm7_in_closed_form(capsys) -> None:

@@ -1,4 +1,4 @@
-"""The one door into the closed form: ClosedFormSolver, cached per robot, weakly."""
+"""The one door into the closed form: Solver, cached per robot, weakly."""
 
 from __future__ import annotations
 
@@ -10,18 +10,19 @@ import pinocchio as pin
 import pytest
 
 from workbench import load_robot
+from workbench.errors import InputError
 from workbench.ik import (
     BRANCHES,
     UR_BRANCHES,
-    ClosedFormSolver,
+    Flag,
+    Solver,
     UnsupportedRobotError,
     analytic,
     analytic_batch,
-    get_closed_form,
+    get_solver,
     get_structure,
     nearest,
 )
-from workbench.ik.solver import FLAG_COUNT
 from workbench.model.per_robot import per_robot
 
 
@@ -31,29 +32,54 @@ def puma():
 
 
 def test_one_solver_per_robot_object(puma) -> None:
-    solver = get_closed_form(puma)
-    assert isinstance(solver, ClosedFormSolver)
-    assert get_closed_form(puma) is solver
+    solver = get_solver(puma)
+    assert isinstance(solver, Solver)
+    assert get_solver(puma) is solver
     assert solver.family == "opw" and solver.branches == BRANCHES
     assert solver.robot is puma
     assert not solver.geometry.flags.writeable
     slower = puma.with_limits(velocity_limit=puma.velocity_limit / 2)
-    assert get_closed_form(slower) is not solver
+    assert get_solver(slower) is not solver
 
 
 def test_ur_solver_has_ur_labels() -> None:
-    solver = get_closed_form(load_robot("ur5"))
+    solver = get_solver(load_robot("ur5"))
     assert solver.family == "ur" and solver.branches == UR_BRANCHES
 
 
+def test_seven_axis_arms_get_the_same_solver_type() -> None:
+    for name, family, parameter in (
+        ("iiwa14", "srs", "arm angle"),
+        ("panda", "franka", "q7"),
+    ):
+        solver = get_solver(load_robot(name))
+        assert isinstance(solver, Solver) and solver.nq == 7
+        assert (solver.family, solver.parameter) == (family, parameter)
+    six = get_solver(load_robot("ur5"))
+    assert (six.nq, six.parameter, six.parameter_range) == (6, None, None)
+
+
 def test_no_closed_form_is_refused() -> None:
-    with pytest.raises(UnsupportedRobotError):
-        get_closed_form(load_robot("panda"))
+    with pytest.raises(UnsupportedRobotError, match="9 joint variables"):
+        get_solver(load_robot("kinova"))
+
+
+def test_redundancy_is_refused_without_redundancy(puma) -> None:
+    solver = get_solver(puma)
+    target = puma.fk(np.full(6, 0.3))
+    with pytest.raises(InputError, match="no redundancy"):
+        solver.solve(target, redundancy=0.3)
+    with pytest.raises(InputError, match="no redundancy"):
+        solver.parameter_of(np.zeros(6))
+    with pytest.raises(InputError, match="no redundancy"):
+        solver.feasible(target)
+    with pytest.raises(InputError, match="no redundancy"):
+        solver.solve_batch(target.homogeneous[None], redundancy=0.3)
 
 
 def test_cache_holds_no_robot_alive() -> None:
     robot = load_robot("ur5")
-    solver = weakref.ref(get_closed_form(robot))
+    solver = weakref.ref(get_solver(robot))
     get_structure(robot)
     gone = weakref.ref(robot)
     del robot
@@ -86,7 +112,7 @@ def test_solve_and_front_door_agree(puma) -> None:
     rng = np.random.default_rng(3)
     qs = rng.uniform(puma.lower, puma.upper, size=(20, 6))
     targets = np.array([puma.fk(q).homogeneous for q in qs])
-    solver = get_closed_form(puma)
+    solver = get_solver(puma)
     q_batch, valid = solver.solve_batch(targets)
     q_front, valid_front = analytic_batch(puma, targets)
     np.testing.assert_array_equal(q_batch, q_front)
@@ -98,18 +124,27 @@ def test_solve_and_front_door_agree(puma) -> None:
         np.testing.assert_array_equal([s.q for s in mine], [s.q for s in front])
 
 
-def test_solve_arrays_names_its_flags(puma) -> None:
+def test_solve_arrays_gives_one_byte_of_flags_per_branch(puma) -> None:
     q0 = np.array([0.1, -0.4, 0.3, 0.2, 0.5, -0.1])
-    q, flags = get_closed_form(puma).solve_arrays(puma.fk(q0).homogeneous, q0)
-    assert q.shape == (8, 6) and flags.shape == (FLAG_COUNT,)
+    q, flags = get_solver(puma).solve_arrays(puma.fk(q0).homogeneous, q0)
+    assert q.shape == (8, 6) and flags.shape == (8,) and flags.dtype == np.uint8
+    solutions = analytic(puma, puma.fk(q0), q_previous=q0)
+    assert [int(s.flags) for s in solutions] == flags.tolist()
+    assert all(Flag.REACHED in s.flags for s in solutions)
+
+
+def test_deviation_is_the_structure_s() -> None:
+    robot = load_robot("ur5")
+    expected = getattr(get_structure(robot), "deviation", None)
+    assert get_solver(robot).deviation == expected
 
 
 def test_track_continues_the_branch_of_the_motion(puma) -> None:
-    solver = get_closed_form(puma)
+    solver = get_solver(puma)
     q0 = np.array([0.1, -0.4, 0.3, 0.2, 0.5, -0.1])
     start = nearest(analytic(puma, puma.fk(q0)), q0)
     q1 = q0 + 1e-3
-    q, index, within = solver.track(puma.fk(q1).homogeneous, q1, start.index >> 1, 1e-2)
+    q, index, within = solver.track(puma.fk(q1).homogeneous, q1, start.index, 1e-2)
     assert index == start.index and within
     np.testing.assert_allclose(q, q1, atol=1e-12)
     # after a jump larger than max_step2 the nearest of all eight is taken

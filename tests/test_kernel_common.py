@@ -11,38 +11,49 @@ from hypothesis import strategies as st
 
 from workbench import load_robot
 from workbench.errors import InputError
+from workbench.ik import (
+    Flag,
+    _flags,
+    _puma_kernel,
+    _redundant_common,
+    _ur_kernel,
+    get_solver,
+)
 from workbench.ik import _kernel_common as common
-from workbench.ik import _puma_kernel, _ur_kernel, get_closed_form
 from workbench.ik._targets import pose_rows
 from workbench.poses import RIGIDITY_TOL
 
-_FLAGS = (
-    "FLAG_WITHIN_LIMITS",
-    "FLAG_WRIST_SINGULAR",
-    "FLAG_SHOULDER_SINGULAR",
-    "FLAG_SOME_UNREACHED",
-    "FLAG_COUNT",
+_BITS = (
+    "REACHED",
+    "WITHIN_LIMITS",
+    "SHOULDER_SINGULAR",
+    "ELBOW_SINGULAR",
+    "WRIST_SINGULAR",
+    "PARAMETER_SINGULAR",
 )
 _STATUSES = ("OK", "NOT_RIGID", "OUT_OF_REACH", "IN_CYLINDER")
 
 
-def test_flag_slots_and_status_codes_are_the_same_in_both_kernels() -> None:
-    for name in _FLAGS + _STATUSES:
-        value = getattr(common, name)
-        assert getattr(_puma_kernel, name) == value == getattr(_ur_kernel, name)
-    slots = [
-        *range(common.FLAG_WITHIN_LIMITS, common.FLAG_WITHIN_LIMITS + 8),
-        *range(common.FLAG_WRIST_SINGULAR, common.FLAG_WRIST_SINGULAR + 4),
-        common.FLAG_SHOULDER_SINGULAR,
-        common.FLAG_SOME_UNREACHED,
-    ]
-    assert sorted(slots) == list(range(common.FLAG_COUNT))  # each slot once
+def test_one_flag_encoding_for_every_kernel() -> None:
+    """Each bit once, named in one place, and the same in 6R and 7R kernels."""
+    bits = [getattr(_flags, name) for name in _BITS]
+    assert sorted(bits) == [1 << k for k in range(len(_BITS))]  # each bit once
+    for name in _BITS:
+        assert getattr(_redundant_common, name) == getattr(_flags, name)
+        assert int(getattr(Flag, name)) == getattr(_flags, name)
+    assert max(bits) < 256  # one uint8 per branch
+    for name in _STATUSES:
+        assert getattr(_puma_kernel, name) == getattr(common, name)
+        assert getattr(_ur_kernel, name) == getattr(common, name)
     assert len({getattr(common, name) for name in _STATUSES}) == 4
+    # the refinement's own (FLAG_COUNT,) slots: 8 "within limits", one "unreached"
+    assert common.FLAG_WITHIN_LIMITS + 8 <= common.FLAG_SOME_UNREACHED
+    assert common.FLAG_SOME_UNREACHED < common.FLAG_COUNT
 
 
 @pytest.fixture(scope="module")
 def solvers() -> list:
-    return [get_closed_form(load_robot(name)) for name in ("puma560", "ur5")]
+    return [get_solver(load_robot(name)) for name in ("puma560", "ur5")]
 
 
 def _rotation(q: list[float]) -> np.ndarray:
@@ -87,7 +98,7 @@ def test_kernels_refuse_exactly_the_poses_the_exact_checks_refuse(
         rigid = False
     for solver in solvers:
         kernel, geometry = solver._kernel, solver.geometry
-        q, flags = np.empty((8, 6)), np.empty(common.FLAG_COUNT, dtype=bool)
+        q, flags = np.empty((8, 6)), np.empty(8, dtype=np.uint8)
         status = kernel.solve_pose(geometry, pose, np.empty(0), q, flags, True)
         assert (status == common.NOT_RIGID) == (not rigid)
         n = kernel.N_ANGLES

@@ -15,7 +15,7 @@ from workbench import (
     NonFiniteError,
     load_robot,
 )
-from workbench.ik import get_branches, get_structure
+from workbench.ik import get_solver, get_structure
 from workbench.ik.closed_form import analytic, nearest
 from workbench.planning import (
     CartesianLimits,
@@ -352,7 +352,7 @@ def test_any_closed_form_arm_runs_the_primitives(name):
     while not planner.done:
         samples.append(planner.step())
         assert planner.cycle < 3000
-    labels = set(get_branches(robot))
+    labels = set(get_solver(robot).branches)
     for s in samples:
         pose = robot.fk(s.q)
         np.testing.assert_allclose(pose.translation, s.position, atol=1e-12)

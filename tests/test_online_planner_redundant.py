@@ -15,7 +15,7 @@ from workbench.ik import (
     DLS_EPSILON,
     DLS_LAMBDA_MAX,
     compute_tool_poses,
-    get_redundant_solver,
+    get_solver,
     nearest,
     solve_null_space_velocity,
 )
@@ -131,10 +131,12 @@ def iiwa_keep(iiwa):
 
 
 def test_the_kept_arm_angle_would_leave_the_limits(iiwa):
-    solver = get_redundant_solver(iiwa)
+    solver = get_solver(iiwa)
     psi = solver.parameter_of(IIWA_START)
-    start = nearest(solver.solve(iiwa.fk(IIWA_START), psi), IIWA_START)
-    goal = solver.solve(_turned_goal(iiwa, IIWA_START), psi, q_previous=IIWA_START)
+    start = nearest(solver.solve(iiwa.fk(IIWA_START), redundancy=psi), IIWA_START)
+    goal = solver.solve(
+        _turned_goal(iiwa, IIWA_START), redundancy=psi, q_previous=IIWA_START
+    )
     kept = next(s for s in goal if s.branch == start.branch)
     assert not kept.within_limits and kept.q[0] > iiwa.upper[0]
 
@@ -142,7 +144,7 @@ def test_the_kept_arm_angle_would_leave_the_limits(iiwa):
 def test_keep_moves_the_arm_angle_only_when_it_must(iiwa, iiwa_keep):
     planner, samples = iiwa_keep
     trace = np.array([s.redundancy for s in samples])
-    psi = get_redundant_solver(iiwa).parameter_of(IIWA_START)
+    psi = get_solver(iiwa).parameter_of(IIWA_START)
     q = np.array([s.q for s in samples])
     margins = np.minimum(q - iiwa.lower, iiwa.upper - q).min(axis=1)
     moving = np.flatnonzero(trace != psi)
@@ -167,7 +169,7 @@ def test_commands_stay_within_the_limits_continuous_and_on_one_branch(iiwa, iiwa
 
 def test_the_trace_is_the_parameter_of_each_command(iiwa, iiwa_keep):
     _, samples = iiwa_keep
-    solver = get_redundant_solver(iiwa)
+    solver = get_solver(iiwa)
     trace = np.array([s.redundancy for s in samples])
     q = np.array([s.q for s in samples])
     step = np.remainder(solver.parameter_of(q) - trace + np.pi, 2 * np.pi) - np.pi
@@ -264,20 +266,20 @@ def test_limit_score_is_a_smooth_minimum_and_its_gradient_is_exact(seed):
 @pytest.mark.parametrize("name", ["iiwa14", "panda"])
 def test_try_track_is_track_without_the_error(name):
     robot = load_robot(name)
-    solver = get_redundant_solver(robot)
+    solver = get_solver(robot)
     q = IIWA_START if name == "iiwa14" else PANDA_START
     pose = robot.fk(q).homogeneous
     value = solver.parameter_of(q)
-    found = solver.try_track(pose, value, q, 0, 10.0)
-    expected = solver.track(pose, value, q, 0, 10.0)
+    found = solver.try_track(pose, q, 0, 10.0, redundancy=value)
+    expected = solver.track(pose, q, 0, 10.0, redundancy=value)
     assert found is not None
     np.testing.assert_array_equal(found[0], expected[0])
     assert found[1:] == expected[1:]
     far = pose.copy()
     far[:3, 3] = [5.0, 0.0, 0.0]  # [m], beyond any reach
-    assert solver.try_track(far, value, q, 0, 10.0) is None
+    assert solver.try_track(far, q, 0, 10.0, redundancy=value) is None
     with pytest.raises(InfeasibleError):
-        solver.track(far, value, q, 0, 10.0)
+        solver.track(far, q, 0, 10.0, redundancy=value)
 
 
 @pytest.mark.parametrize(
@@ -289,11 +291,12 @@ def test_near_the_wrist_singularity_no_joint_spins(iiwa, q6, direction):
     q5 and q7 beyond their speed limits; the planner's commands stay continuous."""
     q_mid = np.array([0.3, 0.6, 0.2, -1.2, 0.4, q6, 0.3])
     step = 0.05 * np.array(direction)  # [m]
-    solver = get_redundant_solver(iiwa)
+    solver = get_solver(iiwa)
     psi = solver.parameter_of(q_mid)
     mid = iiwa.fk(q_mid)
     q0 = nearest(
-        solver.solve(pin.SE3(mid.rotation, mid.translation - step), psi), q_mid
+        solver.solve(pin.SE3(mid.rotation, mid.translation - step), redundancy=psi),
+        q_mid,
     ).q
     _, samples = _run(iiwa, q0, mid.translation + step)
     q = np.array([q0] + [s.q for s in samples])
@@ -302,10 +305,14 @@ def test_near_the_wrist_singularity_no_joint_spins(iiwa, q6, direction):
     for s in samples:
         np.testing.assert_allclose(iiwa.fk(s.q).translation, s.position, atol=ATOL_POSE)
     # the closed form at the start's arm angle along the same poses
-    kept, previous, index = [], q0, nearest(solver.solve(iiwa.fk(q0), psi), q0).index
+    kept, previous, index = (
+        [],
+        q0,
+        nearest(solver.solve(iiwa.fk(q0), redundancy=psi), q0).index,
+    )
     for s in samples:
         pose = pin.SE3(s.rotation, s.position).homogeneous
-        previous, index, _ = solver.track(pose, psi, previous, index, 10.0)
+        previous, index, _ = solver.track(pose, previous, index, 10.0, redundancy=psi)
         kept.append(previous)
     kept_ratio = np.abs(np.diff(np.array([q0, *kept]), axis=0)) / (
         iiwa.velocity_limit * LIMITS_PERIOD

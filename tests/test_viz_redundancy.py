@@ -89,10 +89,10 @@ def test_sweep_configurations_reach_the_pose_at_their_values(name) -> None:
     robot = load_robot(name)
     q0 = Q0[name]
     value, branch = find_branch(robot, q0)
-    assert abs(value - float(ik.redundancy_parameter(robot, q0))) < ATOL_PARAMETER
+    assert abs(value - float(ik.get_solver(robot).parameter_of(q0))) < ATOL_PARAMETER
     target = robot.fk(q0)
     sweep = compute_redundancy_sweep(robot, target, 9, branch)
-    feasible = ik.feasible_redundancy(robot, target)
+    feasible = ik.get_solver(robot).feasible(target)
     assert sweep.intervals == feasible.intervals[feasible.branches.index(branch)]
     assert sweep.branch == branch and sweep.q.shape == (9, 7)
     for qk, vk in zip(sweep.q, sweep.values, strict=True):
@@ -100,7 +100,7 @@ def test_sweep_configurations_reach_the_pose_at_their_values(name) -> None:
         assert np.linalg.norm(error.translation) < ATOL_POSE
         assert np.linalg.norm(pin.log3(error.rotation)) < ATOL_POSE
         assert np.all((qk >= robot.lower) & (qk <= robot.upper))
-        assert abs(float(ik.redundancy_parameter(robot, qk)) - vk) < ATOL_PARAMETER
+        assert abs(float(ik.get_solver(robot).parameter_of(qk)) - vk) < ATOL_PARAMETER
         assert any(lo <= vk <= hi for lo, hi in sweep.intervals)
     assert np.all(np.diff(sweep.unwrapped) > 0.0)
     wrapped = np.where(
@@ -268,7 +268,7 @@ def test_an_arm_angle_sweep_runs_through_pi_without_a_jump() -> None:
     """A branch feasible across ψ = ±π is swept across it, continuously."""
     robot = load_robot("iiwa14")
     target = robot.fk(Q0["iiwa14"])
-    feasible = ik.feasible_redundancy(robot, target)
+    feasible = ik.get_solver(robot).feasible(target)
     through = [
         label
         for label, intervals in zip(feasible.branches, feasible.intervals, strict=True)
@@ -313,7 +313,7 @@ def test_branches_page_renders_the_arm_and_its_ghosts(chromium, tmp_path, name) 
     from tests._chromium import take_screenshot
 
     robot = load_robot(name)
-    value = float(ik.redundancy_parameter(robot, Q0[name]))
+    value = float(ik.get_solver(robot).parameter_of(Q0[name]))
     solutions = ik.analytic(robot, robot.fk(Q0[name]), redundancy=value)
     viewer = Viewer(robot, Q0[name], color_by_singularity=True)
     viewer.show_ghosts([s.q for s in solutions], labels=[s.branch for s in solutions])

@@ -21,7 +21,7 @@ from workbench.ik import (
     UnreachableError,
     UnsupportedRobotError,
     analytic,
-    get_closed_form,
+    get_solver,
 )
 from workbench.ik._refine_kernel import refinement_chain
 from workbench.singularities.conditions import (
@@ -182,7 +182,7 @@ def test_counts_and_dexterity_against_analytic_and_pinocchio(robot: Robot) -> No
     out = evaluate_block(robot, grid, 0, grid.voxel_count)
     poses = block_poses(grid, 0, grid.voxel_count)
     factors, joints = _constants(robot)
-    q_all, valid = get_closed_form(robot).solve_batch(poses[flat])
+    q_all, valid = get_solver(robot).solve_batch(poses[flat])
     counts = np.zeros((2, len(flat)), dtype=np.uint8)
     measures = np.zeros((5, len(flat)), dtype=np.float32)
     dexterity = np.zeros((2, len(flat)))
@@ -329,7 +329,7 @@ def test_bad_requests() -> None:
             evaluate_block(robot, grid, start, stop)
     with pytest.raises(InputError, match="integer"):
         evaluate_block(robot, grid, 0.0, 3)  # type: ignore[arg-type]
-    solver = get_closed_form(robot)
+    solver = get_solver(robot)
     poses = np.tile(np.eye(4), (3, 1, 1))
     with pytest.raises(DimensionError, match="valid"):
         solver.solve_batch_into(poses, np.empty((3, 8, 6)), np.empty((2, 8), bool))

@@ -122,7 +122,7 @@ def test_placement_found_and_verified_at_the_map_values(arm, rng):
         assert placement.all_reachable and placement.missed == 0
         assert math.isnan(placement.min_singularity_margin)
         assert set(placement.redundancy) <= set(values.tolist())
-        assert placement.branch in ik.get_redundant_solver(robot).branches
+        assert placement.branch in ik.get_solver(robot).branches
         _check_independently(robot, placement, task, values)
     keys = [p.rank_key() for p in found]
     assert keys == sorted(keys)
@@ -142,7 +142,7 @@ def test_mounts_with_a_map_use_its_values(arm, rng):
 def test_map_built_in_memory_at_redundancy_samples(rng):
     robot = load_robot("iiwa14")
     count = 2
-    values = redundancy_values(ik.get_redundant_solver(robot).parameter_range, count)
+    values = redundancy_values(ik.get_solver(robot).parameter_range, count)
     task = _task(robot, values, rng, count=3)
     heights = task[:, 2, 3]
     small = build_task_map(
@@ -164,7 +164,7 @@ def test_scene_in_the_world_frame(rng):
     (checked with a checker of the scene in the base frame); a cage around
     the arm blocks every pose."""
     robot = load_robot("iiwa14")
-    values = redundancy_values(ik.get_redundant_solver(robot).parameter_range, K)
+    values = redundancy_values(ik.get_solver(robot).parameter_range, K)
     task = _task(robot, values, rng, count=3)
     near = pin.SE3(np.eye(3), np.array([BASE[0] + 0.35, BASE[1], 0.3]))
     scene = Scene("near", (Obstacle("near", "box", (0.2, 0.2, 0.6), near),))
@@ -186,7 +186,7 @@ def test_path_followed_by_a_chain_over_values_and_branches():
     """A straight 10 cm line at fixed orientation, solved by one (value,
     branch) from BASE: a chain follows it; reversed in time, too."""
     robot = load_robot("iiwa14")
-    values = redundancy_values(ik.get_redundant_solver(robot).parameter_range, K)
+    values = redundancy_values(ik.get_solver(robot).parameter_range, K)
     start = robot.fk(np.array([0.2, 0.6, 0.1, -1.2, 0.2, 0.9, 0.3])).homogeneous
     line = np.repeat(start[None], 11, axis=0)
     line[:, 0, 3] += np.linspace(0.0, 0.1, 11)

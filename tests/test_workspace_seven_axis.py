@@ -63,7 +63,7 @@ def test_values_are_cell_centres_of_the_range() -> None:
 
 def _reference(robot, grid, start, stop, count):
     """Per pose: branches reached, in limits, best margin, its q and value."""
-    values = redundancy_values(ik.get_redundant_solver(robot).parameter_range, count)
+    values = redundancy_values(ik.get_solver(robot).parameter_range, count)
     rows = []
     for pose in block_poses(grid, start, stop):
         reached, usable, best = set(), set(), (-np.inf, None, np.nan)
@@ -134,7 +134,7 @@ def test_map_is_bitwise_the_same_on_1_and_2_workers(robot, grid, tmp_path) -> No
     assert not one.sampled and one.reachable_fraction > 0.0
     assert _arrays(tmp_path / "one.zarr") == _arrays(tmp_path / "two.zarr")
     attrs = open_map(tmp_path / "one.zarr").attrs
-    solver = ik.get_redundant_solver(robot)
+    solver = ik.get_solver(robot)
     assert attrs["family"] == solver.family
     assert attrs["redundancy"]["parameter"] == solver.parameter
     assert attrs["redundancy"]["samples"] == DEFAULT_REDUNDANCY_SAMPLES
@@ -220,7 +220,7 @@ def test_a_pose_reached_at_the_values_is_feasible_and_its_value_inside(
     values = out["redundancy"].reshape(-1)
     assert branches.any()
     for pose, usable, value in zip(poses, branches, values, strict=True):
-        feasible = ik.feasible_redundancy(robot, pose)
+        feasible = ik.get_solver(robot).feasible(pose)
         if not usable:
             continue
         assert feasible.union, "reached at a value, yet feasible for none"

@@ -137,3 +137,61 @@ class JointLimitError(InfeasibleError):
 
 class SceneFileError(InputError):
     """A scene file is missing, unreadable or invalid (the message says where)."""
+
+
+class UnsupportedRobotError(InputError):
+    """The robot has no closed-form IK (not a 6R or 7R arm of a supported family)."""
+
+
+class UnreachableError(InfeasibleError):
+    """The wrist centre of the target lies where the arm cannot put it.
+
+    Attributes:
+        distance: Distance [m] of the wrist centre from the shoulder (``kind``
+            ``"reach"``) or from the base axis (``kind`` ``"cylinder"``).
+        bounds: Reachable interval of that distance, ``(low, high)`` [m].
+        kind: ``"reach"`` (too far or too close to the shoulder),
+            ``"cylinder"`` (inside the cylinder of radius |d2 + d3| around the
+            base axis that the shoulder offset keeps the wrist out of) or
+            ``"model"`` (at the edge of the reach, where a model that is of
+            its family only up to rounding reaches less than its idealised
+            structure: no branch refines onto the pose; distance and bounds
+            then 0).
+
+    A seven-axis arm's solver words its own ``message`` (the redundancy
+    parameter's value and the values that reach).
+    """
+
+    def __init__(
+        self,
+        distance: float,
+        bounds: tuple[float, float],
+        kind: str,
+        message: str | None = None,
+    ):
+        self.distance = distance
+        self.bounds = bounds
+        self.kind = kind
+        if message is not None:
+            pass
+        elif kind == "model":
+            message = (
+                "out of reach: the pose is at the edge of the reach of the "
+                "idealised arm, and no branch reaches it on the robot's own model"
+            )
+        elif kind == "cylinder":
+            message = (
+                f"out of reach: wrist centre at {distance:.6g} m from the base axis, "
+                f"inside the unreachable cylinder of radius {bounds[0]:.6g} m "
+                "(the shoulder offset d2 + d3) around it"
+            )
+        else:
+            message = (
+                f"out of reach: wrist centre at distance {distance:.6g} m from the "
+                f"shoulder, reach is [{bounds[0]:.6g}, {bounds[1]:.6g}] m"
+            )
+        super().__init__(message)
+
+
+class DifferentialIKError(InfeasibleError):
+    """The QP of :func:`workbench.ik.qp_step` has no solution the solver could find."""

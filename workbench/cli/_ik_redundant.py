@@ -23,7 +23,7 @@ from workbench.errors import InfeasibleError, InputError
 from workbench.model.robot import Robot
 
 if TYPE_CHECKING:
-    from workbench.ik import FeasibleRedundancy, RedundantIKSolution, RedundantSolver
+    from workbench.ik import FeasibleRedundancy, IKSolution, Solver
 
 #: The singular flags of a branch, as JSON keys and as printed.
 SINGULAR_FLAGS = (
@@ -35,7 +35,7 @@ SINGULAR_FLAGS = (
 
 
 def solve_and_print_redundant(
-    args: argparse.Namespace, robot: Robot, target: pin.SE3, solver: RedundantSolver
+    args: argparse.Namespace, robot: Robot, target: pin.SE3, solver: Solver
 ) -> int:
     """Print the branches at the given or chosen value; returns the exit code.
 
@@ -47,8 +47,6 @@ def solve_and_print_redundant(
         InputError: If the value exceeds ``_redundancy.MAX_REDUNDANCY`` or
             comes with ``--criterion``.
     """
-    from workbench import ik
-
     head: dict[str, Any] = {
         "robot": robot.name,
         "frame": robot.tool_frame,
@@ -58,14 +56,14 @@ def solve_and_print_redundant(
     }
     feasible: FeasibleRedundancy | None = None
     if args.feasible:
-        feasible = ik.feasible_redundancy(robot, target)
+        feasible = solver.feasible(target)
         head["feasible_redundancy"] = _redundancy.feasible_json(feasible)
     try:
         value, redundancy = _get_value(args, robot, target, solver)
         head["redundancy"] = redundancy
-        rows = _rows(robot, target, solver.solve(target, value))
+        rows = _rows(robot, target, solver.solve(target, redundancy=value))
         if not args.all and not any(row["within_limits"] for row in rows):
-            feasible = feasible or ik.feasible_redundancy(robot, target)
+            feasible = feasible or solver.feasible(target)
             shown = _redundancy.format_value(value, args.deg)
             raise InfeasibleError(
                 f"at {solver.parameter} = {shown} {len(rows)} branches reach the "
@@ -85,7 +83,7 @@ def solve_and_print_redundant(
 
 
 def _get_value(
-    args: argparse.Namespace, robot: Robot, target: pin.SE3, solver: RedundantSolver
+    args: argparse.Namespace, robot: Robot, target: pin.SE3, solver: Solver
 ) -> tuple[float, dict[str, Any]]:
     """The value [rad] and the ``redundancy`` JSON object saying where it comes from."""
     from workbench import ik
@@ -113,7 +111,7 @@ def _get_value(
 
 
 def _rows(
-    robot: Robot, target: pin.SE3, solutions: list[RedundantIKSolution]
+    robot: Robot, target: pin.SE3, solutions: list[IKSolution]
 ) -> list[dict[str, Any]]:
     """One JSON-ready row per branch reaching the pose."""
     return [
@@ -136,7 +134,7 @@ def _print_text(
     head: dict[str, Any],
     rows: list[dict[str, Any]],
     feasible: FeasibleRedundancy | None,
-    solver: RedundantSolver,
+    solver: Solver,
 ) -> None:
 
     redundancy = head["redundancy"]

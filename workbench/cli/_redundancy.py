@@ -3,7 +3,7 @@
 A seven-axis arm of the SRS family (KUKA LBR iiwa) or of the Franka family
 (Panda, FR3) has a closed form per value of one redundancy parameter: the arm
 angle ψ (SRS) or the joint value q7 (Franka), both in rad
-(:func:`workbench.ik.get_redundant_solver`). Here: the ``--redundancy VALUE``
+(:func:`workbench.ik.get_solver`). Here: the ``--redundancy VALUE``
 option, the solver of a robot or None, and the feasible intervals as text and
 JSON.
 """
@@ -21,7 +21,7 @@ from workbench.model.robot import Robot
 if TYPE_CHECKING:
     import pinocchio as pin
 
-    from workbench.ik import FeasibleRedundancy, RedundantSolver
+    from workbench.ik import FeasibleRedundancy, Solver
 
 #: Decimals of a parameter value printed in rad (in degrees: this minus 3).
 DIGITS = 6
@@ -48,14 +48,15 @@ def add_redundancy_argument(parser: argparse.ArgumentParser, unit_help: str) -> 
     )
 
 
-def get_redundant(robot: Robot) -> RedundantSolver | None:
+def get_redundant(robot: Robot) -> Solver | None:
     """The closed form of a seven-axis arm of a known family, else None."""
-    from workbench.ik import UnsupportedRobotError, get_redundant_solver
+    from workbench.ik import UnsupportedRobotError, get_solver
 
     try:
-        return get_redundant_solver(robot)
+        solver = get_solver(robot)
     except UnsupportedRobotError:
         return None
+    return solver if solver.parameter is not None else None
 
 
 def refuse_redundancy(robot: Robot, option: str = "--redundancy") -> InputError:
@@ -137,11 +138,11 @@ def with_feasible(
         degrees: Print the intervals in degrees.
         feasible: The intervals if already known (else computed).
     """
-    from workbench.ik import feasible_redundancy
+    from workbench.ik import get_solver
 
     message = " ".join(str(err).split())
     if "feasible" not in message:  # the solver's reason, without the intervals
-        feasible = feasible or feasible_redundancy(robot, target)
+        feasible = feasible or get_solver(robot).feasible(target)
         message += f"; {describe_feasible(feasible, degrees)}"
     return InfeasibleError(message)
 

@@ -31,12 +31,7 @@ from workbench.cli._ik_output import (
 )
 from workbench.cli._redundancy import add_redundancy_argument
 from workbench.errors import InfeasibleError, InputError
-from workbench.ik.closed_form import (
-    IKSolution,
-    UnsupportedRobotError,
-    get_closed_form,
-    nearest,
-)
+from workbench.ik import IKSolution, UnsupportedRobotError, get_solver, nearest
 from workbench.ik.numerical import numeric
 from workbench.model.robot import Robot
 from workbench.poses import (
@@ -231,7 +226,7 @@ def _solve_and_print(args: argparse.Namespace, robot: Robot, target: pin.SE3) ->
         if getattr(args, option):
             raise _redundancy.refuse_redundancy(robot, f"--{option}")
     try:
-        family = get_closed_form(robot).family
+        family = get_solver(robot).family
     except UnsupportedRobotError as err:
         solver, reason = "numeric", str(err)
         if args.all and not args.json:
@@ -269,7 +264,7 @@ def _solve(
     """
     if solver == "numeric":
         return [_numeric_row(robot, target)]
-    solutions = get_closed_form(robot).solve(target)
+    solutions = get_solver(robot).solve(target)
     if not args.all:
         solutions = [_pick(solutions, robot.nq)]
     return [

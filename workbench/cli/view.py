@@ -158,11 +158,11 @@ def _ik_branches(
 def _redundant_branches(
     args: argparse.Namespace, robot: Robot, q: npt.NDArray[np.float64]
 ) -> tuple[list, list[str], str]:
-    from workbench.ik import analytic, get_redundant_solver, redundancy_parameter
+    from workbench.ik import analytic, get_solver
 
-    solver = get_redundant_solver(robot)
+    solver = get_solver(robot)
     if args.redundancy is None:
-        value, source = float(redundancy_parameter(robot, q)), "the value of Q"
+        value, source = float(solver.parameter_of(q)), "the value of Q"
     else:
         value, source = _redundancy.to_radians(args.redundancy, args.deg), "given"
     target = robot.fk(q)

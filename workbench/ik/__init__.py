@@ -1,28 +1,30 @@
-"""Inverse kinematics: closed form for OPW, UR, SRS and Franka arms, numerical for any.
+r"""Inverse kinematics: closed form for OPW, UR, SRS and Franka arms, numerical for any.
 
 Public entry points (see docs/interface.md): the closed-form families
 (``Family``, ``FAMILIES``, ``get_family``), ``analytic``, ``analytic_batch``,
-``numeric``, ``numeric_batch``, each robot's ``ClosedFormSolver``
-(``get_closed_form``) or, for seven-axis arms, ``RedundantSolver``
-(``get_redundant_solver``) with the redundancy tools (``redundancy_parameter``,
-``feasible_redundancy``, ``choose_redundancy``), plus the damped-least-squares
+``numeric``, ``numeric_batch``, each robot's one ``Solver`` (``get_solver``,
+every family: six axes and, with ``redundancy=``, seven) returning
+``IKSolution``\ s (flags: ``Flag``), the redundancy choice
+(``choose_redundancy``), plus the damped-least-squares
 tools and the compiled chain's batch of tool Jacobians
 (``compute_jacobians_local``) and of tool poses with their manipulability
 (``compute_tool_poses``).
 """
 
+from workbench.errors import (
+    DifferentialIKError,
+    UnreachableError,
+    UnsupportedRobotError,
+)
+from workbench.ik._flags import Flag
 from workbench.ik.batch_jacobians import compute_jacobians_local
 from workbench.ik.batch_poses import compute_tool_poses
 from workbench.ik.closed_form import (
     BRANCHES,
     UR_BRANCHES,
     WRIST_SINGULAR_TOL,
-    IKSolution,
-    UnreachableError,
-    UnsupportedRobotError,
     analytic,
     analytic_batch,
-    get_branches,
     nearest,
 )
 from workbench.ik.damped import (
@@ -42,22 +44,11 @@ from workbench.ik.families import (
 )
 from workbench.ik.numerical import IKResult, numeric
 from workbench.ik.numerical_batch import IKBatchResult, numeric_batch
-from workbench.ik.qp import QP_DAMPING, DifferentialIKError, qp_step
-from workbench.ik.redundancy import (
-    RedundancyChoice,
-    choose_redundancy,
-    feasible_redundancy,
-    redundancy_parameter,
-)
-from workbench.ik.redundant import (
-    FRANKA_BRANCHES,
-    SRS_BRANCHES,
-    FeasibleRedundancy,
-    RedundantIKSolution,
-    RedundantSolver,
-    get_redundant_solver,
-)
-from workbench.ik.solver import ClosedFormSolver, get_closed_form
+from workbench.ik.qp import QP_DAMPING, qp_step
+from workbench.ik.redundancy import RedundancyChoice, choose_redundancy
+from workbench.ik.redundant import FRANKA_BRANCHES, SRS_BRANCHES, FeasibleRedundancy
+from workbench.ik.solution import IKSolution
+from workbench.ik.solver import Solver, get_solver
 from workbench.ik.structure import (
     STRUCTURE_TOL,
     KinematicStructure,
@@ -75,17 +66,16 @@ __all__ = [
     "STRUCTURE_TOL",
     "UR_BRANCHES",
     "WRIST_SINGULAR_TOL",
-    "ClosedFormSolver",
     "DifferentialIKError",
     "Family",
     "FeasibleRedundancy",
+    "Flag",
     "IKBatchResult",
     "IKResult",
     "IKSolution",
     "KinematicStructure",
     "RedundancyChoice",
-    "RedundantIKSolution",
-    "RedundantSolver",
+    "Solver",
     "UnreachableError",
     "UnsupportedRobotError",
     "analytic",
@@ -95,18 +85,14 @@ __all__ = [
     "compute_tool_poses",
     "dls_inverse",
     "dls_step",
-    "feasible_redundancy",
-    "get_branches",
-    "get_closed_form",
     "get_family",
     "get_family_refusal",
-    "get_redundant_solver",
+    "get_solver",
     "get_structure",
     "nearest",
     "numeric",
     "numeric_batch",
     "qp_step",
-    "redundancy_parameter",
     "require_family",
     "solve_null_space_velocity",
     "solve_velocity",

@@ -51,6 +51,7 @@ from workbench.ik._redundant_common import (
     NOT_RIGID,
     OK,
     OUT_OF_REACH,
+    REACHED,
     SHOULDER_SINGULAR,
     WITHIN_LIMITS,
     WRIST_SINGULAR,
@@ -362,7 +363,7 @@ def _solve(geo, f0, f1, f2, value, prev, has_prev, q, flags) -> int:
                 q[b, 5] = common.joint_value(geo, 5, t6, prev, has_prev)
                 q[b, 6] = value
                 within = WITHIN_LIMITS if common.row_within_limits(geo, q, b) else 0
-                flags[b] = singular | within
+                flags[b] = REACHED | singular | within
             reached = True
     return OK if reached else OUT_OF_REACH
 
@@ -399,7 +400,7 @@ def solve_pose(
             (0,) for the representative within the limits (else in (−π, π]).
         q: (8, 7) output [rad], rows in :data:`BRANCHES` order; NaN rows for
             the branches that do not reach.
-        flags: (8,) uint8 output, bits of ``_redundant_common``.
+        flags: (8,) uint8 output, bits of ``_flags``.
         check: Test first that the pose is finite and rigid.
 
     Returns:

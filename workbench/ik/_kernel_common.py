@@ -1,4 +1,4 @@
-r"""What the compiled closed forms share: status codes, flag slots, pose rows, angles.
+r"""What the compiled closed forms share: status codes, flag bits, pose rows, angles.
 
 The kernels of both families (:mod:`workbench.ik._puma_kernel`,
 :mod:`workbench.ik._ur_kernel`) call these helpers; the cache of every kernel
@@ -20,6 +20,13 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench._compiled import entry_point, helper
+from workbench.ik._flags import (
+    ELBOW_SINGULAR,
+    REACHED,
+    SHOULDER_SINGULAR,
+    WITHIN_LIMITS,
+    WRIST_SINGULAR,
+)
 from workbench.poses import RIGIDITY_TOL
 
 FloatArray = npt.NDArray[np.float64]
@@ -31,16 +38,11 @@ Row = tuple[float, float, float, float]
 #: reach; it is inside the cylinder the shoulder offset keeps it out of.
 OK, NOT_RIGID, OUT_OF_REACH, IN_CYLINDER = 0, 1, 2, 3
 
-#: Slots of the (FLAG_COUNT,) flags of ``solve_pose``. Branch ``b`` within
-#: the joint limits (± LIMIT_TOL): slot ``FLAG_WITHIN_LIMITS + b``, 8 slots.
+#: Slots of the (FLAG_COUNT,) bool flags that the 6R refinement
+#: (``_refine_kernel.refine_pose``) updates: branch ``b`` within the joint
+#: limits, slot ``FLAG_WITHIN_LIMITS + b`` (8 slots); some branches do not
+#: reach. The kernels' own flags are the per-branch bits of ``_flags``.
 FLAG_WITHIN_LIMITS = 0
-#: Wrist singular for branches ``2 pair`` and ``2 pair + 1`` (the two wrists of
-#: an (arm, elbow) pair): slot ``FLAG_WRIST_SINGULAR + pair``, 4 slots.
-FLAG_WRIST_SINGULAR = 8
-#: The shoulder is singular (wrist centre on the surface where the arms meet).
-FLAG_SHOULDER_SINGULAR = 12
-#: Some branches cannot reach the pose (their rows of ``q`` are NaN) though
-#: others can.
 FLAG_SOME_UNREACHED = 13
 FLAG_COUNT = 14
 
@@ -327,7 +329,7 @@ def solve_one(
     pose: FloatArray,
     prev: FloatArray,
     q: FloatArray,
-    flags: npt.NDArray[np.bool_],
+    flags: npt.NDArray[np.uint8],
     check: bool,
     angle_arguments,
     assemble,
@@ -340,19 +342,20 @@ def solve_one(
         pose: (4, 4) target pose of the tool frame in the base frame [m].
         prev: (6,) previous configuration [rad], or (0,) for none.
         q: (8, 6) output [rad].
-        flags: (FLAG_COUNT,) output, slots ``FLAG_*``.
+        flags: (8,) uint8 output, the bits of ``_flags`` per branch.
         check: Test first that the pose is finite and rigid.
         angle_arguments: The family's ``angle_arguments``.
         assemble: The family's ``assemble``.
         layout: The family's mask, ``(n_angles, wrist_bits, shoulder_bit,
-            dead_bits)``: the number of angle slots, the mask bit of a
-            singular wrist per (arm, elbow) pair (4,), of a singular
-            shoulder, and the bits of the parts that cannot reach.
+            elbow_bits, dead_bits)``: the number of angle slots, the mask bit
+            of a singular wrist per (arm, elbow) pair (4,), of a singular
+            shoulder, of a singular elbow per branch (8,), and of a branch
+            that cannot reach (8,).
 
     Returns:
         OK, NOT_RIGID, OUT_OF_REACH or IN_CYLINDER (outputs then undefined).
     """
-    n_angles, wrist_bits, shoulder_bit, dead_bits = layout
+    n_angles, wrist_bits, shoulder_bit, elbow_bits, dead_bits = layout
     if check and not is_rigid(pose):
         return NOT_RIGID
     y, x = np.empty(n_angles), np.empty(n_angles)
@@ -367,11 +370,18 @@ def solve_one(
     for slot in range(n_angles):  # atan2, or the angle itself in y
         exact = mask >> slot & 1
         angles[slot] = y[slot] if exact else math.atan2(y[slot], x[slot])
-    assemble(geo, angles, previous, q, flags[FLAG_WITHIN_LIMITS:8], mask)
-    for pair in range(4):
-        flags[FLAG_WRIST_SINGULAR + pair] = mask >> wrist_bits[pair] & 1
-    flags[FLAG_SHOULDER_SINGULAR] = mask >> shoulder_bit & 1
-    flags[FLAG_SOME_UNREACHED] = mask & dead_bits != 0
+    within = np.empty(8, dtype=np.bool_)
+    assemble(geo, angles, previous, q, within, mask)
+    shoulder = SHOULDER_SINGULAR if mask >> shoulder_bit & 1 else 0
+    for b in range(8):
+        if mask >> dead_bits[b] & 1:
+            flags[b] = 0
+            continue
+        bits = REACHED | shoulder
+        bits |= WITHIN_LIMITS if within[b] else 0
+        bits |= WRIST_SINGULAR if mask >> wrist_bits[b >> 1] & 1 else 0
+        bits |= ELBOW_SINGULAR if mask >> elbow_bits[b] & 1 else 0
+        flags[b] = bits
     return OK
 
 
@@ -488,7 +498,7 @@ def track_one(
         (:func:`continuing_branch`) and whether it is within the limits.
     """
     q = np.empty((8, 6))
-    flags = np.empty(FLAG_COUNT, dtype=np.bool_)
+    flags = np.empty(8, dtype=np.uint8)
     status = solve_one(
         geo, pose, q_predicted, q, flags, True, angle_arguments, assemble, layout
     )
@@ -497,15 +507,13 @@ def track_one(
     index = continuing_branch(q, q_predicted, pair, max_step2)
     for j in range(6):
         q_out[j] = q[index, j]
-    return status, index, flags[FLAG_WITHIN_LIMITS + index]
+    return status, index, flags[index] & WITHIN_LIMITS != 0
 
 
 __all__ = [
     "FLAG_COUNT",
-    "FLAG_SHOULDER_SINGULAR",
     "FLAG_SOME_UNREACHED",
     "FLAG_WITHIN_LIMITS",
-    "FLAG_WRIST_SINGULAR",
     "IN_CYLINDER",
     "NOT_RIGID",
     "OK",

@@ -30,8 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from workbench.errors import InfeasibleError
-from workbench.ik.structure import UnsupportedRobotError, get_structure
+from workbench.errors import UnsupportedRobotError
+from workbench.ik.structure import get_structure
 from workbench.model.dh import DHTable
 from workbench.model.per_robot import per_robot
 from workbench.model.robot import Robot
@@ -53,6 +53,12 @@ LIMIT_TOL = 1e-9
 #: orientation error, so the tolerance is kept below the 1e-9 accuracy goal.
 WRIST_SINGULAR_TOL = 1e-10
 
+#: |sin| of the elbow angle (OPW: γ = θ3 + β; UR: θ3) at or below which the
+#: elbow counts as singular (stretched or folded: elbow-up and elbow-down
+#: meet). The sine is the root of 1 − cos², so a pose at the singularity
+#: rounded to 1e-16 gives about 1e-8: the tolerance is above that.
+ELBOW_SINGULAR_TOL = 1e-7
+
 #: The reach tests of a fitted structure are widened by this many times its
 #: residual (``KinematicStructure.residual``, the FK difference of the model
 #: and the idealised chain on a few configurations): a pose the model reaches
@@ -60,56 +66,6 @@ WRIST_SINGULAR_TOL = 1e-10
 #: the idealised boundary and refined on the model (``_refine_kernel``), which
 #: reports it as not reached if it truly is not.
 MODEL_ERROR_SLACK = 10.0
-
-
-class UnreachableError(InfeasibleError):
-    """The wrist centre of the target lies where the arm cannot put it.
-
-    Attributes:
-        distance: Distance [m] of the wrist centre from the shoulder (``kind``
-            ``"reach"``) or from the base axis (``kind`` ``"cylinder"``).
-        bounds: Reachable interval of that distance, ``(low, high)`` [m].
-        kind: ``"reach"`` (too far or too close to the shoulder),
-            ``"cylinder"`` (inside the cylinder of radius |d2 + d3| around the
-            base axis that the shoulder offset keeps the wrist out of) or
-            ``"model"`` (at the edge of the reach, where a model that is of
-            its family only up to rounding reaches less than its idealised
-            structure: no branch refines onto the pose; distance and bounds
-            then 0).
-
-    A seven-axis arm's solver (:mod:`workbench.ik.redundant`) words its own
-    ``message`` (the redundancy parameter's value and the values that reach).
-    """
-
-    def __init__(
-        self,
-        distance: float,
-        bounds: tuple[float, float],
-        kind: str,
-        message: str | None = None,
-    ):
-        self.distance = distance
-        self.bounds = bounds
-        self.kind = kind
-        if message is not None:
-            pass
-        elif kind == "model":
-            message = (
-                "out of reach: the pose is at the edge of the reach of the "
-                "idealised arm, and no branch reaches it on the robot's own model"
-            )
-        elif kind == "cylinder":
-            message = (
-                f"out of reach: wrist centre at {distance:.6g} m from the base axis, "
-                f"inside the unreachable cylinder of radius {bounds[0]:.6g} m "
-                "(the shoulder offset d2 + d3) around it"
-            )
-        else:
-            message = (
-                f"out of reach: wrist centre at distance {distance:.6g} m from the "
-                f"shoulder, reach is [{bounds[0]:.6g}, {bounds[1]:.6g}] m"
-            )
-        super().__init__(message)
 
 
 def _one_turn(lower: float, upper: float) -> bool:

@@ -46,16 +46,11 @@ import numpy.typing as npt
 
 from workbench._compiled import entry_point
 from workbench.ik import _kernel_common as common
-from workbench.ik._kernel_common import FLAG_COUNT as FLAG_COUNT
-from workbench.ik._kernel_common import FLAG_SHOULDER_SINGULAR as FLAG_SHOULDER_SINGULAR
-from workbench.ik._kernel_common import FLAG_SOME_UNREACHED as FLAG_SOME_UNREACHED
-from workbench.ik._kernel_common import FLAG_WITHIN_LIMITS as FLAG_WITHIN_LIMITS
-from workbench.ik._kernel_common import FLAG_WRIST_SINGULAR as FLAG_WRIST_SINGULAR
 from workbench.ik._kernel_common import IN_CYLINDER as IN_CYLINDER
 from workbench.ik._kernel_common import NOT_RIGID as NOT_RIGID
 from workbench.ik._kernel_common import OK as OK
 from workbench.ik._kernel_common import OUT_OF_REACH as OUT_OF_REACH
-from workbench.ik._puma import WRIST_SINGULAR_TOL, PumaGeometry
+from workbench.ik._puma import ELBOW_SINGULAR_TOL, WRIST_SINGULAR_TOL, PumaGeometry
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -200,12 +195,16 @@ SHOULDER = 24
 #: Distance [m] of the wrist centre's projection from the shoulder-singular
 #: surface below which the shoulder counts as singular.
 SHOULDER_SINGULAR_TOL = 1e-10
+#: Bit ``ELBOW + arm`` of the mask: that arm's elbow is singular (stretched or
+#: folded, |sin γ| <= ELBOW_SINGULAR_TOL), its elbow-up and elbow-down meet.
+ELBOW = 25
 #: The bits of the mask that flag a singular wrist, per (arm, elbow) pair, and
 #: an arm that cannot reach, per branch.
 _WRIST_BITS = (T4, T4 + 1, T4 + 2, T4 + 3)
 _DEAD_BITS = (DEAD, DEAD, DEAD, DEAD, DEAD + 1, DEAD + 1, DEAD + 1, DEAD + 1)
 #: The mask layout of :func:`solve_pose` (``_kernel_common.solve_one``).
-_LAYOUT = (N_ANGLES, _WRIST_BITS, SHOULDER, 3 << DEAD)
+_ELBOW_BITS = (ELBOW, ELBOW, ELBOW, ELBOW, ELBOW + 1, ELBOW + 1, ELBOW + 1, ELBOW + 1)
+_LAYOUT = (N_ANGLES, _WRIST_BITS, SHOULDER, _ELBOW_BITS, _DEAD_BITS)
 
 
 @common.inline
@@ -290,6 +289,8 @@ def angle_arguments(
             k = common.clip_unit(k)  # cos(gamma), gamma = theta3 + beta
             big_a = a2 + ell * k
             root = common.clamped_root(1.0 - k * k)
+        if root <= ELBOW_SINGULAR_TOL:
+            exact |= 1 << (ELBOW + arm)
         # elbow-up: sin(gamma) of the sign of up_sign times that of xp
         if xp != 0.0:
             side = 1.0 if xp > 0.0 else -1.0
@@ -421,7 +422,7 @@ def solve_pose(
     pose: FloatArray,
     prev: FloatArray,
     q: FloatArray,
-    flags: npt.NDArray[np.bool_],
+    flags: npt.NDArray[np.uint8],
     check: bool,
 ) -> int:
     """All eight branches of one pose.
@@ -433,10 +434,8 @@ def solve_pose(
             representative nearest it, and a free θ4/θ6 split by continuity;
             or (0,) for none.
         q: (8, 6) output, joint values [rad].
-        flags: (FLAG_COUNT,) output, slots ``FLAG_*`` (``_kernel_common``):
-            per branch within the limits; per (arm, elbow) pair wrist
-            singular; shoulder singular; an arm cannot reach (its branches
-            are NaN).
+        flags: (8,) uint8 output, the bits of ``_flags`` per branch (0 for
+            a branch that does not reach: an arm that cannot, its rows NaN).
         check: Test first that the pose is finite and rigid (the test of
             ``workbench.poses``); False for a pose known to be.
 

@@ -1,15 +1,24 @@
-r"""What the compiled closed forms of seven-axis arms share: status codes and flag bits.
+r"""What the compiled closed forms of seven-axis arms share: status codes.
 
 The kernels of both seven-axis families (:mod:`workbench.ik._srs_kernel`, SRS arms
 such as the KUKA LBR iiwa; :mod:`workbench.ik._franka_kernel`, the Franka Panda and
 FR3 geometry) solve one pose for one value of the redundancy parameter (SRS: the
-arm angle ψ; Franka: q7) and describe each branch by one byte of flag bits.
+arm angle ψ; Franka: q7) and describe each branch by one byte of the flag bits
+of :mod:`workbench.ik._flags` (re-exported here for the kernels), as the 6R
+kernels do.
 
 A branch's row of ``q`` is NaN when the branch does not reach the pose for that
-value; a byte's bits are only meaningful on reached branches.
+value; its byte is then 0.
 """
 
 from __future__ import annotations
+
+from workbench.ik._flags import ELBOW_SINGULAR as ELBOW_SINGULAR
+from workbench.ik._flags import PARAMETER_SINGULAR as PARAMETER_SINGULAR
+from workbench.ik._flags import REACHED as REACHED
+from workbench.ik._flags import SHOULDER_SINGULAR as SHOULDER_SINGULAR
+from workbench.ik._flags import WITHIN_LIMITS as WITHIN_LIMITS
+from workbench.ik._flags import WRIST_SINGULAR as WRIST_SINGULAR
 
 #: Status codes of the kernels' ``solve_pose`` and ``diagnose``: solved (at
 #: least one branch reaches); the pose is not a finite rigid transform; no
@@ -17,26 +26,13 @@ from __future__ import annotations
 #: out of the arm's reach, or, Franka, out of the reach the fixed q7 leaves).
 OK, NOT_RIGID, OUT_OF_REACH = 0, 1, 2
 
-#: Flag bits of one branch (a uint8 per branch).
-#: Every joint within its limits (± the 6R kernels' LIMIT_TOL).
-WITHIN_LIMITS = 1
-#: The branch meets its shoulder twin (SRS: sin θ2 = 0, axes 1 and 3 aligned).
-SHOULDER_SINGULAR = 2
-#: The branch meets its elbow twin (SRS: sin θ4 = 0, the arm stretched).
-ELBOW_SINGULAR = 4
-#: The branch meets its wrist twin (SRS: sin θ6 = 0, axes 5 and 7 aligned).
-WRIST_SINGULAR = 8
-#: The redundancy parameter itself is undefined or degenerate here (SRS: the
-#: wrist centre on axis 1, where the arm angle's reference plane is not
-#: defined: the algorithmic singularity).
-PARAMETER_SINGULAR = 16
-
 __all__ = [
     "ELBOW_SINGULAR",
     "NOT_RIGID",
     "OK",
     "OUT_OF_REACH",
     "PARAMETER_SINGULAR",
+    "REACHED",
     "SHOULDER_SINGULAR",
     "WITHIN_LIMITS",
     "WRIST_SINGULAR",

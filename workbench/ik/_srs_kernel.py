@@ -59,6 +59,7 @@ from workbench.ik._redundant_common import (
     OK,
     OUT_OF_REACH,
     PARAMETER_SINGULAR,
+    REACHED,
     SHOULDER_SINGULAR,
     WITHIN_LIMITS,
     WRIST_SINGULAR,
@@ -395,7 +396,7 @@ def _branches(geo, rot, sw, value, prev, has_prev, q, flags, with_flags):
             for k in range(4):
                 b = 4 * (k >> 1) + 2 * elbow + (k & 1)
                 ok = common.row_within_limits(geo, q, b)
-                bits = WITHIN_LIMITS if ok else 0
+                bits = REACHED | (WITHIN_LIMITS if ok else 0)
                 bits |= SHOULDER_SINGULAR if h2 <= SINGULAR_TOL else 0
                 bits |= ELBOW_SINGULAR if s4 <= ELBOW_SINGULAR_TOL else 0
                 bits |= WRIST_SINGULAR if h6 <= SINGULAR_TOL else 0
@@ -425,7 +426,7 @@ def solve_pose(
             singularity), or (0,).
         q: (8, 7) output, robot joint values [rad], branch order
             :data:`BRANCHES`; NaN rows when the pose is out of reach.
-        flags: (8,) uint8 output, bits of ``_redundant_common``.
+        flags: (8,) uint8 output, bits of ``_flags``.
         check: Test first that the pose is finite and rigid.
 
     Returns:

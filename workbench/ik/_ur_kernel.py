@@ -38,16 +38,16 @@ import numpy.typing as npt
 
 from workbench._compiled import entry_point
 from workbench.ik import _kernel_common as common
-from workbench.ik._kernel_common import FLAG_COUNT as FLAG_COUNT
-from workbench.ik._kernel_common import FLAG_SHOULDER_SINGULAR as FLAG_SHOULDER_SINGULAR
-from workbench.ik._kernel_common import FLAG_SOME_UNREACHED as FLAG_SOME_UNREACHED
-from workbench.ik._kernel_common import FLAG_WITHIN_LIMITS as FLAG_WITHIN_LIMITS
-from workbench.ik._kernel_common import FLAG_WRIST_SINGULAR as FLAG_WRIST_SINGULAR
 from workbench.ik._kernel_common import IN_CYLINDER as IN_CYLINDER
 from workbench.ik._kernel_common import NOT_RIGID as NOT_RIGID
 from workbench.ik._kernel_common import OK as OK
 from workbench.ik._kernel_common import OUT_OF_REACH as OUT_OF_REACH
-from workbench.ik._puma import LIMIT_TOL, MODEL_ERROR_SLACK, WRIST_SINGULAR_TOL
+from workbench.ik._puma import (
+    ELBOW_SINGULAR_TOL,
+    LIMIT_TOL,
+    MODEL_ERROR_SLACK,
+    WRIST_SINGULAR_TOL,
+)
 from workbench.ik.structure import KinematicStructure
 
 FloatArray = npt.NDArray[np.float64]
@@ -92,6 +92,9 @@ SINGULAR = 32
 #: Bit of the mask: shoulder singular (as ``_puma_kernel.SHOULDER``).
 SHOULDER = 34
 SHOULDER_SINGULAR_TOL = 1e-10
+#: Bit ``ELBOW + 2·shoulder + wrist`` of the mask: that pair's elbow is
+#: singular (|sin θ3| <= ELBOW_SINGULAR_TOL), its elbow-up and -down meet.
+ELBOW = 35
 #: Orientation error [rad] a turn of θ6 may cost (about |s5| times the turn)
 #: to bring frame 3 within reach near a wrist singularity. There θ6 comes
 #: from a vector of length |s5| known to ~1e-16, so it is known to ~1e-16 /
@@ -109,7 +112,8 @@ REACH_MARGIN = 1e-12
 _WRIST_BITS = (SINGULAR, SINGULAR, SINGULAR + 1, SINGULAR + 1)
 _DEAD_BITS = tuple(DEAD + 2 * (b >> 2) + (b & 1) for b in range(8))
 #: The mask layout of :func:`solve_pose` (``_kernel_common.solve_one``).
-_LAYOUT = (N_ANGLES, _WRIST_BITS, SHOULDER, 15 << DEAD)
+_ELBOW_BITS = tuple(ELBOW + 2 * (b >> 2) + (b & 1) for b in range(8))
+_LAYOUT = (N_ANGLES, _WRIST_BITS, SHOULDER, _ELBOW_BITS, _DEAD_BITS)
 
 
 def pack_geometry(structure: KinematicStructure, lower, upper) -> np.ndarray:
@@ -366,6 +370,8 @@ def angle_arguments(
             c3 = common.clip_unit(c3)
             up = -1.0 if s1g * a2 * a3 * big_x > 0.0 else 1.0
             s3_up = up * common.clamped_root(1.0 - c3 * c3)
+            if abs(s3_up) <= ELBOW_SINGULAR_TOL:
+                mask |= np.int64(1) << (ELBOW + pair)
             y[U3 + pair], x[U3 + pair] = s3_up, c3
             for elbow in range(2):
                 b = 4 * arm + 2 * elbow + wrist
@@ -433,7 +439,7 @@ def solve_pose(
     pose: FloatArray,
     prev: FloatArray,
     q: FloatArray,
-    flags: npt.NDArray[np.bool_],
+    flags: npt.NDArray[np.uint8],
     check: bool,
 ) -> int:
     """All eight branches of one pose, as ``_puma_kernel.solve_pose``.

@@ -9,68 +9,34 @@ formulas, ``docs/closed-form-ik.md`` covers any arm. The target is always the
 pose of the robot's tool frame: base and tool transforms are folded in.
 
 The functions here are the front door for one call; each robot's
-:class:`~workbench.ik.solver.ClosedFormSolver` (:func:`get_closed_form`) does
-the work, and holds the branch labels (physical, defined in
-:mod:`workbench.ik.solver`): :data:`BRANCHES` for OPW arms, bits
-``4·left + 2·down + flip``; :data:`UR_BRANCHES` for UR-type arms.
+:class:`~workbench.ik.Solver` (:func:`~workbench.ik.get_solver`) does the work,
+and holds the branch labels (physical, defined in :mod:`workbench.ik.solver`):
+:data:`BRANCHES` for OPW arms, bits ``4·left + 2·down + flip``;
+:data:`UR_BRANCHES` for UR-type arms.
 
 A seven-axis arm (SRS or Franka family, :mod:`workbench.ik.redundant`) has
 a one-parameter family of solutions per branch: :func:`analytic` and
 :func:`analytic_batch` take the redundancy parameter (``redundancy=``: the
-arm angle ψ or q7 [rad]) and solve through the arm's
-:class:`~workbench.ik.redundant.RedundantSolver` (:func:`get_redundant_solver`);
+arm angle ψ or q7 [rad]), through the same solver;
 :mod:`workbench.ik.redundancy` chooses a value.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TypeVar
 
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InputError
-from workbench.ik._puma import (
-    TAU,
-    WRIST_SINGULAR_TOL,
-    UnreachableError,
-    UnsupportedRobotError,
-)
-from workbench.ik.redundant import (
-    RedundantIKSolution,
-    check_six_axis,
-    get_redundant_solver,
-)
-from workbench.ik.solver import (
-    BRANCHES,
-    UR_BRANCHES,
-    IKSolution,
-    get_closed_form,
-)
+from workbench.ik._puma import TAU, WRIST_SINGULAR_TOL
+from workbench.ik.solution import IKSolution
+from workbench.ik.solver import BRANCHES, UR_BRANCHES, get_solver
 from workbench.model.robot import Robot
 from workbench.validation import as_vector
 
 FloatArray = npt.NDArray[np.float64]
-#: A closed-form solution of a 6R or a 7R arm.
-Solution = TypeVar("Solution", bound=IKSolution | RedundantIKSolution)
-
-
-def get_branches(robot: Robot) -> tuple[str, ...]:
-    """Branch labels of a robot's closed form (:data:`BRANCHES`, UR's, 7R's)."""
-    if robot.model.nq == 7:
-        return get_redundant_solver(robot).branches
-    return get_closed_form(robot).branches
-
-
-def _missing_redundancy(robot: Robot, parameter: str) -> InputError:
-    return InputError(
-        f"robot {robot.name!r} is a seven-axis arm: give redundancy= (the "
-        f"{parameter} [rad]; ik.choose_redundancy(robot, target) chooses one, "
-        "ik.redundancy_parameter(robot, q) reads it from a configuration), or "
-        "q_previous= to keep its value"
-    )
 
 
 def analytic(
@@ -79,7 +45,7 @@ def analytic(
     *,
     q_previous: npt.ArrayLike | None = None,
     redundancy: float | None = None,
-) -> list[IKSolution] | list[RedundantIKSolution]:
+) -> list[IKSolution]:
     """Every closed-form IK branch of a 6R (OPW, UR) or 7R (SRS, Franka) arm.
 
     Args:
@@ -103,8 +69,8 @@ def analytic(
         unless a shoulder offset (a1 != 0, or a UR arm) lets only some reach.
         At a shoulder or elbow singularity some coincide; at a wrist
         singularity the flip twin is the continuity member turned by π.
-        7R arms: one :class:`~workbench.ik.redundant.RedundantIKSolution` per
-        branch reaching the pose for that value of the parameter.
+        7R arms: one per branch reaching the pose for that value of the
+        parameter (``IKSolution.redundancy`` holds it; None on 6R arms).
 
     Raises:
         UnsupportedRobotError: If the robot has no closed form.
@@ -117,17 +83,7 @@ def analytic(
             ``redundancy`` is given for a 6R arm, or a 7R arm has neither
             ``redundancy`` nor ``q_previous``.
     """
-    if robot.model.nq != 7:
-        solver = get_closed_form(robot)
-        if redundancy is not None:
-            check_six_axis(robot, redundancy)
-        return solver.solve(target, q_previous=q_previous)
-    redundant = get_redundant_solver(robot)
-    if redundancy is None:
-        if q_previous is None:
-            raise _missing_redundancy(robot, redundant.parameter)
-        redundancy = redundant.parameter_of(q_previous)  # type: ignore[assignment]
-    return redundant.solve(target, redundancy, q_previous=q_previous)  # type: ignore[arg-type]
+    return get_solver(robot).solve(target, redundancy=redundancy, q_previous=q_previous)
 
 
 def analytic_batch(
@@ -161,8 +117,8 @@ def analytic_batch(
         reach). Rows of branches that do not reach are NaN. Joint limits are
         not applied: test ``(robot.lower <= q) & (q <= robot.upper)`` for that.
         7R arms: ``q`` (N, B, 7) and ``valid`` (N, B), B the arm's branch
-        count (SRS 8, Franka 4), as :meth:`RedundantSolver.solve_batch
-        <workbench.ik.redundant.RedundantSolver.solve_batch>`.
+        count (SRS 8, Franka 8), as :meth:`Solver.solve_batch
+        <workbench.ik.Solver.solve_batch>`.
 
     Raises:
         UnsupportedRobotError: If the robot has no closed form.
@@ -171,18 +127,10 @@ def analytic_batch(
         InputError: If a pose is not rigid (``poses.RIGIDITY_TOL``), or
             ``redundancy`` is given for a 6R arm or missing for a 7R arm.
     """
-    if robot.model.nq != 7:
-        solver = get_closed_form(robot)
-        if redundancy is not None:
-            check_six_axis(robot, redundancy)
-        return solver.solve_batch(targets)
-    redundant = get_redundant_solver(robot)
-    if redundancy is None:
-        raise _missing_redundancy(robot, redundant.parameter)
-    return redundant.solve_batch(targets, redundancy)
+    return get_solver(robot).solve_batch(targets, redundancy=redundancy)
 
 
-def nearest(solutions: Sequence[Solution], q_previous: npt.ArrayLike) -> Solution:
+def nearest(solutions: Sequence[IKSolution], q_previous: npt.ArrayLike) -> IKSolution:
     """The solution nearest to ``q_previous``, angles compared modulo 2π.
 
     Generalises Kang's rule "if θ4 jumps by ≈ π, take the other solution": the
@@ -216,11 +164,7 @@ __all__ = [
     "UR_BRANCHES",
     "WRIST_SINGULAR_TOL",
     "IKSolution",
-    "UnreachableError",
-    "UnsupportedRobotError",
     "analytic",
     "analytic_batch",
-    "get_branches",
-    "get_closed_form",
     "nearest",
 ]

@@ -41,6 +41,7 @@ from types import MappingProxyType
 import numpy as np
 import numpy.typing as npt
 
+from workbench.errors import UnsupportedRobotError
 from workbench.ik import (
     _franka_intervals,
     _franka_kernel,
@@ -50,7 +51,7 @@ from workbench.ik import (
 )
 from workbench.ik import _puma_kernel as _opw_kernel
 from workbench.ik._puma import geometry_from_dh, get_geometry
-from workbench.ik.structure import UnsupportedRobotError, get_structure
+from workbench.ik.structure import get_structure
 from workbench.model.dh import DHTable
 from workbench.model.per_robot import per_robot
 from workbench.model.robot import Robot

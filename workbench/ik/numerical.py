@@ -26,8 +26,8 @@ from __future__ import annotations
 import math
 import numbers
 import time
-from dataclasses import dataclass
-from typing import TypeGuard
+from operator import itemgetter
+from typing import ClassVar, TypeGuard
 
 import numpy as np
 import numpy.typing as npt
@@ -36,6 +36,7 @@ import pinocchio as pin
 from workbench.errors import InputError
 from workbench.ik import _chain_kernel as kernel
 from workbench.ik._chain import Chain, get_chain
+from workbench.ik._record import FrozenRecord
 from workbench.model.robot import Robot
 from workbench.poses import as_se3
 
@@ -46,9 +47,12 @@ FloatArray = npt.NDArray[np.float64]
 _HOMOGENEOUS_IS_C: bool = pin.SE3.Identity().homogeneous.flags.c_contiguous
 
 
-@dataclass(frozen=True, slots=True)
-class IKResult:
+class IKResult(FrozenRecord):
     """Outcome of :func:`numeric`; a failed solve is not an exception.
+
+    Immutable (a :class:`~workbench.ik._record.FrozenRecord`, as
+    :class:`~workbench.ik.IKSolution`: assigning a field raises
+    :class:`dataclasses.FrozenInstanceError`), equal by value.
 
     Attributes:
         q: Best configuration found, shape (nq,) [rad], within the position
@@ -62,13 +66,33 @@ class IKResult:
         restarts: Random restarts used.
     """
 
-    q: FloatArray
-    success: bool
-    iterations: int
-    error: float
-    position_error: float
-    rotation_error: float
-    restarts: int
+    __slots__ = ()
+    _fields: ClassVar[tuple[str, ...]] = (
+        "q", "success", "iterations", "error", "position_error",
+        "rotation_error", "restarts",
+    )  # fmt: skip
+
+    def __new__(
+        cls,
+        q: FloatArray,
+        success: bool,
+        iterations: int,
+        error: float,
+        position_error: float,
+        rotation_error: float,
+        restarts: int,
+    ) -> IKResult:
+        """The record of these values (``q`` is stored as given)."""
+        items = (q, success, iterations, error, position_error, rotation_error)
+        return tuple.__new__(cls, (*items, restarts))
+
+    q = property(itemgetter(0), doc="Best configuration (nq,) [rad], read-only.")
+    success = property(itemgetter(1), doc="True when ``error <= tol``.")
+    iterations = property(itemgetter(2), doc="Steps taken, over all restarts.")
+    error = property(itemgetter(3), doc="Norm of the SE(3) log error.")
+    position_error = property(itemgetter(4), doc="Position residual [m].")
+    rotation_error = property(itemgetter(5), doc="Rotation residual [rad].")
+    restarts = property(itemgetter(6), doc="Random restarts used.")
 
 
 def numeric(
@@ -186,32 +210,10 @@ def numeric(
     else:
         best_q = chain.to_configuration(states[row, n : 2 * n], q_base)
         best_q.setflags(write=False)
-    # IKResult(...) at a third of the cost: see _Fields.
-    result = _Fields()
-    result.q, result.success, result.iterations = best_q, err2 <= tol2, steps
-    result.error, result.position_error = math.sqrt(err2), position
-    result.rotation_error, result.restarts = rotation, restarts
-    result.__class__ = IKResult  # type: ignore[assignment]
-    return result  # type: ignore[return-value]
-
-
-class _Fields:
-    """The slots of :class:`IKResult`, without its frozen ``__setattr__``.
-
-    :func:`numeric` fills one and then makes it an ``IKResult`` (assigning
-    ``__class__``, which Python allows between classes of the same slots):
-    the same frozen instance as ``IKResult(...)``, whose ``__init__`` sets
-    each field through ``object.__setattr__`` at several times the cost.
-    """
-
-    __slots__ = IKResult.__slots__
-    q: FloatArray
-    success: bool
-    iterations: int
-    error: float
-    position_error: float
-    rotation_error: float
-    restarts: int
+    return tuple.__new__(  # IKResult(...) without its Python-level __new__
+        IKResult,
+        (best_q, err2 <= tol2, steps, math.sqrt(err2), position, rotation, restarts),
+    )
 
 
 def reference_configuration(

@@ -26,7 +26,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from workbench.errors import InfeasibleError
+from workbench.errors import DifferentialIKError
 from workbench.ik.damped import _twist_command
 from workbench.model.robot import Robot
 from workbench.validation import check_positive
@@ -48,10 +48,6 @@ def _osqp_settings() -> dict[str, Any]:
     if int(importlib.metadata.version("osqp").split(".")[0]) >= 1:
         return settings | {"polishing": True, "raise_error": False}
     return settings | {"polish": True}  # OSQP 0.6 names
-
-
-class DifferentialIKError(InfeasibleError):
-    """The QP of :func:`qp_step` has no solution the solver could find."""
 
 
 def qp_step(

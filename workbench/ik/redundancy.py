@@ -4,11 +4,12 @@ For one tool pose a seven-axis arm of the SRS or Franka family
 (:mod:`workbench.ik.redundant`) has, per branch, a one-parameter family of
 configurations, indexed by the arm angle ψ (SRS) or q7 (Franka), both [rad].
 
-* :func:`redundancy_parameter` reads the parameter of configurations;
-* :func:`feasible_redundancy` gives, per branch, the intervals of the
-  parameter where the branch reaches the pose with every joint within its
-  limits (the kernels': analytic for SRS arms, bisected to 1e-12 rad for
-  Franka arms);
+* :meth:`Solver.parameter_of <workbench.ik.Solver.parameter_of>` reads the
+  parameter of configurations;
+* :meth:`Solver.feasible <workbench.ik.Solver.feasible>` gives, per branch,
+  the intervals of the parameter where the branch reaches the pose with every
+  joint within its limits (the kernels': analytic for SRS arms, bisected to
+  1e-12 rad for Franka arms);
 * :func:`choose_redundancy` picks the value and the branch that maximise a
   criterion over those intervals.
 
@@ -39,16 +40,12 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from workbench.errors import InfeasibleError, InputError
-from workbench.ik._puma import LIMIT_TOL, UnreachableError
+from workbench.errors import InfeasibleError, InputError, UnreachableError
+from workbench.ik._puma import LIMIT_TOL
 from workbench.ik._targets import pose_rows
 from workbench.ik.batch_jacobians import compute_jacobians_local
-from workbench.ik.redundant import (
-    FeasibleRedundancy,
-    RedundantIKSolution,
-    RedundantSolver,
-    get_redundant_solver,
-)
+from workbench.ik.solution import IKSolution
+from workbench.ik.solver import Solver, get_solver
 from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
@@ -80,52 +77,12 @@ class RedundancyChoice:
     """
 
     value: float
-    solution: RedundantIKSolution
+    solution: IKSolution
     criterion: str
     score: float
 
 
-def redundancy_parameter(robot: Robot, q: npt.ArrayLike) -> float | FloatArray:
-    """The redundancy parameter of configurations of a seven-axis arm.
-
-    Args:
-        robot: A seven-axis arm of the SRS or Franka family.
-        q: (7,) or (N, 7) robot joint values [rad].
-
-    Returns:
-        A float for (7,), an (N,) array for (N, 7) [rad]: the arm angle ψ in
-        [−π, π] (SRS; with the wrist centre on axis 1 the reference plane of
-        θ1 = 0) or q7 (Franka).
-
-    Raises:
-        UnsupportedRobotError: If the robot is not such an arm.
-        DimensionError, NonFiniteError: Bad shape or entries of ``q``.
-    """
-    return get_redundant_solver(robot).parameter_of(q)
-
-
-def feasible_redundancy(
-    robot: Robot, target: pin.SE3 | npt.ArrayLike
-) -> FeasibleRedundancy:
-    """The values of the redundancy parameter that reach a pose within the limits.
-
-    Args:
-        robot: A seven-axis arm of the SRS or Franka family.
-        target: Pose of the tool frame in the base frame: ``pin.SE3`` or a
-            (4, 4) homogeneous matrix [m].
-
-    Returns:
-        Per branch and in union, the closed intervals of the parameter [rad]
-        (empty when the pose is out of reach or out of the limits).
-
-    Raises:
-        UnsupportedRobotError: If the robot is not such an arm.
-        DimensionError, NonFiniteError, InputError: Bad target.
-    """
-    return get_redundant_solver(robot).feasible(target)
-
-
-def _branch_index(solver: RedundantSolver, branch: str | int | None) -> int | None:
+def _branch_index(solver: Solver, branch: str | int | None) -> int | None:
     if branch is None:
         return None
     if isinstance(branch, str):
@@ -148,7 +105,7 @@ class _Scorer:
 
     def __init__(
         self,
-        solver: RedundantSolver,
+        solver: Solver,
         pose: FloatArray,
         criterion: str,
         q_previous: FloatArray | None,
@@ -162,7 +119,7 @@ class _Scorer:
     def configurations(self, values: FloatArray, branches: npt.NDArray[np.intp]):
         """(N, 7) configurations [rad] of the pairs, NaN rows where not reached."""
         poses = np.broadcast_to(self.pose, (len(values), 4, 4))
-        q, _ = self.solver.solve_batch(poses, values)
+        q, _ = self.solver.solve_batch(poses, redundancy=values)
         return q[np.arange(len(values)), branches]
 
     def scores(self, q: FloatArray) -> FloatArray:
@@ -219,7 +176,7 @@ def _golden(
     return np.where(best, x1, x2), np.where(best, f1, f2)
 
 
-def _refuse(solver: RedundantSolver, pose: FloatArray, only: int | None) -> None:
+def _refuse(solver: Solver, pose: FloatArray, only: int | None) -> None:
     """Raise why no value of the parameter puts a branch on ``pose`` in limits.
 
     ``UnreachableError`` when no branch reaches the pose at any value: the
@@ -228,16 +185,20 @@ def _refuse(solver: RedundantSolver, pose: FloatArray, only: int | None) -> None
     :data:`SAMPLE_STEP`) and the error gives the distance nearest the reach.
     Else ``InfeasibleError``: the pose is reached, outside the joint limits.
     """
+    if solver.parameter_range is None:  # (feasible refused it already)
+        raise InputError(f"robot {solver.robot.name!r} has no redundancy")
     lo, hi = solver.parameter_range
     if solver.family == "srs":
-        solver.solve_arrays(pose, 0.5 * (lo + hi), np.empty(0))  # raises if out
+        solver.solve_arrays(pose, np.empty(0), redundancy=0.5 * (lo + hi))  # raises
     else:
         values = _samples(lo, hi)
-        _, valid = solver.solve_batch(np.repeat(pose[None], len(values), 0), values)
+        _, valid = solver.solve_batch(
+            np.repeat(pose[None], len(values), 0), redundancy=values
+        )
         if not valid.any():
             gaps = []
             for value in values:
-                distance, low, high = solver.diagnose(pose, float(value))
+                distance, low, high = solver.diagnose(pose, redundancy=float(value))
                 gaps.append((max(low - distance, distance - high), distance, low, high))
             _, distance, low, high = min(gaps)
             raise UnreachableError(
@@ -281,14 +242,14 @@ def choose_redundancy(
         first branch, then the lowest value, wins.
 
     Raises:
-        UnsupportedRobotError: If the robot is not a seven-axis arm of a
-            supported family.
+        UnsupportedRobotError: If the robot has no closed form.
         UnreachableError: If no branch reaches the pose for any value.
         InfeasibleError: If some do, but none within the joint limits.
-        InputError: Bad criterion, branch, or ``"nearest"`` without
-            ``q_previous``; ``DimensionError``/``NonFiniteError`` for bad arrays.
+        InputError: A six-axis arm (no redundancy), bad criterion, branch,
+            or ``"nearest"`` without ``q_previous``; ``DimensionError`` or
+            ``NonFiniteError`` for bad arrays.
     """
-    solver = get_redundant_solver(robot)
+    solver = get_solver(robot)
     if criterion not in CRITERIA:
         raise InputError(
             f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}"
@@ -336,7 +297,7 @@ def choose_redundancy(
             f"no {solver.parameter} puts a branch on the pose within the joint limits"
         )
     value, index = float(cand_value[top]), int(cand_branch[top])
-    solutions = solver.solve(pose, value)  # each angle within the limits
+    solutions = solver.solve(pose, redundancy=value)  # angles within the limits
     chosen = next(s for s in solutions if s.index == index)
     return RedundancyChoice(
         value=value, solution=chosen, criterion=criterion, score=float(cand_score[top])
@@ -350,6 +311,4 @@ __all__ = [
     "SAMPLE_STEP",
     "RedundancyChoice",
     "choose_redundancy",
-    "feasible_redundancy",
-    "redundancy_parameter",
 ]

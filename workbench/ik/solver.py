@@ -1,15 +1,27 @@
-r"""The closed-form solver of one robot: the one door into the compiled kernels.
+r"""The closed form of one robot, for every family: the one door into the kernels.
 
-:func:`get_closed_form` gives the :class:`ClosedFormSolver` of a robot, built on
-first use and cached per robot object through a weak reference
-(:func:`~workbench.model.per_robot.per_robot`). It holds what every solve of
-that robot needs: the family (``"opw"``, PUMA-type, kernel
-``_puma_kernel``; ``"ur"``, kernel ``_ur_kernel``), the arm's constants packed
-into the kernel's record, the branch labels, and the named slots of the
-kernel's flags. :func:`~workbench.ik.analytic`,
-:func:`~workbench.ik.analytic_batch` and the online planner all solve through
-it, so the pose checks, the wording of errors and the choice of kernel live
-here once.
+:func:`get_solver` gives the :class:`Solver` of a robot, built on first use and
+cached per robot object through a weak reference
+(:func:`~workbench.model.per_robot.per_robot`). One type serves every family:
+six-axis arms (``"opw"``, PUMA-type, kernel ``_puma_kernel``; ``"ur"``, kernel
+``_ur_kernel``; no redundancy, ``parameter`` None) and seven-axis arms
+(``"srs"``, spherical shoulder, elbow and wrist, e.g. the KUKA LBR iiwa,
+kernel ``_srs_kernel``, parameter the arm angle ψ; ``"franka"``, the Franka
+Panda/FR3 geometry, kernel ``_franka_kernel``, parameter q7), whose closed form
+takes the value of the redundancy parameter (``redundancy=`` [rad]). It holds
+what every solve of that robot needs: the family, the arm's constants packed
+into the kernel's record, the branch labels; it checks every input, calls the
+family's compiled kernel and words its failures.
+:func:`~workbench.ik.analytic`, :func:`~workbench.ik.analytic_batch`, the
+redundancy choice, the online planner, the workspace atlas and the command
+line all solve through it. Every solve returns
+:class:`~workbench.ik.IKSolution`\ s, whose flags are the per-branch bits of
+:mod:`workbench.ik._flags` (one encoding for every kernel).
+
+On a model that is of its family only up to its rounding, every reached
+branch is then refined on the model's own chain (``_refine_kernel``,
+``_refine_redundant_kernel``; a seven-axis arm with the parameter held):
+exact to 1e-12 there too; a branch that does not converge does not reach.
 
 OPW branch labels (UR labels: :data:`UR_BRANCHES`) are physical, so that one
 posture of the PUMA carries the same label in both DH models of the workbench
@@ -28,64 +40,122 @@ posture of the PUMA carries the same label in both DH models of the workbench
   twin of a solution is :math:`(\theta_4 + \pi, -\theta_5, \theta_6 + \pi)`.
 
 Branch ``i`` of :data:`BRANCHES` (also the second axis of
-:func:`ClosedFormSolver.solve_batch`) has bits ``4·left + 2·down + flip``; UR
+:meth:`Solver.solve_batch`) has bits ``4·left + 2·down + flip``; UR
 branches ``4·left + 2·down + wrist-down``.
+Seven-axis labels: :data:`~workbench.ik.SRS_BRANCHES`,
+:data:`~workbench.ik.FRANKA_BRANCHES` (index order: the kernels' module docs).
 """
 
 from __future__ import annotations
 
+import math
 import threading
 import types
 import weakref
-from dataclasses import FrozenInstanceError
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from workbench.errors import DimensionError, InputError
+from workbench.errors import (
+    DimensionError,
+    InputError,
+    UnreachableError,
+    UnsupportedRobotError,
+)
+from workbench.ik import _franka_intervals, _franka_kernel, _srs_intervals, _srs_kernel
+from workbench.ik import _puma_kernel as opw_kernel
+from workbench.ik import _refine_redundant_kernel as refine_redundant
+from workbench.ik import _ur_kernel as ur_kernel
 from workbench.ik._atan2_kernel import atan2_into
+from workbench.ik._chain import compiled_entry
+from workbench.ik._flags import WITHIN_LIMITS
 from workbench.ik._kernel_common import (
     FLAG_COUNT,
-    FLAG_SHOULDER_SINGULAR,
-    FLAG_SOME_UNREACHED,
     FLAG_WITHIN_LIMITS,
-    FLAG_WRIST_SINGULAR,
     IN_CYLINDER,
     NOT_RIGID,
     OK,
     continuing_branch,
+    nearest_or_kept,
 )
-from workbench.ik._puma import UnreachableError, UnsupportedRobotError
+from workbench.ik._puma import get_geometry
 from workbench.ik._refine_kernel import refine_batch, refine_pose, refinement_chain
 from workbench.ik._targets import as_targets, check_poses, pose_rows
-from workbench.ik.families import BRANCHES, UR_BRANCHES, require_family
+from workbench.ik.redundant import (
+    FeasibleRedundancy,
+    check_redundancy,
+    feasible_union,
+    format_intervals,
+)
+from workbench.ik.solution import IKSolution
+from workbench.ik.structure import get_structure
 from workbench.model.per_robot import per_robot
 from workbench.model.robot import Robot
+from workbench.validation import as_finite_array
 
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
+FlagArray = npt.NDArray[np.uint8]
 
-#: Poses per chunk of :meth:`ClosedFormSolver.solve_batch` (its three
+#: Branch names; index = 4·left + 2·down + flip.
+BRANCHES: tuple[str, ...] = tuple(
+    f"{arm}/elbow-{elbow}/{wrist}"
+    for arm in ("right", "left")
+    for elbow in ("up", "down")
+    for wrist in ("no-flip", "flip")
+)
+
+#: Branch names of UR-type arms; index = 4·left + 2·down + wrist-down.
+UR_BRANCHES: tuple[str, ...] = tuple(
+    f"shoulder-{arm}/elbow-{elbow}/wrist-{wrist}"
+    for arm in ("right", "left")
+    for elbow in ("up", "down")
+    for wrist in ("up", "down")
+)
+
+#: Poses per chunk of a six-axis :meth:`Solver.solve_batch` (its three
 #: (N, N_ANGLES) buffers take 1.1–1.2 MB; chunks of 256 to 4096 poses were no
 #: faster on 1M poses).
 BATCH_CHUNK = 2048
+#: Poses per chunk of the rigidity check of a seven-axis
+#: :meth:`Solver.solve_batch` (4096: 50 ns a pose, in cache; 65536 and more
+#: were 30 % slower).
+CHECK_CHUNK = 4096
 
 _NO_PREVIOUS = np.empty(0)
+_FLOAT64 = np.dtype(np.float64)
+#: The SRS record the refinement of a Franka arm is given (it holds q7, not ψ).
+_NO_ARM_ANGLE = np.zeros(1, dtype=_srs_kernel.GEOMETRY_DTYPE)
+_NO_ARM_ANGLE.setflags(write=False)
+#: Seven-axis families: kernel module and feasible-interval function.
+_SEVEN_AXIS: dict[str, tuple[types.ModuleType, Any]] = {
+    "srs": (_srs_kernel, _srs_intervals.compute_feasible_intervals),
+    "franka": (_franka_kernel, _franka_intervals.compute_feasible_intervals),
+}
 
 
-class ClosedFormSolver:
-    """The closed form of one robot; get it from :func:`get_closed_form`.
+class Solver:
+    """The closed form of one robot, any family; get it from :func:`get_solver`.
 
     Attributes:
-        family: ``"opw"`` (PUMA-type) or ``"ur"``.
-        branches: Branch labels, :data:`BRANCHES` or :data:`UR_BRANCHES`.
+        family: ``"opw"`` (PUMA-type), ``"ur"`` (6R), ``"srs"`` or
+            ``"franka"`` (7R).
+        branches: Branch labels (:data:`BRANCHES`, :data:`UR_BRANCHES`,
+            ``SRS_BRANCHES``, ``FRANKA_BRANCHES``).
+        nq: Joint count, 6 or 7.
+        parameter: The redundancy parameter as messages name it: ``"arm
+            angle"`` (ψ) or ``"q7"``; None on a six-axis arm.
+        parameter_range: ``(low, high)`` [rad]: (−π, π) for ψ, joint 7's
+            limits for q7; None on a six-axis arm.
         geometry: The arm's constants, the kernel's (1,) record, read-only.
     """
 
     __slots__ = (
-        "__weakref__", "_kernel", "_refine", "_robot", "_work", "branches", "family",
-        "geometry",
+        "__weakref__", "_arm_angle_geometry", "_indices", "_intervals",
+        "_kernel", "_refine", "_robot", "_solve_pose", "_work", "branches",
+        "family", "geometry", "nq", "parameter", "parameter_range",
     )  # fmt: skip
 
     def __init__(self, robot: Robot):
@@ -95,185 +165,484 @@ class ClosedFormSolver:
             UnsupportedRobotError: If the robot has no closed form (the message
                 says which axes fail which test).
         """
-        family, branches, kernel, geometry = _family(robot)
+        family, kernel, geometry = _family(robot)
         geometry.setflags(write=False)
         self.family: str = family
-        self.branches = branches
         self.geometry: np.ndarray = geometry
         self._kernel: types.ModuleType = kernel
+        # the kernel's solve_pose; its compiled code itself after the first call
+        self._solve_pose: Any = self._first_solve_pose
         self._robot = weakref.ref(robot)
         # the model's chain when it differs from the idealised structure
         self._refine: FloatArray | None = refinement_chain(robot)
         self._work = threading.local()  # each thread's buffers of solve_batch_into
+        seven = _SEVEN_AXIS.get(family)
+        if seven is None:
+            self.nq = 6
+            self.branches: tuple[str, ...] = UR_BRANCHES if family == "ur" else BRANCHES
+            self.parameter: str | None = None
+            self.parameter_range: tuple[float, float] | None = None
+            self._intervals = None
+            self._arm_angle_geometry = _NO_ARM_ANGLE
+        else:
+            self.nq = 7
+            self.branches = kernel.BRANCHES
+            self.parameter = kernel.PARAMETER
+            lo, hi = kernel.parameter_range(geometry)
+            self.parameter_range = (float(lo), float(hi))
+            self._intervals = seven[1]
+            self._arm_angle_geometry = geometry if family == "srs" else _NO_ARM_ANGLE
+        self._indices = tuple(range(len(self.branches)))
 
     @property
     def robot(self) -> Robot:
         """The robot this solver was built for."""
         robot = self._robot()
         if robot is None:
-            raise InputError("the robot of this closed-form solver no longer exists")
+            raise InputError("the robot of this solver no longer exists")
         return robot
+
+    @property
+    def deviation(self) -> object | None:
+        """How far the robot's model is from its family's ideal structure.
+
+        The ``deviation`` of its :class:`~workbench.ik.KinematicStructure`
+        (None where the structure does not report one).
+        """
+        try:
+            structure = get_structure(self.robot)
+        except UnsupportedRobotError:  # a PUMA DH table the axes do not fit
+            return None
+        return getattr(structure, "deviation", None)
 
     def __repr__(self) -> str:
         robot = self._robot()
         name = "<gone>" if robot is None else robot.name
-        return f"ClosedFormSolver({name!r}, family={self.family!r})"
+        return f"Solver({name!r}, family={self.family!r})"
 
     # -- one pose -------------------------------------------------------------
     def solve(
         self,
         target: pin.SE3 | npt.ArrayLike,
         *,
+        redundancy: float | None = None,
         q_previous: npt.ArrayLike | None = None,
     ) -> list[IKSolution]:
-        """Every branch that reaches ``target``: see :func:`workbench.ik.analytic`."""
-        if type(target) is pin.SE3:
-            pose = target.homogeneous
-        elif (
-            type(target) is np.ndarray
+        """Every branch that reaches ``target``: see :func:`workbench.ik.analytic`.
+
+        Args:
+            target: Pose of the tool frame in the base frame: ``pin.SE3`` or a
+                (4, 4) homogeneous matrix [m].
+            redundancy: Seven-axis arms: the redundancy parameter [rad] (ψ or
+                q7); None takes that of ``q_previous``. Six-axis arms: None.
+            q_previous: Optional configuration (nq,) [rad]; each angle is then
+                the representative (mod 2π) nearest it.
+
+        Returns:
+            One :class:`~workbench.ik.IKSolution` per branch that reaches, in
+            the order of ``branches``.
+
+        Raises:
+            UnreachableError: If no branch reaches the pose (the message says
+                why).
+            DimensionError, NonFiniteError, InputError: Bad target,
+                ``redundancy`` or ``q_previous`` (a value given for a six-axis
+                arm, none for a seven-axis arm without ``q_previous``).
+        """
+        if (
+            target.__class__ is np.ndarray
             and target.shape == (4, 4)
-            and target.dtype == float
+            and target.dtype is _FLOAT64
         ):
             pose = target
+        elif target.__class__ is pin.SE3:
+            pose = target.homogeneous
         else:
             pose = np.array(pose_rows(target))  # every check, with its error
         prev = _NO_PREVIOUS if q_previous is None else self._previous(q_previous)
-        q, flags = np.empty((8, 6)), np.empty(FLAG_COUNT, dtype=bool)
-        kernel = self._kernel
-        if self._refine is not None or kernel.solve_pose(
-            self.geometry, pose, prev, q, flags, True
-        ):  # not OK (rechecked, or raises), or refined on the model
-            q, flags = self.solve_arrays(pose, prev)
+        if self.parameter is None:
+            if redundancy is not None:
+                raise _no_redundancy(self.robot)
+            q, flags = np.empty((8, 6)), np.empty(8, dtype=np.uint8)
+            if self._refine is not None or self._solve_pose(
+                self.geometry, pose, prev, q, flags, True
+            ):  # not OK (rechecked, or raises), or refined on the model
+                q, flags = self.solve_arrays(pose, prev)
+        else:
+            if redundancy is None:
+                if q_previous is None:
+                    raise self._missing_redundancy()
+                redundancy = float(self.parameter_of(prev))
+            elif redundancy.__class__ is not float or not (
+                -math.inf < redundancy < math.inf
+            ):
+                redundancy = check_redundancy(redundancy, self.parameter)
+            q, flags = np.empty((8, 7)), np.empty(8, dtype=np.uint8)
+            if self._refine is not None or self._solve_pose(
+                self.geometry, pose, redundancy, prev, q, flags, True
+            ):
+                q, flags = self.solve_arrays(pose, prev, redundancy=redundancy)
         q.setflags(write=False)
-        flag_list = flags.tolist()
-        shared = (q, flag_list, self.branches)
-        if not flag_list[FLAG_SOME_UNREACHED]:
-            return [IKSolution(shared, index) for index in _INDICES]
-        reached = q[:, 0] == q[:, 0]  # False on the NaN rows of an arm out of reach
-        return [IKSolution(shared, index) for index in _INDICES if reached[index]]
+        labels = self.branches
+        return [  # (IKSolution(items) is tuple.__new__ through type's fast call)
+            IKSolution((q, i, bits, labels, redundancy))
+            for i, bits in zip(self._indices, flags.tolist(), strict=True)
+            if bits
+        ]
+
+    def _first_solve_pose(self, *args: Any) -> int:
+        """The kernel's ``solve_pose``, then its compiled code for later calls.
+
+        Numba's dispatcher types every argument of every call to choose the
+        compiled code (~0.3 µs of a solve); :meth:`solve` passes arguments of
+        the one signature only (a float64 (4, 4) pose, float64 or empty
+        ``q_previous``, a float parameter, fresh outputs), so that after the
+        first call (which compiles, or loads from the cache) the compiled
+        entry point is called directly (``_chain.compiled_entry``).
+        """
+        status = int(self._kernel.solve_pose(*args))
+        self._solve_pose = compiled_entry(self._kernel.solve_pose, args)
+        return status
 
     def solve_arrays(
-        self, pose: FloatArray, q_previous: FloatArray
-    ) -> tuple[FloatArray, BoolArray]:
+        self,
+        pose: FloatArray,
+        q_previous: FloatArray,
+        *,
+        redundancy: float | None = None,
+    ) -> tuple[FloatArray, FlagArray]:
         """The kernel's solve of one pose, as arrays, its failures as errors.
 
         Args:
             pose: (4, 4) float array, the target pose of the tool frame in the
                 base frame [m].
-            q_previous: (6,) previous configuration [rad] (each angle is then
+            q_previous: (nq,) previous configuration [rad] (each angle is then
                 the representative nearest it), or (0,) for none.
+            redundancy: Seven-axis arms: the redundancy parameter [rad],
+                finite (required); six-axis arms: None.
 
         Returns:
-            ``q`` (8, 6) [rad], NaN rows for branches that do not reach, and
-            ``flags`` (:data:`FLAG_COUNT`,), slots ``FLAG_*``.
+            ``q`` (B, nq) [rad], NaN rows for branches that do not reach, and
+            ``flags`` (B,) uint8, the bits of :class:`~workbench.ik.Flag` per
+            branch (0 where it does not reach).
 
         Raises:
-            UnreachableError, NonFiniteError, InputError: As
-                :func:`workbench.ik.analytic`.
+            UnreachableError, NonFiniteError, InputError: As :meth:`solve`.
         """
-        q, flags = np.empty((8, 6)), np.empty(FLAG_COUNT, dtype=bool)
-        kernel = self._kernel
-        status = kernel.solve_pose(self.geometry, pose, q_previous, q, flags, True)
-        if status == NOT_RIGID:  # the kernel's test is the exact one
-            pose_rows(pose)  # raises the error that says why
-            raise InputError("target is not a rigid transform")  # (pose_rows raised)
+        count = len(self._indices)
+        q, flags = np.empty((count, self.nq)), np.empty(count, dtype=np.uint8)
+        if self.parameter is None:
+            status = self._kernel.solve_pose(
+                self.geometry, pose, q_previous, q, flags, True
+            )
+        else:
+            if redundancy is None:
+                raise self._missing_redundancy()
+            status = self._kernel.solve_pose(
+                self.geometry, pose, redundancy, q_previous, q, flags, True
+            )
         if status != OK:
-            self._explain(pose)
-        if self._refine is not None and not refine_pose(self._refine, pose, q, flags):
+            self._raise(status, pose, redundancy)
+        chain = self._refine
+        if chain is not None and not self._refined(chain, pose, redundancy, q, flags):
             raise UnreachableError(0.0, (0.0, 0.0), "model")
         return q, flags
+
+    def _refined(
+        self,
+        chain: FloatArray,
+        pose: FloatArray,
+        value: float | None,
+        q: FloatArray,
+        flags: FlagArray,
+    ) -> int:
+        """Refine the branches ``q`` (B, nq) on the model's own chain, in place.
+
+        Returns:
+            The number of branches that reach the pose on the model; the
+            others are NaN rows now, their ``flags`` 0, and the
+            ``WITHIN_LIMITS`` bits of the others are those of the model.
+        """
+        if value is None:
+            slots = np.empty(FLAG_COUNT, dtype=np.bool_)
+            count = int(refine_pose(chain, pose, q, slots))
+            within = slots[FLAG_WITHIN_LIMITS : FLAG_WITHIN_LIMITS + 8]
+            flags &= ~np.uint8(WITHIN_LIMITS)
+            flags |= within.astype(np.uint8) * np.uint8(WITHIN_LIMITS)
+        else:
+            count = int(
+                refine_redundant.refine_pose(
+                    chain, self._arm_angle_geometry, self.family == "srs",
+                    pose, value, q, flags,
+                )
+            )  # fmt: skip
+        flags[np.isnan(q[:, 0])] = 0
+        return count
 
     def track(
         self,
         pose: FloatArray,
         q_predicted: FloatArray,
-        pair: int,
+        branch: int,
         max_step2: float,
+        *,
+        redundancy: float | None = None,
     ) -> tuple[FloatArray, int, bool]:
-        """The branch that continues a motion (Kang's θ4 flip rule, generalised).
+        """The branch that continues a motion (for the online planner).
 
-        Every angle is taken as the representative nearest the prediction;
-        the branch is the nearer wrist twin of the last (arm, elbow) pair if
-        within ``max_step2``, else (after a shoulder or elbow singularity) the
-        nearest of all.
+        Every angle is taken as the representative nearest the prediction.
+        Six-axis arms (Kang's θ4 flip rule, generalised): the nearer wrist
+        twin of the last (arm, elbow) pair, ``branch >> 1``, if within
+        ``max_step2``; seven-axis arms: the branch itself if within
+        ``max_step2``; else (after a singularity) the nearest of all.
 
         Args:
-            pose: (4, 4) target pose of the tool frame in the base frame [m].
-            q_predicted: (6,) predicted configuration [rad], e.g. the linear
+            pose: (4, 4) float64 target pose of the tool frame in the base
+                frame [m].
+            q_predicted: (nq,) predicted configuration [rad], e.g. the linear
                 extrapolation of the last two commands.
-            pair: (Arm, elbow) pair of the last command's branch, ``index >> 1``.
-            max_step2: Largest squared joint step [rad²] that keeps the pair.
+            branch: Index of the last command's branch.
+            max_step2: Largest squared joint step [rad²] that keeps it.
+            redundancy: Seven-axis arms: the redundancy parameter [rad],
+                finite (required); six-axis arms: None.
 
         Returns:
-            ``(q, index, within)``: the configuration (6,) [rad], its branch
+            ``(q, index, within)``: the configuration (nq,) [rad], its branch
             index and whether it is within the joint limits.
 
         Raises:
-            UnreachableError, InputError: As :func:`workbench.ik.analytic`.
+            UnreachableError, InputError: As :meth:`solve`.
         """
+        found = self.try_track(
+            pose, q_predicted, branch, max_step2, redundancy=redundancy
+        )
+        if found is None:  # raises the error that says why
+            self.solve_arrays(pose, q_predicted, redundancy=redundancy)
+            raise UnreachableError(0.0, (0.0, 0.0), "model")  # (it raised)
+        return found
+
+    def try_track(
+        self,
+        pose: FloatArray,
+        q_predicted: FloatArray,
+        branch: int,
+        max_step2: float,
+        *,
+        redundancy: float | None = None,
+    ) -> tuple[FloatArray, int, bool] | None:
+        """:meth:`track`, but None where no branch reaches (no error is built).
+
+        For callers that probe values of the parameter (the online planner):
+        the error of :meth:`track` says why a pose is out of reach, which
+        takes a search over the parameter (milliseconds for q7).
+
+        Returns:
+            ``(q, index, within)`` as :meth:`track`, or None if the kernel's
+            status is not OK (the pose out of reach, or not rigid).
+        """
+        seven = self.parameter is not None
+        if seven and redundancy is None:
+            raise self._missing_redundancy()
         if self._refine is None:
-            q = np.empty(6)
-            status, index, within = self._kernel.track(
-                self.geometry, pose, q_predicted, pair, max_step2, q
+            q = np.empty(self.nq)
+            if seven:
+                status, index, within = self._kernel.track(
+                    self.geometry, pose, redundancy, q_predicted, branch, max_step2, q
+                )
+            else:
+                status, index, within = self._kernel.track(
+                    self.geometry, pose, q_predicted, branch >> 1, max_step2, q
+                )
+            return (q, index, bool(within)) if status == OK else None
+        chain, count = self._refine, len(self._indices)
+        q_all = np.empty((count, self.nq))
+        flags = np.empty(count, dtype=np.uint8)
+        if seven:
+            status = self._kernel.solve_pose(
+                self.geometry, pose, redundancy, q_predicted, q_all, flags, True
             )
-            if status == OK:
-                return q, index, within
-        q_all, flags = self.solve_arrays(pose, q_predicted)  # refined, or raises
-        index = continuing_branch(q_all, q_predicted, pair, max_step2)
-        return q_all[index].copy(), index, bool(flags[FLAG_WITHIN_LIMITS + index])
+        else:
+            status = self._kernel.solve_pose(
+                self.geometry, pose, q_predicted, q_all, flags, True
+            )
+        if status != OK or not self._refined(chain, pose, redundancy, q_all, flags):
+            return None
+        if seven:
+            index = int(nearest_or_kept(q_all, q_predicted, branch, max_step2))
+        else:
+            index = int(continuing_branch(q_all, q_predicted, branch >> 1, max_step2))
+        return q_all[index].copy(), index, bool(flags[index] & WITHIN_LIMITS)
+
+    def diagnose(
+        self, pose: FloatArray, *, redundancy: float | None = None
+    ) -> tuple[float, float, float]:
+        """How far the wrist point is from the shoulder, and the arm's reach.
+
+        Args:
+            pose: (4, 4) float64 pose of the tool frame in the base frame [m].
+            redundancy: Seven-axis arms: the redundancy parameter [rad] (a
+                Franka arm's wrist point turns with q7; an SRS arm's wrist
+                centre does not depend on ψ); six-axis arms: None.
+
+        Returns:
+            ``(distance, low, high)`` [m]: the distance of the wrist centre
+            (Franka: wrist point) from the shoulder and the interval of
+            distances the arm reaches; on a six-axis arm whose wrist centre
+            is inside the cylinder of its shoulder offset, its distance from
+            the base axis and ``(radius, radius)``.
+        """
+        if self.parameter is None:
+            _, distance, low, high = self._kernel.diagnose(self.geometry, pose)
+        else:
+            value = 0.0 if redundancy is None else redundancy
+            _, distance, low, high = self._kernel.diagnose(self.geometry, pose, value)
+        return float(distance), float(low), float(high)
 
     def _previous(self, q_previous: npt.ArrayLike) -> FloatArray:
         """``q_previous`` checked (``Robot.check_configuration``), as floats."""
         if (
             type(q_previous) is np.ndarray
-            and q_previous.shape == (6,)
+            and q_previous.shape == (self.nq,)
             and q_previous.dtype == float
             and np.isfinite(q_previous).all()
         ):
             return q_previous
         return self.robot.check_configuration(q_previous)
 
-    def _explain(self, pose: FloatArray) -> None:
-        """Raise the :class:`UnreachableError` of a pose the arm cannot reach."""
-        status, distance, low, high = self._kernel.diagnose(self.geometry, pose)
-        kind = "cylinder" if status == IN_CYLINDER else "reach"
-        raise UnreachableError(distance, (low, high), kind)
+    def _missing_redundancy(self) -> InputError:
+        return InputError(
+            f"robot {self.robot.name!r} is a seven-axis arm: give redundancy= "
+            f"(the {self.parameter} [rad]; ik.choose_redundancy(robot, target) "
+            "chooses one, ik.get_solver(robot).parameter_of(q) reads it from a "
+            "configuration), or q_previous= to keep its value"
+        )
+
+    def _raise(self, status: int, pose: FloatArray, value: float | None) -> None:
+        """Raise the error of a pose the kernel refused (``status`` not OK)."""
+        if status == NOT_RIGID:  # the kernel's test is the exact one
+            pose_rows(pose)  # raises the error that says why
+            raise InputError("target is not a rigid transform")  # (pose_rows raised)
+        if self.parameter is None:
+            status, distance, low, high = self._kernel.diagnose(self.geometry, pose)
+            kind = "cylinder" if status == IN_CYLINDER else "reach"
+            raise UnreachableError(distance, (low, high), kind)
+        distance, low, high = self.diagnose(pose, redundancy=value)
+        if self.family == "srs":
+            message = (
+                f"out of reach for every arm angle: wrist centre at distance "
+                f"{distance:.6g} m from the shoulder, reach is [{low:.6g}, "
+                f"{high:.6g}] m"
+            )
+        else:
+            union = self.feasible(pose).union
+            reach = (
+                f"feasible {self.parameter} (every joint within its limits): "
+                f"{format_intervals(union)} rad"
+                if union
+                else f"no {self.parameter} reaches it within the joint limits"
+            )
+            where = (
+                f"the wrist point ({distance:.6g} m from the shoulder) is within "
+                f"the elbow's reach [{low:.6g}, {high:.6g}] m, but axis 5 cannot "
+                "be normal to axis 6 there"
+                if low <= distance <= high
+                else f"wrist point at distance {distance:.6g} m from the "
+                f"shoulder, the elbow reaches [{low:.6g}, {high:.6g}] m"
+            )
+            message = (
+                f"out of reach for {self.parameter} = {value:.6g} rad: {where}; {reach}"
+            )
+        raise UnreachableError(distance, (low, high), "reach", message)
 
     # -- many poses -----------------------------------------------------------
-    def solve_batch(self, targets: npt.ArrayLike) -> tuple[FloatArray, BoolArray]:
-        """Every branch of N poses: see :func:`workbench.ik.analytic_batch`."""
+    def solve_batch(
+        self,
+        targets: npt.ArrayLike,
+        *,
+        redundancy: float | npt.ArrayLike | None = None,
+    ) -> tuple[FloatArray, BoolArray]:
+        """Every branch of N poses: see :func:`workbench.ik.analytic_batch`.
+
+        Args:
+            targets: (N, 4, 4) poses of the tool frame in the base frame [m].
+            redundancy: Seven-axis arms, required: the redundancy parameter
+                [rad], one for all or (N,); six-axis arms: None.
+
+        Returns:
+            ``q`` (N, B, nq) [rad], NaN where a branch does not reach;
+            ``valid`` (N, B), True where it reaches. Joint limits are not
+            applied.
+
+        Raises:
+            DimensionError, NonFiniteError: Bad shapes or entries.
+            InputError: If a pose is not rigid (``poses.RIGIDITY_TOL``), or
+                ``redundancy`` is given for a six-axis arm or missing for a
+                seven-axis arm.
+        """
         poses = as_targets(targets)
         count = len(poses)
-        q, valid = np.empty((count, 8, 6)), np.empty((count, 8), dtype=bool)
-        self.solve_batch_into(poses, q, valid)
+        q = np.empty((count, len(self._indices), self.nq))
+        valid = np.empty((count, len(self._indices)), dtype=bool)
+        self.solve_batch_into(poses, q, valid, redundancy=redundancy)
         return q, valid
 
     def solve_batch_into(
-        self, poses: FloatArray, q: FloatArray, valid: BoolArray
+        self,
+        poses: FloatArray,
+        q: FloatArray,
+        valid: BoolArray,
+        *,
+        redundancy: float | npt.ArrayLike | None = None,
     ) -> None:
         """:meth:`solve_batch` into given arrays (no allocation of the results).
 
         Args:
             poses: (N, 4, 4) float64 C-contiguous poses of the tool frame in
                 the base frame [m]; each is checked finite and rigid.
-            q: (N, 8, 6) float64 output [rad], as :meth:`solve_batch`'s.
-            valid: (N, 8) bool output.
+            q: (N, B, nq) float64 output [rad], as :meth:`solve_batch`'s.
+            valid: (N, B) bool output.
+            redundancy: As :meth:`solve_batch`.
 
         Raises:
             DimensionError: If the shapes do not match.
-            NonFiniteError, InputError: As :func:`workbench.ik.analytic_batch`.
+            NonFiniteError, InputError: As :meth:`solve_batch`.
         """
-        count = len(poses)
+        count, branches = len(poses), len(self._indices)
         for name, array, shape in (
             ("poses", poses, (count, 4, 4)),
-            ("q", q, (count, 8, 6)),
-            ("valid", valid, (count, 8)),
+            ("q", q, (count, branches, self.nq)),
+            ("valid", valid, (count, branches)),
         ):
             if array.shape != shape:
                 raise DimensionError(name, shape, array.shape)
+        if self.parameter is None:
+            if redundancy is not None:
+                raise _no_redundancy(self.robot)
+            self._batch_six(poses, q, valid)
+            if self._refine is not None:
+                refine_batch(self._refine, poses, q, valid)
+            return
+        if redundancy is None:
+            raise self._missing_redundancy()
+        for start in range(0, count, CHECK_CHUNK):
+            check_poses(poses[start : start + CHECK_CHUNK], start)
+        if np.ndim(redundancy) == 0:
+            values = np.full(count, check_redundancy(redundancy, self.parameter))
+        else:
+            values = as_finite_array(redundancy, (count,), "redundancy")
+        values = np.ascontiguousarray(values)
+        self._kernel.solve_batch(self.geometry, poses, values, q, valid)
+        if self._refine is not None:
+            refine_redundant.refine_batch(
+                self._refine, self._arm_angle_geometry, self.family == "srs",
+                poses, values, q, valid,
+            )  # fmt: skip
+
+    def _batch_six(self, poses: FloatArray, q: FloatArray, valid: BoolArray) -> None:
+        """The six-axis kernels' three batch stages, chunk by chunk."""
         kernel, geometry = self._kernel, self.geometry
         (y, x, angles), status, exact, odd = self._batch_work()
-        for start in range(0, count, BATCH_CHUNK):
+        for start in range(0, len(poses), BATCH_CHUNK):
             chunk = poses[start : start + BATCH_CHUNK]
             n = len(chunk)
             codes = status[:n], exact[:n], odd[:n]
@@ -290,11 +659,9 @@ class ClosedFormSolver:
                 geometry, angles[:n], y[:n], status[:n], exact[:n],
                 q[start : start + n], valid[start : start + n],
             )  # fmt: skip
-        if self._refine is not None:
-            refine_batch(self._refine, poses, q, valid)
 
     def _batch_work(self) -> tuple[FloatArray, np.ndarray, np.ndarray, np.ndarray]:
-        """This thread's work arrays of :meth:`solve_batch_into`, made once.
+        """This thread's work arrays of the six-axis batch, made once.
 
         (3, BATCH_CHUNK, N_ANGLES) float64 stages, then the int8 status, int64
         exact flags and uint8 odd flags of BATCH_CHUNK poses. Reused by every
@@ -314,145 +681,125 @@ class ClosedFormSolver:
             self._work.arrays = work
         return work
 
+    # -- the redundancy parameter -------------------------------------------------
+    def parameter_of(self, q: npt.ArrayLike) -> float | FloatArray:
+        """The redundancy parameter [rad] of configurations of a seven-axis arm.
 
-def _family(robot: Robot) -> tuple[str, tuple[str, ...], types.ModuleType, np.ndarray]:
-    """Family name, branch labels, kernel module and packed constants of a 6R arm.
+        Args:
+            q: (7,) or (N, 7) robot joint values [rad].
 
-    From the robot's :class:`~workbench.ik.families.Family`
-    (:func:`~workbench.ik.families.require_family`).
-    """
-    family = require_family(robot)
-    if family.redundant:
-        raise UnsupportedRobotError(
-            f"robot {robot.name!r} is a seven-axis arm ({family.name.upper()} "
-            "family): its closed form takes a redundancy parameter, use "
-            "ik.get_redundant_solver(robot) or ik.analytic(..., redundancy=...)"
+        Returns:
+            A float for (7,), an (N,) array for (N, 7): ψ in [−π, π] (SRS; the
+            θ1 = 0 reference when the wrist centre is on axis 1) or q7. On a
+            model off its idealised structure (a rounded URDF) ψ is that of
+            the idealised chain at ``q``, the value the refinement holds, so
+            that :meth:`solve` at it gives ``q`` back.
+
+        Raises:
+            InputError: On a six-axis arm (no redundancy).
+            DimensionError, NonFiniteError: Bad shape or entries.
+        """
+        if self.parameter is None:
+            raise _no_redundancy(self.robot)
+        arr = np.asarray(q, dtype=np.float64) if not isinstance(q, np.ndarray) else q
+        if arr.ndim == 2:
+            rows = as_finite_array(arr, (arr.shape[0], 7), "q")
+            out = np.empty(len(rows))
+            self._kernel.parameter_of(self.geometry, rows, out)
+            return out
+        one = self.robot.check_configuration(q)
+        value = np.empty(1)
+        self._kernel.parameter_of(self.geometry, one.reshape(1, 7), value)
+        return float(value[0])
+
+    def feasible(self, target: pin.SE3 | npt.ArrayLike) -> FeasibleRedundancy:
+        """The values of the parameter that reach ``target`` within the limits.
+
+        Args:
+            target: Pose of the tool frame in the base frame: ``pin.SE3`` or a
+                (4, 4) homogeneous matrix [m].
+
+        Returns:
+            Per branch and in union, the closed intervals of the parameter
+            [rad] (empty when the pose is out of reach or out of the limits):
+            analytic for SRS arms, bisected to 1e-12 rad for Franka arms.
+
+        Raises:
+            InputError: On a six-axis arm (no redundancy).
+            DimensionError, NonFiniteError, InputError: Bad target.
+        """
+        if (
+            self.parameter is None
+            or self.parameter_range is None
+            or self._intervals is None
+        ):
+            raise _no_redundancy(self.robot)
+        pose = np.array(pose_rows(target))
+        found = self._intervals(self.geometry, pose)
+        intervals = tuple(
+            tuple((float(lo), float(hi)) for lo, hi in branch) for branch in found
         )
-    return family.name, family.branches, family.kernel, family.pack(robot)
+        return FeasibleRedundancy(
+            parameter=self.parameter,
+            range=self.parameter_range,
+            branches=self.branches,
+            intervals=intervals,
+            union=feasible_union(intervals),
+            circular=self.family == "srs",
+        )
+
+
+def _no_redundancy(robot: Robot) -> InputError:
+    return InputError(
+        f"robot {robot.name!r} has {robot.nq} joints and no redundancy: call "
+        "without redundancy="
+    )
+
+
+def _family(robot: Robot) -> tuple[str, types.ModuleType, np.ndarray]:
+    """Family, kernel module and packed constants of a robot's closed form.
+
+    From the robot's DH table when it has one and the tool frame is the
+    table's last frame (the PUMA models), else from the DH chain fitted to its
+    joint axes (:func:`~workbench.ik.structure.get_structure`).
+    """
+    table = robot.dh_table
+    if table is not None and robot.tool_frame == table.tool_frame:
+        try:
+            return "opw", opw_kernel, opw_kernel.pack_geometry(get_geometry(robot))
+        except UnsupportedRobotError:  # the table is not PUMA-type: the axes
+            pass
+    structure = get_structure(robot)
+    seven = _SEVEN_AXIS.get(structure.family)
+    if seven is not None:
+        kernel = seven[0]
+        return (
+            structure.family,
+            kernel,
+            kernel.pack_geometry(structure, robot.lower, robot.upper),
+        )
+    if structure.family == "ur":
+        packed = ur_kernel.pack_geometry(structure, robot.lower, robot.upper)
+        return "ur", ur_kernel, packed
+    return "opw", opw_kernel, opw_kernel.pack_geometry(get_geometry(robot))
 
 
 @per_robot
-def get_closed_form(robot: Robot) -> ClosedFormSolver:
-    """The :class:`ClosedFormSolver` of ``robot``, cached per robot object (weakly).
+def get_solver(robot: Robot) -> Solver:
+    """The :class:`Solver` of ``robot``, cached per robot object (weakly).
 
     Raises:
-        UnsupportedRobotError: If the robot has no closed form.
+        UnsupportedRobotError: If the robot has no closed form (the message
+            says which axes fail which test).
     """
-    return ClosedFormSolver(robot)
+    return Solver(robot)
 
-
-class IKSolution:
-    """One closed-form branch (immutable).
-
-    Attributes:
-        q: Configuration, shape (6,) [rad], read-only; each angle is the
-            representative (mod 2π) within the joint limits when one is, else
-            in (−π, π] — or, when ``q_previous`` was given, the one nearest it.
-        branch: Label, e.g. ``"right/elbow-up/no-flip"`` (see module docs) or
-            ``"shoulder-left/elbow-up/wrist-down"`` (UR-type arms).
-        index: Position of ``branch`` in :data:`BRANCHES` (UR:
-            :data:`UR_BRANCHES`).
-        within_limits: True if every joint of ``q`` is within its limits.
-        wrist_singular: True if |sin θ5| <= ``WRIST_SINGULAR_TOL``; θ4 and θ6
-            (UR: θ6 and θ2 + θ3 + θ4) are then one member of a one-parameter
-            family.
-        shoulder_singular: True if the two shoulder (arm) solutions meet.
-
-    The eight solutions of one solve share its result arrays (each ``q`` is a
-    row of one read-only (8, 6) array). Equality is identity; the fields are
-    read-only properties (assigning one raises
-    ``dataclasses.FrozenInstanceError``).
-    """
-
-    __slots__ = ("_index", "_shared")
-
-    def __init__(
-        self, shared: tuple[FloatArray, list[bool], tuple[str, ...]], index: int
-    ) -> None:
-        # private: built by ClosedFormSolver.solve; shared = (q, flags, labels)
-        self._shared = shared
-        self._index = index
-
-    @property
-    def q(self) -> FloatArray:
-        """Configuration (6,) [rad], read-only."""
-        return self._shared[0][self._index]
-
-    @property
-    def branch(self) -> str:
-        """Label, e.g. ``"right/elbow-up/no-flip"``."""
-        return self._shared[2][self._index]
-
-    @property
-    def index(self) -> int:
-        """Position of ``branch`` in :data:`BRANCHES`."""
-        return self._index
-
-    @property
-    def within_limits(self) -> bool:
-        """True if every joint of ``q`` is within its limits."""
-        return self._shared[1][FLAG_WITHIN_LIMITS + self._index]
-
-    @property
-    def wrist_singular(self) -> bool:
-        """True if |sin θ5| <= ``WRIST_SINGULAR_TOL``."""
-        return self._shared[1][FLAG_WRIST_SINGULAR + (self._index >> 1)]
-
-    @property
-    def shoulder_singular(self) -> bool:
-        """True if the right and left arms meet (shoulder singularity).
-
-        The wrist centre is then on the cylinder |D| around the base axis (to
-        1e-10 m); on the base axis itself θ1 is free and this solution is one
-        member of a one-parameter family.
-        """
-        return self._shared[1][FLAG_SHOULDER_SINGULAR]
-
-    def __repr__(self) -> str:
-        return (
-            f"IKSolution(q={self.q!r}, branch={self.branch!r}, index={self.index}, "
-            f"within_limits={self.within_limits}, "
-            f"wrist_singular={self.wrist_singular}, "
-            f"shoulder_singular={self.shoulder_singular})"
-        )
-
-    def __reduce__(self) -> tuple[object, tuple[object, ...]]:
-        return (IKSolution, (self._shared, self._index))
-
-
-def _frozen_field(name: str) -> property:
-    """``IKSolution.<name>`` with a setter and deleter that raise, as frozen."""
-    getter = IKSolution.__dict__[name].fget
-
-    def refuse(self: IKSolution, *value: object) -> None:
-        raise FrozenInstanceError(f"cannot assign to field {name!r}")
-
-    return property(getter, refuse, refuse, getter.__doc__)
-
-
-for _name in (
-    "q",
-    "branch",
-    "index",
-    "within_limits",
-    "wrist_singular",
-    "shoulder_singular",
-):
-    setattr(IKSolution, _name, _frozen_field(_name))
-del _name
-
-_INDICES = tuple(range(len(BRANCHES)))
 
 __all__ = [
     "BATCH_CHUNK",
     "BRANCHES",
-    "FLAG_COUNT",
-    "FLAG_SHOULDER_SINGULAR",
-    "FLAG_SOME_UNREACHED",
-    "FLAG_WITHIN_LIMITS",
-    "FLAG_WRIST_SINGULAR",
+    "CHECK_CHUNK",
     "UR_BRANCHES",
-    "ClosedFormSolver",
-    "IKSolution",
-    "get_closed_form",
+    "Solver",
+    "get_solver",
 ]

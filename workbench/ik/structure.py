@@ -55,7 +55,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from workbench.errors import InputError
+from workbench.errors import UnsupportedRobotError
 from workbench.model.dh import DHJoint, DHTable
 from workbench.model.per_robot import per_robot
 from workbench.model.robot import Robot
@@ -77,10 +77,6 @@ _TINY = 1e-12
 #: Joint counts of the chains with a closed form: 6R arms (OPW, UR) and 7R
 #: arms (SRS, Franka), whose seventh joint is the redundancy.
 JOINT_COUNTS = (6, 7)
-
-
-class UnsupportedRobotError(InputError):
-    """The robot has no closed-form IK (not a 6R or 7R arm of a supported family)."""
 
 
 @dataclass(frozen=True, slots=True)

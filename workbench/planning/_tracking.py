@@ -2,7 +2,7 @@
 
 Step 2 turns the tool-tip command into the wrist-centre command in the base
 frame; step 3, the closed-form IK that continues the motion, is
-:meth:`workbench.ik.ClosedFormSolver.track`. Step 2 runs once per planning
+:meth:`workbench.ik.Solver.track`. Step 2 runs once per planning
 cycle, so it is compiled with Numba (the same arithmetic in Python costs
 several times more than the IK itself).
 """

@@ -19,7 +19,7 @@ Once per planning cycle, :meth:`OnlinePlanner.step` runs Kang's chain:
    servo interpolation would otherwise ripple).
 
 On a seven-axis arm (``iiwa14``, ``panda``) step 3 is the redundant closed
-form (``workbench.ik.get_redundant_solver``) at a value of the redundancy
+form (``workbench.ik.get_solver``) at a value of the redundancy
 parameter (SRS: the arm angle ψ; Franka: q7) that the ``redundancy`` policy
 keeps or moves at a bounded rate (:mod:`workbench.planning.redundancy_policy`;
 the branch never changes by that choice), and step 4 is
@@ -54,8 +54,7 @@ from workbench.errors import InputError, JointLimitError
 from workbench.ik import (
     DLS_EPSILON,
     DLS_LAMBDA_MAX,
-    get_closed_form,
-    get_redundant_solver,
+    get_solver,
     nearest,
     solve_null_space_velocity,
     solve_velocity,
@@ -250,7 +249,7 @@ class OnlinePlanner:
         oMf = robot.fk(q0)
         self._tracker: RedundancyTracker | None = None
         if robot.nq == 7:  # a seven-axis arm, else UnsupportedRobotError
-            solver = get_redundant_solver(robot)
+            solver = get_solver(robot)
             self._tracker = RedundancyTracker(
                 robot,
                 solver,
@@ -260,7 +259,7 @@ class OnlinePlanner:
                 q0,
             )
             self._labels = solver.branches
-            start = solver.solve(oMf, self._tracker.value, q_previous=q0)
+            start = solver.solve(oMf, redundancy=self._tracker.value, q_previous=q0)
             self._branch = nearest(start, q0).index
         else:
             if redundancy is not None:
@@ -268,7 +267,7 @@ class OnlinePlanner:
                     f"robot {robot.name!r} has no redundancy (6 joints): the "
                     "redundancy policy is for seven-axis arms"
                 )
-            self._closed_form = get_closed_form(robot)  # fails early without one
+            self._closed_form = get_solver(robot)  # fails early without one
             self._labels = self._closed_form.branches
             solutions = self._closed_form.solve(oMf, q_previous=q0)
             self._branch = nearest(solutions, q0).index
@@ -445,7 +444,7 @@ class OnlinePlanner:
 
         Steps 2 and 3 of the cycle: the wrist-centre command in the base frame
         (``_tracking.wrist_command``), then the IK solution that continues the
-        motion (:meth:`~workbench.ik.ClosedFormSolver.track`, from the
+        motion (:meth:`~workbench.ik.Solver.track`, from the
         configuration predicted from the last two commands, so that at a wrist
         singularity, θ4 and θ6 free, the wrist keeps moving as it was).
 
@@ -463,7 +462,7 @@ class OnlinePlanner:
             )
         else:
             q, index, within = self._closed_form.track(
-                pose, q_predicted, self._branch >> 1, self._max_step2
+                pose, q_predicted, self._branch, self._max_step2
             )
         q.setflags(write=False)
         return twist, q, index, within

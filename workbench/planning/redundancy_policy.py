@@ -1,7 +1,7 @@
 r"""The joint command of a seven-axis arm, its redundancy chosen once per cycle.
 
 A seven-axis arm reaches a tool pose along a one-parameter self-motion: the
-closed form of :func:`workbench.ik.get_redundant_solver` takes that parameter
+closed form of :func:`workbench.ik.get_solver` takes that parameter
 (SRS arms: the arm angle ψ; Franka: q7) besides the pose. The online planner
 (:class:`~workbench.planning.OnlinePlanner`) asks :class:`RedundancyTracker`
 for each cycle's joint command, which moves the parameter v by a policy:
@@ -60,7 +60,7 @@ from workbench.errors import InputError
 from workbench.ik import (
     DLS_EPSILON,
     DLS_LAMBDA_MAX,
-    RedundantSolver,
+    Solver,
     compute_tool_poses,
     require_family,
     solve_null_space_velocity,
@@ -236,7 +236,7 @@ class RedundancyTracker:
 
     Args:
         robot: The arm (joint limits, speed limits, Jacobian).
-        solver: Its closed form, ``workbench.ik.get_redundant_solver(robot)``.
+        solver: Its closed form, ``workbench.ik.get_solver(robot)``.
         policy: One of :data:`REDUNDANCY_POLICIES`.
         period: Planning period [s], > 0.
         max_rate: Largest rate of the parameter's policy moves [rad/s], > 0.
@@ -251,7 +251,7 @@ class RedundancyTracker:
     def __init__(
         self,
         robot: Robot,
-        solver: RedundantSolver,
+        solver: Solver,
         policy: str,
         period: float,
         max_rate: float,
@@ -261,6 +261,8 @@ class RedundancyTracker:
         self.solver = solver
         self.policy = check_policy(policy)
         self._lower, self._upper = robot.lower, robot.upper
+        if solver.parameter_range is None:
+            raise InputError(f"robot {robot.name!r} has no redundancy parameter")
         self._range = solver.parameter_range
         # the arm angle is taken mod 2π; q7 is a joint value with limits
         self._periodic = require_family(robot).parameter_periodic
@@ -297,7 +299,7 @@ class RedundancyTracker:
             q_predicted: (7,) configuration predicted for this cycle [rad].
             branch: Branch index of the last command.
             max_step2: Largest squared joint step [rad²] that keeps the branch
-                (see ``RedundantSolver.track``).
+                (see ``Solver.track``).
 
         Returns:
             ``(q (7,), branch index, within limits)``.
@@ -307,7 +309,9 @@ class RedundancyTracker:
         """
         value, last_step, self._last_step = self.value, self._last_step, 0.0
         self.differential = False
-        kept = self.solver.try_track(pose, value, q_predicted, branch, max_step2)
+        kept = self.solver.try_track(
+            pose, q_predicted, branch, max_step2, redundancy=value
+        )
         if kept is None or self._too_fast(kept[0], q_last):
             return self._differential_command(pose, twist, q_last, branch)
         q0, index, _ = kept
@@ -317,8 +321,8 @@ class RedundancyTracker:
             return kept
         low = self._shift(value, -PROBE_STEP)
         high = self._shift(value, PROBE_STEP)
-        below = self.solver.try_track(pose, low, q0, index, max_step2)
-        above = self.solver.try_track(pose, high, q0, index, max_step2)
+        below = self.solver.try_track(pose, q0, index, max_step2, redundancy=low)
+        above = self.solver.try_track(pose, q0, index, max_step2, redundancy=high)
         if below is None or above is None or below[1] != index or above[1] != index:
             return self._differential_command(pose, twist, q_last, index)
         derivative = (above[0] - below[0]) / self._span(low, high)  # ∂q/∂v
@@ -329,7 +333,7 @@ class RedundancyTracker:
         if abs(step) < MIN_STEP:
             return kept
         moved = self.solver.try_track(
-            pose, self._shift(value, step), q0, index, max_step2
+            pose, q0, index, max_step2, redundancy=self._shift(value, step)
         )
         if moved is None or moved[1] != index or self._too_fast(moved[0], q_last):
             return self._differential_command(pose, twist, q_last, index)
@@ -408,9 +412,9 @@ class RedundancyTracker:
                 break
             q = q + self._velocity(q, error, self._zero, _LOCAL, damped=False)
         else:  # no convergence: out of reach (the closed form's error says why)
-            return self.solver.track(pose, self.value, q_last, index, 0.0)
+            return self.solver.track(pose, q_last, index, 0.0, redundancy=self.value)
         value = float(self.solver.parameter_of(q))
-        found = self.solver.try_track(pose, value, q, index, 0.0)  # nearest of all
+        found = self.solver.try_track(pose, q, index, 0.0, redundancy=value)  # nearest
         if found is not None:
             index = found[1]
         within = bool(((q >= self._lower) & (q <= self._upper)).all())

@@ -29,7 +29,7 @@ from workbench.errors import InfeasibleError, InputError
 from workbench.ik import (
     analytic,
     choose_redundancy,
-    feasible_redundancy,
+    get_solver,
     get_structure,
     nearest,
     require_family,
@@ -379,7 +379,7 @@ def check_waypoints(
 
     On a seven-axis arm: on the branch of ``q_home`` (the online planner
     keeps it), for some value of the redundancy parameter
-    (``workbench.ik.feasible_redundancy``).
+    (``workbench.ik.Solver.feasible``).
 
     Raises:
         InfeasibleError: Naming the first waypoint out of reach or limits.
@@ -416,7 +416,7 @@ def _check_redundant_waypoint(
         InfeasibleError: Naming the waypoint.
     """
     try:
-        feasible = feasible_redundancy(robot, target)
+        feasible = get_solver(robot).feasible(target)
     except InfeasibleError as err:
         raise InfeasibleError(f"waypoint {name}: {err}") from err
     if not feasible.intervals[feasible.branches.index(branch)]:
@@ -472,7 +472,8 @@ def _redundant_home(
         for point in compute_waypoints(fish, setup).values()
     ]
     try:
-        feasible = [feasible_redundancy(robot, target) for target in targets]
+        solver = get_solver(robot)
+        feasible = [solver.feasible(target) for target in targets]
     except InfeasibleError as err:
         raise InfeasibleError(
             f"{robot.name}: Kang's cell out of reach ({err})"

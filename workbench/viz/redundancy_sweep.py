@@ -2,9 +2,9 @@ r"""One pose of a seven-axis arm drawn over its redundancy parameter (self-motio
 
 A seven-axis arm of the SRS or Franka family reaches one tool pose along a
 one-parameter family of configurations per branch (the arm angle ψ, or q7;
-:func:`workbench.ik.get_redundant_solver`). :func:`compute_redundancy_sweep`
+:func:`workbench.ik.get_solver`). :func:`compute_redundancy_sweep`
 samples one branch at ``count`` values spread over the intervals where it is
-within the joint limits (:func:`workbench.ik.feasible_redundancy`): the total
+within the joint limits (:meth:`workbench.ik.Solver.feasible`): the total
 length of the intervals is cut into ``count`` equal cells and each value is a
 cell's centre, so every value lies inside an interval and the spacing is even
 across them. The arm angle is periodic: a branch feasible through ψ = ±π (its
@@ -107,7 +107,7 @@ def find_branch(robot: Robot, q: npt.ArrayLike) -> tuple[float, str]:
     from workbench import ik
 
     q = robot.check_configuration(q)
-    value = float(ik.redundancy_parameter(robot, q))
+    value = float(ik.get_solver(robot).parameter_of(q))
     solutions = ik.analytic(robot, robot.fk(q), redundancy=value)
     if not solutions:
         raise InfeasibleError(f"no branch reproduces the configuration {q.tolist()}")
@@ -124,7 +124,7 @@ def compute_redundancy_sweep(
         robot: A seven-axis arm of the SRS or Franka family.
         target: Tool pose, ``pin.SE3`` or (4, 4), base frame [m].
         count: Number of values (1..:data:`MAX_SWEEP`).
-        branch: Label of the branch (``ik.get_redundant_solver(robot).branches``).
+        branch: Label of the branch (``ik.get_solver(robot).branches``).
 
     Raises:
         InputError: If ``count`` is out of range or the label unknown.
@@ -134,7 +134,7 @@ def compute_redundancy_sweep(
 
     if not 1 <= count <= MAX_SWEEP:
         raise InputError(f"a sweep takes 1..{MAX_SWEEP} values, got {count}")
-    feasible = ik.feasible_redundancy(robot, target)
+    feasible = ik.get_solver(robot).feasible(target)
     if branch not in feasible.branches:
         raise InputError(
             f"unknown branch {branch!r}; {robot.name} has "

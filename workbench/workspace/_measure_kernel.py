@@ -1,7 +1,7 @@
 r"""Compiled per-pose measures of the workspace map, after the batch closed form.
 
 :func:`fill_poses` writes the (N, 4, 4) poses of a run of flat grid indices;
-:meth:`ClosedFormSolver.solve_batch_into` (the family kernel's batch stages)
+:meth:`Solver.solve_batch_into` (the family kernel's batch stages)
 gives every branch; :func:`measure_poses` then does, per pose, what
 :func:`~workbench.workspace._reference.evaluate_block_reference` does with
 NumPy, in the same arithmetic (the results are bitwise equal, tested to

@@ -1,7 +1,7 @@
 """The per-pose measures of a block of the pose grid, plainly in NumPy.
 
 The definition of :func:`workbench.workspace.measures.evaluate_block`, written
-on top of the public closed form (:meth:`ClosedFormSolver.solve_batch`) and
+on top of the public closed form (:meth:`Solver.solve_batch`) and
 the analytic singularity factors
 (:func:`workbench.singularities.compute_conditions`): the compiled kernel
 (:mod:`workbench.workspace._measure_kernel`) is tested against it, and it
@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
-from workbench.ik import get_closed_form
+from workbench.ik import get_solver
 from workbench.model.robot import Robot
 from workbench.singularities.conditions import (
     ELBOW_TOL,
@@ -119,7 +119,7 @@ def evaluate_block_reference(
     checker: CollisionChecker | None = None,
 ) -> dict[str, np.ndarray]:
     """Measures of voxels ``start:stop`` (see ``measures.evaluate_block``)."""
-    solver = get_closed_form(robot)
+    solver = get_solver(robot)
     fac = get_factorisation(robot)
     count, orientations = stop - start, grid.orientation_count
     q, valid = solver.solve_batch(block_poses(grid, start, stop))

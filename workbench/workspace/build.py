@@ -42,7 +42,7 @@ import numpy as np
 from workbench.atomic_files import check_output
 from workbench.collision import Scene
 from workbench.errors import InputError
-from workbench.ik import Family, get_family, get_redundant_solver
+from workbench.ik import Family, get_family, get_solver
 from workbench.model.robot import Robot
 from workbench.workspace._block_runner import run_tasks
 from workbench.workspace._block_tasks import SAMPLES_PER_BLOCK, BlockJob, compute_block
@@ -350,7 +350,9 @@ def _redundancy_attributes(
         )
     if sampled or not seven_axis:
         return None
-    solver = get_redundant_solver(robot)
+    solver = get_solver(robot)
+    if solver.parameter_range is None:  # (a seven-axis family has one)
+        raise InputError(f"robot {robot.name!r} is no seven-axis arm")
     k = DEFAULT_REDUNDANCY_SAMPLES if count is None else count
     values = redundancy_values(solver.parameter_range, k)
     return {

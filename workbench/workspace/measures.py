@@ -35,8 +35,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from workbench.errors import InputError
-from workbench.ik import ClosedFormSolver, get_closed_form
+from workbench.errors import InputError, UnsupportedRobotError
+from workbench.ik import Solver, get_solver
 from workbench.model.per_robot import per_robot
 from workbench.model.robot import Robot
 from workbench.singularities.conditions import (
@@ -177,7 +177,7 @@ _work = _Work()
 
 def _evaluate_compiled(
     robot: Robot,
-    solver: ClosedFormSolver,
+    solver: Solver,
     grid: PoseGrid,
     start: int,
     stop: int,
@@ -234,7 +234,7 @@ def evaluate_block(
     """Measures of every pose of voxels ``start:stop`` × all orientations.
 
     Through the compiled kernels (:mod:`workbench.workspace._measure_kernel`
-    after :meth:`ClosedFormSolver.solve_batch_into`, which also refines the
+    after :meth:`Solver.solve_batch_into`, which also refines the
     branches of a URDF that is of its family only up to an error); with a
     ``checker``, through the NumPy definition
     (:mod:`workbench.workspace._reference`), one collision query per in-limit
@@ -260,7 +260,13 @@ def evaluate_block(
         InputError: If the voxel range is empty or outside the grid.
     """
     start, stop = check_voxel_range(grid, start, stop)
-    solver = get_closed_form(robot)  # raises UnsupportedRobotError
+    solver = get_solver(robot)  # raises UnsupportedRobotError
+    if solver.parameter is not None:
+        raise UnsupportedRobotError(
+            f"robot {robot.name!r} is a seven-axis arm ({solver.family.upper()} "
+            "family): its atlas solves at values of the redundancy parameter, "
+            "see workspace.evaluate_redundant_block"
+        )
     if checker is None:
         return _evaluate_compiled(robot, solver, grid, start, stop, reuse)
     return evaluate_block_reference(robot, grid, start, stop, checker=checker)

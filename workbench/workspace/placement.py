@@ -53,7 +53,7 @@ import numpy.typing as npt
 
 from workbench.collision import Scene
 from workbench.errors import InfeasibleError, InputError
-from workbench.ik import get_family, get_redundant_solver
+from workbench.ik import get_family, get_solver
 from workbench.model.robot import Robot
 from workbench.validation import as_finite_array
 from workbench.workspace._placement_screen import CandidateLattice, Screening
@@ -247,7 +247,10 @@ def _values(
     """
     if the_map is None:
         count = TASK_MAP_REDUNDANCY_SAMPLES if samples is None else samples
-        return redundancy_values(get_redundant_solver(robot).parameter_range, count)
+        range_ = get_solver(robot).parameter_range
+        if range_ is None:
+            raise InputError(f"{robot.name} has no redundancy parameter")
+        return redundancy_values(range_, count)
     attrs = getattr(the_map, "attrs", None)
     values = getattr(the_map, "redundancy", None)
     if attrs is not None:

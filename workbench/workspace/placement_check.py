@@ -4,7 +4,7 @@ A candidate base pose is :math:`B = \mathrm{Trans}(x, y, z)\, R_z(\psi)` in the
 world frame (:func:`base_transform`); task pose :math:`T` is then
 :math:`B^{-1} T` in the base frame. :class:`PlacementEvaluator` solves every
 :math:`B^{-1} T` of a batch of candidates in one closed-form call
-(:meth:`~workbench.ik.ClosedFormSolver.solve_batch`) and keeps, per pose, the
+(:meth:`~workbench.ik.Solver.solve_batch`) and keeps, per pose, the
 *usable* branches: they reach the pose, some 2π representative of every angle
 is within its limits (the one nearest the middle of the limits, as the maps
 take it), and, with a scene, the configuration touches nothing (no distance
@@ -22,7 +22,7 @@ singularity crossed in joint space, as a joint-space trajectory may); a wrist
 flip (θ4 and θ6 turning by π) or a change of arm or elbow posture is a jump.
 Of the chains, the one of largest worst dexterity is kept.
 
-**Seven-axis arms** (SRS: ψ, Franka: q7; :func:`workbench.ik.get_redundant_solver`)
+**Seven-axis arms** (SRS: ψ, Franka: q7; :func:`workbench.ik.get_solver`)
 are verified exactly at the :math:`K` values of the redundancy parameter of
 their map (:func:`workbench.workspace.redundant.redundancy_values`), the same
 meaning of *exact* as their maps: every :math:`B^{-1} T` of a batch of
@@ -58,15 +58,13 @@ from workbench.collision import CollisionChecker, Scene
 from workbench.errors import InputError
 from workbench.ik import (
     FAMILIES,
-    ClosedFormSolver,
-    RedundantSolver,
+    Solver,
     UnsupportedRobotError,
     analytic_batch,
     compute_tool_poses,
-    get_closed_form,
     get_family,
     get_family_refusal,
-    get_redundant_solver,
+    get_solver,
 )
 from workbench.model.robot import Robot
 from workbench.singularities import compute_conditions, get_factorisation
@@ -259,7 +257,7 @@ class PlacementEvaluator:
     ):
         self.robot = robot
         self.solver = _closed_form(robot)
-        self.seven_axis = isinstance(self.solver, RedundantSolver)
+        self.seven_axis = self.solver.parameter is not None
         self.branches: tuple[str, ...] = self.solver.branches
         if self.seven_axis != (redundancy is not None):
             raise InputError(
@@ -307,7 +305,7 @@ class PlacementEvaluator:
 
         Seven-axis arms: each pose at each of the K values, in one call.
         """
-        if isinstance(self.solver, ClosedFormSolver):
+        if not self.seven_axis:
             return self.solver.solve_batch(targets)
         k = len(self.values)
         return analytic_batch(
@@ -390,7 +388,7 @@ class PlacementEvaluator:
         return CollisionChecker(self.robot, replace(self.scene, obstacles=obstacles))
 
 
-def _closed_form(robot: Robot) -> ClosedFormSolver | RedundantSolver:
+def _closed_form(robot: Robot) -> Solver:
     """The closed form of ``robot``: six-axis, or seven-axis.
 
     Raises:
@@ -404,9 +402,7 @@ def _closed_form(robot: Robot) -> ClosedFormSolver | RedundantSolver:
             f"base placement needs an arm of a closed-form family ({names}), "
             f"which {robot.name} is not ({reason.split(':')[0]})"
         )
-    if family.redundant:
-        return get_redundant_solver(robot)
-    return get_closed_form(robot)
+    return get_solver(robot)
 
 
 def _touches_nothing(checker: CollisionChecker, q: FloatArray) -> bool:

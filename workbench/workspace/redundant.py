@@ -3,7 +3,7 @@ r"""Per-pose measures of a block of the grid for seven-axis arms, in closed form
 A seven-axis arm of the SRS family (KUKA LBR iiwa) or the Franka family (Panda,
 FR3) reaches a tool pose along a one-parameter family of configurations per
 branch: the arm angle ψ (SRS) or q7 (Franka) [rad]
-(:func:`workbench.ik.get_redundant_solver`). The map solves every pose in
+(:func:`workbench.ik.get_solver`). The map solves every pose in
 closed form at a fixed set of :math:`K` values of that parameter,
 :func:`redundancy_values`: the centres of :math:`K` equal cells of the
 parameter's range (SRS :math:`(-\pi, \pi]`, Franka the limits of joint 7),
@@ -41,7 +41,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
-from workbench.ik import analytic_batch, compute_tool_poses, get_redundant_solver
+from workbench.ik import analytic_batch, compute_tool_poses, get_solver
 from workbench.model.robot import Robot
 from workbench.workspace import _redundant_kernel as kernel
 from workbench.workspace._reference import block_poses, summarise_voxels
@@ -111,7 +111,9 @@ def evaluate_redundant_block(
             ``count`` out of range.
     """
     start, stop = check_voxel_range(grid, start, stop)
-    solver = get_redundant_solver(robot)
+    solver = get_solver(robot)
+    if solver.parameter_range is None:
+        raise InputError(f"robot {robot.name!r} is no seven-axis arm")
     values = redundancy_values(solver.parameter_range, count)
     poses = block_poses(grid, start, stop)
     total = len(poses)

@@ -22,7 +22,7 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench.errors import InputError
-from workbench.ik import get_family, get_redundant_solver
+from workbench.ik import get_family, get_solver
 from workbench.model.robot import Robot
 from workbench.workspace.grid import PoseGrid, default_bounds, make_pose_grid
 from workbench.workspace.measures import evaluate_block, get_core_count
@@ -104,10 +104,12 @@ def build_task_map(
         keys: tuple[str, ...] = TASK_MAP_KEYS
         values, count = None, 0
     else:
-        solver = get_redundant_solver(robot)
+        range_ = get_solver(robot).parameter_range
+        if range_ is None:  # (a seven-axis family has one)
+            raise InputError(f"robot {robot.name!r} is no seven-axis arm")
         count = TASK_MAP_REDUNDANCY_SAMPLES
         count = count if redundancy_samples is None else redundancy_samples
-        values = redundancy_values(solver.parameter_range, count)
+        values = redundancy_values(range_, count)
         keys = TASK_MAP_REDUNDANT_KEYS
     z = np.asarray(heights, dtype=np.float64).reshape(-1)
     box = default_bounds(robot)
