@@ -274,8 +274,8 @@ def test_six_axis_arm_has_no_redundancy() -> None:
         analytic(robot, target, redundancy=0.0)
     with pytest.raises(InputError, match="no redundancy"):
         analytic_batch(robot, target[None], redundancy=0.0)
-    with pytest.raises(UnsupportedRobotError, match="get_solver"):
-        get_solver(robot)
+    with pytest.raises(InputError, match="no redundancy"):
+        get_solver(robot).parameter_of(np.zeros(6))
     assert len(analytic(robot, target)) == 8  # unchanged without redundancy
     with pytest.raises(UnsupportedRobotError, match="9 joint variables"):
         analytic(load_robot("kinova"), np.eye(4), redundancy=0.0)

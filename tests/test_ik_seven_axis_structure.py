@@ -11,6 +11,7 @@ import pinocchio as pin
 import pytest
 
 from workbench import Robot, load_robot
+from workbench.errors import InputError
 from workbench.ik import UnsupportedRobotError, get_solver, get_structure
 from workbench.ik.structure import compute_structure
 from workbench.model.dh import DHTable
@@ -115,10 +116,12 @@ def test_franka_without_elbow_offset_is_refused() -> None:
     assert "axes 3, 4, 5 do not meet in one point" in message
 
 
-def test_six_axis_solver_points_to_the_redundant_one() -> None:
+def test_seven_axis_arms_have_the_one_solver_type() -> None:
     for name in ("iiwa14", "panda"):
-        with pytest.raises(UnsupportedRobotError, match="get_solver"):
-            get_solver(load_robot(name))
+        solver = get_solver(load_robot(name))
+        assert solver.nq == 7 and solver.parameter is not None
+        with pytest.raises(InputError, match="give redundancy="):
+            solver.solve(np.eye(4))
 
 
 @pytest.mark.parametrize("name", ["iiwa14", "panda"])

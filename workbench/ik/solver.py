@@ -154,7 +154,7 @@ class Solver:
 
     __slots__ = (
         "__weakref__", "_arm_angle_geometry", "_indices", "_intervals",
-        "_kernel", "_refine", "_robot", "_solve_pose", "_work", "branches",
+        "_kernel", "_name", "_refine", "_robot", "_solve_pose", "_work", "branches",
         "family", "geometry", "nq", "parameter", "parameter_range",
     )  # fmt: skip
 
@@ -173,6 +173,7 @@ class Solver:
         # the kernel's solve_pose; its compiled code itself after the first call
         self._solve_pose: Any = self._first_solve_pose
         self._robot = weakref.ref(robot)
+        self._name = robot.name  # for the messages
         # the model's chain when it differs from the idealised structure
         self._refine: FloatArray | None = refinement_chain(robot)
         self._work = threading.local()  # each thread's buffers of solve_batch_into
@@ -262,7 +263,7 @@ class Solver:
         prev = _NO_PREVIOUS if q_previous is None else self._previous(q_previous)
         if self.parameter is None:
             if redundancy is not None:
-                raise _no_redundancy(self.robot)
+                raise self._no_redundancy()
             q, flags = np.empty((8, 6)), np.empty(8, dtype=np.uint8)
             if self._refine is not None or self._solve_pose(
                 self.geometry, pose, prev, q, flags, True
@@ -509,9 +510,15 @@ class Solver:
             return q_previous
         return self.robot.check_configuration(q_previous)
 
+    def _no_redundancy(self) -> InputError:
+        return InputError(
+            f"robot {self._name!r} has {self.nq} joints and no redundancy: call "
+            "without redundancy="
+        )
+
     def _missing_redundancy(self) -> InputError:
         return InputError(
-            f"robot {self.robot.name!r} is a seven-axis arm: give redundancy= "
+            f"robot {self._name!r} is a seven-axis arm: give redundancy= "
             f"(the {self.parameter} [rad]; ik.choose_redundancy(robot, target) "
             "chooses one, ik.get_solver(robot).parameter_of(q) reads it from a "
             "configuration), or q_previous= to keep its value"
@@ -617,7 +624,7 @@ class Solver:
                 raise DimensionError(name, shape, array.shape)
         if self.parameter is None:
             if redundancy is not None:
-                raise _no_redundancy(self.robot)
+                raise self._no_redundancy()
             self._batch_six(poses, q, valid)
             if self._refine is not None:
                 refine_batch(self._refine, poses, q, valid)
@@ -700,7 +707,7 @@ class Solver:
             DimensionError, NonFiniteError: Bad shape or entries.
         """
         if self.parameter is None:
-            raise _no_redundancy(self.robot)
+            raise self._no_redundancy()
         arr = np.asarray(q, dtype=np.float64) if not isinstance(q, np.ndarray) else q
         if arr.ndim == 2:
             rows = as_finite_array(arr, (arr.shape[0], 7), "q")
@@ -733,7 +740,7 @@ class Solver:
             or self.parameter_range is None
             or self._intervals is None
         ):
-            raise _no_redundancy(self.robot)
+            raise self._no_redundancy()
         pose = np.array(pose_rows(target))
         found = self._intervals(self.geometry, pose)
         intervals = tuple(
@@ -747,13 +754,6 @@ class Solver:
             union=feasible_union(intervals),
             circular=self.family == "srs",
         )
-
-
-def _no_redundancy(robot: Robot) -> InputError:
-    return InputError(
-        f"robot {robot.name!r} has {robot.nq} joints and no redundancy: call "
-        "without redundancy="
-    )
 
 
 def _family(robot: Robot) -> tuple[str, types.ModuleType, np.ndarray]:
