@@ -180,7 +180,7 @@ def test_vectorised_batch_stage_equals_angle_arguments(arm) -> None:
     targets[-4:-2, :3, 3] *= 10.0  # out of reach
     targets[-2:, :2, 3] *= 1e-3  # near the base axis
     closed_form = get_solver(arm)
-    solver = _ur_kernel if closed_form.family == "ur" else _puma_kernel
+    solver = _ur_kernel if closed_form.family.name == "ur" else _puma_kernel
     geometry = closed_form.geometry
     n, slots = len(targets), solver.N_ANGLES
     y, x = np.full((n, slots), np.nan), np.full((n, slots), np.nan)

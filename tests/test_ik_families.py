@@ -19,6 +19,7 @@ import pytest
 
 import workbench.ik.families as families_module
 from workbench import ik, load_robot
+from workbench.errors import InputError
 from workbench.ik.structure import axis_lines
 from workbench.model.catalog import CATALOG
 
@@ -87,7 +88,7 @@ def test_no_family_says_why() -> None:
     assert ik.get_family(robot) is None
     assert "no closed-form IK" in str(ik.get_family_refusal(robot))
     with pytest.raises(ik.UnsupportedRobotError, match="not OPW"):
-        ik.get_closed_form(robot)
+        ik.get_solver(robot)
 
 
 def test_the_registry_is_read_only() -> None:
@@ -122,26 +123,23 @@ def test_facts_agree_with_the_solver(name: str) -> None:
     assert (family.parameter is None) is (family.joint_count == 6)
     assert family.redundant is (family.joint_count == 7)
     assert (family.feasible_intervals is None) is (not family.redundant)
+    solver = ik.get_solver(robot)
+    assert solver.family is family  # the solver is built from its Family
+    assert solver.branches == family.branches
+    assert solver.parameter == family.parameter
+    assert solver.nq == family.joint_count
     if not family.redundant:
         assert not family.parameter_periodic
-        solver = ik.get_closed_form(robot)
-        assert solver.branches == family.branches == ik.get_branches(robot)
-        with pytest.raises(ik.UnsupportedRobotError, match="six-axis"):
-            ik.get_redundant_solver(robot)
+        assert solver.parameter_range is None
+        with pytest.raises(InputError, match="no redundancy"):
+            solver.feasible(robot.fk(0.5 * (robot.lower + robot.upper)))
     else:
-        redundant = ik.get_redundant_solver(robot)
-        assert redundant.branches == family.branches == ik.get_branches(robot)
-        assert redundant.parameter == family.parameter
         pose = robot.fk(0.5 * (robot.lower + robot.upper))
-        assert redundant.feasible(pose).circular is family.parameter_periodic
+        assert solver.feasible(pose).circular is family.parameter_periodic
         if family.parameter_periodic:
-            assert redundant.parameter_range == pytest.approx((-np.pi, np.pi))
+            assert solver.parameter_range == pytest.approx((-np.pi, np.pi))
         else:
-            assert redundant.parameter_range == (robot.lower[6], robot.upper[6])
-        with pytest.raises(ik.UnsupportedRobotError, match="seven-axis"):
-            ik.get_closed_form(robot)
-        solver = redundant
-    assert solver.family == family.name
+            assert solver.parameter_range == (robot.lower[6], robot.upper[6])
     packed = family.pack(robot)
     assert packed.dtype == solver.geometry.dtype
     assert packed.tobytes() == solver.geometry.tobytes()

@@ -77,11 +77,11 @@ def _fk_error(robot: Robot, q: np.ndarray, target: np.ndarray) -> float:
 def test_solver_of_each_family(arm: Robot) -> None:
     solver = get_solver(arm)
     assert solver is get_solver(arm)  # cached per robot
-    assert solver.family == FAMILY[arm.name]
-    labels = SRS_BRANCHES if solver.family == "srs" else FRANKA_BRANCHES
+    assert solver.family.name == FAMILY[arm.name]
+    labels = SRS_BRANCHES if solver.family.name == "srs" else FRANKA_BRANCHES
     assert solver.branches == labels == get_solver(arm).branches
-    assert solver.parameter == ("arm angle" if solver.family == "srs" else "q7")
-    if solver.family == "srs":
+    assert solver.parameter == ("arm angle" if solver.family.name == "srs" else "q7")
+    if solver.family.name == "srs":
         assert solver.parameter_range == (-math.pi, math.pi)
     else:
         assert solver.parameter_range == (arm.lower[6], arm.upper[6])
@@ -372,7 +372,7 @@ def test_feasible_intervals_are_feasible(arm: Robot) -> None:
     feasible = get_solver(arm).feasible(arm.fk(q))
     assert isinstance(feasible, FeasibleRedundancy)
     assert feasible.parameter == solver.parameter
-    assert feasible.circular is (solver.family == "srs")
+    assert feasible.circular is (solver.family.name == "srs")
     assert feasible.branches == solver.branches
     assert len(feasible.intervals) == len(solver.branches)
     value = get_solver(arm).parameter_of(q)

@@ -13,6 +13,7 @@ from workbench import load_robot
 from workbench.errors import InputError
 from workbench.ik import (
     BRANCHES,
+    FAMILIES,
     UR_BRANCHES,
     Flag,
     Solver,
@@ -35,7 +36,7 @@ def test_one_solver_per_robot_object(puma) -> None:
     solver = get_solver(puma)
     assert isinstance(solver, Solver)
     assert get_solver(puma) is solver
-    assert solver.family == "opw" and solver.branches == BRANCHES
+    assert solver.family is FAMILIES["opw"] and solver.branches == BRANCHES
     assert solver.robot is puma
     assert not solver.geometry.flags.writeable
     slower = puma.with_limits(velocity_limit=puma.velocity_limit / 2)
@@ -44,17 +45,17 @@ def test_one_solver_per_robot_object(puma) -> None:
 
 def test_ur_solver_has_ur_labels() -> None:
     solver = get_solver(load_robot("ur5"))
-    assert solver.family == "ur" and solver.branches == UR_BRANCHES
+    assert solver.family is FAMILIES["ur"] and solver.branches == UR_BRANCHES
 
 
 def test_seven_axis_arms_get_the_same_solver_type() -> None:
-    for name, family, parameter in (
+    for name, family, parameter in (  # (names: the registry's keys)
         ("iiwa14", "srs", "arm angle"),
         ("panda", "franka", "q7"),
     ):
         solver = get_solver(load_robot(name))
         assert isinstance(solver, Solver) and solver.nq == 7
-        assert (solver.family, solver.parameter) == (family, parameter)
+        assert (solver.family, solver.parameter) == (FAMILIES[family], parameter)
     six = get_solver(load_robot("ur5"))
     assert (six.nq, six.parameter, six.parameter_range) == (6, None, None)
 

@@ -51,7 +51,7 @@ def solve_and_print_redundant(
         "robot": robot.name,
         "frame": robot.tool_frame,
         "solver": "closed-form",
-        "solver_note": f"{solver.family.upper()} family (seven axes, redundancy "
+        "solver_note": f"{solver.family.name.upper()} family (seven axes, redundancy "
         f"parameter {solver.parameter})",
     }
     feasible: FeasibleRedundancy | None = None
@@ -141,7 +141,7 @@ def _print_text(
     value = _redundancy.format_value(redundancy["value"], args.deg)
     print(
         f"robot {head['robot']}   frame {head['frame']}   solver closed-form "
-        f"({solver.family.upper()} family, seven axes)"
+        f"({solver.family.name.upper()} family, seven axes)"
     )
     if redundancy["source"] == "given":
         print(f"{solver.parameter} = {value} (given)")

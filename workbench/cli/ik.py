@@ -226,7 +226,7 @@ def _solve_and_print(args: argparse.Namespace, robot: Robot, target: pin.SE3) ->
         if getattr(args, option):
             raise _redundancy.refuse_redundancy(robot, f"--{option}")
     try:
-        family = get_solver(robot).family
+        family = get_solver(robot).family.name
     except UnsupportedRobotError as err:
         solver, reason = "numeric", str(err)
         if args.all and not args.json:

@@ -188,7 +188,7 @@ def _refuse(solver: Solver, pose: FloatArray, only: int | None) -> None:
     if solver.parameter_range is None:  # (feasible refused it already)
         raise InputError(f"robot {solver.robot.name!r} has no redundancy")
     lo, hi = solver.parameter_range
-    if solver.family == "srs":
+    if solver.family.parameter_periodic:  # SRS: the reach does not depend on ψ
         solver.solve_arrays(pose, np.empty(0), redundancy=0.5 * (lo + hi))  # raises
     else:
         values = _samples(lo, hi)

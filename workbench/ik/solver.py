@@ -64,10 +64,8 @@ from workbench.errors import (
     UnreachableError,
     UnsupportedRobotError,
 )
-from workbench.ik import _franka_intervals, _franka_kernel, _srs_intervals, _srs_kernel
-from workbench.ik import _puma_kernel as opw_kernel
 from workbench.ik import _refine_redundant_kernel as refine_redundant
-from workbench.ik import _ur_kernel as ur_kernel
+from workbench.ik import _srs_kernel
 from workbench.ik._atan2_kernel import atan2_into
 from workbench.ik._chain import compiled_entry
 from workbench.ik._flags import WITHIN_LIMITS
@@ -80,9 +78,9 @@ from workbench.ik._kernel_common import (
     continuing_branch,
     nearest_or_kept,
 )
-from workbench.ik._puma import get_geometry
 from workbench.ik._refine_kernel import refine_batch, refine_pose, refinement_chain
 from workbench.ik._targets import as_targets, check_poses, pose_rows
+from workbench.ik.families import BRANCHES, UR_BRANCHES, Family, require_family
 from workbench.ik.redundant import (
     FeasibleRedundancy,
     check_redundancy,
@@ -99,22 +97,6 @@ FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 FlagArray = npt.NDArray[np.uint8]
 
-#: Branch names; index = 4·left + 2·down + flip.
-BRANCHES: tuple[str, ...] = tuple(
-    f"{arm}/elbow-{elbow}/{wrist}"
-    for arm in ("right", "left")
-    for elbow in ("up", "down")
-    for wrist in ("no-flip", "flip")
-)
-
-#: Branch names of UR-type arms; index = 4·left + 2·down + wrist-down.
-UR_BRANCHES: tuple[str, ...] = tuple(
-    f"shoulder-{arm}/elbow-{elbow}/wrist-{wrist}"
-    for arm in ("right", "left")
-    for elbow in ("up", "down")
-    for wrist in ("up", "down")
-)
-
 #: Poses per chunk of a six-axis :meth:`Solver.solve_batch` (its three
 #: (N, N_ANGLES) buffers take 1.1–1.2 MB; chunks of 256 to 4096 poses were no
 #: faster on 1M poses).
@@ -129,19 +111,15 @@ _FLOAT64 = np.dtype(np.float64)
 #: The SRS record the refinement of a Franka arm is given (it holds q7, not ψ).
 _NO_ARM_ANGLE = np.zeros(1, dtype=_srs_kernel.GEOMETRY_DTYPE)
 _NO_ARM_ANGLE.setflags(write=False)
-#: Seven-axis families: kernel module and feasible-interval function.
-_SEVEN_AXIS: dict[str, tuple[types.ModuleType, Any]] = {
-    "srs": (_srs_kernel, _srs_intervals.compute_feasible_intervals),
-    "franka": (_franka_kernel, _franka_intervals.compute_feasible_intervals),
-}
 
 
 class Solver:
     """The closed form of one robot, any family; get it from :func:`get_solver`.
 
     Attributes:
-        family: ``"opw"`` (PUMA-type), ``"ur"`` (6R), ``"srs"`` or
-            ``"franka"`` (7R).
+        family: The robot's :class:`~workbench.ik.Family` (name ``"opw"``,
+            PUMA-type, or ``"ur"``: 6R; ``"srs"`` or ``"franka"``: 7R), from
+            which the solver is built: kernel, packing, branches, parameter.
         branches: Branch labels (:data:`BRANCHES`, :data:`UR_BRANCHES`,
             ``SRS_BRANCHES``, ``FRANKA_BRANCHES``).
         nq: Joint count, 6 or 7.
@@ -165,10 +143,12 @@ class Solver:
             UnsupportedRobotError: If the robot has no closed form (the message
                 says which axes fail which test).
         """
-        family, kernel, geometry = _family(robot)
+        family = require_family(robot)
+        geometry = family.pack(robot)
         geometry.setflags(write=False)
-        self.family: str = family
+        self.family: Family = family
         self.geometry: np.ndarray = geometry
+        kernel = family.kernel
         self._kernel: types.ModuleType = kernel
         # the kernel's solve_pose; its compiled code itself after the first call
         self._solve_pose: Any = self._first_solve_pose
@@ -177,22 +157,18 @@ class Solver:
         # the model's chain when it differs from the idealised structure
         self._refine: FloatArray | None = refinement_chain(robot)
         self._work = threading.local()  # each thread's buffers of solve_batch_into
-        seven = _SEVEN_AXIS.get(family)
-        if seven is None:
-            self.nq = 6
-            self.branches: tuple[str, ...] = UR_BRANCHES if family == "ur" else BRANCHES
-            self.parameter: str | None = None
-            self.parameter_range: tuple[float, float] | None = None
-            self._intervals = None
-            self._arm_angle_geometry = _NO_ARM_ANGLE
-        else:
-            self.nq = 7
-            self.branches = kernel.BRANCHES
-            self.parameter = kernel.PARAMETER
+        self.nq: int = family.joint_count
+        self.branches: tuple[str, ...] = family.branches
+        self.parameter: str | None = family.parameter
+        self.parameter_range: tuple[float, float] | None = None
+        self._intervals = family.feasible_intervals
+        # the arm angle (SRS) is no joint: its refinement needs the SRS record
+        self._arm_angle_geometry = (
+            geometry if family.parameter_periodic else _NO_ARM_ANGLE
+        )
+        if family.redundant:
             lo, hi = kernel.parameter_range(geometry)
             self.parameter_range = (float(lo), float(hi))
-            self._intervals = seven[1]
-            self._arm_angle_geometry = geometry if family == "srs" else _NO_ARM_ANGLE
         self._indices = tuple(range(len(self.branches)))
 
     @property
@@ -219,7 +195,7 @@ class Solver:
     def __repr__(self) -> str:
         robot = self._robot()
         name = "<gone>" if robot is None else robot.name
-        return f"Solver({name!r}, family={self.family!r})"
+        return f"Solver({name!r}, family={self.family.name!r})"
 
     # -- one pose -------------------------------------------------------------
     def solve(
@@ -373,7 +349,7 @@ class Solver:
         else:
             count = int(
                 refine_redundant.refine_pose(
-                    chain, self._arm_angle_geometry, self.family == "srs",
+                    chain, self._arm_angle_geometry, self.family.parameter_periodic,
                     pose, value, q, flags,
                 )
             )  # fmt: skip
@@ -534,7 +510,7 @@ class Solver:
             kind = "cylinder" if status == IN_CYLINDER else "reach"
             raise UnreachableError(distance, (low, high), kind)
         distance, low, high = self.diagnose(pose, redundancy=value)
-        if self.family == "srs":
+        if self.family.parameter_periodic:  # the SRS reach does not depend on ψ
             message = (
                 f"out of reach for every arm angle: wrist centre at distance "
                 f"{distance:.6g} m from the shoulder, reach is [{low:.6g}, "
@@ -641,7 +617,7 @@ class Solver:
         self._kernel.solve_batch(self.geometry, poses, values, q, valid)
         if self._refine is not None:
             refine_redundant.refine_batch(
-                self._refine, self._arm_angle_geometry, self.family == "srs",
+                self._refine, self._arm_angle_geometry, self.family.parameter_periodic,
                 poses, values, q, valid,
             )  # fmt: skip
 
@@ -752,36 +728,8 @@ class Solver:
             branches=self.branches,
             intervals=intervals,
             union=feasible_union(intervals),
-            circular=self.family == "srs",
+            circular=self.family.parameter_periodic,
         )
-
-
-def _family(robot: Robot) -> tuple[str, types.ModuleType, np.ndarray]:
-    """Family, kernel module and packed constants of a robot's closed form.
-
-    From the robot's DH table when it has one and the tool frame is the
-    table's last frame (the PUMA models), else from the DH chain fitted to its
-    joint axes (:func:`~workbench.ik.structure.get_structure`).
-    """
-    table = robot.dh_table
-    if table is not None and robot.tool_frame == table.tool_frame:
-        try:
-            return "opw", opw_kernel, opw_kernel.pack_geometry(get_geometry(robot))
-        except UnsupportedRobotError:  # the table is not PUMA-type: the axes
-            pass
-    structure = get_structure(robot)
-    seven = _SEVEN_AXIS.get(structure.family)
-    if seven is not None:
-        kernel = seven[0]
-        return (
-            structure.family,
-            kernel,
-            kernel.pack_geometry(structure, robot.lower, robot.upper),
-        )
-    if structure.family == "ur":
-        packed = ur_kernel.pack_geometry(structure, robot.lower, robot.upper)
-        return "ur", ur_kernel, packed
-    return "opw", opw_kernel, opw_kernel.pack_geometry(get_geometry(robot))
 
 
 @per_robot

@@ -263,7 +263,7 @@ def evaluate_block(
     solver = get_solver(robot)  # raises UnsupportedRobotError
     if solver.parameter is not None:
         raise UnsupportedRobotError(
-            f"robot {robot.name!r} is a seven-axis arm ({solver.family.upper()} "
+            f"robot {robot.name!r} is a seven-axis arm ({solver.family.name.upper()} "
             "family): its atlas solves at values of the redundancy parameter, "
             "see workspace.evaluate_redundant_block"
         )
