@@ -135,7 +135,7 @@ def test_map_is_bitwise_the_same_on_1_and_2_workers(robot, grid, tmp_path) -> No
     assert _arrays(tmp_path / "one.zarr") == _arrays(tmp_path / "two.zarr")
     attrs = open_map(tmp_path / "one.zarr").attrs
     solver = ik.get_solver(robot)
-    assert attrs["family"] == solver.family
+    assert attrs["family"] == solver.family.name
     assert attrs["redundancy"]["parameter"] == solver.parameter
     assert attrs["redundancy"]["samples"] == DEFAULT_REDUNDANCY_SAMPLES
     np.testing.assert_array_equal(
