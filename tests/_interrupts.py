@@ -132,7 +132,7 @@ def _alive(pid: int) -> bool:
     return state != "Z"
 
 
-def _take_sigint() -> None:
+def take_sigint() -> None:
     """In the child, before exec: SIGINT acts (not ignored as by ``nohup cmd &``)."""
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
@@ -182,7 +182,7 @@ def interrupt_once(
         cwd=folder,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
-        preexec_fn=_take_sigint,  # a background job (`cmd &`) inherits it ignored
+        preexec_fn=take_sigint,  # a background job (`cmd &`) inherits it ignored
     )
     delay = rng.uniform(min_delay, max_delay)
     time.sleep(delay)
@@ -291,7 +291,7 @@ def interrupt_map_once(
         cwd=folder,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
-        preexec_fn=_take_sigint,
+        preexec_fn=take_sigint,
     )
     delay = rng.uniform(min_delay, max_delay)
     time.sleep(delay)

@@ -20,6 +20,7 @@ import pinocchio as pin
 import pytest
 import umsgpack
 
+from tests._interrupts import take_sigint
 from tests.conftest import random_configurations, run_cli
 from workbench import FrameNotFoundError, InputError, URDFLoadError, load_robot
 from workbench.cli import EXIT_BAD_INPUT
@@ -512,6 +513,7 @@ def test_cli_serve_until_interrupted() -> None:
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        preexec_fn=take_sigint,  # a background job (`cmd &`) inherits it ignored
     )
     url = f"http://127.0.0.1:{port}/"
     try:

@@ -14,6 +14,7 @@ import pytest
 from tornado.httpclient import HTTPClientError, HTTPRequest
 from tornado.websocket import websocket_connect
 
+from tests._interrupts import take_sigint
 from tests.test_viz import free_port
 from workbench.viz import Viewer
 from workbench.viz._server import (
@@ -160,6 +161,7 @@ def test_served_cli_writes_nothing_on_stderr() -> None:
         [sys.executable, "-m", "workbench", *argv],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
+        preexec_fn=take_sigint,  # a background job (`cmd &`) inherits it ignored
         text=True,
     )
     try:
