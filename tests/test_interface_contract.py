@@ -503,6 +503,7 @@ JSON_CASES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", JSON_CASES)
 def test_every_json_key_is_listed(case: str, capsys, inputs) -> None:
     argv = JSON_CASES[case].replace("{dir}", str(inputs)).split()
