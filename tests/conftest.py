@@ -38,8 +38,23 @@ os.environ["WORKBENCH_PROGRESS"] = "0"
 _FIRST = ("test_docs.py",)
 
 
+#: Markers that make a test slow as well (the fast tier leaves them out).
+_SLOW_TIERS = ("browser", "docs")
+
+
+@pytest.hookimpl(tryfirst=True)  # before ``-m`` deselects by these markers
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """The slowest file first (pytest-xdist then keeps this order, pyproject.toml)."""
+    """Mark the tiers, then put the slowest file first.
+
+    A test that uses the ``chromium`` fixture is a ``browser`` test; every
+    ``browser`` and ``docs`` test is ``slow`` too (``docs/development.md``).
+    pytest-xdist then keeps this order (pyproject.toml).
+    """
+    for item in items:
+        if "chromium" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.browser)
+        if any(item.get_closest_marker(tier) for tier in _SLOW_TIERS):
+            item.add_marker(pytest.mark.slow)
     items.sort(key=lambda item: item.path.name not in _FIRST)  # stable sort
 
 

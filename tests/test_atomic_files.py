@@ -70,6 +70,7 @@ def test_a_write_failure_is_an_input_error(tmp_path: Path) -> None:
     assert target.read_text() == "old" and sorted(tmp_path.iterdir()) == [target]
 
 
+@pytest.mark.subprocess
 def test_a_killed_writer_leaves_a_temporary_file_the_next_write_removes(
     tmp_path: Path,
 ) -> None:

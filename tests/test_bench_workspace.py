@@ -17,6 +17,7 @@ from workbench.ik import UnreachableError, analytic
 from workbench.workspace import make_pose_grid
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["puma560", "ur5"])
 def test_exact_counts_are_the_closed_forms_branches_within_limits(name: str) -> None:
     robot = load_robot(name)

@@ -134,6 +134,7 @@ def demo_run(tmp_path_factory) -> tuple[Path, dict]:
     return out, json.loads(printed.getvalue())
 
 
+@pytest.mark.slow
 def test_demo_reproduces_table2(demo_run) -> None:
     folder, summary = demo_run
     text = (folder / "summary.json").read_text()
@@ -161,6 +162,7 @@ def test_demo_reproduces_table2(demo_run) -> None:
     assert (folder / "fishcut.html").stat().st_size > 100_000
 
 
+@pytest.mark.slow  # the demo_run fixture runs the whole demo
 def test_demo_text_and_flags(capsys, monkeypatch, demo_run, tmp_path: Path) -> None:
     """Text mode prints the summary formatted; --no-plots reaches the demo."""
     _, summary = demo_run

@@ -170,6 +170,7 @@ def test_fishcut_default_check_is_the_python_default(capsys) -> None:
     assert {key: result[key] for key in python} == python
 
 
+@pytest.mark.slow
 def test_fishcut_obstacle_in_the_way_exits_3(capsys, tmp_path: Path) -> None:
     scene = tmp_path / "post.json"  # a post through the fish's middle
     post = {

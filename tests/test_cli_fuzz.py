@@ -45,6 +45,7 @@ WORKSPACE_EXAMPLES_PER_CLASS = 12
 ATOL_IK = 1e-9  # [m, rad] FK residual of the IK of an FK pose printed with repr()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(CLASSES))
 def test_bad_input_keeps_the_contract(name: str) -> None:
     @settings(
@@ -62,6 +63,7 @@ def test_bad_input_keeps_the_contract(name: str) -> None:
     check()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(WORKSPACE_CLASSES))
 def test_bad_workspace_input_keeps_the_contract(name: str) -> None:
     @settings(
@@ -167,6 +169,7 @@ def test_infeasible_ik_prints_its_json(tmp_path: Path) -> None:
     assert "out of reach" in result["error"] and err.count("\n") == 1
 
 
+@pytest.mark.slow
 def test_plan_writes_an_infeasible_result_and_nothing_on_bad_input(
     tmp_path: Path,
 ) -> None:
@@ -195,6 +198,8 @@ def test_export_checks_what_plan_checks(tmp_path: Path) -> None:
     assert plan_code == 3
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 @pytest.mark.parametrize(
     ("argv", "code"),
     [

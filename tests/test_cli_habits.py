@@ -82,6 +82,7 @@ def test_quiet_and_verbose_exclude_each_other(capsys) -> None:
     assert code == 2 and "not allowed with" in err
 
 
+@pytest.mark.subprocess
 def test_closed_pipe_exits_quietly() -> None:
     process = subprocess.Popen(
         [sys.executable, "-m", "workbench", *IK_ARGS],
@@ -149,6 +150,7 @@ def test_numba_compilation_is_announced_once() -> None:
     assert after.getvalue() == ""
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", ["map", "place", "report"])
 def test_workspace_closed_pipe_in_process(
     command: str, capsys, monkeypatch, tmp_path

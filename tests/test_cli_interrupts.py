@@ -28,6 +28,8 @@ from tests._interrupts import (
     run_reference,
 )
 
+pytestmark = [pytest.mark.subprocess, pytest.mark.slow]
+
 INTERRUPTS = 10  # per command: the suite stays fast
 MAX_DELAY = 2.0  # [s] the commands take 3-6 s; most runs are stopped midway
 #: [s] Python's own start (interpreter, site) precedes any workbench code: a

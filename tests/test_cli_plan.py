@@ -18,6 +18,7 @@ PLACE = [str(x) for x in paper_data.ANGELES_PLACE_Q_DEG]
 BASE = ("plan", "pick-place", "--robot", "puma560", "--pick-deg", *PICK)
 
 
+@pytest.mark.slow
 def test_table3_json_csv_and_plot(capsys, tmp_path: Path) -> None:
     csv, png = tmp_path / "t.csv", tmp_path / "t.png"
     code, out, err = run(
@@ -194,6 +195,7 @@ def test_seven_axis_poses_at_a_given_redundancy(capsys) -> None:
         assert value == pytest.approx(1.5, abs=1e-9)
 
 
+@pytest.mark.slow
 def test_seven_axis_poses_at_chosen_values_on_one_branch(capsys) -> None:
     code, result, _ = _plan_poses(capsys, "panda", "--criterion", "manipulability")
     assert code == 0

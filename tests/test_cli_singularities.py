@@ -230,6 +230,7 @@ def test_singularities_bad_input(capsys, argv, fragment) -> None:
     assert len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_report_singularities_json(capsys, tmp_path, monkeypatch) -> None:
     from workbench import progress
 

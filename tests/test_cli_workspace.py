@@ -23,6 +23,7 @@ KEYS |= {"seconds", "poses_per_second", "store", "samples", "blocks"}
 KEYS |= {"blocks_computed", "redundancy_samples"}
 
 
+@pytest.mark.slow
 def test_map_json_keys_and_the_map(capsys, tmp_path) -> None:
     out_path = tmp_path / "puma.zarr"
     code, out, err = run(
@@ -55,6 +56,7 @@ def test_map_json_keys_and_the_map(capsys, tmp_path) -> None:
     assert np.array_equal(atlas["positions"], grid.positions)
 
 
+@pytest.mark.slow
 def test_map_text_cone_and_sampled(capsys, tmp_path) -> None:
     code, out, err = run(
         capsys,

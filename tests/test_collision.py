@@ -244,6 +244,7 @@ def test_obstacle_thinner_than_the_step_is_caught(puma) -> None:
     assert report.refinements > 0
 
 
+@pytest.mark.slow
 @given(seed=st.integers(0, 10_000))
 def test_lower_bound_holds_between_samples(puma, seed) -> None:
     rng = np.random.default_rng(seed)

@@ -182,6 +182,8 @@ print(len(compiles))
 """
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 @pytest.mark.skipif(sys.platform == "win32", reason="no file locks on Windows")
 def test_processes_sharing_a_cache_compile_an_entry_point_once(tmp_path: Path) -> None:
     (tmp_path / "lockmodule.py").write_text(textwrap.dedent(_MODULE))
@@ -241,6 +243,8 @@ def _edit(path: Path, old: str, new: str) -> None:
     path.write_text(text.replace(old, new))
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_an_edited_callee_or_constant_is_recompiled_not_loaded(tmp_path: Path) -> None:
     """Numba keys its cache on the entry point's own file; ours on all it imports.
 
@@ -320,6 +324,8 @@ def halve(x: float) -> float:
 """
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_the_first_compile_of_a_process_is_said_once_on_stderr(tmp_path: Path) -> None:
     """One line for two compiles; none once cached, none with progress off."""
     (tmp_path / "twokernels.py").write_text(_TWO_KERNELS)
@@ -375,6 +381,8 @@ print(total(np.ascontiguousarray(strided)))
 """
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_a_strided_array_is_refused_where_layout_c_is_declared(tmp_path: Path) -> None:
     """Also on the call that compiles: Numba hands that call's own arguments on.
 

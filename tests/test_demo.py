@@ -131,6 +131,7 @@ def test_second_process_ends_with_its_parent_and_leaves_no_file(
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_base_placement_of_table3(puma, tmp_path) -> None:
     """The demo's coarse map and placement: exact bases, none worse than the paper's."""
     result = run_base_placement_demo(puma, tmp_path, plots=True)

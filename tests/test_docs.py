@@ -19,6 +19,8 @@ import pytest
 
 from workbench.cli import build_parser
 
+pytestmark = pytest.mark.docs
+
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 #: Notebooks whose output is a 3D page, not a matplotlib figure.
@@ -45,6 +47,7 @@ def site(tmp_path_factory) -> Path:
     return out
 
 
+@pytest.mark.subprocess
 def test_every_page_is_built(site) -> None:
     for page in (
         "index.html",
@@ -58,6 +61,7 @@ def test_every_page_is_built(site) -> None:
         assert (site / page).is_file(), page
 
 
+@pytest.mark.subprocess
 @pytest.mark.parametrize("notebook", NOTEBOOKS, ids=lambda path: path.stem)
 def test_notebook_is_executed_with_its_figures(site, notebook: Path) -> None:
     page = (site / "notebooks" / notebook.stem / "index.html").read_text("utf-8")
@@ -66,6 +70,7 @@ def test_notebook_is_executed_with_its_figures(site, notebook: Path) -> None:
         assert "data:image/png;base64" in page, f"no figure in {notebook.name}"
 
 
+@pytest.mark.subprocess
 def test_cli_page_has_every_command(site) -> None:
     page = (site / "cli" / "index.html").read_text("utf-8")
     for action in build_parser()._actions:
@@ -74,12 +79,14 @@ def test_cli_page_has_every_command(site) -> None:
     assert "usage: workbench urdf from-dh" in page
 
 
+@pytest.mark.subprocess
 def test_api_reference_documents_public_names(site) -> None:
     page = (site / "api" / "ik" / "index.html").read_text("utf-8")
     for name in ("analytic", "analytic_batch", "numeric", "IKResult"):
         assert re.search(rf'id="workbench\.ik\.{name}"', page), name
 
 
+@pytest.mark.subprocess
 def test_api_pages_link_sphinx_roles(site) -> None:
     pages = sorted((site / "api").glob("*/index.html"))
     assert len(pages) >= 10
@@ -101,6 +108,7 @@ def test_api_pages_link_sphinx_roles(site) -> None:
     )
 
 
+@pytest.mark.subprocess
 def test_not_found_page_links_from_the_site_root(site) -> None:
     page = (site / "404.html").read_text("utf-8")
     assert 'href="/assets/stylesheets/' in page
@@ -204,6 +212,7 @@ def test_math_becomes_mathml(hooks) -> None:
     assert hooks.render_math(":math:`\\frac{1}{`") == "<code>\\frac{1}{</code>"
 
 
+@pytest.mark.subprocess
 def test_api_pages_draw_math(site) -> None:
     for page in sorted((site / "api").glob("*/index.html")):
         text = page.read_text("utf-8")

@@ -72,6 +72,7 @@ def test_bag_round_trip_from_the_cli(capsys, tmp_path: Path) -> None:
 finite = st.floats(-10.0, 10.0, allow_nan=False)
 
 
+@pytest.mark.slow
 @given(
     steps=arrays(np.int64, 5, elements=st.integers(1, 10**9), unique=True),
     values=arrays(np.float64, (5, 3, 2), elements=finite),

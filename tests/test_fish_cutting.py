@@ -237,6 +237,7 @@ def test_unreachable_waypoint_is_rejected_before_running(puma_kang):
         run_fish_cutting(puma_kang, setup=FishCuttingSetup(max_velocity=-1.0))
 
 
+@pytest.mark.slow
 def test_cli_json_csv_and_html(tmp_path, capsys, run):
     path, page = tmp_path / "fish.csv", tmp_path / "fish.html"
     assert main(["fishcut", "--csv", str(path), "--html", str(page), "--json"]) == 0
@@ -380,6 +381,7 @@ def test_every_arm_reaches_the_scaled_cell_within_its_limits(name):
     assert tip.translation[2] == pytest.approx(0.05 * setup.scale)
 
 
+@pytest.mark.slow
 def test_ur3_run_is_the_puma_run_scaled(ur3_run, run):
     """Same program, same time line, same events; every length times s = 0.63."""
     ur3, s = load_robot("ur3"), ur3_run.setup.scale
@@ -404,6 +406,7 @@ def test_ur3_run_is_the_puma_run_scaled(ur3_run, run):
     np.testing.assert_allclose(ur3_run.position[-1], ur3_run.position[0], atol=1e-12)
 
 
+@pytest.mark.slow
 def test_ur3_clears_the_scaled_table_and_fish(ur3_run):
     """The UR3 in its cell: table and fish (no pedestal), only the knife cuts."""
     ur3 = load_robot("ur3")
@@ -470,6 +473,7 @@ def seven_axis_run(request):
     return robot, run_fish_cutting(robot)
 
 
+@pytest.mark.slow
 def test_seven_axis_cell_scale(seven_axis_run):
     robot, result = seven_axis_run
     reach, scale = SEVEN_AXIS_SCALES[robot.name]
@@ -477,6 +481,7 @@ def test_seven_axis_cell_scale(seven_axis_run):
     assert get_cell_scale(robot) == scale == result.setup.scale
 
 
+@pytest.mark.slow
 def test_shortest_fold_against_pinocchio(seven_axis_run):
     robot, _ = seven_axis_run
     q = np.zeros(7)
@@ -550,6 +555,7 @@ def test_six_axis_summary_has_no_redundancy(run):
     assert np.isnan(run.redundancy).all() and run.redundancy_parameter is None
 
 
+@pytest.mark.slow
 def test_seven_axis_policy_options():
     panda = load_robot("panda")
     setup = dataclasses.replace(
@@ -561,6 +567,7 @@ def test_seven_axis_policy_options():
         run_fish_cutting(load_robot("puma560-kang"), redundancy="keep")
 
 
+@pytest.mark.slow
 def test_cli_seven_axis_arms_and_the_policy_option(capsys) -> None:
     from tests.conftest import run_cli
 

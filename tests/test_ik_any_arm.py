@@ -121,6 +121,7 @@ def test_family_is_recognised(arm) -> None:
     assert structure.residual <= 1e-12
 
 
+@pytest.mark.slow
 def test_random_configurations(arm) -> None:
     """10,000 configurations within limits: every branch, q among them, 8 distinct."""
     rng = np.random.default_rng(1)
@@ -163,6 +164,7 @@ def test_batch_equals_single(arm) -> None:
         np.testing.assert_allclose(batch[ok], single, rtol=0, atol=1e-9)
 
 
+@pytest.mark.slow
 def test_vectorised_batch_stage_equals_angle_arguments(arm) -> None:
     """The batch's vectorised first stage gives angle_arguments' values, bitwise.
 
@@ -270,6 +272,7 @@ def _shoulder_config(arm: Robot, rng) -> np.ndarray | None:
     return None
 
 
+@pytest.mark.slow
 def test_near_every_singularity(arm) -> None:
     """Wrist, elbow and shoulder singular (and 1e-12..1e-6 off): every branch."""
     rng = np.random.default_rng(3)
@@ -338,6 +341,7 @@ def _rotated(robot: Robot, joint: int, angle: float) -> Robot:
     return plain(robot, model)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["puma560", "ur5", "abb-irb2400"])
 def test_urdf_rounding_passes_and_1e3_is_refused(name: str) -> None:
     robot = load_robot(name)
@@ -477,6 +481,7 @@ def test_det_j_is_the_product_of_the_factors(arm) -> None:
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["ur5", "kuka-kr6-r700"])
 def test_round_trip_property(name: str) -> None:
     """Hypothesis: q -> FK -> every branch reaches the pose, q among them."""
@@ -550,6 +555,8 @@ np.savez(sys.argv[2], **results)
 """
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_interpreted_kernels_equal_the_compiled_ones(tmp_path) -> None:
     """``_compiled.interpreted`` (``workbench ik``) gives the compiled answers.
 

@@ -219,6 +219,7 @@ def test_any_puma_type_table(rng) -> None:
             np.testing.assert_allclose(batch, single, rtol=0, atol=ATOL_BATCH)
 
 
+@pytest.mark.slow
 def test_labels_match_robotics_toolbox(rng) -> None:
     rtb = pytest.importorskip("roboticstoolbox")
     peer = rtb.models.DH.Puma560()

@@ -145,6 +145,7 @@ def check_edge_family(robot: Robot, family: str, seed: int, fk_tol: float) -> No
         )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("family", EDGE_FAMILIES)
 @pytest.mark.parametrize("name", MODELS)
 def test_edge_poses_are_reached(name: str, family: str) -> None:
@@ -165,6 +166,7 @@ def test_stretched_ur5_with_wrist_nearly_singular() -> None:
     assert min(abs(wrapped(s.q[[0, 4]] - q[[0, 4]])).max() for s in solutions) <= 1e-9
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["ur5", "ur10"])
 def test_ur_frame3_turned_into_reach_costs_no_accuracy(name: str) -> None:
     """θ5 in 1e-10 … 1e-8 (not singular) next to the stretched elbow: ≤ 1e-13."""
@@ -196,6 +198,7 @@ NEAR_MODELS = (("kuka-kr6-r700", False), ("puma560", False), ("ur5", True))
 REFUSED = {("ur5", "stretched+wrist"): 0.001}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("name", "zeros"), NEAR_MODELS)
 def test_near_model_is_refined_to_1e_12(name: str, zeros: bool, rounded) -> None:
     """Random poses: every branch within 1e-12 m and 1e-12 rad, q among them."""
@@ -224,6 +227,7 @@ def test_near_model_is_refined_to_1e_12(name: str, zeros: bool, rounded) -> None
         assert residuals[:, 1].max() <= ROTATION_TOL
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("family", EDGE_FAMILIES)
 @pytest.mark.parametrize(("name", "zeros"), NEAR_MODELS)
 def test_near_model_edges(name: str, zeros: bool, family: str, rounded) -> None:

@@ -141,6 +141,7 @@ def test_round_trip_batch(panda: Robot, geometry: np.ndarray, inside: bool) -> N
         assert within == expected
 
 
+@pytest.mark.slow
 @given(
     st.lists(
         st.floats(min_value=0.0, max_value=1.0, allow_nan=False),
@@ -192,6 +193,7 @@ def _well_conditioned(geometry: np.ndarray, q: np.ndarray, skip: int) -> bool:
     return all(v > 0.1 for j, v in checks.items() if j not in skipped)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["shoulder", "elbow", "wrist"])
 def test_near_singularities(panda: Robot, geometry: np.ndarray, name: str) -> None:
     joint, thetas = _singular_angles(geometry)[name]

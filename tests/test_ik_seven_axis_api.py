@@ -147,6 +147,7 @@ def test_continuity_from_q_previous(arm: Robot) -> None:
             assert np.all(np.abs(s.q - q) <= math.pi + 1e-12)
 
 
+@pytest.mark.slow
 def test_batch_equals_single_pose(arm: Robot) -> None:
     rng = np.random.default_rng(4)
     qs = np.array([_random_q(arm, rng) for _ in range(64)])
@@ -204,6 +205,7 @@ def _regularity(robot: Robot, q: np.ndarray) -> float:
     return float(np.linalg.svd(stacked, compute_uv=False)[-1])
 
 
+@pytest.mark.slow
 @settings(max_examples=200, deadline=None)
 @given(
     name=st.sampled_from(NAMES),
@@ -422,6 +424,7 @@ def _manipulability(robot: Robot, q: np.ndarray) -> float:
     return math.sqrt(max(np.linalg.det(world @ world.T), 0.0))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("criterion", ["limit_margin", "manipulability", "nearest"])
 def test_choice_beats_brute_force(arm: Robot, criterion: str) -> None:
     rng = np.random.default_rng(9)

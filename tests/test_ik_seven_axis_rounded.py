@@ -106,6 +106,7 @@ def _round_trip(robot: Robot, q: np.ndarray) -> None:
             assert abs(ik.get_solver(robot).parameter_of(s.q) - value) <= ATOL_RESIDUAL
 
 
+@pytest.mark.slow
 def test_round_trip_of_random_configurations(robot: Robot) -> None:
     """analytic(fk(q), redundancy=solver.parameter_of(q)) holds q, each branch exact."""
     rng = np.random.default_rng(2026)
@@ -113,6 +114,7 @@ def test_round_trip_of_random_configurations(robot: Robot) -> None:
         _round_trip(robot, q)
 
 
+@pytest.mark.slow
 @settings(max_examples=200, deadline=None)
 @given(st.lists(st.floats(0.0, 1.0), min_size=7, max_size=7))
 def test_round_trip_property_xarm7(fractions: list[float]) -> None:
@@ -121,6 +123,7 @@ def test_round_trip_property_xarm7(fractions: list[float]) -> None:
     _round_trip(robot, q)
 
 
+@pytest.mark.slow
 def test_batch_equals_single_poses(robot: Robot) -> None:
     rng = np.random.default_rng(7)
     qs = rng.uniform(robot.lower, robot.upper, size=(300, 7))

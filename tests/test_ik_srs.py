@@ -194,6 +194,7 @@ def _round_trip(iiwa, geometry, qs: np.ndarray) -> tuple[float, float]:
     return recovered, residual
 
 
+@pytest.mark.slow
 def test_round_trip_within_limits(iiwa, geometry, rng) -> None:
     qs = _random_in_limits(iiwa, rng, 10_000)
     recovered, residual = _round_trip(iiwa, geometry, qs)
@@ -201,6 +202,7 @@ def test_round_trip_within_limits(iiwa, geometry, rng) -> None:
     assert residual <= ATOL_POSE
 
 
+@pytest.mark.slow
 def test_round_trip_outside_limits(iiwa, geometry, rng) -> None:
     qs = rng.uniform(-3.0 * math.pi, 3.0 * math.pi, (10_000, 7))
     recovered, residual = _round_trip(iiwa, geometry, qs)
@@ -388,6 +390,7 @@ def _numeric_solutions(iiwa, geometry, pose, psi, rng, starts=50):
     return found
 
 
+@pytest.mark.slow
 def test_multi_start_numerical_ik_agrees(iiwa, geometry, rng) -> None:
     found_total, distinct = 0, 0
     for q in _random_in_limits(iiwa, rng, 200):
@@ -488,6 +491,7 @@ def _grid_within(iiwa, geometry, pose, grid):
     return valid & inside.all(axis=2), q
 
 
+@pytest.mark.slow
 def test_feasible_intervals_against_a_dense_grid(iiwa, geometry, rng) -> None:
     grid = np.linspace(-math.pi, math.pi, 100_001)
     model = iiwa.model
@@ -523,6 +527,7 @@ def test_feasible_intervals_against_a_dense_grid(iiwa, geometry, rng) -> None:
     assert counted > 100
 
 
+@pytest.mark.slow
 def test_feasible_interval_of_a_joint_with_a_stationary_point(iiwa, geometry) -> None:
     """θ1(ψ) that turns back: two limit hits of one joint, both found."""
     rng = np.random.default_rng(7)

@@ -106,6 +106,7 @@ def _layer(module: str) -> int:
     return LAYERS[top]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("module", sorted(set(MODULES) - FRONT_DOORS))
 def test_module_imports_only_its_layer_or_lower(module: str) -> None:
     own = _layer(module)
@@ -117,6 +118,7 @@ def test_module_imports_only_its_layer_or_lower(module: str) -> None:
     assert not upward, f"{module} (layer {own}) imports a higher layer: {upward}"
 
 
+@pytest.mark.slow
 def test_no_import_cycle() -> None:
     graph = {
         m: {d for d in _imports(m) if d in MODULES and d != m}

@@ -6,6 +6,8 @@ import importlib.metadata
 import subprocess
 import sys
 
+import pytest
+
 import workbench
 
 
@@ -21,6 +23,8 @@ def test_console_script_points_at_main() -> None:
     assert entry.load() is workbench.cli.main
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_core_import_does_not_pull_viewers_or_pyplot() -> None:
     code = (
         "import sys, workbench, workbench.ik;"
@@ -32,6 +36,8 @@ def test_core_import_does_not_pull_viewers_or_pyplot() -> None:
     assert out.stdout.strip() == "False"
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_help_lists_every_command() -> None:
     out = subprocess.run(
         [sys.executable, "-m", "workbench", "--help"], capture_output=True, text=True

@@ -57,6 +57,7 @@ def test_joint_plot_one_row_per_joint_with_its_own_limits(puma, traj) -> None:
         )
 
 
+@pytest.mark.slow
 def test_plots_draw_into_a_given_figure_and_save_on_request(traj, tmp_path) -> None:
     fig = plt.figure()
     assert plot_normal_spline(traj.spline, fig=fig) is fig

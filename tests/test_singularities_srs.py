@@ -76,6 +76,7 @@ def _smallest_distance(robot: Robot, qs: np.ndarray) -> np.ndarray:
     return np.minimum.reduce([np.abs(c.elbow), c.shoulder, c.wrist, c.shoulder_wrist])
 
 
+@pytest.mark.slow
 def test_det_jjt_factorisation(iiwa, rng) -> None:
     qs = rng.uniform(-math.pi, math.pi, (10_000, 7))
     analytic = compute_srs_det_jjt(iiwa, qs)
@@ -88,6 +89,7 @@ def test_det_jjt_factorisation(iiwa, rng) -> None:
         assert abs(sum(m * m for m in minors) - exact) <= RTOL_DET * exact + ATOL_DET
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", JACOBIAN_KINDS)
 def test_rank_loss_and_lost_direction_on_each_locus(iiwa, rng, kind) -> None:
     worst_sigma, worst_residual = 0.0, 0.0

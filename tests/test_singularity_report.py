@@ -61,6 +61,7 @@ def kang_report(tmp_path_factory):
     return report, path.read_text(encoding="utf-8")
 
 
+@pytest.mark.slow
 def test_every_figure_is_an_embedded_png(kang_report) -> None:
     report, text = kang_report
     parser = _Sources()
@@ -102,6 +103,7 @@ def test_degenerate_directions_and_arms_sections(kang_report) -> None:
         assert "arm in each singular configuration" in text
 
 
+@pytest.mark.slow
 def test_angeles_report_has_its_own_elbow_angles_and_progress() -> None:
     stages: dict[str, tuple[int, int]] = {}
     report = build_singularity_report(
@@ -137,6 +139,7 @@ def grid_jacobians(robot, size: int) -> np.ndarray:
     return np.array(jacobians)
 
 
+@pytest.mark.slow
 def test_report_of_a_seven_axis_arm_has_the_numeric_maps_and_no_det() -> None:
     robot = load_robot("panda")
     size = 9
@@ -178,6 +181,7 @@ def test_report_of_a_seven_axis_arm_has_the_numeric_maps_and_no_det() -> None:
         )
 
 
+@pytest.mark.slow
 def test_cli_report_of_a_seven_axis_arm(capsys, tmp_path) -> None:
     html = tmp_path / "panda.html"
     argv = ["--robot", "panda", "--out", str(html), "--svd-grid", "6", "--no-progress"]
@@ -193,6 +197,7 @@ def test_cli_report_of_a_seven_axis_arm(capsys, tmp_path) -> None:
     assert "(numeric only: no analytic conditions)" in out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["ur5", "kuka-kr6-r700"])
 def test_report_of_any_closed_form_arm_classifies(name: str) -> None:
     report = build_singularity_report(
@@ -214,6 +219,8 @@ def test_report_of_any_closed_form_arm_classifies(name: str) -> None:
         assert summary["elbow_theta3_deg"] == pytest.approx([0.0, 180.0], abs=1e-6)
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_core_modules_do_not_import_matplotlib() -> None:
     code = (
         "import sys, workbench.singularities, "
@@ -237,6 +244,7 @@ def test_html_has_title_and_units(kang_report) -> None:
     assert "[m/s; rad/s]" in text
 
 
+@pytest.mark.slow
 def test_report_of_an_srs_arm_checks_its_conditions_against_pinocchio() -> None:
     """iiwa14: det(J Jᵀ), the loci and the sweeps against Pinocchio's J (numpy SVD)."""
     robot = load_robot("iiwa14")
@@ -271,6 +279,7 @@ def test_report_of_an_srs_arm_checks_its_conditions_against_pinocchio() -> None:
     assert "SRS seven-axis arm" in report.html
 
 
+@pytest.mark.slow
 def test_cli_report_of_an_srs_arm(capsys, tmp_path) -> None:
     html = tmp_path / "iiwa.html"
     argv = ["--robot", "iiwa14", "--out", str(html), "--svd-grid", "6", "--no-progress"]

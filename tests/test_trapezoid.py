@@ -87,6 +87,7 @@ def test_contract_entry_point_and_array_sampling():
     assert s.shape == sd.shape == sdd.shape == (2, 3)
 
 
+@pytest.mark.slow
 @settings(max_examples=150, deadline=None)
 @given(
     distance=st.floats(min_value=0.0, max_value=3.0, allow_subnormal=False),

@@ -431,6 +431,8 @@ def test_cli_ik_branches(tmp_path, capsys) -> None:
     )
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_viz_is_imported_lazily() -> None:
     code = "import sys, workbench, workbench.cli; print(sorted(m for m in sys.modules"
     code += " if m.split('.')[0] in ('meshcat', 'ipywidgets', 'tornado')"
@@ -494,6 +496,8 @@ def free_port() -> int:
         return int(probe.getsockname()[1])
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_cli_serve_until_interrupted() -> None:
     port = free_port()
     process = subprocess.Popen(

@@ -153,6 +153,8 @@ def test_unknown_path_is_a_short_404(served, caplog) -> None:
     assert [r.name for r in caplog.records if r.name.startswith("tornado")] == []
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_served_cli_writes_nothing_on_stderr() -> None:
     """Normal, 403, 404 requests and page messages: stderr stays empty."""
     port = free_port()

@@ -168,6 +168,8 @@ def _wait_for_workers(scheduler_file: Path, count: int) -> str:
     return address
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_exact_map_is_bitwise_the_same_on_1_2_workers_and_a_cluster(
     puma, grid, reference, cluster, tmp_path
 ) -> None:
@@ -194,6 +196,7 @@ def test_exact_map_is_bitwise_the_same_on_1_2_workers_and_a_cluster(
     assert not get_partial_path(tmp_path / "cluster.zarr").exists()
 
 
+@pytest.mark.subprocess
 def test_the_command_on_a_cluster_makes_the_same_map(
     capsys, reference, cluster, tmp_path
 ) -> None:
@@ -221,6 +224,8 @@ def test_the_command_on_a_cluster_makes_the_same_map(
     _same_map(reference, path)
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_sampled_map_is_bitwise_the_same_on_1_2_workers_and_a_cluster(
     panda, panda_grid, cluster, tmp_path
 ) -> None:
@@ -296,6 +301,7 @@ def test_a_failed_build_resumes_with_the_missing_blocks_only(
     _same_map(reference, path)
 
 
+@pytest.mark.slow
 def test_a_sampled_build_resumes_and_equals_the_uninterrupted_one(
     panda, panda_grid, tmp_path, monkeypatch
 ) -> None:
@@ -345,6 +351,8 @@ def _wait_for_blocks(partial: Path, count: int, process: subprocess.Popen) -> in
     raise TimeoutError("no block done")
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 @pytest.mark.parametrize("stop", [signal.SIGKILL, signal.SIGINT])
 def test_a_killed_command_resumes_to_the_same_map(
     stop, cli_reference, tmp_path

@@ -53,6 +53,7 @@ def _random_quats(rng: np.random.Generator, count: int) -> np.ndarray:
     return q / np.linalg.norm(q, axis=1, keepdims=True)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("n", [1, 7, 64, 512])
 def test_uniform_set_is_unit_canonical_and_deterministic(n: int) -> None:
     quat, info = uniform_orientations(n)
@@ -93,6 +94,7 @@ def test_covering_radius_bounds_random_rotations(n: int) -> None:
     assert ball < radius < 2.5 * ball
 
 
+@pytest.mark.slow
 def test_covering_radius_shrinks_with_the_count() -> None:
     radii = [uniform_orientations(n)[1]["covering_radius"] for n in (64, 512, 4096)]
     assert radii[0] > radii[1] > radii[2]
@@ -178,6 +180,7 @@ def test_quaternion_product_composes_rotations() -> None:
     np.testing.assert_allclose(product, expected, rtol=0, atol=ATOL_EXACT)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("axis", "half_deg"), [((0, 0, -1), 30.0), ((1, 1, 0), 10.0), ((0, 0, 1), 180.0)]
 )
@@ -194,6 +197,7 @@ def test_cone_set_stays_in_its_cone(axis: tuple[float, ...], half_deg: float) ->
     np.testing.assert_allclose(info["axis"], direction, rtol=0, atol=1e-15)
 
 
+@pytest.mark.slow
 def test_cone_covering_radius_bounds_rotations_in_the_cone() -> None:
     half = math.radians(30.0)
     quat, info = cone_orientations((0, 0, -1), half, 256)

@@ -114,6 +114,7 @@ def _compare(fast: dict[str, np.ndarray], ref: dict[str, np.ndarray]) -> None:
         )
 
 
+@pytest.mark.slow
 def test_kernel_equals_the_reference_on_a_real_block(robot: Robot) -> None:
     grid = _coarse_grid(robot)
     fast = evaluate_block(robot, grid, 0, grid.voxel_count)
@@ -321,6 +322,7 @@ def test_with_a_scene_the_best_branch_is_collision_free(tmp_path: Path) -> None:
     assert free_poses > 0 and blocked_poses > 0
 
 
+@pytest.mark.slow
 def test_bad_requests() -> None:
     robot = load_robot("puma560")
     grid = make_pose_grid(robot, resolution=0.2, orientations=4)

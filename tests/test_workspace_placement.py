@@ -472,6 +472,7 @@ def test_quaternion_within_tolerance_is_normalised(tmp_path):
 
 
 # -- command line -------------------------------------------------------------
+@pytest.mark.slow
 def test_cli_place_json(puma, rng, tmp_path, capsys):
     task, _ = _task(puma, rng, count=6)
     path = _write_task_csv(tmp_path / "task.csv", task)
@@ -507,6 +508,7 @@ def test_cli_place_default_region_is_python_place_base_default(
     assert out["placements"] == [p.as_dict() for p in python]
 
 
+@pytest.mark.slow
 def test_cli_place_nothing_reaches_exits_3(puma, rng, tmp_path, capsys):
     task, _ = _task(puma, rng, count=3)
     path = _write_task_csv(tmp_path / "task.csv", task)

@@ -85,6 +85,7 @@ def _reference(robot, grid, start, stop, count):
     return rows
 
 
+@pytest.mark.slow
 def test_block_matches_a_loop_over_the_public_closed_form(robot, grid) -> None:
     start = grid.voxel_count // 2 - 6  # around the arm's middle: poses it reaches
     stop = start + 12
@@ -125,6 +126,7 @@ def _arrays(path) -> dict[str, bytes]:
     return {name: opened[name].tobytes() for name in opened.names}
 
 
+@pytest.mark.slow
 def test_map_is_bitwise_the_same_on_1_and_2_workers(robot, grid, tmp_path) -> None:
     one = build_map(robot, grid, tmp_path / "one.zarr", workers=1, block_voxels=16)
     two = build_map(robot, grid, tmp_path / "two.zarr", workers=2, block_voxels=16)
@@ -161,6 +163,7 @@ def test_sampled_stays_an_option_and_k_is_refused_elsewhere(tmp_path) -> None:
         )
 
 
+@pytest.mark.slow
 def test_command_line_says_what_exact_means(capsys, tmp_path) -> None:
     out = tmp_path / "iiwa.zarr"
     argv = ["workspace", "map", "--robot", "iiwa14", "--resolution", "0.4"]
@@ -179,6 +182,7 @@ def test_command_line_says_what_exact_means(capsys, tmp_path) -> None:
     assert "6 × 7 Jacobian of a seven-axis arm" in page
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
@@ -209,6 +213,7 @@ def test_base_placement_says_it_needs_a_closed_form(capsys, tmp_path) -> None:
     assert "robot 'generic6r' has no closed-form IK" in err
 
 
+@pytest.mark.slow
 def test_a_pose_reached_at_the_values_is_feasible_and_its_value_inside(
     robot, grid
 ) -> None:
@@ -250,6 +255,7 @@ def test_query_gives_the_best_value_and_it_reaches_the_grid_pose(robot, grid, tm
     assert np.all(np.isnan(open_map(tmp_path / "p.zarr").query(poses[:1]).redundancy))
 
 
+@pytest.mark.slow
 def test_a_stopped_build_resumes_to_the_same_bits_and_refuses_another_k(
     robot, grid, tmp_path, monkeypatch
 ) -> None:

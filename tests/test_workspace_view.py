@@ -165,6 +165,7 @@ def test_figure_input_errors(puma_map) -> None:
 # -- report --------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_report_key_numbers_from_the_per_pose_arrays(puma_map) -> None:
     report = build_workspace_report(puma_map)
     summary = report.summary
@@ -226,6 +227,7 @@ def test_slice_heights_spread_over_the_reached_layers(puma_map) -> None:
         assert np.min(np.abs(z - h)) < ATOL_POSITION  # a reached layer
 
 
+@pytest.mark.slow
 def test_report_page_is_self_contained(puma_map, tmp_path) -> None:
     report = write_workspace_report(puma_map, tmp_path / "report.html")
     page = (tmp_path / "report.html").read_text(encoding="utf-8")
@@ -239,6 +241,7 @@ def test_report_page_is_self_contained(puma_map, tmp_path) -> None:
         assert text in page
 
 
+@pytest.mark.slow
 def test_report_of_a_map_that_reaches_nothing(empty_map_path) -> None:
     report = build_workspace_report(open_map(empty_map_path))
     assert report.summary["reachable_voxels"] == 0
@@ -299,6 +302,7 @@ def test_view_of_a_map_that_reaches_nothing(empty_map_path) -> None:
     assert "No voxel is reached" in page
 
 
+@pytest.mark.slow
 def test_view_draws_the_scene_of_a_map_built_with_one(tmp_path) -> None:
     robot = load_robot("puma560")
     table = {"name": "table", "shape": "box", "size": [0.6, 0.8, 0.05]}
@@ -312,6 +316,7 @@ def test_view_draws_the_scene_of_a_map_built_with_one(tmp_path) -> None:
     assert "Key numbers" in build_workspace_report(cell_map).html
 
 
+@pytest.mark.slow
 def test_sampled_map_report_and_view(tmp_path) -> None:
     """A 7-axis arm: a sampled map, manipulability only (no singularity factors)."""
     robot = load_robot("panda")
@@ -418,6 +423,7 @@ def _workspace(capsys, command: str, map_path: Path, *options: object):
     return run_cli(capsys, "workspace", command, str(map_path), *map(str, options))
 
 
+@pytest.mark.slow
 def test_cli_view_and_report(capsys, map_path, tmp_path) -> None:
     html = tmp_path / "view.html"
     code, out, err = _workspace(
@@ -435,6 +441,7 @@ def test_cli_view_and_report(capsys, map_path, tmp_path) -> None:
     assert summary["reachable_voxels"] > 0 and report.is_file()
 
 
+@pytest.mark.slow
 def test_cli_report_heights(capsys, map_path, tmp_path) -> None:
     code, out, _ = _workspace(
         capsys, "report", map_path, "--out", tmp_path / "r.html",

@@ -47,6 +47,16 @@ from workbench.cli._interrupt_guard import interrupts_wait_for_compiler
 from workbench.errors import InfeasibleError, InputError, WorkbenchError
 from workbench.progress import Progress
 
+__all__ = [
+    "EXIT_BAD_INPUT",
+    "EXIT_BROKEN_PIPE",
+    "EXIT_INFEASIBLE",
+    "EXIT_INTERNAL",
+    "EXIT_OK",
+    "build_parser",
+    "main",
+]
+
 EXIT_OK = 0
 EXIT_INTERNAL = 1
 EXIT_BAD_INPUT = 2

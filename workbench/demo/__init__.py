@@ -1,1 +1,29 @@
 """The papers' examples end to end (``workbench demo``)."""
+
+from workbench.demo.base_placement import (
+    format_base_placement,
+    run_base_placement_demo,
+)
+from workbench.demo.pick_and_place import (
+    format_pick_and_place,
+    run_pick_and_place_demo,
+)
+from workbench.demo.run import (
+    Table2Comparison,
+    compare_table2,
+    format_fish_cutting,
+    format_table2,
+    run_demo,
+)
+
+__all__ = [
+    "Table2Comparison",
+    "compare_table2",
+    "format_base_placement",
+    "format_fish_cutting",
+    "format_pick_and_place",
+    "format_table2",
+    "run_base_placement_demo",
+    "run_demo",
+    "run_pick_and_place_demo",
+]

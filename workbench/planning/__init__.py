@@ -26,6 +26,24 @@ from workbench.planning.orientation_profile import (
     compute_relative_axis_angle,
     orientation,
 )
+from workbench.planning.redundancy_policy import (
+    DEFAULT_MAX_REDUNDANCY_RATE,
+    FAST_SHARE,
+    KEEP_LIMIT_MARGIN,
+    LIMIT_SHARPNESS,
+    MAX_POSE_STEPS,
+    MIN_STEP,
+    POSE_TOL,
+    PROBE_STEP,
+    RATE_RAMP_TIME,
+    REDUNDANCY_POLICIES,
+    SINGULAR_GAIN,
+    RedundancyTracker,
+    compute_limit_gradient,
+    compute_limit_margin,
+    compute_limit_score,
+    compute_manipulability_gradient,
+)
 from workbench.planning.servo_interpolation import interpolate_servo
 from workbench.planning.trapezoidal_profile import (
     TrapezoidalProfile,
@@ -35,6 +53,17 @@ from workbench.planning.trapezoidal_profile import (
 )
 
 __all__ = [
+    "DEFAULT_MAX_REDUNDANCY_RATE",
+    "FAST_SHARE",
+    "KEEP_LIMIT_MARGIN",
+    "LIMIT_SHARPNESS",
+    "MAX_POSE_STEPS",
+    "MIN_STEP",
+    "POSE_TOL",
+    "PROBE_STEP",
+    "RATE_RAMP_TIME",
+    "REDUNDANCY_POLICIES",
+    "SINGULAR_GAIN",
     "CartesianLimits",
     "CartesianMotion",
     "CartesianState",
@@ -44,10 +73,15 @@ __all__ = [
     "OrientationProfile",
     "PlannerSample",
     "PointToPoint",
+    "RedundancyTracker",
     "SemiCircleUp",
     "Stop",
     "StraightLine",
     "TrapezoidalProfile",
+    "compute_limit_gradient",
+    "compute_limit_margin",
+    "compute_limit_score",
+    "compute_manipulability_gradient",
     "compute_relative_axis_angle",
     "interpolate_servo",
     "orientation",

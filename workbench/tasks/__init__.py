@@ -7,13 +7,23 @@ Any OPW or UR-type arm runs it in Kang's cell scaled to its reach
 from workbench.tasks.cuts import HorizontalCut, VerticalDownCut
 from workbench.tasks.fish import SimulatedFish
 from workbench.tasks.fish_cutting import FishCuttingResult, FishEvent, run_fish_cutting
-from workbench.tasks.fish_program import FishCuttingSetup, build_program, get_cell_scale
+from workbench.tasks.fish_program import (
+    FOLD_MARGIN,
+    KANG_START_FOLD,
+    FishCuttingSetup,
+    build_program,
+    get_base_placement,
+    get_cell_scale,
+    get_shortest_fold,
+)
 from workbench.tasks.fish_scene import (
     compute_fish_cutting_clearance,
     get_fish_cutting_scene,
 )
 
 __all__ = [
+    "FOLD_MARGIN",
+    "KANG_START_FOLD",
     "FishCuttingResult",
     "FishCuttingSetup",
     "FishEvent",
@@ -22,7 +32,9 @@ __all__ = [
     "VerticalDownCut",
     "build_program",
     "compute_fish_cutting_clearance",
+    "get_base_placement",
     "get_cell_scale",
     "get_fish_cutting_scene",
+    "get_shortest_fold",
     "run_fish_cutting",
 ]

@@ -17,6 +17,14 @@ from workbench.trajectory.cartesian import (
     pick_and_place_from_poses,
     select_ik_solution,
 )
+from workbench.trajectory.csv_io import (
+    MAX_SAMPLES,
+    JointTrajectorySamples,
+    TrajectoryFileError,
+    check_sample_count,
+    read_trajectory_csv,
+    write_trajectory_csv,
+)
 from workbench.trajectory.limits import (
     JointExtrema,
     LimitViolation,
@@ -42,19 +50,23 @@ from workbench.trajectory.time_optimal import (
 )
 
 __all__ = [
+    "MAX_SAMPLES",
     "CartesianSamples",
     "IKChoice",
     "JointExtrema",
     "JointTrajectory",
+    "JointTrajectorySamples",
     "LimitViolation",
     "NormalSpline",
     "PosePickAndPlace",
     "SegmentedTrajectory",
     "SplineExtremum",
     "TimeOptimalComparison",
+    "TrajectoryFileError",
     "UniformCubicSpline",
     "as_target_pose",
     "check_limits",
+    "check_sample_count",
     "compare_time_optimal",
     "compute_cartesian_trajectory",
     "compute_literal_spline",
@@ -67,5 +79,7 @@ __all__ = [
     "pick_and_place_from_poses",
     "pick_via_place",
     "raise_for_violations",
+    "read_trajectory_csv",
     "select_ik_solution",
+    "write_trajectory_csv",
 ]

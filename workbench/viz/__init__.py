@@ -17,17 +17,36 @@ Example::
 
 from workbench.viz import _meshcat  # noqa: F401  (first: quiet import)
 from workbench.viz.preview import write_trajectory_html
+from workbench.viz.redundancy_sweep import (
+    MAX_SWEEP,
+    RedundancySweep,
+    compute_redundancy_sweep,
+    find_branch,
+    show_redundancy_sweep,
+    spread_over_intervals,
+)
 from workbench.viz.singularity_gauge import SingularityGauge, get_singularity_color
 from workbench.viz.teach import TeachPanel
 from workbench.viz.viewer import Viewer
-from workbench.viz.workspace_view import make_workspace_viewer, write_workspace_view
+from workbench.viz.workspace_view import (
+    get_map_robot,
+    make_workspace_viewer,
+    write_workspace_view,
+)
 
 __all__ = [
+    "MAX_SWEEP",
+    "RedundancySweep",
     "SingularityGauge",
     "TeachPanel",
     "Viewer",
+    "compute_redundancy_sweep",
+    "find_branch",
+    "get_map_robot",
     "get_singularity_color",
     "make_workspace_viewer",
+    "show_redundancy_sweep",
+    "spread_over_intervals",
     "write_trajectory_html",
     "write_workspace_view",
 ]

@@ -10,7 +10,13 @@ from :mod:`.task_poses`); maps built on Dask
 (:mod:`.build`) into a Zarr store, opened and queried (:mod:`.store`).
 """
 
-from workbench.workspace.build import MapSummary, build_map
+from workbench.workspace._block_tasks import SAMPLES_PER_BLOCK
+from workbench.workspace.build import (
+    DEFAULT_BLOCK_VOXELS,
+    DEFAULT_SAMPLES,
+    MapSummary,
+    build_map,
+)
 from workbench.workspace.grid import (
     PoseGrid,
     cone_orientations,
@@ -23,7 +29,9 @@ from workbench.workspace.map_query import MapQuery
 from workbench.workspace.measures import (
     POSE_KEYS,
     VOXEL_KEYS,
+    check_voxel_range,
     evaluate_block,
+    get_core_count,
     singularity_margin,
 )
 from workbench.workspace.placement import (
@@ -31,39 +39,92 @@ from workbench.workspace.placement import (
     PlacementInfeasibleError,
     place_base,
 )
+from workbench.workspace.placement_check import (
+    PATH_STEP_MAX,
+    PlacementEvaluator,
+    base_transform,
+    follow_path,
+)
 from workbench.workspace.placement_region import default_region
-from workbench.workspace.redundant import evaluate_redundant_block, redundancy_values
+from workbench.workspace.redundant import (
+    DEFAULT_REDUNDANCY_SAMPLES,
+    MAX_REDUNDANCY_SAMPLES,
+    REDUNDANT_POSE_KEYS,
+    REDUNDANT_VOXEL_KEYS,
+    evaluate_redundant_block,
+    redundancy_values,
+)
+from workbench.workspace.robot_spec import (
+    RobotSpec,
+    get_robot_spec,
+    load_spec_robot,
+)
 from workbench.workspace.sampled import accumulate, sample_block
-from workbench.workspace.store import WorkspaceMap, open_map
+from workbench.workspace.store import (
+    ARRAYS,
+    FORMAT,
+    FORMAT_VERSION,
+    WorkspaceMap,
+    get_partial_path,
+    open_map,
+)
+from workbench.workspace.task_map import (
+    TaskMap,
+    build_task_map,
+)
 from workbench.workspace.task_poses import (
     TaskPoses,
     read_task_poses,
+    read_trajectory_task_poses,
     task_poses_from_trajectory,
 )
 
 __all__ = [
+    "ARRAYS",
+    "DEFAULT_BLOCK_VOXELS",
+    "DEFAULT_REDUNDANCY_SAMPLES",
+    "DEFAULT_SAMPLES",
+    "FORMAT",
+    "FORMAT_VERSION",
+    "MAX_REDUNDANCY_SAMPLES",
+    "PATH_STEP_MAX",
     "POSE_KEYS",
+    "REDUNDANT_POSE_KEYS",
+    "REDUNDANT_VOXEL_KEYS",
+    "SAMPLES_PER_BLOCK",
     "VOXEL_KEYS",
     "JointSpaceMap",
     "MapQuery",
     "MapSummary",
     "Placement",
+    "PlacementEvaluator",
     "PlacementInfeasibleError",
     "PoseGrid",
+    "RobotSpec",
+    "TaskMap",
     "TaskPoses",
     "WorkspaceMap",
     "accumulate",
+    "base_transform",
     "build_map",
+    "build_task_map",
+    "check_voxel_range",
     "compute_joint_space_map",
     "cone_orientations",
     "default_bounds",
     "default_region",
     "evaluate_block",
     "evaluate_redundant_block",
+    "follow_path",
+    "get_core_count",
+    "get_partial_path",
+    "get_robot_spec",
+    "load_spec_robot",
     "make_pose_grid",
     "open_map",
     "place_base",
     "read_task_poses",
+    "read_trajectory_task_poses",
     "redundancy_values",
     "sample_block",
     "singularity_margin",
