@@ -8,7 +8,8 @@ Public entry points (see docs/interface.md): the closed-form families
 ``feasible_redundancy``, ``choose_redundancy``), plus the damped-least-squares
 tools and the compiled chain's batch of tool Jacobians
 (``compute_jacobians_local``) and of tool poses with their manipulability
-(``compute_tool_poses``).
+(``compute_tool_poses``), and the one rule that chooses a configuration
+among the branches (``select``, ``pick_place_configurations``).
 """
 
 from workbench.ik.batch_jacobians import compute_jacobians_local
@@ -57,6 +58,14 @@ from workbench.ik.redundant import (
     RedundantSolver,
     get_redundant_solver,
 )
+from workbench.ik.selection import (
+    DEFAULT_RULE,
+    NUMERIC_BRANCH,
+    RULES,
+    IKChoice,
+    pick_place_configurations,
+    select,
+)
 from workbench.ik.solver import ClosedFormSolver, get_closed_form
 from workbench.ik.structure import (
     STRUCTURE_TOL,
@@ -66,11 +75,14 @@ from workbench.ik.structure import (
 
 __all__ = [
     "BRANCHES",
+    "DEFAULT_RULE",
     "DLS_EPSILON",
     "DLS_LAMBDA_MAX",
     "FAMILIES",
     "FRANKA_BRANCHES",
+    "NUMERIC_BRANCH",
     "QP_DAMPING",
+    "RULES",
     "SRS_BRANCHES",
     "STRUCTURE_TOL",
     "UR_BRANCHES",
@@ -80,6 +92,7 @@ __all__ = [
     "Family",
     "FeasibleRedundancy",
     "IKBatchResult",
+    "IKChoice",
     "IKResult",
     "IKSolution",
     "KinematicStructure",
@@ -105,9 +118,11 @@ __all__ = [
     "nearest",
     "numeric",
     "numeric_batch",
+    "pick_place_configurations",
     "qp_step",
     "redundancy_parameter",
     "require_family",
+    "select",
     "solve_null_space_velocity",
     "solve_velocity",
 ]

@@ -1,0 +1,538 @@
+r"""One IK solution for a pose, and one pair for a pick and a place: the selection rule.
+
+Every caller that needs one configuration of a tool pose (``workbench ik``,
+``workbench plan pick-place``, ``trajectory.pick_and_place_from_poses``, the
+online planner's first command, the fish-cutting program) asks
+:func:`select` (one pose) or :func:`pick_place_configurations` (two poses
+chosen together), so the command line and Python give the same
+configuration, to the bit, for the same request.
+
+Candidates are the closed-form branches (``ik.analytic``) of an arm of a
+known family; every rule chooses among those **within the joint limits**
+(none: :class:`~workbench.errors.InfeasibleError`). The rules
+(:data:`RULES`):
+
+* ``"limit_margin"`` (:data:`DEFAULT_RULE`): the largest limit margin
+  :math:`\min_k \min(q_k - l_k,\ u_k - q_k)` [rad];
+* ``"nearest"``: the smallest distance to ``q_near`` [rad], each joint's
+  difference wrapped to [−π, π) (``ik.nearest``);
+* ``"branch"``: the named ``branch``;
+* ``"first_within_limits"``: the first branch in the order of the labels.
+
+Without ``rule`` the rule is ``"branch"`` when ``branch`` is given, else
+``"nearest"`` when ``q_near`` is given, else ``"limit_margin"``. Ties go to
+the first branch in label order. When ``q_near`` is given, each angle of a
+six-axis solution is the representative (mod 2π) nearest it.
+
+A seven-axis arm (SRS: arm angle ψ, Franka: q7) is solved at ``redundancy``
+when given (every branch at that value, then the rule), else the value and
+the branch come from ``ik.choose_redundancy`` with ``criterion``
+(``"limit_margin"``, ``"manipulability"`` or ``"nearest"``; default
+``"nearest"`` for the rule ``"nearest"``, else ``"limit_margin"``), over every
+branch (``"limit_margin"``, ``"nearest"``), the named one (``"branch"``) or
+the first that reaches the pose within the limits at some value
+(``"first_within_limits"``).
+
+An arm of no family is solved numerically (``ik.numeric``, started from
+``q_near``, else from its deterministic default guess; seed 0), branch
+``"numeric"``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+
+from workbench.errors import InfeasibleError, InputError
+from workbench.ik._puma import LIMIT_TOL, TAU, UnsupportedRobotError
+from workbench.ik.closed_form import analytic, get_branches
+from workbench.ik.numerical import numeric
+from workbench.ik.redundancy import CRITERIA, choose_redundancy, feasible_redundancy
+from workbench.model.robot import Robot
+
+FloatArray = npt.NDArray[np.float64]
+
+#: The rules of :func:`select`.
+RULES = ("limit_margin", "nearest", "branch", "first_within_limits")
+#: The rule when neither ``branch`` nor ``q_near`` is given.
+DEFAULT_RULE = "limit_margin"
+#: Branch label of a solution of the numerical IK.
+NUMERIC_BRANCH = "numeric"
+
+
+class _Solution(Protocol):
+    """A closed-form solution: what the selection reads of it."""
+
+    @property
+    def q(self) -> FloatArray: ...  # pragma: no cover
+
+    @property
+    def branch(self) -> str: ...  # pragma: no cover
+
+    @property
+    def index(self) -> int: ...  # pragma: no cover
+
+    @property
+    def within_limits(self) -> bool: ...  # pragma: no cover
+
+
+@dataclass(frozen=True, slots=True)
+class IKChoice:
+    """The configuration chosen for one pose, and how.
+
+    Attributes:
+        q: Configuration, shape (nq,) [rad], read-only.
+        branch: Closed-form branch label, or ``"numeric"``.
+        index: Position of ``branch`` in ``ik.get_branches(robot)``; None
+            for the numerical IK.
+        within_limits: True if every joint of ``q`` is within its limits.
+        redundancy: Seven-axis arms: the value of the redundancy parameter
+            [rad] (ψ or q7); None otherwise.
+        rule: The rule applied (one of :data:`RULES`), or ``"numeric"``.
+        criterion: Seven-axis arms whose value was chosen: the criterion of
+            ``ik.choose_redundancy``; None otherwise.
+        score: What the choice maximised: the limit margin [rad]
+            (``"limit_margin"``), minus the distance to ``q_near`` [rad]
+            (``"nearest"``) or, for a chosen seven-axis value, the
+            criterion's score; None when nothing was maximised (``"branch"``,
+            ``"first_within_limits"`` at a given value, ``"numeric"``).
+        solution: The closed-form solution object (with its singularity
+            flags: ``wrist_singular``, ...); None for the numerical IK.
+    """
+
+    q: FloatArray
+    branch: str
+    index: int | None
+    within_limits: bool
+    redundancy: float | None
+    rule: str
+    criterion: str | None
+    score: float | None
+    solution: _Solution | None
+
+
+@dataclass(frozen=True, slots=True)
+class _Request:
+    """A checked request: the rule and its arguments."""
+
+    rule: str
+    q_near: FloatArray | None
+    branch: str | None
+    redundancy: float | None
+    criterion: str | None
+
+
+def compute_limit_margin(robot: Robot, q: FloatArray) -> float:
+    r"""Smallest distance [rad or m] of a joint of ``q`` (nq,) to one of its limits."""
+    return float(np.min(np.minimum(q - robot.lower, robot.upper - q)))
+
+
+def _distance(q: FloatArray, reference: FloatArray) -> float:
+    """Euclidean norm [rad] of the joint differences, each wrapped to [−π, π)."""
+    step = np.remainder(q - reference + math.pi, TAU) - math.pi
+    return float(math.sqrt(float(step @ step)))
+
+
+def _labels(robot: Robot) -> tuple[str, ...] | None:
+    """The closed form's branch labels, None for an arm of no family."""
+    try:
+        return get_branches(robot)
+    except UnsupportedRobotError:
+        return None
+
+
+def _request(
+    robot: Robot,
+    labels: tuple[str, ...] | None,
+    rule: str | None,
+    q_near: npt.ArrayLike | None,
+    branch: str | None,
+    redundancy: float | None,
+    criterion: str | None,
+) -> _Request:
+    """The arguments checked, the rule resolved (module docs).
+
+    Raises:
+        InputError: On an unknown rule, branch or criterion, a rule without
+            its argument, or an argument the arm or the rule does not take.
+    """
+    if rule is None:
+        rule = (
+            "branch"
+            if branch is not None
+            else "nearest"
+            if q_near is not None
+            else DEFAULT_RULE
+        )
+    if rule not in RULES:
+        raise InputError(f"rule must be one of {', '.join(RULES)}, got {rule!r}")
+    near = None if q_near is None else robot.check_configuration(q_near).copy()
+    if rule == "nearest" and near is None:
+        raise InputError('rule "nearest" needs q_near (a configuration)')
+    if rule == "branch":
+        if branch is None:
+            raise InputError('rule "branch" needs branch (a label)')
+        if labels is None:
+            raise InputError(
+                f"branch {branch!r} given, but robot {robot.name} has no "
+                "closed-form IK (its solution is numerical)"
+            )
+        if branch not in labels:
+            raise InputError(f"unknown branch {branch!r}; valid: {', '.join(labels)}")
+    elif branch is not None:
+        raise InputError(f'branch {branch!r} given with rule "{rule}": it is the rule')
+    seven_axis = labels is not None and robot.nq == 7
+    for name, value in (("redundancy", redundancy), ("criterion", criterion)):
+        if value is not None and not seven_axis:
+            raise InputError(
+                f"{name} is for seven-axis arms of the SRS or Franka family, not "
+                f"{robot.name}"
+            )
+    value = None
+    if redundancy is not None:
+        if criterion is not None:
+            raise InputError("criterion chooses a value: not with redundancy")
+        value = float(redundancy)
+    if criterion is not None and criterion not in CRITERIA:
+        raise InputError(
+            f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}"
+        )
+    if seven_axis and value is None and criterion is None:
+        criterion = "nearest" if rule == "nearest" else "limit_margin"
+    if criterion == "nearest" and near is None:
+        raise InputError('criterion "nearest" needs q_near (a configuration)')
+    return _Request(rule, near, branch, value, criterion)
+
+
+def _choice(
+    request: _Request,
+    solution: _Solution,
+    score: float | None,
+    redundancy: float | None,
+    criterion: str | None = None,
+) -> IKChoice:
+    q = np.array(solution.q, dtype=np.float64)
+    q.setflags(write=False)
+    return IKChoice(
+        q=q,
+        branch=solution.branch,
+        index=int(solution.index),
+        within_limits=bool(solution.within_limits),
+        redundancy=redundancy,
+        rule=request.rule,
+        criterion=criterion,
+        score=score,
+        solution=solution,
+    )
+
+
+def _best(
+    robot: Robot, request: _Request, solutions: Sequence[_Solution], what: str
+) -> tuple[_Solution, float | None]:
+    """The solution within the limits the rule prefers, and its score.
+
+    Raises:
+        InfeasibleError: If none is within the limits (on the named branch).
+    """
+    within = [s for s in solutions if s.within_limits]
+    if request.rule == "branch":
+        within = [s for s in within if s.branch == request.branch]
+    if not within:
+        message = (
+            f"the {what} is reached by {len(solutions)} closed-form branches, none "
+            "within the joint limits"
+        )
+        if request.branch is not None:
+            reached = any(s.branch == request.branch for s in solutions)
+            message += f" on branch {request.branch}" + (
+                "" if reached else " (which does not reach it)"
+            )
+        raise InfeasibleError(message)
+    if request.rule == "nearest" and request.q_near is not None:
+        distances = [_distance(s.q, request.q_near) for s in within]
+        top = int(np.argmin(distances))  # the first on a tie, as ik.nearest
+        return within[top], -distances[top]
+    if request.rule == "limit_margin":
+        margins = [compute_limit_margin(robot, s.q) for s in within]
+        top = int(np.argmax(margins))  # the first on a tie
+        return within[top], margins[top]
+    return within[0], None
+
+
+def _numeric(robot: Robot, target: pin.SE3 | npt.ArrayLike, near: FloatArray | None):
+    result = numeric(robot, target, q0=near)
+    if not result.success:
+        raise InfeasibleError(
+            f"numerical IK found no solution for {robot.name} "
+            f"(best error {result.error:.3g} after {result.iterations} iterations, "
+            f"{result.restarts} restarts): the pose is probably out of reach"
+        )
+    q = np.array(result.q)
+    q.setflags(write=False)
+    within = bool(
+        np.all(q >= robot.lower - LIMIT_TOL) and np.all(q <= robot.upper + LIMIT_TOL)
+    )
+    return IKChoice(q, NUMERIC_BRANCH, None, within, None, "numeric", None, None, None)
+
+
+def _chosen_value(
+    robot: Robot,
+    request: _Request,
+    target: pin.SE3 | npt.ArrayLike,
+    branch: str | None,
+    q_previous: FloatArray | None,
+) -> IKChoice:
+    """A seven-axis arm's value and branch by ``ik.choose_redundancy``."""
+    criterion = request.criterion or "limit_margin"
+    choice = choose_redundancy(
+        robot,
+        target,
+        criterion=criterion,
+        q_previous=q_previous if criterion == "nearest" else None,
+        branch=branch,
+    )
+    return _choice(request, choice.solution, choice.score, choice.value, criterion)
+
+
+def _first_feasible_branch(
+    robot: Robot, targets: Sequence[pin.SE3 | npt.ArrayLike]
+) -> list[str]:
+    """The labels reaching every target within the limits at some value (7R)."""
+    feasible = [feasible_redundancy(robot, target) for target in targets]
+    labels = feasible[0].branches
+    return [
+        label for i, label in enumerate(labels) if all(f.intervals[i] for f in feasible)
+    ]
+
+
+def select(
+    robot: Robot,
+    target: pin.SE3 | npt.ArrayLike,
+    *,
+    rule: str | None = None,
+    q_near: npt.ArrayLike | None = None,
+    branch: str | None = None,
+    redundancy: float | None = None,
+    criterion: str | None = None,
+) -> IKChoice:
+    """The one configuration of ``robot`` that puts its tool frame at ``target``.
+
+    Args:
+        robot: Any serial arm; closed form for the OPW, UR, SRS and Franka
+            families, else numerical.
+        target: Pose of the tool frame in the base frame: ``pin.SE3`` or a
+            (4, 4) homogeneous matrix [m].
+        rule: One of :data:`RULES` (module docs); None: ``"branch"`` with
+            ``branch``, else ``"nearest"`` with ``q_near``, else
+            :data:`DEFAULT_RULE`.
+        q_near: Configuration (nq,) [rad]: the reference of ``"nearest"``,
+            the representatives of the angles (six axes), the start of the
+            numerical IK.
+        branch: A label of ``ik.get_branches(robot)``, for the rule
+            ``"branch"``.
+        redundancy: Seven-axis arms: the value of the redundancy parameter
+            [rad] (ψ or q7) to solve at; None chooses it (``criterion``).
+        criterion: Seven-axis arms without ``redundancy``: the criterion of
+            ``ik.choose_redundancy`` (module docs for the default).
+
+    Returns:
+        An :class:`IKChoice`: ``q`` within the limits for the closed form
+        (``within_limits`` True), the solution object in ``solution``.
+
+    Raises:
+        InputError: Bad target or ``q_near`` (``DimensionError``,
+            ``NonFiniteError``), unknown rule, branch or criterion, a rule
+            without its argument, ``redundancy``/``criterion`` for an arm
+            without the parameter, ``branch`` for an arm of no family.
+        UnreachableError: If the closed form does not reach the pose.
+        InfeasibleError: If no branch (or not ``branch``) is within the
+            limits, or the numerical IK does not converge.
+    """
+    labels = _labels(robot)
+    request = _request(robot, labels, rule, q_near, branch, redundancy, criterion)
+    if labels is None:
+        return _numeric(robot, target, request.q_near)
+    if robot.nq == 7 and request.redundancy is None:
+        only = request.branch
+        if request.rule == "first_within_limits":
+            common = _first_feasible_branch(robot, [target])
+            if not common:  # the reason (out of reach, or out of the limits)
+                return _chosen_value(robot, request, target, None, request.q_near)
+            only = common[0]
+        return _chosen_value(robot, request, target, only, request.q_near)
+    solutions = analytic(
+        robot, target, q_previous=request.q_near, redundancy=request.redundancy
+    )
+    chosen, score = _best(robot, request, solutions, "pose")
+    return _choice(request, chosen, score, request.redundancy)
+
+
+def pick_place_configurations(
+    robot: Robot,
+    pick: pin.SE3 | npt.ArrayLike,
+    place: pin.SE3 | npt.ArrayLike,
+    *,
+    rule: str | None = None,
+    q_near: npt.ArrayLike | None = None,
+    branch: str | None = None,
+    redundancy: float | None = None,
+    criterion: str | None = None,
+) -> tuple[IKChoice, IKChoice]:
+    r"""The pick and the place configurations, chosen together.
+
+    Where a branch reaches both poses within the limits, both are on one
+    branch: of those branches, the one whose pair scores best, ties to the
+    first label. The pair's score is, per rule: ``"limit_margin"`` the
+    smaller of the two limit margins; ``"nearest"`` minus the joint motion
+    :math:`d(q_{near}, q_{pick}) + d(q_{pick}, q_{place})` (distances as
+    :func:`select`'s); ``"first_within_limits"`` the first such branch;
+    ``"branch"`` the named one. A seven-axis arm without ``redundancy``
+    chooses each pose's value on each such branch by ``criterion`` (for
+    ``"nearest"``, the place's nearest the pick), the pair's score the
+    smaller of the two scores (``"nearest"``: their sum). The place's angles
+    are the representatives nearest the pick's (six axes), so the motion
+    between them is the shortest.
+
+    Where no branch serves both (and the rule is not ``"branch"``), the pick
+    is :func:`select`'s and the place the solution nearest the pick
+    (``select(place, q_near=pick.q)``, seven axes at the pick's
+    ``redundancy`` when it was given, else at the value nearest the pick).
+
+    Args:
+        robot: As :func:`select`.
+        pick: Pick pose of the tool frame in the base frame: ``pin.SE3`` or
+            (4, 4) [m].
+        place: Place pose, same forms.
+        rule: As :func:`select` (the pick's ``q_near``, ``branch``).
+        q_near: Configuration (nq,) [rad] the motion starts from: the
+            reference of ``"nearest"`` for the pick.
+        branch: The branch of both, for the rule ``"branch"``.
+        redundancy: Seven-axis arms: both poses at this value [rad].
+        criterion: Seven-axis arms without ``redundancy``: as :func:`select`.
+
+    Returns:
+        ``(pick, place)``, two :class:`IKChoice`, both within the limits.
+
+    Raises:
+        InputError, UnreachableError: As :func:`select`, for either pose.
+        InfeasibleError: If a pose has no solution within the limits, or
+            with the rule ``"branch"`` the branch does not serve both.
+    """
+    labels = _labels(robot)
+    request = _request(robot, labels, rule, q_near, branch, redundancy, criterion)
+    if labels is None:
+        first = _numeric(robot, pick, request.q_near)
+        return first, _numeric(robot, place, first.q)
+    if robot.nq == 7 and request.redundancy is None:
+        pair = _pair_chosen_values(robot, request, pick, place)
+    else:
+        pair = _pair_at_value(robot, request, pick, place)
+    if pair is not None:
+        return pair
+    if request.rule == "branch":
+        raise InfeasibleError(
+            f"the place pose has no IK solution within the joint limits on the "
+            f"pick's branch {request.branch}"
+        )
+    first = select(
+        robot,
+        pick,
+        rule=request.rule,
+        q_near=request.q_near,
+        redundancy=request.redundancy,
+        criterion=request.criterion,
+    )
+    chosen_value = robot.nq == 7 and request.redundancy is None
+    second = select(
+        robot,
+        place,
+        rule="nearest",
+        q_near=first.q,
+        redundancy=request.redundancy,
+        criterion="nearest" if chosen_value else None,
+    )
+    return first, second
+
+
+def _pair_at_value(
+    robot: Robot, request: _Request, pick: pin.SE3 | npt.ArrayLike, place
+) -> tuple[IKChoice, IKChoice] | None:
+    """The best pair on one branch, six axes or seven at a given value; None: none."""
+    value = request.redundancy
+    picks = analytic(robot, pick, q_previous=request.q_near, redundancy=value)
+    within = [s for s in picks if s.within_limits]
+    if request.rule == "branch":
+        within = [s for s in within if s.branch == request.branch]
+    if not within:
+        _best(robot, request, picks, "pick pose")  # raises why
+    best: tuple[float, IKChoice, IKChoice] | None = None
+    for first in within:
+        places = analytic(robot, place, q_previous=first.q, redundancy=value)
+        second = next(
+            (s for s in places if s.index == first.index and s.within_limits), None
+        )
+        if second is None:
+            continue
+        if request.rule == "limit_margin":
+            a, b = (compute_limit_margin(robot, s.q) for s in (first, second))
+            pair_score = min(a, b)
+        elif request.rule == "nearest" and request.q_near is not None:
+            a = -_distance(first.q, request.q_near)
+            b = -_distance(second.q, first.q)
+            pair_score = a + b
+        else:  # the first (or the named) branch serving both
+            return (
+                _choice(request, first, None, value),
+                _choice(request, second, None, value),
+            )
+        if best is None or pair_score > best[0]:
+            best = (
+                pair_score,
+                _choice(request, first, a, value),
+                _choice(request, second, b, value),
+            )
+    return None if best is None else (best[1], best[2])
+
+
+def _pair_chosen_values(
+    robot: Robot, request: _Request, pick: pin.SE3 | npt.ArrayLike, place
+) -> tuple[IKChoice, IKChoice] | None:
+    """The best pair on one branch of a seven-axis arm, values chosen; None: none."""
+    if request.rule == "branch" and request.branch is not None:
+        common = [request.branch]
+        feasible = _first_feasible_branch(robot, [pick, place])
+        if request.branch not in feasible:
+            _chosen_value(robot, request, pick, request.branch, request.q_near)
+            return None  # the pick is reached on the branch, the place is not
+    else:
+        common = _first_feasible_branch(robot, [pick, place])
+        if not common:
+            return None
+        if request.rule == "first_within_limits":
+            common = common[:1]
+    best: tuple[float, IKChoice, IKChoice] | None = None
+    for label in common:
+        first = _chosen_value(robot, request, pick, label, request.q_near)
+        second = _chosen_value(robot, request, place, label, first.q)
+        a, b = (-math.inf if c.score is None else c.score for c in (first, second))
+        pair_score = a + b if request.criterion == "nearest" else min(a, b)
+        if best is None or pair_score > best[0]:
+            best = (pair_score, first, second)
+    return None if best is None else (best[1], best[2])
+
+
+__all__ = [
+    "DEFAULT_RULE",
+    "NUMERIC_BRANCH",
+    "RULES",
+    "IKChoice",
+    "compute_limit_margin",
+    "pick_place_configurations",
+    "select",
+]
