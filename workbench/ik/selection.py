@@ -43,7 +43,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import TypeAlias
 
 import numpy as np
 import numpy.typing as npt
@@ -54,6 +54,8 @@ from workbench.ik._puma import LIMIT_TOL, TAU, UnsupportedRobotError
 from workbench.ik.closed_form import analytic, get_branches
 from workbench.ik.numerical import numeric
 from workbench.ik.redundancy import CRITERIA, choose_redundancy, feasible_redundancy
+from workbench.ik.redundant import RedundantIKSolution
+from workbench.ik.solver import IKSolution
 from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
@@ -66,20 +68,8 @@ DEFAULT_RULE = "limit_margin"
 NUMERIC_BRANCH = "numeric"
 
 
-class _Solution(Protocol):
-    """A closed-form solution: what the selection reads of it."""
-
-    @property
-    def q(self) -> FloatArray: ...  # pragma: no cover
-
-    @property
-    def branch(self) -> str: ...  # pragma: no cover
-
-    @property
-    def index(self) -> int: ...  # pragma: no cover
-
-    @property
-    def within_limits(self) -> bool: ...  # pragma: no cover
+#: A closed-form solution, six or seven axes.
+_Solution: TypeAlias = IKSolution | RedundantIKSolution
 
 
 @dataclass(frozen=True, slots=True)
@@ -244,15 +234,16 @@ def _best(
     if request.rule == "branch":
         within = [s for s in within if s.branch == request.branch]
     if not within:
-        message = (
-            f"the {what} is reached by {len(solutions)} closed-form branches, none "
-            "within the joint limits"
-        )
+        on = ""
         if request.branch is not None:
             reached = any(s.branch == request.branch for s in solutions)
-            message += f" on branch {request.branch}" + (
+            on = f" on branch {request.branch}" + (
                 "" if reached else " (which does not reach it)"
             )
+        message = (
+            f"the {what} has no IK solution within the joint limits{on} "
+            f"({len(solutions)} closed-form branches reach it)"
+        )
         raise InfeasibleError(message)
     if request.rule == "nearest" and request.q_near is not None:
         distances = [_distance(s.q, request.q_near) for s in within]
