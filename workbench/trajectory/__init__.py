@@ -10,12 +10,10 @@ Cartesian planning is in :mod:`workbench.planning`.
 
 from workbench.trajectory.cartesian import (
     CartesianSamples,
-    IKChoice,
     PosePickAndPlace,
     as_target_pose,
     compute_cartesian_trajectory,
     pick_and_place_from_poses,
-    select_ik_solution,
 )
 from workbench.trajectory.limits import (
     JointExtrema,
@@ -43,7 +41,6 @@ from workbench.trajectory.time_optimal import (
 
 __all__ = [
     "CartesianSamples",
-    "IKChoice",
     "JointExtrema",
     "JointTrajectory",
     "LimitViolation",
@@ -67,5 +64,4 @@ __all__ = [
     "pick_and_place_from_poses",
     "pick_via_place",
     "raise_for_violations",
-    "select_ik_solution",
 ]
