@@ -63,6 +63,7 @@ from workbench.ik.selection import (
     NUMERIC_BRANCH,
     RULES,
     IKChoice,
+    compute_limit_margin,
     pick_place_configurations,
     select,
 )
@@ -105,6 +106,7 @@ __all__ = [
     "analytic_batch",
     "choose_redundancy",
     "compute_jacobians_local",
+    "compute_limit_margin",
     "compute_tool_poses",
     "dls_inverse",
     "dls_step",

@@ -118,9 +118,19 @@ class _Request:
     criterion: str | None
 
 
-def compute_limit_margin(robot: Robot, q: FloatArray) -> float:
-    r"""Smallest distance [rad or m] of a joint of ``q`` (nq,) to one of its limits."""
-    return float(np.min(np.minimum(q - robot.lower, robot.upper - q)))
+def compute_limit_margin(q: FloatArray, lower: FloatArray, upper: FloatArray) -> float:
+    """Smallest distance [rad] of a joint to one of its limits (< 0 outside).
+
+    Args:
+        q: Configuration (n,) [rad].
+        lower: Lower joint limits (n,) [rad].
+        upper: Upper joint limits (n,) [rad].
+    """
+    # on lists: a fifth of the time of NumPy's reductions on seven values
+    return min(
+        min(v - lo, hi - v)
+        for v, lo, hi in zip(q.tolist(), lower.tolist(), upper.tolist(), strict=True)
+    )
 
 
 def _distance(q: FloatArray, reference: FloatArray) -> float:
@@ -250,7 +260,7 @@ def _best(
         top = int(np.argmin(distances))  # the first on a tie, as ik.nearest
         return within[top], -distances[top]
     if request.rule == "limit_margin":
-        margins = [compute_limit_margin(robot, s.q) for s in within]
+        margins = [compute_limit_margin(s.q, robot.lower, robot.upper) for s in within]
         top = int(np.argmax(margins))  # the first on a tie
         return within[top], margins[top]
     return within[0], None
@@ -471,7 +481,10 @@ def _pair_at_value(
         if second is None:
             continue
         if request.rule == "limit_margin":
-            a, b = (compute_limit_margin(robot, s.q) for s in (first, second))
+            a, b = (
+                compute_limit_margin(s.q, robot.lower, robot.upper)
+                for s in (first, second)
+            )
             pair_score = min(a, b)
         elif request.rule == "nearest" and request.q_near is not None:
             a = -_distance(first.q, request.q_near)
