@@ -27,7 +27,6 @@ import pinocchio as pin
 
 from workbench.errors import InfeasibleError, InputError
 from workbench.ik import (
-    choose_redundancy,
     feasible_redundancy,
     get_structure,
     redundancy_parameter,
@@ -479,11 +478,10 @@ def _redundant_home(
             f"{robot.name}: no branch reaches Kang's home pose H and every waypoint "
             "within the joint limits"
         )
-    choices = [
-        choose_redundancy(robot, home, criterion="limit_margin", branch=label)
-        for label in branches
-    ]
-    return max(choices, key=lambda choice: choice.score).solution.q.copy()
+    # per branch the value of largest limit margin (ik.select), the best of them
+    choices = [select(robot, home, branch=label) for label in branches]
+    scores = [-math.inf if c.score is None else c.score for c in choices]
+    return choices[int(np.argmax(scores))].q.copy()  # the first on a tie
 
 
 __all__ = [
