@@ -35,7 +35,11 @@ from workbench.cli._ik_output import (
 )
 from workbench.cli._redundancy import add_redundancy_argument
 from workbench.errors import InfeasibleError, InputError
-from workbench.ik.closed_form import UnsupportedRobotError, get_closed_form
+from workbench.ik.closed_form import (
+    UnreachableError,
+    UnsupportedRobotError,
+    get_closed_form,
+)
 from workbench.model.robot import Robot
 from workbench.poses import ANGELES7_PRINTED_TOL, TARGET_FORMS, parse_target
 
@@ -226,11 +230,15 @@ def _solve(
     """
     if solver == "numeric":
         return [_row(robot, ik.select(robot, target), target)]
-    solutions: list[Any] = (
-        list(ik.analytic(robot, target))
-        if args.all
-        else [ik.select(robot, target).solution]
-    )
+    if args.all:
+        solutions: list[Any] = list(ik.analytic(robot, target))
+    else:
+        try:
+            solutions = [ik.select(robot, target).solution]
+        except UnreachableError:
+            raise
+        except InfeasibleError as err:  # reached outside the limits
+            raise InfeasibleError(f"{err} (--all prints them)") from err
     return [
         {
             "branch": s.branch,

@@ -251,8 +251,8 @@ def _best(
                 "" if reached else " (which does not reach it)"
             )
         message = (
-            f"the {what} has no IK solution within the joint limits{on} "
-            f"({len(solutions)} closed-form branches reach it)"
+            f"the {what} has no IK solution within the joint limits{on}: none of "
+            f"the {len(solutions)} closed-form branches reaching it is within them"
         )
         raise InfeasibleError(message)
     if request.rule == "nearest" and request.q_near is not None:
