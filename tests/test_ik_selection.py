@@ -141,6 +141,7 @@ def test_an_arm_of_no_family_is_solved_numerically(rng) -> None:
         ("ur5", {"criterion": "manipulability"}, "seven-axis arms"),
         ("ur5", {"q_near": [0.0] * 5}, "6 values expected"),
         ("iiwa14", {"redundancy": 0.3, "criterion": "limit_margin"}, "not with"),
+        ("iiwa14", {"redundancy": "half"}, "must be a number"),
         ("iiwa14", {"criterion": "dexterity"}, "criterion must be one of"),
         ("iiwa14", {"criterion": "nearest"}, "needs q_near"),
         ("generic6r", {"branch": "numeric"}, "no closed-form IK"),

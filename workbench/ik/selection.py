@@ -198,7 +198,12 @@ def _request(
     if redundancy is not None:
         if criterion is not None:
             raise InputError("criterion chooses a value: not with redundancy")
-        value = float(redundancy)
+        try:
+            value = float(redundancy)
+        except (TypeError, ValueError):
+            raise InputError(
+                f"redundancy must be a number [rad], got {redundancy!r}"
+            ) from None
     if criterion is not None and criterion not in CRITERIA:
         raise InputError(
             f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}"
@@ -418,7 +423,9 @@ def pick_place_configurations(
         criterion: Seven-axis arms without ``redundancy``: as :func:`select`.
 
     Returns:
-        ``(pick, place)``, two :class:`IKChoice`, both within the limits.
+        ``(pick, place)``, two :class:`IKChoice`, both within the limits; each
+        ``score`` is its own pose's (for ``"nearest"``, the place's is minus
+        its distance to the pick).
 
     Raises:
         InputError, UnreachableError: As :func:`select`, for either pose.
