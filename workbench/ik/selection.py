@@ -50,8 +50,9 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.errors import InfeasibleError, InputError
-from workbench.ik._puma import LIMIT_TOL, TAU, UnsupportedRobotError
-from workbench.ik.closed_form import analytic, get_branches
+from workbench.ik._puma import LIMIT_TOL, TAU
+from workbench.ik.closed_form import analytic
+from workbench.ik.families import Family, get_family
 from workbench.ik.numerical import numeric
 from workbench.ik.redundancy import CRITERIA, choose_redundancy, feasible_redundancy
 from workbench.ik.redundant import RedundantIKSolution
@@ -116,6 +117,7 @@ class _Request:
     branch: str | None
     redundancy: float | None
     criterion: str | None
+    seven_axis: bool
 
 
 def compute_limit_margin(q: FloatArray, lower: FloatArray, upper: FloatArray) -> float:
@@ -139,17 +141,9 @@ def _distance(q: FloatArray, reference: FloatArray) -> float:
     return float(math.sqrt(float(step @ step)))
 
 
-def _labels(robot: Robot) -> tuple[str, ...] | None:
-    """The closed form's branch labels, None for an arm of no family."""
-    try:
-        return get_branches(robot)
-    except UnsupportedRobotError:
-        return None
-
-
 def _request(
     robot: Robot,
-    labels: tuple[str, ...] | None,
+    family: Family | None,
     rule: str | None,
     q_near: npt.ArrayLike | None,
     branch: str | None,
@@ -175,6 +169,7 @@ def _request(
     near = None if q_near is None else robot.check_configuration(q_near).copy()
     if rule == "nearest" and near is None:
         raise InputError('rule "nearest" needs q_near (a configuration)')
+    labels = None if family is None else family.branches
     if rule == "branch":
         if branch is None:
             raise InputError('rule "branch" needs branch (a label)')
@@ -187,7 +182,7 @@ def _request(
             raise InputError(f"unknown branch {branch!r}; valid: {', '.join(labels)}")
     elif branch is not None:
         raise InputError(f'branch {branch!r} given with rule "{rule}": it is the rule')
-    seven_axis = labels is not None and robot.nq == 7
+    seven_axis = family is not None and family.redundant
     for name, value in (("redundancy", redundancy), ("criterion", criterion)):
         if value is not None and not seven_axis:
             raise InputError(
@@ -212,7 +207,7 @@ def _request(
         criterion = "nearest" if rule == "nearest" else "limit_margin"
     if criterion == "nearest" and near is None:
         raise InputError('criterion "nearest" needs q_near (a configuration)')
-    return _Request(rule, near, branch, value, criterion)
+    return _Request(rule, near, branch, value, criterion, seven_axis)
 
 
 def _choice(
@@ -360,11 +355,11 @@ def select(
         InfeasibleError: If no branch (or not ``branch``) is within the
             limits, or the numerical IK does not converge.
     """
-    labels = _labels(robot)
-    request = _request(robot, labels, rule, q_near, branch, redundancy, criterion)
-    if labels is None:
+    family = get_family(robot)
+    request = _request(robot, family, rule, q_near, branch, redundancy, criterion)
+    if family is None:
         return _numeric(robot, target, request.q_near)
-    if robot.nq == 7 and request.redundancy is None:
+    if request.seven_axis and request.redundancy is None:
         only = request.branch
         if request.rule == "first_within_limits":
             common = _first_feasible_branch(robot, [target])
@@ -432,12 +427,12 @@ def pick_place_configurations(
         InfeasibleError: If a pose has no solution within the limits, or
             with the rule ``"branch"`` the branch does not serve both.
     """
-    labels = _labels(robot)
-    request = _request(robot, labels, rule, q_near, branch, redundancy, criterion)
-    if labels is None:
+    family = get_family(robot)
+    request = _request(robot, family, rule, q_near, branch, redundancy, criterion)
+    if family is None:
         first = _numeric(robot, pick, request.q_near)
         return first, _numeric(robot, place, first.q)
-    if robot.nq == 7 and request.redundancy is None:
+    if request.seven_axis and request.redundancy is None:
         pair = _pair_chosen_values(robot, request, pick, place)
     else:
         pair = _pair_at_value(robot, request, pick, place)
@@ -456,7 +451,7 @@ def pick_place_configurations(
         redundancy=request.redundancy,
         criterion=request.criterion,
     )
-    chosen_value = robot.nq == 7 and request.redundancy is None
+    chosen_value = request.seven_axis and request.redundancy is None
     second = select(
         robot,
         place,
