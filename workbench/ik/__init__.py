@@ -43,6 +43,7 @@ from workbench.ik.families import (
 )
 from workbench.ik.numerical import IKResult, numeric
 from workbench.ik.numerical_batch import IKBatchResult, numeric_batch
+from workbench.ik.pick_place import pick_place_configurations
 from workbench.ik.qp import QP_DAMPING, DifferentialIKError, qp_step
 from workbench.ik.redundancy import (
     RedundancyChoice,
@@ -64,7 +65,6 @@ from workbench.ik.selection import (
     RULES,
     IKChoice,
     compute_limit_margin,
-    pick_place_configurations,
     select,
 )
 from workbench.ik.solver import ClosedFormSolver, get_closed_form
