@@ -17,6 +17,7 @@ import pytest
 
 from tests.conftest import run_cli as run
 from workbench import ik, load_robot
+from workbench.json_numbers import to_json_ready
 
 #: Residual of a closed-form branch (FK against the target) [m, rad].
 ATOL_RESIDUAL = 1e-9
@@ -46,7 +47,7 @@ def _wrapped(a: np.ndarray, b: np.ndarray) -> float:
 def test_every_branch_at_the_given_value(capsys, name) -> None:
     robot = load_robot(name)
     value = float(ik.get_solver(robot).parameter_of(Q0[name]))
-    code, out, err = _ik(capsys, name, "--redundancy", repr(value), "--json")
+    code, out, err = _ik(capsys, name, "--redundancy", repr(value), "--all", "--json")
     assert (code, err) == (0, "")
     result = json.loads(out)
     assert result["solver"] == "closed-form" and result["feasible"] is True
@@ -71,6 +72,11 @@ def test_every_branch_at_the_given_value(capsys, name) -> None:
         assert row["residual"] < ATOL_RESIDUAL
     # Q0 itself is one of them
     assert min(_wrapped(np.array(r["q"]), Q0[name]) for r in result["solutions"]) < 1e-9
+    # without --all: the one ik.select chooses at that value
+    code, out, err = _ik(capsys, name, "--redundancy", repr(value), "--json")
+    (row,) = json.loads(out)["solutions"]
+    choice = ik.select(robot, robot.fk(Q0[name]), redundancy=value)
+    assert row["branch"] == choice.branch and row["q"] == to_json_ready(choice.q)
 
 
 @pytest.mark.parametrize("name", ROBOTS)

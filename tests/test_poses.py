@@ -17,6 +17,7 @@ from workbench.poses import (
     angeles7_from_se3,
     as_se3,
     axis_angle_from_rotation,
+    parse_target,
     quat_wxyz_from_rotation,
     quat_xyzw_from_rotation,
     rotation_from_angeles4,
@@ -345,3 +346,39 @@ def test_default_tolerance_is_tight():
     with pytest.raises(InputError, match="norm"):
         rotation_from_angeles4(x)
     _close(rotation_from_angeles4(x, tol=10.0 * ANGELES7_TOL), np.eye(3))
+
+
+def test_parse_target_forms_give_one_pose() -> None:
+    pose = pin.SE3(pin.exp3(np.array([0.3, -0.5, 0.9])), np.array([0.4, -0.2, 0.6]))
+    matrix = parse_target(pose.homogeneous.ravel().tolist(), "matrix")
+    assert np.array_equal(matrix.homogeneous, pose.homogeneous)  # kept as given
+    typed = [*pose.translation, *quat_wxyz_from_rotation(pose.rotation)]
+    quat = parse_target(typed, "xyz_quat_wxyz")
+    seven = parse_target(angeles7_from_se3(pose).tolist(), "angeles7")
+    for other in (quat, seven):
+        np.testing.assert_allclose(
+            other.homogeneous, pose.homogeneous, rtol=0, atol=ATOL_EXACT
+        )
+    mm = [*(1e3 * pose.translation), *quat_wxyz_from_rotation(pose.rotation)]
+    np.testing.assert_allclose(
+        parse_target(mm, "xyz_quat_wxyz", scale=1e-3).translation,
+        pose.translation,
+        rtol=0,
+        atol=ATOL_EXACT,
+    )
+
+
+@pytest.mark.parametrize(
+    ("values", "form", "fragment"),
+    [
+        ([0.0] * 7, "euler", "target form must be one of angeles7, matrix"),
+        ([0.0] * 6, "xyz_quat_wxyz", "has 7 values, got 6"),
+        ([2e6, 0, 0, 1, 0, 0, 0], "xyz_quat_wxyz", "too far"),
+        ([0, 0, 0, 1.1, 0, 0, 0], "xyz_quat_wxyz", "quat"),
+        ([0, 0, 0, float("nan"), 0, 0, 0], "xyz_quat_wxyz", "finite"),
+        ([1.0] + [0.0] * 15, "matrix", "bottom row"),
+    ],
+)
+def test_parse_target_refuses_bad_numbers(values, form, fragment) -> None:
+    with pytest.raises(InputError, match=fragment):
+        parse_target(values, form)

@@ -31,24 +31,43 @@ def table2(puma):
         paper_data.ANGELES_PICK_ANGELES7,
         paper_data.ANGELES_PLACE_ANGELES7,
         T,
-        pick_near=Q3_PICK,
-        place_near=Q3_PLACE,
         angeles7_tol=ANGELES7_PRINTED_TOL,
     )
 
 
-def test_table2_inverts_to_table3_branches(table2) -> None:
-    assert table2.pick.branch == "right/elbow-down/no-flip"
-    assert table2.place.branch == "right/elbow-up/flip"
-    assert table2.pick.rule == table2.place.rule == "nearest"
+def _nearest(robot, printed, q3):
+    target = se3_from_angeles7(printed, tol=ANGELES7_PRINTED_TOL)
+    return ik.nearest(ik.analytic(robot, target, q_previous=q3), q3)
+
+
+def test_table2_inverts_to_table3_branches(puma) -> None:
+    pick = _nearest(puma, paper_data.ANGELES_PICK_ANGELES7, Q3_PICK)
+    place = _nearest(puma, paper_data.ANGELES_PLACE_ANGELES7, Q3_PLACE)
+    assert pick.branch == "right/elbow-down/no-flip"
+    assert place.branch == "right/elbow-up/flip"
     # Table II is printed to two decimals: IK lands within 1 deg of Table III
-    assert np.abs(np.rad2deg(table2.pick.q) - paper_data.ANGELES_PICK_Q_DEG).max() < 1
-    assert np.abs(np.rad2deg(table2.place.q) - paper_data.ANGELES_PLACE_Q_DEG).max() < 1
+    assert np.abs(np.rad2deg(pick.q) - paper_data.ANGELES_PICK_Q_DEG).max() < 1
+    assert np.abs(np.rad2deg(place.q) - paper_data.ANGELES_PLACE_Q_DEG).max() < 1
     # ...and joint 2 of the pick lands a hair above its 45 deg limit
-    assert not table2.pick.within_limits
-    (violation,) = table2.trajectory.check_limits()
+    assert not pick.within_limits
+    (violation,) = trajectory.pick_and_place(puma, pick.q, place.q, T).check_limits()
     assert (violation.joint, violation.kind, violation.t) == ("joint2", "position", 0)
     assert 0 < np.rad2deg(violation.value - violation.limit) < 1e-3
+
+
+def test_from_poses_is_the_selection_rule(puma, table2) -> None:
+    """Both ends on one branch within the limits: ik.pick_place_configurations."""
+    pick, place = ik.pick_place_configurations(
+        puma,
+        se3_from_angeles7(paper_data.ANGELES_PICK_ANGELES7, tol=ANGELES7_PRINTED_TOL),
+        se3_from_angeles7(paper_data.ANGELES_PLACE_ANGELES7, tol=ANGELES7_PRINTED_TOL),
+    )
+    assert table2.pick.branch == table2.place.branch == pick.branch == place.branch
+    assert table2.pick.rule == "limit_margin"
+    assert table2.pick.within_limits and table2.place.within_limits
+    assert np.array_equal(table2.pick.q, pick.q)
+    assert np.array_equal(table2.place.q, place.q)
+    assert table2.trajectory.check_limits() == []
 
 
 def test_cartesian_rates_vanish_at_both_ends(table2) -> None:
@@ -89,30 +108,19 @@ def test_cartesian_rates_are_derivatives_of_the_pose(table2) -> None:
     assert robot.name == "puma560"
 
 
-def test_default_rule_is_first_branch_within_limits(puma) -> None:
-    choice = trajectory.select_ik_solution(
-        puma, paper_data.ANGELES_PICK_ANGELES7, angeles7_tol=ANGELES7_PRINTED_TOL
-    )
-    assert choice.rule == "first-within-limits" and choice.within_limits
-    assert choice.branch == "right/elbow-up/no-flip"
-
-
-def test_explicit_branch_and_unknown_branch(puma) -> None:
+def test_pose_forms_agree(puma) -> None:
     pose = puma.fk(Q3_PLACE)
-    choice = trajectory.select_ik_solution(puma, pose, branch="right/elbow-up/flip")
-    np.testing.assert_allclose(choice.q, Q3_PLACE, atol=1e-9)
-    with pytest.raises(InputError, match="valid: right/elbow-up/no-flip"):
-        trajectory.select_ik_solution(puma, pose, branch="elbow-sideways")
-
-
-def test_se3_matrix_and_angeles7_inputs_agree(puma) -> None:
-    pose = puma.fk(Q3_PICK)
-    a = trajectory.select_ik_solution(puma, pose, q_near=Q3_PICK)
-    b = trajectory.select_ik_solution(puma, pose.homogeneous, q_near=Q3_PICK)
-    c = trajectory.select_ik_solution(puma, angeles7_from_se3(pose), q_near=Q3_PICK)
-    np.testing.assert_allclose(a.q, Q3_PICK, atol=1e-9)
-    np.testing.assert_allclose(b.q, a.q, atol=1e-12)
-    np.testing.assert_allclose(c.q, a.q, atol=1e-9)
+    a = trajectory.pick_and_place_from_poses(puma, pose, pose, T, q_near=Q3_PLACE)
+    b = trajectory.pick_and_place_from_poses(
+        puma, pose.homogeneous, pose.homogeneous, T, q_near=Q3_PLACE
+    )
+    c = trajectory.pick_and_place_from_poses(
+        puma, angeles7_from_se3(pose), angeles7_from_se3(pose), T, q_near=Q3_PLACE
+    )
+    np.testing.assert_allclose(a.pick.q, Q3_PLACE, atol=1e-9)
+    assert a.pick.rule == "nearest"
+    np.testing.assert_allclose(b.pick.q, a.pick.q, atol=1e-12)
+    np.testing.assert_allclose(c.pick.q, a.pick.q, atol=1e-9)
     with pytest.raises(
         InputError, match="angeles7 \\(7 numbers\\), got shape \\(3,\\)"
     ):
@@ -122,63 +130,64 @@ def test_se3_matrix_and_angeles7_inputs_agree(puma) -> None:
 def test_unreachable_pose_is_infeasible(puma) -> None:
     far = pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.0]))
     with pytest.raises(InfeasibleError):
-        trajectory.select_ik_solution(puma, far)
+        trajectory.pick_and_place_from_poses(puma, far, puma.fk(Q3_PLACE), T)
 
 
 def test_panda_from_poses_uses_its_closed_form(rng) -> None:
-    """A seven-axis arm: the closed form at q7 of ``q_near``, else a chosen q7."""
+    """A seven-axis arm: values and branch chosen together, in closed form."""
     panda = load_robot("panda")
     q0, q1 = random_configurations(panda, rng, 2)
     planned = trajectory.pick_and_place_from_poses(
-        panda, panda.fk(q0), panda.fk(q1), 5.0, pick_near=q0, place_near=q1
+        panda, panda.fk(q0), panda.fk(q1), 5.0
     )
     assert planned.pick.branch in ik.FRANKA_BRANCHES
-    np.testing.assert_allclose(planned.pick.q, q0, atol=1e-9)  # its own branch
-    np.testing.assert_allclose(planned.place.q, q1, atol=1e-9)
+    assert planned.pick.branch == planned.place.branch
+    assert planned.pick.criterion == "limit_margin"
+    for choice, q in ((planned.pick, q0), (planned.place, q1)):
+        np.testing.assert_allclose(
+            panda.fk(choice.q).homogeneous, panda.fk(q).homogeneous, atol=1e-12
+        )
     cart = trajectory.compute_cartesian_trajectory(planned.trajectory, [0.0, 5.0])
     np.testing.assert_allclose(
         np.concatenate([cart.velocity, cart.acceleration]), 0.0, atol=ATOL_ENDS
     )
-    np.testing.assert_allclose(
-        cart.angeles7[0], angeles7_from_se3(panda.fk(q0)), atol=1e-8
-    )
-    chosen = trajectory.select_ik_solution(panda, panda.fk(q0))  # no q_near
-    best = ik.choose_redundancy(panda, panda.fk(q0))
-    assert chosen.within_limits and chosen.rule == "largest-limit-margin"
-    assert chosen.branch == best.solution.branch
-    np.testing.assert_allclose(chosen.q, best.solution.q, atol=0.0)
-    np.testing.assert_allclose(
-        panda.fk(chosen.q).homogeneous, panda.fk(q0).homogeneous, atol=1e-12
-    )
     label = planned.pick.branch
-    one = trajectory.select_ik_solution(panda, panda.fk(q0), branch=label)
-    assert one.branch == label and one.rule == "branch"
-    with pytest.raises(InputError, match="is not one of"):
-        trajectory.select_ik_solution(panda, panda.fk(q0), branch="right/elbow-up/flip")
+    one = trajectory.pick_and_place_from_poses(
+        panda, panda.fk(q0), panda.fk(q1), 5.0, branch=label
+    )
+    assert one.pick.branch == one.place.branch == label and one.pick.rule == "branch"
+    with pytest.raises(InputError, match="unknown branch"):
+        trajectory.pick_and_place_from_poses(
+            panda, panda.fk(q0), panda.fk(q1), 5.0, branch="right/elbow-up/flip"
+        )
 
 
 def test_an_arm_without_closed_form_uses_numerical_ik(rng) -> None:
     arm = load_robot("generic6r")
-    q0 = random_configurations(arm, rng, 1)[0]
-    choice = trajectory.select_ik_solution(arm, arm.fk(q0), q_near=q0)
-    assert choice.branch == "numeric"
-    np.testing.assert_allclose(
-        arm.fk(choice.q).homogeneous, arm.fk(q0).homogeneous, atol=1e-9
+    q0, q1 = random_configurations(arm, rng, 2)
+    planned = trajectory.pick_and_place_from_poses(
+        arm, arm.fk(q0), arm.fk(q1), 5.0, q_near=q0
     )
+    assert planned.pick.branch == planned.place.branch == "numeric"
+    for choice, q in ((planned.pick, q0), (planned.place, q1)):
+        np.testing.assert_allclose(
+            arm.fk(choice.q).homogeneous, arm.fk(q).homogeneous, atol=1e-9
+        )
     with pytest.raises(InputError, match="no closed-form IK"):
-        trajectory.select_ik_solution(arm, arm.fk(q0), branch="right/elbow-up/flip")
+        trajectory.pick_and_place_from_poses(
+            arm, arm.fk(q0), arm.fk(q1), 5.0, branch="right/elbow-up/flip"
+        )
 
 
-def test_ur5_from_poses_uses_the_closed_form(rng) -> None:
+def test_ur5_from_poses_uses_the_closed_form() -> None:
     """A UR-type arm gets labelled closed-form branches, not numerical IK."""
-    from workbench.trajectory.cartesian import select_ik_solution
-
     ur5 = load_robot("ur5")
     q = np.array([0.4, -1.2, 1.5, -0.9, 0.8, 0.5])
-    choice = select_ik_solution(
-        ur5, ur5.fk(q), branch="shoulder-left/elbow-up/wrist-up"
+    label = "shoulder-left/elbow-up/wrist-up"
+    planned = trajectory.pick_and_place_from_poses(
+        ur5, ur5.fk(q), ur5.fk(q), 5.0, branch=label
     )
-    assert choice.branch == "shoulder-left/elbow-up/wrist-up"
+    assert planned.pick.branch == label
     np.testing.assert_allclose(
-        ur5.fk(choice.q).homogeneous, ur5.fk(q).homogeneous, atol=1e-9
+        ur5.fk(planned.pick.q).homogeneous, ur5.fk(q).homogeneous, atol=1e-9
     )

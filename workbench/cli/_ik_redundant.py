@@ -1,11 +1,13 @@
 """``workbench ik`` on a seven-axis arm: every branch at one value of ψ or q7.
 
-The value is ``--redundancy`` (rad, or degrees with ``--deg``), else the one
-:func:`workbench.ik.choose_redundancy` picks (largest joint-limit margin, or
-``--criterion``), and the output says which. Every branch reaching the pose
-at that value is printed, with its flags; none within the limits is an
-infeasible request (exit 3, the feasible intervals in the message) unless
-``--all`` asks for the branches anyway.
+The configuration is :func:`workbench.ik.select`'s: at ``--redundancy``
+(rad, or degrees with ``--deg``) the branch of largest limit margin, else the
+value and branch :func:`workbench.ik.choose_redundancy` picks (largest
+joint-limit margin, or ``--criterion``), and the output says which value.
+``--all`` prints every branch reaching the pose at that value, with its
+flags. None within the limits is an infeasible request (exit 3, the
+feasible intervals in the message) unless ``--all`` asks for the branches
+anyway.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
+from workbench import ik
 from workbench.cli import _redundancy
 from workbench.cli._common import print_json
 from workbench.cli._ik_output import print_infeasible, print_rows, residual
@@ -23,7 +26,7 @@ from workbench.errors import InfeasibleError, InputError
 from workbench.model.robot import Robot
 
 if TYPE_CHECKING:
-    from workbench.ik import FeasibleRedundancy, IKSolution, Solver
+    from workbench.ik import FeasibleRedundancy, Solver
 
 #: The singular flags of a branch, as JSON keys and as printed.
 SINGULAR_FLAGS = (
@@ -37,7 +40,7 @@ SINGULAR_FLAGS = (
 def solve_and_print_redundant(
     args: argparse.Namespace, robot: Robot, target: pin.SE3, solver: Solver
 ) -> int:
-    """Print the branches at the given or chosen value; returns the exit code.
+    """Print ``ik.select``'s solution (``--all``: every branch at its value); exit code.
 
     Raises:
         InfeasibleError: If no value reaches the pose within the limits, the
@@ -59,17 +62,24 @@ def solve_and_print_redundant(
         feasible = solver.feasible(target)
         head["feasible_redundancy"] = _redundancy.feasible_json(feasible)
     try:
-        value, redundancy = _get_value(args, robot, target, solver)
-        head["redundancy"] = redundancy
-        rows = _rows(robot, target, solver.solve(target, redundancy=value))
-        if not args.all and not any(row["within_limits"] for row in rows):
-            feasible = feasible or solver.feasible(target)
-            shown = _redundancy.format_value(value, args.deg)
-            raise InfeasibleError(
-                f"at {solver.parameter} = {shown} {len(rows)} branches reach the "
-                "pose, none within the joint limits (--all prints them); "
-                + _redundancy.describe_feasible(feasible, args.deg)
+        value, redundancy = _get_value(args, solver)
+        solutions: list[Any]
+        if args.all and value is not None:  # every branch at the given value
+            solutions = list(ik.analytic(robot, target, redundancy=value))
+        else:
+            choice = ik.select(
+                robot, target, redundancy=value, criterion=redundancy["criterion"]
             )
+            redundancy["value"] = choice.redundancy
+            if value is None:
+                redundancy["score"] = choice.score
+            solutions = [choice.solution]
+            if args.all:  # every branch at the chosen value
+                solutions = list(
+                    ik.analytic(robot, target, redundancy=choice.redundancy)
+                )
+        head["redundancy"] = redundancy
+        rows = _rows(robot, target, solutions)
     except InfeasibleError as err:
         said = _redundancy.with_feasible(err, robot, target, args.deg, feasible)
         if not args.json:
@@ -83,11 +93,14 @@ def solve_and_print_redundant(
 
 
 def _get_value(
-    args: argparse.Namespace, robot: Robot, target: pin.SE3, solver: Solver
-) -> tuple[float, dict[str, Any]]:
-    """The value [rad] and the ``redundancy`` JSON object saying where it comes from."""
-    from workbench import ik
+    args: argparse.Namespace, solver: Solver
+) -> tuple[float | None, dict[str, Any]]:
+    """The given value [rad] or None, and the ``redundancy`` JSON object to fill.
 
+    Raises:
+        InputError: ``--criterion`` with ``--redundancy``, or a value beyond
+            ``_redundancy.MAX_REDUNDANCY``.
+    """
     if args.redundancy is not None:
         if args.criterion is not None:
             raise InputError("--criterion chooses a value: not with --redundancy")
@@ -99,20 +112,16 @@ def _get_value(
             "criterion": None,
             "score": None,
         }
-    criterion = args.criterion or "limit_margin"
-    choice = ik.choose_redundancy(robot, target, criterion=criterion)
-    return choice.value, {
+    return None, {
         "parameter": solver.parameter,
-        "value": choice.value,
+        "value": None,
         "source": "chosen",
-        "criterion": choice.criterion,
-        "score": choice.score,
+        "criterion": args.criterion or "limit_margin",
+        "score": None,
     }
 
 
-def _rows(
-    robot: Robot, target: pin.SE3, solutions: list[IKSolution]
-) -> list[dict[str, Any]]:
+def _rows(robot: Robot, target: pin.SE3, solutions: list[Any]) -> list[dict[str, Any]]:
     """One JSON-ready row per branch reaching the pose."""
     return [
         {

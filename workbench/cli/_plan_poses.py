@@ -1,14 +1,15 @@
 """``plan pick-place`` from tool poses: the pick and place configurations by IK.
 
 ``--pick-xyz-quat-wxyz`` and ``--place-xyz-quat-wxyz`` give the two tool poses
-(base frame, metres, unit quaternion w x y z, as ``ik --xyz-quat-wxyz``); the
-closed form turns them into joint values on one branch: the pick's is the
-solution of the largest joint-limit margin, the place's the same branch.
-Seven-axis arms (SRS: the arm angle ψ; Franka: q7) take the redundancy
-parameter as ``ik`` does: ``--redundancy VALUE`` [rad] solves both poses at
-that value, else ``--criterion`` (default ``limit_margin``) chooses each
-pose's value by ``workbench.ik.choose_redundancy`` (the place's on the pick's
-branch). Joint values (``--pick-deg``, ``--place-deg``) fix the parameter:
+(base frame, metres, unit quaternion w x y z, as ``ik --xyz-quat-wxyz``,
+parsed by :func:`workbench.poses.parse_target`);
+:func:`workbench.ik.pick_place_configurations` turns them into joint values,
+both on the branch that serves both with the largest joint-limit margin (the
+same answer as the same call in Python). Seven-axis arms (SRS: the arm angle
+ψ; Franka: q7) take the redundancy parameter as ``ik`` does:
+``--redundancy VALUE`` [rad] solves both poses at that value, else
+``--criterion`` (default ``limit_margin``) chooses each pose's value.
+Joint values (``--pick-deg``, ``--place-deg``) fix the parameter:
 ``--redundancy`` and ``--criterion`` are refused with them.
 """
 
@@ -24,11 +25,9 @@ import pinocchio as pin
 from workbench import ik
 from workbench.cli._common import q_from_degrees
 from workbench.cli._redundancy import get_redundant, refuse_redundancy
-from workbench.cli.ik import MAX_TARGET_COORDINATE, QUAT_TYPED_TOL
-from workbench.errors import InfeasibleError, InputError
+from workbench.errors import InputError
 from workbench.model.robot import Robot
-from workbench.planning.redundancy_policy import compute_limit_margin
-from workbench.poses import rotation_from_quat_wxyz
+from workbench.poses import parse_target
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -87,74 +86,34 @@ def get_configurations(
         return q_pick, q_place, {"branch": None, "redundancy": redundancy}
     pick = _target(args.pick_xyz_quat_wxyz, "--pick-xyz-quat-wxyz")
     place = _target(args.place_xyz_quat_wxyz, "--place-xyz-quat-wxyz")
-    if solver is None:
-        first = _best(robot, ik.analytic(robot, pick), "pick")
-        second = _on_branch(ik.analytic(robot, place, q_previous=first.q), first)
-        return first.q, second.q, {"branch": first.branch, "redundancy": None}
-    if args.redundancy is not None:
-        value = float(args.redundancy)
-        first = _best(robot, ik.analytic(robot, pick, redundancy=value), "pick")
-        solutions = ik.analytic(robot, place, q_previous=first.q, redundancy=value)
-        second = _on_branch(solutions, first)
-        source, criterion = "given", None
-    else:
+    criterion = None
+    if solver is not None and args.redundancy is None:
         criterion = args.criterion or "limit_margin"
-        first = ik.choose_redundancy(robot, pick, criterion=criterion).solution
-        second = ik.choose_redundancy(
-            robot, place, criterion=criterion, branch=first.branch
-        ).solution
-        source = "chosen"
-    redundancy = {
-        "parameter": solver.parameter,
-        "source": source,
-        "criterion": criterion,
-        "pick": first.redundancy,
-        "place": second.redundancy,
-    }
-    return first.q, second.q, {"branch": first.branch, "redundancy": redundancy}
+    first, second = ik.pick_place_configurations(
+        robot, pick, place, redundancy=args.redundancy, criterion=criterion
+    )
+    branch = first.branch
+    if second.branch != branch:
+        branch = f"{first.branch} -> {second.branch}"
+    redundancy = None
+    if solver is not None:
+        redundancy = {
+            "parameter": solver.parameter,
+            "source": "given" if args.redundancy is not None else "chosen",
+            "criterion": criterion,
+            "pick": first.redundancy,
+            "place": second.redundancy,
+        }
+    return first.q, second.q, {"branch": branch, "redundancy": redundancy}
 
 
 def _target(values: list[float], option: str) -> pin.SE3:
-    """The pose of ``x y z qw qx qy qz`` (metres, unit quaternion scalar first)."""
-    x = np.array(values)
-    if np.abs(x[:3]).max() > MAX_TARGET_COORDINATE:
-        raise InputError(
-            f"{option}: position {x[:3].tolist()} too far: each coordinate at most "
-            f"{MAX_TARGET_COORDINATE:g} m"
-        )
+    """The pose of ``x y z qw qx qy qz`` (metres, unit quaternion scalar first).
+
+    Raises:
+        InputError: Naming ``option``, if the numbers make no rigid pose.
+    """
     try:
-        rotation = rotation_from_quat_wxyz(x[3:], tol=QUAT_TYPED_TOL)
+        return parse_target(values, "xyz_quat_wxyz")
     except InputError as err:
         raise InputError(f"{option}: {err}") from err
-    return pin.SE3(rotation, x[:3])
-
-
-def _best(robot: Robot, solutions: list, which: str) -> Any:
-    """The solution within the limits of the largest joint-limit margin.
-
-    Raises:
-        InfeasibleError: If none is within the limits.
-    """
-    within = [s for s in solutions if s.within_limits]
-    if not within:
-        raise InfeasibleError(
-            f"the {which} pose has no IK solution within the joint limits"
-        )
-    return max(
-        within, key=lambda s: compute_limit_margin(s.q, robot.lower, robot.upper)
-    )
-
-
-def _on_branch(solutions: list, first: Any) -> Any:
-    """The place's solution on the pick's branch, within the limits.
-
-    Raises:
-        InfeasibleError: If the branch does not reach it within the limits.
-    """
-    for solution in solutions:
-        if solution.branch == first.branch and solution.within_limits:
-            return solution
-    raise InfeasibleError(
-        f"the place pose has no IK solution within the joint limits on the pick's "
-        f"branch {first.branch}"
-    )

@@ -1,9 +1,12 @@
 """``workbench ik``: inverse kinematics, closed form for OPW and UR-type arms.
 
-Seven-axis arms of the SRS and Franka families are solved in closed form at
-one value of their redundancy parameter (:mod:`workbench.cli._ik_redundant`).
-Any other robot falls back to numerical IK (one solution, branch "numeric"),
-and the output says so: ``solver`` is ``"closed-form"`` or ``"numeric"``.
+The target is parsed by :func:`workbench.poses.parse_target`, the
+configuration chosen by :func:`workbench.ik.select` (the same answer as the
+same call in Python). Seven-axis arms of the SRS and Franka families are
+solved in closed form at one value of their redundancy parameter
+(:mod:`workbench.cli._ik_redundant`). Any other robot falls back to
+numerical IK (one solution, branch "numeric"), and the output says so:
+``solver`` is ``"closed-form"`` or ``"numeric"``.
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from workbench import ik
 from workbench._compiled import interpreted
 from workbench.cli import _redundancy
 from workbench.cli._common import (
@@ -31,23 +35,11 @@ from workbench.cli._ik_output import (
 )
 from workbench.cli._redundancy import add_redundancy_argument
 from workbench.errors import InfeasibleError, InputError
-from workbench.ik import IKSolution, UnsupportedRobotError, get_solver, nearest
-from workbench.ik.numerical import numeric
+from workbench.ik import UnreachableError, UnsupportedRobotError, get_solver
 from workbench.model.robot import Robot
-from workbench.poses import (
-    ANGELES7_PRINTED_TOL,
-    as_se3,
-    rotation_from_quat_wxyz,
-    se3_from_angeles7,
-)
+from workbench.poses import ANGELES7_PRINTED_TOL, TARGET_FORMS, parse_target
 
-#: Largest accepted | |q| - 1 | of a typed quaternion (then normalised): four
-#: decimals, as in "0.7071 0 0 0.7071", are enough.
-QUAT_TYPED_TOL = 1e-3
-
-_MM = 1e-3
-#: Largest |coordinate| of a target position [m] (1000 km: far beyond any arm).
-MAX_TARGET_COORDINATE = 1e6
+_MM = 1e-3  # [m] per mm (--mm)
 #: ``--criterion`` choices (``ik.choose_redundancy`` criteria needing no q_previous).
 CRITERIA = ("limit_margin", "manipulability")
 #: The flags printed after a six-axis branch: (JSON key, text).
@@ -64,13 +56,15 @@ def register(commands: argparse._SubParsersAction) -> None:
         help="inverse kinematics (closed form for OPW and UR-type arms, else "
         "numerical)",
         description="Joint values that put the tool frame at a pose. Prints the "
-        "branch within the joint limits nearest to q = 0, or with --all every "
-        "closed-form branch. Arms of the OPW (PUMA, KUKA, ABB, ...) and UR families "
-        "are recognised from their joint axes; so are the seven-axis SRS (KUKA "
-        "iiwa) and Franka (Panda) families, whose every branch at one value of the "
-        "redundancy parameter is printed (--redundancy, else the value chosen by "
-        "--criterion, said in the output); any other robot gets one numerical "
-        "solution (solver 'numeric', branch 'numeric'). residual = max(position "
+        "configuration workbench.ik.select chooses (the branch within the joint "
+        "limits of the largest limit margin; seven-axis arms: the value of the "
+        "redundancy parameter and the branch of the largest limit margin, or the "
+        "value given by --redundancy, or chosen by --criterion), or with --all "
+        "every closed-form branch (seven-axis arms: at that value). Arms of the OPW "
+        "(PUMA, KUKA, ABB, ...) and UR families are recognised from their joint "
+        "axes, and so are the seven-axis SRS (KUKA iiwa) and Franka (Panda) "
+        "families; any other robot gets one numerical solution (solver 'numeric', "
+        "branch 'numeric'). residual = max(position "
         "error [m], rotation error [rad]) of FK(q) against the target.",
     )
     add_robot_argument(parser)
@@ -106,13 +100,14 @@ def register(commands: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--all",
         action="store_true",
-        help="print every closed-form branch (seven-axis arms: every branch is "
-        "printed; --all also when none is within the limits, exit 0)",
+        help="print every closed-form branch (seven-axis arms: at the given or "
+        "chosen value; also when none is within the limits, exit 0)",
     )
     add_redundancy_argument(
         parser,
-        "[rad, or degrees with --deg]; every branch at that value is printed "
-        "(default: the value of largest joint-limit margin, or --criterion)",
+        "[rad, or degrees with --deg]; the branch of largest limit margin at that "
+        "value is printed, with --all every branch (default: the value and "
+        "branch of largest joint-limit margin, or --criterion)",
     )
     parser.add_argument(
         "--deg",
@@ -143,58 +138,25 @@ def target_from_args(args: argparse.Namespace) -> pin.SE3:
     Raises:
         InputError: If the numbers do not make a rigid pose.
     """
-    scale = _MM if args.mm else 1.0
-    if args.angeles7 is not None:
-        position = args.angeles7[4:]
-    elif args.matrix is not None:
-        position = args.matrix[3:12:4]
-    else:
-        position = args.xyz_quat_wxyz[:3]
-    if max(abs(x) * scale for x in position) > MAX_TARGET_COORDINATE:
-        raise InputError(
-            f"target position {position} too far: each coordinate at most "
-            f"{MAX_TARGET_COORDINATE:g} m"
-        )
-    if args.angeles7 is not None:
-        x = np.array(args.angeles7)
-        x[4:] *= scale
-        return se3_from_angeles7(x, tol=ANGELES7_PRINTED_TOL)
-    if args.matrix is not None:
-        m = np.array(args.matrix).reshape(4, 4)
-        m[:3, 3] *= scale
-        return as_se3(m)
-    x = np.array(args.xyz_quat_wxyz)
-    rotation = rotation_from_quat_wxyz(x[3:], tol=QUAT_TYPED_TOL)
-    return pin.SE3(rotation, x[:3] * scale)
+    for form in TARGET_FORMS:
+        values = getattr(args, form)
+        if values is not None:
+            return parse_target(values, form, scale=_MM if args.mm else 1.0)
+    raise InputError("no target pose given")  # argparse requires one
 
 
-def _pick(solutions: list[IKSolution], nq: int) -> IKSolution:
-    feasible = [s for s in solutions if s.within_limits]
-    if not feasible:
-        raise InfeasibleError(
-            f"the pose is reachable, but none of the {len(solutions)} closed-form "
-            "branches is within the joint limits (use --all to see them)"
-        )
-    return nearest(feasible, np.zeros(nq))
-
-
-def _numeric_row(robot: Robot, target: pin.SE3) -> dict[str, object]:
-    result = numeric(robot, target)
-    if not result.success:
-        raise InfeasibleError(
-            f"numerical IK found no solution for {robot.name} "
-            f"(best error {result.error:.3g} after {result.iterations} iterations, "
-            f"{result.restarts} restarts): the pose is probably out of reach"
-        )
+def _row(robot: Robot, choice: ik.IKChoice, target: pin.SE3) -> dict[str, object]:
+    """The JSON row of the numerical solution."""
+    values = robot.joint_values_from_q(choice.q)
     return {
-        "branch": "numeric",
-        "q": result.q,
-        "joint_values": robot.joint_values_from_q(result.q),
-        "q_deg": np.rad2deg(robot.joint_values_from_q(result.q)),
-        "within_limits": True,
+        "branch": choice.branch,
+        "q": choice.q,
+        "joint_values": values,
+        "q_deg": np.rad2deg(values),
+        "within_limits": choice.within_limits,
         "wrist_singular": False,
         "shoulder_singular": False,
-        "residual": residual(robot, result.q, target),
+        "residual": residual(robot, choice.q, target),
     }
 
 
@@ -256,17 +218,23 @@ def _solve_and_print(args: argparse.Namespace, robot: Robot, target: pin.SE3) ->
 def _solve(
     args: argparse.Namespace, robot: Robot, target: pin.SE3, solver: str
 ) -> list[dict[str, Any]]:
-    """The rows to print: the chosen branch, every branch (``--all``) or numeric.
+    """The rows to print: :func:`workbench.ik.select`'s, or every branch (``--all``).
 
     Raises:
         InfeasibleError: If the pose is out of reach, or no branch is within
             the joint limits.
     """
     if solver == "numeric":
-        return [_numeric_row(robot, target)]
-    solutions = get_solver(robot).solve(target)
-    if not args.all:
-        solutions = [_pick(solutions, robot.nq)]
+        return [_row(robot, ik.select(robot, target), target)]
+    if args.all:
+        solutions: list[Any] = list(ik.analytic(robot, target))
+    else:
+        try:
+            solutions = [ik.select(robot, target).solution]
+        except UnreachableError:
+            raise
+        except InfeasibleError as err:  # reached outside the limits
+            raise InfeasibleError(f"{err} (--all prints them)") from err
     return [
         {
             "branch": s.branch,

@@ -1,8 +1,9 @@
 """``workbench plan pick-place``: Angeles' normal-spline pick-and-place trajectory.
 
-Pick and place are joint values, or tool poses solved in closed form
-(:mod:`workbench.cli._plan_poses`; seven-axis arms at ``--redundancy`` or a
-value chosen by ``--criterion``, as ``workbench ik``).
+Pick and place are joint values, or tool poses solved together by
+:func:`workbench.ik.pick_place_configurations` (:mod:`workbench.cli._plan_poses`;
+seven-axis arms at ``--redundancy`` or a value chosen by ``--criterion``, as
+``workbench ik``).
 """
 
 from __future__ import annotations
@@ -87,8 +88,9 @@ def register(commands: argparse._SubParsersAction) -> None:
             type=finite_float,
             metavar="X",
             help=f"{name} pose of the tool frame, base frame: position x y z [m], "
-            "then unit quaternion w x y z; solved in closed form, the pick's "
-            "branch of largest joint-limit margin, the place on the same branch",
+            "then unit quaternion w x y z; pick and place solved together "
+            "(workbench.ik.pick_place_configurations): on the branch serving both "
+            "with the largest joint-limit margin",
         )
     add_redundancy_argument(
         pick,
@@ -100,7 +102,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         choices=CRITERIA,
         help="seven-axis arms, poses without --redundancy: how each pose's value "
         "is chosen (ik.choose_redundancy; limit_margin, the default, or "
-        "manipulability); the place's on the pick's branch",
+        "manipulability), both poses on the branch that scores best",
     )
     pick.add_argument(
         "--duration",

@@ -21,6 +21,7 @@ import numpy as np
 from workbench import paper_data
 from workbench.collision import CollisionChecker, get_angeles_scene
 from workbench.errors import WorkbenchError
+from workbench.ik import analytic, nearest
 from workbench.model.robot import Robot
 from workbench.poses import ANGELES7_PRINTED_TOL, se3_from_angeles7
 from workbench.trajectory import (
@@ -29,7 +30,6 @@ from workbench.trajectory import (
     compute_literal_spline,
     minimum_duration,
     pick_and_place,
-    pick_and_place_from_poses,
 )
 from workbench.trajectory.csv_io import write_trajectory_csv
 
@@ -53,8 +53,6 @@ FIGURES = {
 
 def _ik_table(robot: Robot) -> dict[str, Any]:
     """Every closed-form branch of both Table II poses, in degrees."""
-    from workbench.ik.closed_form import analytic
-
     table = {}
     for pose, printed in (
         ("pick", paper_data.ANGELES_PICK_ANGELES7),
@@ -70,6 +68,18 @@ def _ik_table(robot: Robot) -> dict[str, Any]:
             for s in analytic(robot, target)
         ]
     return table
+
+
+def _nearest_table3(robot: Robot, printed: np.ndarray, q3: np.ndarray) -> Any:
+    """The closed-form branch of a Table II pose nearest its Table III row.
+
+    The paper's configuration is reproduced, within the limits or not (its
+    pick sits on joint 2's limit, the rounded Table II a hair beyond), so
+    this is ``ik.nearest`` on every branch, not the selection rule
+    (``ik.select``) that chooses within the limits.
+    """
+    target = se3_from_angeles7(printed, tol=ANGELES7_PRINTED_TOL)
+    return nearest(analytic(robot, target, q_previous=q3), q3)
 
 
 def _singularities(robot: Robot, t: np.ndarray, q: np.ndarray) -> dict[str, Any]:
@@ -121,16 +131,9 @@ def run_pick_and_place_demo(
     duration = paper_data.ANGELES_DURATION
     q3_pick = np.deg2rad(paper_data.ANGELES_PICK_Q_DEG)
     q3_place = np.deg2rad(paper_data.ANGELES_PLACE_Q_DEG)
-    planned = pick_and_place_from_poses(
-        robot,
-        paper_data.ANGELES_PICK_ANGELES7,
-        paper_data.ANGELES_PLACE_ANGELES7,
-        duration,
-        pick_near=q3_pick,
-        place_near=q3_place,
-        angeles7_tol=ANGELES7_PRINTED_TOL,
-    )
-    traj = planned.trajectory
+    pick = _nearest_table3(robot, paper_data.ANGELES_PICK_ANGELES7, q3_pick)
+    place = _nearest_table3(robot, paper_data.ANGELES_PLACE_ANGELES7, q3_place)
+    traj = pick_and_place(robot, pick.q, place.q, duration)
     paper_traj = pick_and_place(robot, q3_pick, q3_place, duration)
     t = np.linspace(0.0, duration, CARTESIAN_SAMPLES)
     cart = compute_cartesian_trajectory(traj, t)
@@ -151,18 +154,16 @@ def run_pick_and_place_demo(
         "amplitude": traj.spline.amplitude,
         "ik_branches": _ik_table(robot),
         "pick": {
-            "branch": planned.pick.branch,
-            "q_deg": np.rad2deg(planned.pick.q),
-            "minus_table3_deg": np.rad2deg(planned.pick.q)
-            - paper_data.ANGELES_PICK_Q_DEG,
-            "within_limits": planned.pick.within_limits,
+            "branch": pick.branch,
+            "q_deg": np.rad2deg(pick.q),
+            "minus_table3_deg": np.rad2deg(pick.q) - paper_data.ANGELES_PICK_Q_DEG,
+            "within_limits": pick.within_limits,
         },
         "place": {
-            "branch": planned.place.branch,
-            "q_deg": np.rad2deg(planned.place.q),
-            "minus_table3_deg": np.rad2deg(planned.place.q)
-            - paper_data.ANGELES_PLACE_Q_DEG,
-            "within_limits": planned.place.within_limits,
+            "branch": place.branch,
+            "q_deg": np.rad2deg(place.q),
+            "minus_table3_deg": np.rad2deg(place.q) - paper_data.ANGELES_PLACE_Q_DEG,
+            "within_limits": place.within_limits,
         },
         "violations": [v.as_dict() for v in traj.check_limits()],
         "table3_violations": [v.as_dict() for v in paper_traj.check_limits()],

@@ -8,7 +8,8 @@ every family: six axes and, with ``redundancy=``, seven) returning
 (``choose_redundancy``), plus the damped-least-squares
 tools and the compiled chain's batch of tool Jacobians
 (``compute_jacobians_local``) and of tool poses with their manipulability
-(``compute_tool_poses``).
+(``compute_tool_poses``), and the one rule that chooses a configuration
+among the branches (``select``, ``pick_place_configurations``).
 """
 
 from workbench.errors import (
@@ -44,9 +45,18 @@ from workbench.ik.families import (
 )
 from workbench.ik.numerical import IKResult, numeric
 from workbench.ik.numerical_batch import IKBatchResult, numeric_batch
+from workbench.ik.pick_place import pick_place_configurations
 from workbench.ik.qp import QP_DAMPING, qp_step
 from workbench.ik.redundancy import RedundancyChoice, choose_redundancy
 from workbench.ik.redundant import FRANKA_BRANCHES, SRS_BRANCHES, FeasibleRedundancy
+from workbench.ik.selection import (
+    DEFAULT_RULE,
+    NUMERIC_BRANCH,
+    RULES,
+    IKChoice,
+    compute_limit_margin,
+    select,
+)
 from workbench.ik.solution import IKSolution
 from workbench.ik.solver import Solver, get_solver
 from workbench.ik.structure import (
@@ -57,11 +67,14 @@ from workbench.ik.structure import (
 
 __all__ = [
     "BRANCHES",
+    "DEFAULT_RULE",
     "DLS_EPSILON",
     "DLS_LAMBDA_MAX",
     "FAMILIES",
     "FRANKA_BRANCHES",
+    "NUMERIC_BRANCH",
     "QP_DAMPING",
+    "RULES",
     "SRS_BRANCHES",
     "STRUCTURE_TOL",
     "UR_BRANCHES",
@@ -71,6 +84,7 @@ __all__ = [
     "FeasibleRedundancy",
     "Flag",
     "IKBatchResult",
+    "IKChoice",
     "IKResult",
     "IKSolution",
     "KinematicStructure",
@@ -82,6 +96,7 @@ __all__ = [
     "analytic_batch",
     "choose_redundancy",
     "compute_jacobians_local",
+    "compute_limit_margin",
     "compute_tool_poses",
     "dls_inverse",
     "dls_step",
@@ -92,8 +107,10 @@ __all__ = [
     "nearest",
     "numeric",
     "numeric_batch",
+    "pick_place_configurations",
     "qp_step",
     "require_family",
+    "select",
     "solve_null_space_velocity",
     "solve_velocity",
 ]

@@ -55,7 +55,7 @@ from workbench.ik import (
     DLS_EPSILON,
     DLS_LAMBDA_MAX,
     get_solver,
-    nearest,
+    select,
     solve_null_space_velocity,
     solve_velocity,
 )
@@ -259,8 +259,10 @@ class OnlinePlanner:
                 q0,
             )
             self._labels = solver.branches
-            start = solver.solve(oMf, redundancy=self._tracker.value, q_previous=q0)
-            self._branch = nearest(start, q0).index
+            start = select(
+                robot, oMf, q_near=q0, redundancy=self._tracker.value
+            )  # the rule "nearest" at the policy's value
+            self._branch = int(start.index or 0)
         else:
             if redundancy is not None:
                 raise InputError(
@@ -269,8 +271,7 @@ class OnlinePlanner:
                 )
             self._closed_form = get_solver(robot)  # fails early without one
             self._labels = self._closed_form.branches
-            solutions = self._closed_form.solve(oMf, q_previous=q0)
-            self._branch = nearest(solutions, q0).index
+            self._branch = int(select(robot, oMf, q_near=q0).index or 0)  # "nearest"
         p = oMf.translation + oMf.rotation @ tip[1]
         rotation = oMf.rotation @ tip[0]
         p, rotation = base[0] @ p + base[1], base[0] @ rotation

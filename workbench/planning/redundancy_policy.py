@@ -61,6 +61,7 @@ from workbench.ik import (
     DLS_EPSILON,
     DLS_LAMBDA_MAX,
     Solver,
+    compute_limit_margin,
     compute_tool_poses,
     require_family,
     solve_null_space_velocity,
@@ -108,21 +109,6 @@ MAX_POSE_STEPS = 4
 
 #: Parameter steps below this [rad] are not taken (the kept value is exact).
 MIN_STEP = 1e-12
-
-
-def compute_limit_margin(q: FloatArray, lower: FloatArray, upper: FloatArray) -> float:
-    """Smallest distance [rad] of a joint to one of its limits (< 0 outside).
-
-    Args:
-        q: Configuration (n,) [rad].
-        lower: Lower joint limits (n,) [rad].
-        upper: Upper joint limits (n,) [rad].
-    """
-    # on lists: a fifth of the time of NumPy's reductions on seven values
-    return min(
-        min(v - lo, hi - v)
-        for v, lo, hi in zip(q.tolist(), lower.tolist(), upper.tolist(), strict=True)
-    )
 
 
 def _limit_weights(

@@ -7,7 +7,9 @@ A rotation ``R`` (3, 3) maps child-frame to parent-frame coordinates, as in
 - ``rotations``: axis–angle and quaternions (component order in the name:
   ``quat_wxyz``, ``quat_xyzw``);
 - ``angeles7``: the 7-number pose of Angeles et al. (1988),
-  ``[e sin(phi), cos(phi), p]``.
+  ``[e sin(phi), cos(phi), p]``;
+- ``targets``: a tool pose typed as numbers (angeles7, matrix, position and
+  quaternion), the parser of every command that takes one (``parse_target``).
 """
 
 from workbench.poses.angeles7 import (
@@ -35,11 +37,20 @@ from workbench.poses.rotations import (
     rotation_from_quat_wxyz,
     rotation_from_quat_xyzw,
 )
+from workbench.poses.targets import (
+    MAX_TARGET_COORDINATE,
+    QUAT_TYPED_TOL,
+    TARGET_FORMS,
+    parse_target,
+)
 
 __all__ = [
     "ANGELES7_PRINTED_TOL",
     "ANGELES7_TOL",
+    "MAX_TARGET_COORDINATE",
+    "QUAT_TYPED_TOL",
     "RIGIDITY_TOL",
+    "TARGET_FORMS",
     "UNIT_NORM_TOL",
     "angeles4_from_rotation",
     "angeles7_from_se3",
@@ -48,6 +59,7 @@ __all__ = [
     "axis_angle_from_rotation",
     "check_rigid_rows",
     "compute_rigidity_errors",
+    "parse_target",
     "quat_wxyz_from_rotation",
     "quat_xyzw_from_rotation",
     "rotation_from_angeles4",

@@ -27,12 +27,10 @@ import pinocchio as pin
 
 from workbench.errors import InfeasibleError, InputError
 from workbench.ik import (
-    analytic,
-    choose_redundancy,
     get_solver,
     get_structure,
-    nearest,
     require_family,
+    select,
 )
 from workbench.model.robot import Robot
 from workbench.planning.cartesian_paths import CartesianLimits
@@ -388,23 +386,19 @@ def check_waypoints(
     q = q_home
     branch = None  # of q_home, on a seven-axis arm
     if is_redundant(robot):
-        branch = nearest(analytic(robot, robot.fk(q), q_previous=q), q).branch
+        value = float(get_solver(robot).parameter_of(q))
+        branch = select(robot, robot.fk(q), q_near=q, redundancy=value).branch
     for name, point in compute_waypoints(fish, setup).items():
         target = base.inverse() * pin.SE3(KANG_START_ROTATION, point) * tip.inverse()
         if branch is not None:
             _check_redundant_waypoint(robot, target, branch, f"{name} {point.tolist()}")
             continue
-        try:
-            solutions = analytic(robot, target, q_previous=q)
+        try:  # the solution within the limits nearest the last one
+            q = select(robot, target, q_near=q).q
         except InfeasibleError as err:
-            raise InfeasibleError(f"waypoint {name} {point.tolist()}: {err}") from err
-        within = [s for s in solutions if s.within_limits]
-        if not within:
             raise InfeasibleError(
-                f"waypoint {name} {point.tolist()} [m] has no IK solution within "
-                "the joint limits"
-            )
-        q = nearest(within, q).q
+                f"waypoint {name} {point.tolist()} [m]: {err}"
+            ) from err
 
 
 def _check_redundant_waypoint(
@@ -452,13 +446,10 @@ def compute_home_configuration(
     target = base.inverse() * wrist
     if is_redundant(robot):
         return _redundant_home(robot, setup, fish, target)
-    zero = np.zeros(robot.nq)
-    within = [s for s in analytic(robot, target, q_previous=zero) if s.within_limits]
-    if not within:
-        raise InfeasibleError(
-            f"{robot.name}: Kang's home pose H has no IK solution within the limits"
-        )
-    return nearest(within, zero).q.copy()
+    try:
+        return select(robot, target, q_near=np.zeros(robot.nq)).q.copy()
+    except InfeasibleError as err:
+        raise InfeasibleError(f"{robot.name}: Kang's home pose H: {err}") from err
 
 
 def _redundant_home(
@@ -487,11 +478,10 @@ def _redundant_home(
             f"{robot.name}: no branch reaches Kang's home pose H and every waypoint "
             "within the joint limits"
         )
-    choices = [
-        choose_redundancy(robot, home, criterion="limit_margin", branch=label)
-        for label in branches
-    ]
-    return max(choices, key=lambda choice: choice.score).solution.q.copy()
+    # per branch the value of largest limit margin (ik.select), the best of them
+    choices = [select(robot, home, branch=label) for label in branches]
+    scores = [-math.inf if c.score is None else c.score for c in choices]
+    return choices[int(np.argmax(scores))].q.copy()  # the first on a tie
 
 
 __all__ = [

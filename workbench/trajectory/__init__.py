@@ -10,12 +10,10 @@ Cartesian planning is in :mod:`workbench.planning`.
 
 from workbench.trajectory.cartesian import (
     CartesianSamples,
-    IKChoice,
     PosePickAndPlace,
     as_target_pose,
     compute_cartesian_trajectory,
     pick_and_place_from_poses,
-    select_ik_solution,
 )
 from workbench.trajectory.csv_io import (
     MAX_SAMPLES,
@@ -52,7 +50,6 @@ from workbench.trajectory.time_optimal import (
 __all__ = [
     "MAX_SAMPLES",
     "CartesianSamples",
-    "IKChoice",
     "JointExtrema",
     "JointTrajectory",
     "JointTrajectorySamples",
@@ -80,6 +77,5 @@ __all__ = [
     "pick_via_place",
     "raise_for_violations",
     "read_trajectory_csv",
-    "select_ik_solution",
     "write_trajectory_csv",
 ]

@@ -1,7 +1,8 @@
 r"""Pick and place given as Cartesian poses: IK at both ends, FK in between.
 
 Angeles et al. (1988), Sections III and V: the two end poses are inverted
-once each (closed form for the PUMA models, else numerically), the joint
+together (:func:`workbench.ik.pick_place_configurations`: closed form for the
+arms of a known family, else numerically), the joint
 trajectory is the scaled normal spline, and the Cartesian trajectory is its
 forward kinematics, reported as the paper's seven numbers
 ``angeles7 = [e sinφ, cosφ, p]`` (Figs. 4–6). The tool twist is
@@ -19,18 +20,14 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from workbench.errors import InfeasibleError, InputError
+from workbench.errors import InputError
+from workbench.ik import IKChoice, pick_place_configurations
 from workbench.model.robot import Robot
 from workbench.poses import ANGELES7_TOL, angeles7_from_se3, as_se3, se3_from_angeles7
 from workbench.trajectory.normal_spline import DEFAULT_N_POINTS
 from workbench.trajectory.pick_and_place import JointTrajectory, pick_and_place
 
 FloatArray = npt.NDArray[np.float64]
-
-NUMERIC_BRANCH = "numeric"
-"""Branch label of a solution found by the numerical IK."""
-
-_LIMIT_TOL = 1e-9  # [rad]: slack of ``within_limits`` for numerical solutions
 
 
 class _Sampled(Protocol):
@@ -40,35 +37,13 @@ class _Sampled(Protocol):
     def sample(self, t: npt.ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]: ...
 
 
-@dataclass(frozen=True, slots=True)
-class IKChoice:
-    """The IK solution chosen for one end pose.
-
-    Attributes:
-        q: Configuration, shape (nq,) [rad], read-only.
-        branch: Closed-form branch label (e.g. ``"right/elbow-up/no-flip"``) or
-            ``"numeric"``.
-        within_limits: True if every joint is within its position limits.
-        rule: How it was chosen: ``"branch"``, ``"nearest"``,
-            ``"first-within-limits"``, ``"largest-limit-margin"`` (seven-axis
-            arms without ``q_near``: the branch and the value of the redundancy
-            parameter that ``ik.choose_redundancy`` picks) or ``"numeric"``
-            (the numerical IK).
-    """
-
-    q: FloatArray
-    branch: str
-    within_limits: bool
-    rule: str
-
-
 @dataclass(frozen=True, slots=True, eq=False)
 class PosePickAndPlace:
     """A pick-and-place motion planned from two Cartesian poses.
 
     Attributes:
         trajectory: The joint trajectory between the two IK solutions.
-        pick: IK choice at the pick pose.
+        pick: IK choice at the pick pose (:class:`workbench.ik.IKChoice`).
         place: IK choice at the place pose.
         pick_pose: Pick pose of the tool frame in the base frame.
         place_pose: Place pose.
@@ -131,144 +106,57 @@ def as_target_pose(
     )
 
 
-def _within(robot: Robot, q: FloatArray) -> bool:
-    return bool(
-        np.all(q >= robot.lower - _LIMIT_TOL) and np.all(q <= robot.upper + _LIMIT_TOL)
-    )
-
-
-def select_ik_solution(
-    robot: Robot,
-    pose: pin.SE3 | npt.ArrayLike,
-    *,
-    branch: str | None = None,
-    q_near: npt.ArrayLike | None = None,
-    angeles7_tol: float = ANGELES7_TOL,
-) -> IKChoice:
-    """Invert one end pose and choose one solution.
-
-    Closed form (``ik.analytic``) for the arms that have one (OPW and UR-type
-    six-axis arms; SRS and Franka seven-axis arms at the redundancy parameter
-    of ``q_near``, else at the value and branch of the largest joint-limit
-    margin, ``ik.choose_redundancy``), else ``ik.numeric``.
-    Rule, first that applies: ``branch`` given → that closed-form branch;
-    ``q_near`` given → the solution nearest to it (angles compared modulo 2π,
-    each angle the representative nearest ``q_near``), within limits or not;
-    else the first branch within the joint limits. The numerical IK starts
-    from ``q_near`` (default mid-range).
-
-    Args:
-        robot: The robot.
-        pose: Tool pose: ``pin.SE3``, (4, 4) matrix or angeles7 (7,) [m].
-        branch: Closed-form label, e.g. ``"right/elbow-down/no-flip"``.
-        q_near: Configuration (nq,) [rad] to stay close to.
-        angeles7_tol: See :func:`as_target_pose`.
-
-    Raises:
-        InputError: Bad pose or ``q_near``, unknown ``branch`` (the message
-            lists the valid ones) or ``branch`` for a robot without closed form.
-        InfeasibleError: Pose out of reach, no branch within limits, or the
-            numerical IK did not converge.
-    """
-    target = as_target_pose(pose, angeles7_tol=angeles7_tol)
-    near = None if q_near is None else robot.check_configuration(q_near)
-    from workbench.ik import closed_form, get_family
-
-    family = get_family(robot)  # any arm of a closed-form family, else None
-    if family is not None:
-        if near is None and family.redundant:  # a seven-axis arm: choose its value
-            return _most_inside(robot, target, branch)
-        solutions = closed_form.analytic(robot, target, q_previous=near)
-        return _choose(robot, solutions, branch, near, closed_form)
-    if branch is not None:
-        raise InputError(
-            f"branch {branch!r} given, but robot {robot.name} has no closed-form IK"
-        )
-    from workbench.ik.numerical import numeric
-
-    result = numeric(robot, target, q0=near)
-    if not result.success:
-        raise InfeasibleError(
-            f"numerical IK did not reach the pose (error {result.error:.3g} after "
-            f"{result.iterations} iterations)"
-        )
-    q = np.array(result.q)
-    q.setflags(write=False)
-    return IKChoice(q, NUMERIC_BRANCH, _within(robot, q), "numeric")
-
-
-def _most_inside(robot: Robot, target: pin.SE3, branch: str | None) -> IKChoice:
-    """A seven-axis arm's branch and parameter with the largest limit margin.
-
-    Raises:
-        UnsupportedRobotError: If the arm has no closed form.
-        InputError: If ``branch`` is not one of its labels.
-        InfeasibleError: If no value of the parameter puts a branch (or
-            ``branch``) within the limits.
-    """
-    from workbench.ik import choose_redundancy
-
-    chosen = choose_redundancy(robot, target, branch=branch).solution
-    rule = "largest-limit-margin" if branch is None else "branch"
-    return IKChoice(chosen.q, chosen.branch, bool(chosen.within_limits), rule)
-
-
-def _choose(robot, solutions, branch, near, closed_form) -> IKChoice:
-    if branch is not None:
-        labels = [s.branch for s in solutions]
-        if branch not in labels:
-            raise InputError(f"unknown branch {branch!r}; valid: {', '.join(labels)}")
-        chosen, rule = solutions[labels.index(branch)], "branch"
-    elif near is not None:
-        chosen, rule = closed_form.nearest(solutions, near), "nearest"
-    else:
-        inside = [s for s in solutions if s.within_limits]
-        if not inside:
-            raise InfeasibleError(
-                "no closed-form IK branch is within the joint limits; pick one "
-                "with branch=... or q_near=..."
-            )
-        chosen, rule = inside[0], "first-within-limits"
-    return IKChoice(chosen.q, chosen.branch, bool(chosen.within_limits), rule)
-
-
 def pick_and_place_from_poses(
     robot: Robot,
     pick: pin.SE3 | npt.ArrayLike,
     place: pin.SE3 | npt.ArrayLike,
     duration: float,
     *,
-    pick_branch: str | None = None,
-    place_branch: str | None = None,
-    pick_near: npt.ArrayLike | None = None,
-    place_near: npt.ArrayLike | None = None,
+    rule: str | None = None,
+    q_near: npt.ArrayLike | None = None,
+    branch: str | None = None,
+    redundancy: float | None = None,
+    criterion: str | None = None,
     angeles7_tol: float = ANGELES7_TOL,
     n_points: int = DEFAULT_N_POINTS,
 ) -> PosePickAndPlace:
     """Angeles' pick-and-place from two tool poses: IK, then the joint spline.
+
+    The configurations are :func:`workbench.ik.pick_place_configurations`'s
+    (the same as ``workbench plan pick-place`` from the same poses): both on
+    the branch that serves both with the largest joint-limit margin, unless
+    ``rule``, ``q_near`` or ``branch`` say otherwise.
 
     Args:
         robot: The robot.
         pick: Pick pose: ``pin.SE3``, (4, 4) matrix or angeles7 (7,) [m].
         place: Place pose, same forms.
         duration: T [s], > 0.
-        pick_branch: Branch rule for the pick, see :func:`select_ik_solution`.
-        place_branch: Branch rule for the place.
-        pick_near: Configuration (nq,) [rad] the pick solution should be near.
-        place_near: Same for the place.
+        rule: The selection rule (``workbench.ik.RULES``), None for the default.
+        q_near: Configuration (nq,) [rad] the motion starts from.
+        branch: The branch of both poses (rule ``"branch"``).
+        redundancy: Seven-axis arms: both poses at this value [rad].
+        criterion: Seven-axis arms without ``redundancy``: how the values are
+            chosen (``ik.choose_redundancy``).
         angeles7_tol: Norm tolerance for angeles7 input.
         n_points: Knots of the normal spline.
 
     Raises:
-        InputError: As :func:`select_ik_solution` and
+        InputError: As :func:`workbench.ik.pick_place_configurations` and
             :func:`~workbench.trajectory.pick_and_place`.
-        InfeasibleError: If a pose cannot be inverted.
+        InfeasibleError: If a pose cannot be inverted within the limits.
     """
     pick_pose = as_target_pose(pick, angeles7_tol=angeles7_tol)
     place_pose = as_target_pose(place, angeles7_tol=angeles7_tol)
-    first = select_ik_solution(robot, pick_pose, branch=pick_branch, q_near=pick_near)
-    second = select_ik_solution(
-        robot, place_pose, branch=place_branch, q_near=place_near
+    first, second = pick_place_configurations(
+        robot,
+        pick_pose,
+        place_pose,
+        rule=rule,
+        q_near=q_near,
+        branch=branch,
+        redundancy=redundancy,
+        criterion=criterion,
     )
     traj = pick_and_place(robot, first.q, second.q, duration, n_points=n_points)
     return PosePickAndPlace(traj, first, second, pick_pose, place_pose)

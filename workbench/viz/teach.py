@@ -31,15 +31,14 @@ FloatArray = npt.NDArray[np.float64]
 def _ik_branch(robot: Robot, q: FloatArray) -> str | None:
     """Closed-form IK branch label of ``q``, or None where there is none."""
     try:
-        from workbench.ik import analytic
+        from workbench.ik import analytic, nearest
     except ImportError:  # the closed-form IK is not part of this installation
         return None
     try:
         solutions = analytic(robot, robot.fk(q), q_previous=q)
     except WorkbenchError:  # not a PUMA-type arm, or out of reach
         return None
-    step = [np.remainder(s.q - q + np.pi, 2 * np.pi) - np.pi for s in solutions]
-    return solutions[int(np.argmin([s @ s for s in step]))].branch
+    return nearest(solutions, q).branch  # q's own, within the limits or not
 
 
 def _format(values: npt.ArrayLike, digits: int = 4) -> str:
