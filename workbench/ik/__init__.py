@@ -17,7 +17,7 @@ from workbench.errors import (
     UnreachableError,
     UnsupportedRobotError,
 )
-from workbench.ik._flags import Flag
+from workbench.ik._flags import Flag, SolveFlag
 from workbench.ik.batch_jacobians import compute_jacobians_local
 from workbench.ik.batch_poses import compute_tool_poses
 from workbench.ik.closed_form import (
@@ -57,7 +57,7 @@ from workbench.ik.selection import (
     compute_limit_margin,
     select,
 )
-from workbench.ik.solution import IKSolution
+from workbench.ik.solution import IKSolution, Solutions
 from workbench.ik.solver import Solver, get_solver
 from workbench.ik.structure import (
     STRUCTURE_TOL,
@@ -89,6 +89,8 @@ __all__ = [
     "IKSolution",
     "KinematicStructure",
     "RedundancyChoice",
+    "Solutions",
+    "SolveFlag",
     "Solver",
     "UnreachableError",
     "UnsupportedRobotError",

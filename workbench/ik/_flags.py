@@ -9,6 +9,13 @@ reads its flags from them. A branch that does not reach the pose has the byte
 
 The same bits as an :class:`enum.IntFlag`: :class:`Flag` (``IKSolution.flags``).
 The kernels use the plain ints (compiled code reads module constants).
+
+What holds for a whole solve rather than for one branch is a second byte,
+:class:`SolveFlag` (``Solutions.solve_flags``): on an arm solved through the
+ideal structure of its family and refined on its own model (a calibrated
+arm), a branch of the ideal arm that has no counterpart on the model, two
+that meet, or solutions of the model no branch holds. It is 0 on an exact
+model.
 """
 
 from __future__ import annotations
@@ -44,12 +51,36 @@ class Flag(enum.IntFlag):
     PARAMETER_SINGULAR = PARAMETER_SINGULAR
 
 
+#: A calibrated arm: a branch of the ideal arm that reaches the pose has no
+#: solution of the model continuing it (it vanished at a fold of the model);
+#: it is not among the solutions.
+BRANCH_VANISHED = 1
+#: A calibrated arm: two branches of the ideal arm led to one solution of the
+#: model and no other was found for the second; it is not among the solutions.
+BRANCHES_MERGED = 2
+#: A calibrated arm: near a singularity the model may have solutions that no
+#: branch holds.
+SOLUTIONS_UNLISTED = 4
+
+
+class SolveFlag(enum.IntFlag):
+    """The flag bits of a whole solve (module docs), an :class:`enum.IntFlag`."""
+
+    BRANCH_VANISHED = BRANCH_VANISHED
+    BRANCHES_MERGED = BRANCHES_MERGED
+    SOLUTIONS_UNLISTED = SOLUTIONS_UNLISTED
+
+
 __all__ = [
+    "BRANCHES_MERGED",
+    "BRANCH_VANISHED",
     "ELBOW_SINGULAR",
     "PARAMETER_SINGULAR",
     "REACHED",
     "SHOULDER_SINGULAR",
+    "SOLUTIONS_UNLISTED",
     "WITHIN_LIMITS",
     "WRIST_SINGULAR",
     "Flag",
+    "SolveFlag",
 ]
