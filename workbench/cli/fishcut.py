@@ -11,6 +11,7 @@ from workbench.cli._collision import (
     add_collision_arguments,
     check_fish_cutting_path,
     get_collision_keys,
+    get_skip_reason,
     load_scene,
     print_collision_summary,
     report_collision_error,
@@ -126,10 +127,11 @@ def run(args: argparse.Namespace) -> int:
     given = load_scene(args, lambda: None)  # a --scene file is checked first
     result = _run_fish_cutting(robot, args)
     scene, checker, clearance = check_fish_cutting_path(robot, result, given, args)
+    skipped = get_skip_reason(robot, args)
     _write_outputs(args, robot, result, checker)
     summary = {
         **summarize_fish_cutting(result, robot.name),
-        **get_collision_keys(scene, clearance),
+        **get_collision_keys(scene, clearance, skipped),
     }
     if args.json:
         print_json(summary)
@@ -164,7 +166,7 @@ def run(args: argparse.Namespace) -> int:
     for option, path in (("csv", args.csv), ("html", args.html)):
         if path is not None:
             print(f"{option} written to {path}")
-    print_collision_summary(clearance)
+    print_collision_summary(clearance, skipped)
     return 3 if report_collision_error(clearance) else 0
 
 
