@@ -45,7 +45,11 @@ from workbench.trajectory import (
     minimum_duration,
     pick_and_place,
 )
-from workbench.trajectory.csv_io import check_sample_count, write_trajectory_csv
+from workbench.trajectory.csv_io import (
+    check_sample_count,
+    get_output_paths,
+    write_trajectory_csv,
+)
 from workbench.trajectory.normal_spline import DEFAULT_N_POINTS, MIN_N_POINTS
 
 DEFAULT_RATE_HZ = 100.0
@@ -156,7 +160,8 @@ def run_pick_place(args: argparse.Namespace) -> int:
     The outputs are checked before any work and written together at the end
     (all or none, :func:`workbench.atomic_files.atomic_files`).
     """
-    check_outputs([args.csv, args.plot], get_input_paths(args))
+    csv_files = [] if args.csv is None else get_output_paths(args.csv)
+    check_outputs([*csv_files, args.plot], get_input_paths(args))
     if args.plot is not None:
         check_plot_format(args.plot)
     check_sample_count(
@@ -171,11 +176,17 @@ def run_pick_place(args: argparse.Namespace) -> int:
     scene, clearance = check_pick_and_place_path(robot, traj, args, args.rate)
     skipped = get_skip_reason(robot, args)
     samples = traj.sample_uniform(args.rate) if args.csv else None
-    outputs = [p for p in (args.csv, args.plot) if p is not None]
+    outputs = [*csv_files, *([] if args.plot is None else [args.plot])]
     with atomic_files(*outputs) as temps:
         staged = dict(zip(outputs, temps, strict=True))
         if samples is not None:
-            write_trajectory_csv(staged[args.csv], samples)
+            csv_file, record = csv_files
+            write_trajectory_csv(
+                staged[csv_file],
+                samples,
+                joint_names=robot.joint_names,
+                record=staged[record],
+            )
         if args.plot:
             from workbench.plots.trajectory import plot_joint_trajectory
 
