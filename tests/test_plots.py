@@ -151,13 +151,21 @@ def test_singularity_figures_name_every_mark(puma, traj) -> None:
     det_grid = compute_joint_grid(puma, x, x, q_fixed=np.zeros(6))
     svd_grid = compute_joint_grid(puma, x, x, q_fixed=np.zeros(6), quantity="svd")
     overlay = {"shoulder": None, "elbow_theta3": None, "examples": examples}
-    for plot, grid in ((figs.plot_det_map, det_grid), (figs.plot_sigma_map, svd_grid)):
+    maps = (
+        (figs.plot_det_map, det_grid, "[m³]"),
+        (figs.plot_sigma_map, svd_grid, "m/rad and 1"),
+    )
+    for plot, grid, unit in maps:
         ax = plot(puma, grid, **overlay).axes[0]
         assert ax.get_xlabel() == "θ2 [deg]" and ax.get_ylabel() == "θ3 [deg]"
         assert ax.get_title().startswith("puma560: ")
+        assert unit in ax.get_figure().axes[-1].get_ylabel()  # the colour bar
         texts = [t.get_text() for t in ax.get_legend().get_texts()]
         assert "joint limits" in texts
         assert "singular configuration (numbered)" in texts
+    for measure, unit in (("manipulability", "[m³]"), ("condition_number", "m/rad")):
+        colorbar = figs.plot_measure_map(puma, svd_grid, measure).axes[-1]
+        assert unit in colorbar.get_ylabel(), measure
     directions = {
         name: compute_degenerate_direction(puma, q, name.split(",")[0])
         for name, q in examples.items()

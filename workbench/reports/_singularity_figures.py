@@ -199,7 +199,14 @@ def plot_sigma_map(
     fig, ax = _axes(ax, (7.2, 5.8))
     sigma = np.log10(np.maximum(grid.values["sigma_min"], SIGMA_FLOOR))
     title = f"{robot.name}: smallest singular value of J"
-    _image(ax, grid, sigma, "viridis", "log10 σmin (clipped at 1e-6)", title)
+    _image(
+        ax,
+        grid,
+        sigma,
+        "viridis",
+        "log10 σmin, σmin in mixed units m/rad and 1 (clipped at 1e-6)",
+        title,
+    )
     _overlay(ax, robot, grid, shoulder, elbow_theta3, examples, thin=True)
     return _finish(fig, path)
 
@@ -231,10 +238,10 @@ def plot_measure_map(
     values = grid.values[measure]
     if measure == "condition_number":
         shown = np.log10(np.minimum(values, CONDITION_CEILING))
-        label = "log10 σmax/σmin (clipped at 1e6)"
+        label = "log10 σmax/σmin, mixed units m/rad and 1 (clipped at 1e6)"
         _image(ax, grid, shown, "viridis_r", label, f"{robot.name}: condition number")
     else:
-        label = "manipulability √det(J Jᵀ)"
+        label = "manipulability √det(J Jᵀ) [m³]"
         _image(ax, grid, values, "viridis", label, f"{robot.name}: manipulability")
     _overlay(ax, robot, grid, None, None, {}, thin=True)
     return _finish(fig, path)
