@@ -19,6 +19,7 @@ from workbench.errors import (
     URDFLoadError,
 )
 from workbench.model.dh import DHTable
+from workbench.model.mesh_files import honour_collada_frames
 from workbench.model.packages import get_package_lookup, resolve_mesh_uris
 from workbench.model.urdf_joints import MimicJoint
 from workbench.validation import as_vector
@@ -382,21 +383,27 @@ class Robot:
 
     @cached_property
     def visual_model(self) -> pin.GeometryModel:
-        """Visual geometry, meshes resolved (built on first use)."""
+        """Visual geometry, meshes resolved (built on first use).
+
+        Collada meshes carry their file's unit and up axis in ``meshScale``
+        and ``placement`` (:mod:`workbench.model.mesh_files`).
+        """
         return self._build_geometry(pin.GeometryType.VISUAL)
 
     @cached_property
     def collision_model(self) -> pin.GeometryModel:
-        """Collision geometry, meshes resolved (built on first use)."""
+        """Collision geometry, meshes resolved (built on first use; see above)."""
         return self._build_geometry(pin.GeometryType.COLLISION)
 
     def _build_geometry(self, kind: pin.GeometryType) -> pin.GeometryModel:
         try:
-            return pin.buildGeomFromUrdfString(  # type: ignore[attr-defined]
+            model = pin.buildGeomFromUrdfString(  # type: ignore[attr-defined]
                 self.model, self.description, kind
             )
         except (ValueError, RuntimeError) as err:
             raise URDFLoadError(f"{self.urdf_path}: {err}") from err
+        honour_collada_frames(model)  # the files' units and up axes
+        return model
 
     def check_configuration(self, q: npt.ArrayLike) -> FloatArray:
         """Validate ``q``: shape (nq,), finite. Returns it as float64.
