@@ -17,7 +17,7 @@ import pytest
 from workbench import DimensionError, InputError, NonFiniteError, Robot, load_robot
 from workbench.ik import _chain_kernel as kernel
 from workbench.ik import compute_jacobians_local, numeric
-from workbench.ik._chain import compiled_entry, get_chain
+from workbench.ik._chain import FULL_POSE, compiled_entry, get_chain
 
 ATOL_EXACT = 1e-12
 """The same quantity computed twice, by Pinocchio and by the compiled chain."""
@@ -208,7 +208,8 @@ def test_numeric_calls_the_kernels_compiled_code_with_its_types() -> None:
     assert chain.run is not kernel.run
     packed, q_ref, features, starts = chain.run_inputs
     states = chain.fresh_state.reshape(1, -1).copy()
-    args = (packed, np.eye(4), q_ref, states, 0, 0.0, 0, False, features, starts, True)
+    args = (packed, np.eye(4), q_ref, states, 0, 0.0, 0, False, features, starts, True,
+            FULL_POSE, kernel.PART_POSE)  # fmt: skip
     assert compiled_entry(kernel.run, args) is chain.run
     wrong = (
         (packed, np.eye(4, dtype=np.float32), *args[2:]),  # dtype

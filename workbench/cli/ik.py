@@ -42,6 +42,13 @@ from workbench.poses import ANGELES7_PRINTED_TOL, TARGET_FORMS, parse_target
 _MM = 1e-3  # [m] per mm (--mm)
 #: ``--criterion`` choices (``ik.choose_redundancy`` criteria needing no q_previous).
 CRITERIA = ("limit_margin", "manipulability")
+#: What a partial target asks (``--position-only``, ``--free-axis``), for the output.
+PART_NOTES = {
+    "position": "position only",
+    "free-x": "position and tool x axis",
+    "free-y": "position and tool y axis",
+    "free-z": "position and tool z axis",
+}
 #: The flags printed after a six-axis branch: (JSON key, text).
 SIX_AXIS_FLAGS = (
     ("wrist_singular", "wrist singular"),
@@ -97,6 +104,19 @@ def register(commands: argparse._SubParsersAction) -> None:
         help="position x y z, then unit quaternion w x y z (scalar first)",
     )
     parser.add_argument("--mm", action="store_true", help="positions are in mm")
+    part = parser.add_mutually_exclusive_group()
+    part.add_argument(
+        "--position-only",
+        action="store_true",
+        help="reach the target's position in any orientation (numerical IK; e.g. "
+        "an arm of fewer than six axes)",
+    )
+    part.add_argument(
+        "--free-axis",
+        choices=("x", "y", "z"),
+        help="reach the target's position and the direction of this tool axis, "
+        "any rotation about it (numerical IK; e.g. a drill or a nozzle)",
+    )
     parser.add_argument(
         "--all",
         action="store_true",
@@ -171,6 +191,8 @@ def run(args: argparse.Namespace) -> int:
     """
     robot = load_robot_from_args(args, tool_frame=args.tool_frame)
     target = target_from_args(args)
+    if args.position_only or args.free_axis:
+        return _solve_part_and_print(args, robot, target)
     redundant = _redundancy.get_redundant(robot)
     if redundant is not None:
         from workbench.cli._ik_redundant import solve_and_print_redundant
@@ -178,6 +200,58 @@ def run(args: argparse.Namespace) -> int:
         return solve_and_print_redundant(args, robot, target, redundant)
     with interpreted():
         return _solve_and_print(args, robot, target)
+
+
+def _solve_part_and_print(
+    args: argparse.Namespace, robot: Robot, target: pin.SE3
+) -> int:
+    """``--position-only`` / ``--free-axis``: numerical IK of part of the pose."""
+    part = "position" if args.position_only else f"free-{args.free_axis}"
+    for option in ("redundancy", "criterion", "all", "feasible"):
+        if getattr(args, option) not in (None, False):
+            raise InputError(
+                f"--{option} does not apply to a target of part of a pose "
+                f"(--position-only, --free-axis): it is solved numerically"
+            )
+    head = {
+        "robot": robot.name,
+        "frame": robot.tool_frame,
+        "solver": "numeric",
+        "solver_note": f"target: {PART_NOTES[part]}",
+        "target": part,
+    }
+    try:
+        choice = ik.select(robot, target, part=part)
+    except InfeasibleError as err:
+        if not args.json:
+            raise
+        return print_infeasible(head, err)
+    row = {
+        **_row(robot, choice, target),
+        "residual": part_residual(robot, choice.q, target, part),
+    }
+    if args.json:
+        print_json({**head, "solutions": [row], "feasible": True})
+        return 0
+    print(f"robot {robot.name}   frame {robot.tool_frame}   solver numeric   "
+          f"target {PART_NOTES[part]}")  # fmt: skip
+    print_rows([row], SIX_AXIS_FLAGS)
+    return 0
+
+
+def part_residual(robot: Robot, q: np.ndarray, target: pin.SE3, part: str) -> float:
+    """The residual of what a partial target asks (``part``: a ``PART_NOTES`` key).
+
+    The position error [m]; with ``free-x/y/z`` the larger of it and the angle
+    [rad] between that tool axis and the target's.
+    """
+    pose = robot.fk(q)
+    position = float(np.linalg.norm(pose.translation - target.translation))
+    if part == "position":
+        return position
+    axis = "xyz".index(part[-1])
+    cos = float(np.clip(pose.rotation[:, axis] @ target.rotation[:, axis], -1.0, 1.0))
+    return max(position, float(np.arccos(cos)))
 
 
 def _solve_and_print(args: argparse.Namespace, robot: Robot, target: pin.SE3) -> int:

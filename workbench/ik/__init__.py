@@ -43,7 +43,7 @@ from workbench.ik.families import (
     get_family_refusal,
     require_family,
 )
-from workbench.ik.numerical import IKResult, numeric
+from workbench.ik.numerical import TARGET_PARTS, IKResult, numeric
 from workbench.ik.numerical_batch import IKBatchResult, numeric_batch
 from workbench.ik.pick_place import pick_place_configurations
 from workbench.ik.qp import QP_DAMPING, qp_step
@@ -77,6 +77,7 @@ __all__ = [
     "RULES",
     "SRS_BRANCHES",
     "STRUCTURE_TOL",
+    "TARGET_PARTS",
     "UR_BRANCHES",
     "WRIST_SINGULAR_TOL",
     "DifferentialIKError",

@@ -37,6 +37,10 @@ from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
 
+#: The weights of a full-pose target (every entry of the error counts); the
+#: writable array ``numeric`` passes the kernel (one compiled signature).
+FULL_POSE = np.ones(6)
+
 SEED_COUNT = 512
 """Candidate first guesses (mid-range included) when no ``q0`` is given."""
 
@@ -139,7 +143,7 @@ class Chain:
         warm_up = (
             self.run_inputs[0], np.eye(4), self.run_inputs[1],
             self.fresh_state.reshape(1, -1).copy(), 0, 0.0, 0, False,
-            *self.run_no_seeds, True,
+            *self.run_no_seeds, True, FULL_POSE, kernel.PART_POSE,
         )  # fmt: skip
         kernel.run(*warm_up)
         self.run = compiled_entry(kernel.run, warm_up)

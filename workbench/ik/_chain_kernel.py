@@ -55,6 +55,10 @@ CHAIN_WIDTH = 20
 REVOLUTE, PRISMATIC = 0.0, 1.0
 WRAP_NONE, WRAP_FULL_TURN, WRAP_UNBOUNDED = 0.0, 1.0, 2.0
 
+#: What :func:`run` aims at (``part``): the whole pose (the SE(3) log error,
+#: weighted), the position only, the position and the tool's x, y or z axis.
+PART_POSE, PART_POSITION, PART_FREE_X, PART_FREE_Y, PART_FREE_Z = 0, 1, 2, 3, 4
+
 #: Status codes of :func:`run`.
 CONVERGED, STALLED, EXHAUSTED, NOT_RIGID = 0, 1, 2, 3
 
@@ -242,6 +246,61 @@ def _error(target: FloatArray, frames: FloatArray, e: FloatArray) -> float:
 
 
 @helper()
+def _part_error(
+    chain: FloatArray, frames: FloatArray, target: FloatArray, part: int,
+    e: FloatArray, jac: FloatArray, with_jacobian: bool,
+) -> tuple[float, float]:  # fmt: skip
+    r"""Error and Jacobian of a partial target (``part``: :data:`PART_POSITION`, …).
+
+    In the target's axes: ``e[:3] = R_t^T (p_f - p_t)``, the tool's offset, and
+    for a free axis k ``e[3:] = R_t^T a - e_k``, ``a`` the tool's axis k (0 for
+    the position only); ``jac`` (6, n) their exact derivatives (linear rows
+    ``R_t^T v``, angular rows ``R_t^T (w x a)``, from the joints' world axes w).
+
+    Returns:
+        The tool's distance [m] and angle [rad] from the target.
+    """
+    n = chain.shape[0] - 1
+    f, t = frames[n], target
+    dx, dy, dz = f[9] - t[0, 3], f[10] - t[1, 3], f[11] - t[2, 3]
+    for i in range(3):
+        e[i] = t[0, i] * dx + t[1, i] * dy + t[2, i] * dz
+    trace = 0.0
+    for i in range(3):  # trace of R_t^T R_f
+        trace += t[0, i] * f[i] + t[1, i] * f[3 + i] + t[2, i] * f[6 + i]
+    rotation = math.acos(min(max(0.5 * (trace - 1.0), -1.0), 1.0))
+    axis = part - PART_FREE_X  # -1 for the position only
+    ax = ay = az = 0.0
+    if axis >= 0:
+        ax, ay, az = f[axis], f[3 + axis], f[6 + axis]  # the tool's axis, world
+        for i in range(3):
+            e[3 + i] = t[0, i] * ax + t[1, i] * ay + t[2, i] * az
+        e[3 + axis] -= 1.0
+    else:
+        e[3] = e[4] = e[5] = 0.0
+    position = math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2])
+    if not with_jacobian:
+        return position, rotation
+    for k in range(n):
+        c, g = chain[k], frames[k]
+        x, y, z = c[12], c[13], c[14]
+        wx = g[0] * x + g[1] * y + g[2] * z
+        wy = g[3] * x + g[4] * y + g[5] * z
+        wz = g[6] * x + g[7] * y + g[8] * z
+        if c[15] == REVOLUTE:
+            px, py, pz = f[9] - g[9], f[10] - g[10], f[11] - g[11]
+            lx, ly, lz = wy * pz - wz * py, wz * px - wx * pz, wx * py - wy * px
+            bx, by, bz = wy * az - wz * ay, wz * ax - wx * az, wx * ay - wy * ax
+        else:
+            lx, ly, lz = wx, wy, wz
+            bx = by = bz = 0.0
+        for i in range(3):
+            jac[i, k] = t[0, i] * lx + t[1, i] * ly + t[2, i] * lz
+            jac[3 + i, k] = t[0, i] * bx + t[1, i] * by + t[2, i] * bz
+    return position, rotation
+
+
+@helper()
 def _solve(a: FloatArray, b: FloatArray, m: int) -> bool:
     """Solve a x = b (first m rows/columns) in place, x in b; False if singular.
 
@@ -367,7 +426,7 @@ def _first_guess(features: np.ndarray, starts: FloatArray, target: FloatArray, q
 
 @entry_point(
     outputs=("states",),
-    contiguous=("chain", "target", "q_ref", "features", "starts"),
+    contiguous=("chain", "target", "q_ref", "features", "starts", "weights"),
 )
 def run(
     chain: FloatArray,
@@ -381,6 +440,8 @@ def run(
     features: npt.NDArray[np.float32],
     starts: FloatArray,
     check: bool,
+    weights: FloatArray,
+    part: int,
 ) -> tuple[int, float, float, float, int]:
     """One run of damped Newton steps from ``q``, until it converges or stalls.
 
@@ -402,6 +463,14 @@ def run(
         starts: (count, n) candidate coordinates.
         check: Test first that ``target`` is finite and rigid (the test and
             tolerance of ``workbench.poses``).
+        weights: (6,) weights of the error's entries [x, y, z, rx, ry, rz]
+            (target frame) and of the Jacobian's rows: ones for the full pose,
+            0 for an entry left free (e.g. ``(1, 1, 1, 0, 0, 0)``: the
+            position only). ERR2 is the weighted error; POSITION and ROTATION
+            are the tool's true distance and angle from the target.
+        part: :data:`PART_POSE` (the weighted SE(3) log error), or a partial
+            target (:data:`PART_POSITION`, :data:`PART_FREE_X` … Z), whose
+            error and Jacobian are :func:`_part_error`'s (``weights`` unused).
 
     Returns:
         ``(status, err2, position, rotation, steps)``: CONVERGED, STALLED (a
@@ -428,13 +497,19 @@ def run(
     stall_level = math.inf
     while True:
         _forward(chain, q, frames)
-        position = _error(target, frames, e)
         err2 = 0.0
-        for i in range(6):
-            err2 += e[i] * e[i]
+        if part == PART_POSE:
+            position = _error(target, frames, e)
+            rotation = math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5])
+            for i in range(6):
+                e[i] *= weights[i]
+                err2 += e[i] * e[i]
+        else:  # its Jacobian too (the step below needs it unless converged)
+            position, rotation = _part_error(chain, frames, target, part, e, jac, True)
+            for i in range(6):
+                err2 += e[i] * e[i]
         if err2 < stats[ERR2]:
-            stats[ERR2], stats[POSITION] = err2, position
-            stats[ROTATION] = math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5])
+            stats[ERR2], stats[POSITION], stats[ROTATION] = err2, position, rotation
             for k in range(n):
                 best_q[k] = q[k]
             if err2 <= tol2:
@@ -453,7 +528,11 @@ def run(
             break
         steps += 1
 
-        _jacobian(chain, frames, jac)
+        if part == PART_POSE:
+            _jacobian(chain, frames, jac)
+            for i in range(6):
+                for k in range(n):
+                    jac[i, k] *= weights[i]
         newton = False
         if square:  # Newton step J^-1 e
             for i in range(6):
@@ -523,7 +602,15 @@ def _splitmix(state: np.ndarray) -> float:
 
 @entry_point(
     outputs=("out_q", "out_stats"),
-    contiguous=("chain", "targets", "q_ref", "q_start", "features", "starts"),
+    contiguous=(
+        "chain",
+        "targets",
+        "q_ref",
+        "q_start",
+        "features",
+        "starts",
+        "weights",
+    ),
 )
 def solve_batch(
     chain: FloatArray,
@@ -535,6 +622,8 @@ def solve_batch(
     tol2: float,
     max_steps: int,
     seed: int,
+    weights: FloatArray,
+    part: int,
     out_q: FloatArray,
     out_stats: FloatArray,
 ) -> None:
@@ -551,6 +640,8 @@ def solve_batch(
         max_steps: Step budget per target.
         seed: Seed of the restart draws; target i draws from SplitMix64 seeded
             with ``seed + i * golden``, so a result does not depend on the batch.
+        weights: (6,) weights of the error's entries (:func:`run`).
+        part: What is aimed at (:func:`run`).
         out_q: (N, n) best configuration per target.
         out_stats: (N, N_STATS) statistics per target.
     """
@@ -581,7 +672,7 @@ def solve_batch(
         check = i < 0
         while (
             run(chain, target, ref, states, 0, tol2, max_steps, guess, features,
-                starts, check)[0]
+                starts, check, weights, part)[0]
             == STALLED
         ):  # fmt: skip
             guess = check  # False (see above)

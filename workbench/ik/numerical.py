@@ -35,12 +35,25 @@ import pinocchio as pin
 
 from workbench.errors import InputError
 from workbench.ik import _chain_kernel as kernel
-from workbench.ik._chain import Chain, get_chain
+from workbench.ik._chain import FULL_POSE, Chain, get_chain
 from workbench.ik._record import FrozenRecord
 from workbench.model.robot import Robot
 from workbench.poses import as_se3
 
 FloatArray = npt.NDArray[np.float64]
+
+#: What of a target :func:`numeric` reaches (``part=``), by name: the whole
+#: pose; the position only (any orientation); the position and the direction
+#: of one tool axis, any rotation about it ("free-z": the tool's z axis along
+#: the target's, e.g. a drill or a nozzle). The partial targets' errors are
+#: the tool's offset and axis in the target's axes (``_chain_kernel``).
+TARGET_PARTS: dict[str, int] = {
+    "pose": kernel.PART_POSE,
+    "position": kernel.PART_POSITION,
+    "free-x": kernel.PART_FREE_X,
+    "free-y": kernel.PART_FREE_Y,
+    "free-z": kernel.PART_FREE_Z,
+}
 
 #: Whether ``pin.SE3.homogeneous`` is a C-contiguous array (eigenpy's copy of
 #: the matrix), the layout the kernel is called with (see Chain.run).
@@ -104,6 +117,8 @@ def numeric(
     max_iterations: int = 1000,
     time_budget: float = 0.1,
     rng: np.random.Generator | int | None = None,
+    part: str = "pose",
+    weights: npt.ArrayLike | None = None,
 ) -> IKResult:
     """Solve the inverse kinematics of the tool frame numerically.
 
@@ -130,17 +145,27 @@ def numeric(
         rng: Generator, or int seed >= 0, of the restart configurations;
             default seed 0, so that results are reproducible. Drawn from only
             when a restart is due.
+        part: What of the target is reached, a name of :data:`TARGET_PARTS`:
+            ``"pose"``, ``"position"``, ``"free-x"``/``"free-y"``/``"free-z"``.
+            An arm of fewer than six joints asked for a pose, or a target out
+            of reach, gets the configuration of least error found
+            (``success`` False, the residuals in the result).
+        weights: With ``part="pose"``: 6 weights >= 0 of the error entries
+            ``[x, y, z, rx, ry, rz]`` (target frame; default all 1).
 
     Returns:
         An :class:`IKResult`; ``success`` is False when the target was not
         reached within the budget (e.g. it is out of reach), never None.
+        ``error`` is the norm of the error aimed at (weighted, or of the
+        partial target); ``position_error`` and ``rotation_error`` are the
+        tool's true distance and angle from the target.
 
     Raises:
         DimensionError: If ``target`` or ``q0`` has the wrong shape.
         NonFiniteError: If ``target`` or ``q0`` holds NaN or infinity.
         InputError: If ``target`` is not rigid, or ``tol``, ``max_iterations``,
-            ``time_budget`` or ``rng`` is invalid, or a joint of the arm is
-            neither revolute nor prismatic.
+            ``time_budget``, ``rng``, ``part`` or ``weights`` is invalid, or a
+            joint of the arm is neither revolute nor prismatic.
     """
     # Fast paths for the usual types; anything else gets the full checks.
     if target.__class__ is pin.SE3 and _HOMOGENEOUS_IS_C:
@@ -169,6 +194,11 @@ def numeric(
             raise InputError(f"time_budget must be > 0 [s], got {time_budget!r}")
         tol, max_iterations = float(tol), int(max_iterations)
     chain = get_chain(robot)
+    weighting, aim = (
+        (FULL_POSE, 0)
+        if weights is None and part == "pose"
+        else check_part(part, weights)
+    )
     n = chain.n
     # This solve's state: row `row` of a block, [q, best q, stats] (kernel.run)
     states, states_read_only, row = chain.states.take()
@@ -184,7 +214,7 @@ def numeric(
     run = chain.run  # kernel.run's compiled code: our arguments are typed
     status, err2, position, rotation, steps = run(
         packed, matrix, q_ref, states, row, tol2, max_iterations, guess, features,
-        starts, True,
+        starts, True, weighting, aim,
     )  # fmt: skip
     if status == kernel.NOT_RIGID:  # the kernel's test is the exact one
         as_se3(target)  # raises the error that says why
@@ -201,7 +231,7 @@ def numeric(
             restarts += 1
             status, err2, position, rotation, steps = run(
                 packed, matrix, q_ref, states, row, tol2, max_iterations, False,
-                features, starts, False,
+                features, starts, False, weighting, aim,
             )  # fmt: skip
             if status != kernel.STALLED or time.perf_counter() > deadline:
                 break
@@ -230,6 +260,41 @@ def reference_configuration(
     if robot.model.nq != robot.model.nv:
         q = pin.normalize(robot.model, q)
     return q
+
+
+def check_part(part: str, weights: npt.ArrayLike | None) -> tuple[FloatArray, int]:
+    """``(weights (6,), kernel part)`` of ``numeric``'s ``part=`` and ``weights=``.
+
+    Raises:
+        InputError: If ``part`` is no name of :data:`TARGET_PARTS`, or
+            ``weights`` are given with a partial target or are not 6 finite
+            numbers >= 0, not all zero.
+    """
+    if part not in TARGET_PARTS:
+        names = ", ".join(TARGET_PARTS)
+        raise InputError(f"part {part!r}: expected one of {names}")
+    if weights is None:
+        return np.ones(6), TARGET_PARTS[part]
+    if part != "pose":
+        raise InputError(f"weights apply to part='pose' only, not {part!r}")
+    return check_weights(weights), TARGET_PARTS[part]
+
+
+def check_weights(weights: npt.ArrayLike) -> FloatArray:
+    """The (6,) weights of ``numeric``'s ``weights=`` (a new, writable array).
+
+    Raises:
+        InputError: If ``weights`` are not 6 finite numbers >= 0, or all zero.
+    """
+    try:
+        values = np.array(weights, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        raise InputError(f"weights must be 6 numbers >= 0, got {weights!r}") from None
+    if values.shape != (6,) or not np.all(np.isfinite(values)) or np.any(values < 0):
+        raise InputError(f"weights must be 6 finite numbers >= 0, got {weights!r}")
+    if not values.any():
+        raise InputError("weights are all 0: nothing of the target would count")
+    return values
 
 
 def check_options(tol: float, max_iterations: int, rng: object) -> None:

@@ -20,7 +20,11 @@ from workbench.errors import DimensionError, NonFiniteError
 from workbench.ik import _chain_kernel as kernel
 from workbench.ik._chain import Chain, get_chain
 from workbench.ik._targets import as_targets, check_poses
-from workbench.ik.numerical import check_options, reference_configuration
+from workbench.ik.numerical import (
+    check_options,
+    check_part,
+    reference_configuration,
+)
 from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
@@ -58,6 +62,8 @@ def numeric_batch(
     tol: float = 1e-10,
     max_iterations: int = 1000,
     rng: np.random.Generator | int | None = None,
+    part: str = "pose",
+    weights: npt.ArrayLike | None = None,
 ) -> IKBatchResult:
     """Solve the inverse kinematics of the tool frame for many targets.
 
@@ -75,6 +81,10 @@ def numeric_batch(
         rng: Generator, or int seed >= 0, of the restart streams (one number
             is drawn from a Generator); default seed 0, so that results are
             reproducible.
+        part: What of each target is reached, as
+            :func:`~workbench.ik.numeric`'s (a name of ``ik.TARGET_PARTS``).
+        weights: With ``part="pose"``, 6 weights of the error, as
+            :func:`~workbench.ik.numeric`'s.
 
     Returns:
         An :class:`IKBatchResult`; unreached targets have ``success`` False.
@@ -109,6 +119,7 @@ def numeric_batch(
         seed = int(rng.integers(0, 2**63))
     else:
         seed = 0 if rng is None else int(rng)
+    weighting = check_part(part, weights)
     values = np.empty((count, chain.n))
     stats = np.empty((count, kernel.N_STATS))
     kernel.solve_batch(
@@ -120,6 +131,7 @@ def numeric_batch(
         float(tol) ** 2,
         int(max_iterations),
         seed % 2**63,  # always an int64 for the kernel
+        *weighting,
         values,
         stats,
     )

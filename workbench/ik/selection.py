@@ -52,7 +52,7 @@ from workbench.errors import InfeasibleError, InputError
 from workbench.ik._puma import LIMIT_TOL, TAU
 from workbench.ik.closed_form import analytic
 from workbench.ik.families import Family, get_family
-from workbench.ik.numerical import numeric
+from workbench.ik.numerical import TARGET_PARTS, numeric
 from workbench.ik.redundancy import CRITERIA, choose_redundancy
 from workbench.ik.solution import IKSolution
 from workbench.ik.solver import get_solver
@@ -261,13 +261,20 @@ def _best(
     return within[0], None
 
 
-def _numeric(robot: Robot, target: pin.SE3 | npt.ArrayLike, near: FloatArray | None):
-    result = numeric(robot, target, q0=near)
+def _numeric(
+    robot: Robot,
+    target: pin.SE3 | npt.ArrayLike,
+    near: FloatArray | None,
+    part: str = "pose",
+):
+    result = numeric(robot, target, q0=near, part=part)
     if not result.success:
+        what = "pose" if part == "pose" else f"target ({part})"
         raise InfeasibleError(
-            f"numerical IK found no solution for {robot.name} "
-            f"(best error {result.error:.3g} after {result.iterations} iterations, "
-            f"{result.restarts} restarts): the pose is probably out of reach"
+            f"numerical IK found no solution for {robot.name}: the {what} is "
+            f"probably out of reach (best residual {result.position_error:.3g} m, "
+            f"{result.rotation_error:.3g} rad after {result.iterations} iterations, "
+            f"{result.restarts} restarts)"
         )
     q = np.array(result.q)
     q.setflags(write=False)
@@ -317,6 +324,7 @@ def select(
     branch: str | None = None,
     redundancy: float | None = None,
     criterion: str | None = None,
+    part: str = "pose",
 ) -> IKChoice:
     """The one configuration of ``robot`` that puts its tool frame at ``target``.
 
@@ -337,6 +345,10 @@ def select(
             [rad] (ψ or q7) to solve at; None chooses it (``criterion``).
         criterion: Seven-axis arms without ``redundancy``: the criterion of
             ``ik.choose_redundancy`` (module docs for the default).
+        part: What of the target is reached, a name of ``ik.TARGET_PARTS``:
+            anything but ``"pose"`` (the position only, the position and a
+            tool axis) is solved numerically from ``q_near`` (the closed forms
+            take whole poses), with the rule ``"numeric"``.
 
     Returns:
         An :class:`IKChoice`: ``q`` within the limits for the closed form
@@ -351,6 +363,18 @@ def select(
         InfeasibleError: If no branch (or not ``branch``) is within the
             limits, or the numerical IK does not converge.
     """
+    if part != "pose":
+        if part not in TARGET_PARTS:
+            raise InputError(
+                f"part {part!r}: expected one of {', '.join(TARGET_PARTS)}"
+            )
+        if rule is not None or branch is not None or redundancy is not None:
+            raise InputError(
+                f"a partial target ({part}) is solved numerically: no rule, branch "
+                "or redundancy applies"
+            )
+        near = None if q_near is None else robot.check_configuration(q_near)
+        return _numeric(robot, target, near, part)
     family = get_family(robot)
     request = _request(robot, family, rule, q_near, branch, redundancy, criterion)
     if family is None:
