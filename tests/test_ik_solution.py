@@ -60,7 +60,7 @@ def test_six_and_seven_axis_arms_share_one_solution_type(arm) -> None:
 
 def test_flags_are_named_bits_of_one_byte(arm) -> None:
     robot, _, solutions = arm
-    q_all, flags = get_solver(robot).solve_arrays(
+    q_all, flags, _ = get_solver(robot).solve_arrays(
         robot.fk(arm[1]).homogeneous,
         np.empty(0),
         redundancy=solutions[0].redundancy,

@@ -17,7 +17,7 @@ from workbench.errors import (
     UnreachableError,
     UnsupportedRobotError,
 )
-from workbench.ik._flags import Flag
+from workbench.ik._flags import Flag, SolveFlag
 from workbench.ik.batch_jacobians import compute_jacobians_local
 from workbench.ik.batch_poses import compute_tool_poses
 from workbench.ik.closed_form import (
@@ -60,13 +60,18 @@ from workbench.ik.selection import (
 from workbench.ik.solution import IKSolution
 from workbench.ik.solver import Solver, get_solver
 from workbench.ik.structure import (
+    CALIBRATION_ANGLE_TOL,
+    CALIBRATION_DISTANCE_TOL,
     STRUCTURE_TOL,
     KinematicStructure,
+    StructureDeviation,
     get_structure,
 )
 
 __all__ = [
     "BRANCHES",
+    "CALIBRATION_ANGLE_TOL",
+    "CALIBRATION_DISTANCE_TOL",
     "DEFAULT_RULE",
     "DLS_EPSILON",
     "DLS_LAMBDA_MAX",
@@ -89,7 +94,9 @@ __all__ = [
     "IKSolution",
     "KinematicStructure",
     "RedundancyChoice",
+    "SolveFlag",
     "Solver",
+    "StructureDeviation",
     "UnreachableError",
     "UnsupportedRobotError",
     "analytic",

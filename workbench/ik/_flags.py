@@ -9,6 +9,11 @@ reads its flags from them. A branch that does not reach the pose has the byte
 
 The same bits as an :class:`enum.IntFlag`: :class:`Flag` (``IKSolution.flags``).
 The kernels use the plain ints (compiled code reads module constants).
+
+A solve as a whole has one more byte, :class:`SolveFlag`: what carrying the
+branches of a calibrated arm from its idealised structure to the model
+(``_refine_kernel``, ``_refine_redundant_kernel``) could not place. It is 0 on
+an exact model, and on every pose whose branches all carried over one to one.
 """
 
 from __future__ import annotations
@@ -33,6 +38,19 @@ WRIST_SINGULAR = 16
 PARAMETER_SINGULAR = 32
 
 
+#: Solve-level bits (:class:`SolveFlag`). A branch of the idealised arm that
+#: reaches the pose found no solution of the model continuing it (it vanished
+#: at a fold of the model, e.g. where the two elbows meet): its row is NaN.
+BRANCH_VANISHED = 1
+#: Two branches of the idealised arm led to one solution of the model and no
+#: other solution was found for the second: its row is NaN.
+BRANCHES_MERGED = 2
+#: The model may have solutions near a singularity that no branch holds (more
+#: solutions than free branches, or a valley of near-singular solutions that
+#: is not searched).
+SOLUTIONS_UNLISTED = 4
+
+
 class Flag(enum.IntFlag):
     """The flag bits of a branch (module docs), as an :class:`enum.IntFlag`."""
 
@@ -44,12 +62,24 @@ class Flag(enum.IntFlag):
     PARAMETER_SINGULAR = PARAMETER_SINGULAR
 
 
+class SolveFlag(enum.IntFlag):
+    """The solve-level bits of one pose (module docs), as an :class:`enum.IntFlag`."""
+
+    BRANCH_VANISHED = BRANCH_VANISHED
+    BRANCHES_MERGED = BRANCHES_MERGED
+    SOLUTIONS_UNLISTED = SOLUTIONS_UNLISTED
+
+
 __all__ = [
+    "BRANCHES_MERGED",
+    "BRANCH_VANISHED",
     "ELBOW_SINGULAR",
     "PARAMETER_SINGULAR",
     "REACHED",
     "SHOULDER_SINGULAR",
+    "SOLUTIONS_UNLISTED",
     "WITHIN_LIMITS",
     "WRIST_SINGULAR",
     "Flag",
+    "SolveFlag",
 ]

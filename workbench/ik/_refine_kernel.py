@@ -43,11 +43,18 @@ from workbench.ik._chain_kernel import (
     _jacobian,
     _solve,
 )
-from workbench.ik._kernel_common import (
-    FLAG_SOME_UNREACHED,
-    FLAG_WITHIN_LIMITS,
-    remainder,
+from workbench.ik._flags import (
+    BRANCH_VANISHED,
+    BRANCHES_MERGED,
+    ELBOW_SINGULAR,
+    PARAMETER_SINGULAR,
+    REACHED,
+    SHOULDER_SINGULAR,
+    SOLUTIONS_UNLISTED,
+    WITHIN_LIMITS,
+    WRIST_SINGULAR,
 )
+from workbench.ik._kernel_common import remainder
 from workbench.ik._puma import LIMIT_TOL
 from workbench.ik.structure import get_structure
 from workbench.model.robot import Robot
@@ -69,6 +76,29 @@ ACCEPT = 0.5
 REFINE_STEPS = 60
 #: Refinement stops when the residual has not decreased for this many steps.
 STALL_STEPS = 20
+#: ... or for this many once it is within :data:`ACCEPT` (a residual at the
+#: rounding of the FK, 1e-14…1e-13 m on a calibrated arm, decreases no more).
+SETTLED_STEPS = 2
+#: Two refined branches this close [rad, each joint mod 2π] are one solution.
+TWIN_TOL = 1e-8
+#: Bits of :func:`_refine_pose`'s result above the branch mask (bits 0-7):
+#: the solve-level bits of ``_flags`` (``SolveFlag``) shifted by
+#: :data:`EVENT_SHIFT`.
+EVENT_SHIFT = 8
+VANISHED = BRANCH_VANISHED << EVENT_SHIFT
+MERGED = BRANCHES_MERGED << EVENT_SHIFT
+UNLISTED = SOLUTIONS_UNLISTED << EVENT_SHIFT
+#: The per-branch bits of the closed form that the refinement keeps (the
+#: idealised arm's singularities); REACHED and WITHIN_LIMITS are the model's.
+KEPT_BITS = SHOULDER_SINGULAR | ELBOW_SINGULAR | WRIST_SINGULAR | PARAMETER_SINGULAR
+#: A branch whose Newton steps move it farther than this [rad, a joint] from
+#: the idealised arm's solution is near a singularity of the model (the shift
+#: is about the deviation over the least singular value of J): the valley
+#: through its start is searched for every solution.
+SHIFT_GATE = 0.2
+#: Solutions one pose may have on a calibrated arm that are kept (the 8
+#: branches, and as many more found near singularities, then reported).
+MAX_SOLUTIONS = 16
 #: Valley search (:func:`_valley_search`): values of the fixed joint scanned
 #: over a turn, Gauss–Newton steps of the other five per value, and the
 #: steps of the root search between two scanned values.
@@ -83,6 +113,10 @@ GRAM_SHIFT = 1e-24
 VALLEY_STEP_TOL = 1e-15
 VALLEY_ROOT_TOL = 1e-15
 _GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
+#: Newton's residual [tolerances] below which a branch that does not converge
+#: is in a valley of solutions of the idealised arm (a singular wrist: the
+#: valley search follows it), 1e-6 m or rad.
+VALLEY_GATE = 1e6
 #: A fitted structure whose FK differs from the model's by more than this
 #: [m, and rotation entries] (``KinematicStructure.residual``) is refined; the
 #: catalog's URDFs are within 6e-16.
@@ -130,8 +164,10 @@ def keep_best(
     """One step's bookkeeping of a refinement: the best iterate, and whether to stop.
 
     Copies ``q`` into ``best_q`` when ``error`` (in tolerances) is the least yet;
-    stops at :data:`POLISH`, after :data:`STALL_STEPS` steps without progress,
-    at a NaN error or after :data:`REFINE_STEPS` steps.
+    stops at :data:`POLISH`, after :data:`STALL_STEPS` steps without progress
+    (:data:`SETTLED_STEPS` once the best is within :data:`ACCEPT`: rounding,
+    not the model, then limits the residual), at a NaN error or after
+    :data:`REFINE_STEPS` steps.
 
     Returns:
         ``(best, best_step, stop)``.
@@ -140,7 +176,9 @@ def keep_best(
         best, best_step = error, step
         for k in range(q.shape[0]):
             best_q[k] = q[k]
-    elif not error == error or step - best_step >= STALL_STEPS:
+    elif not error == error or step - best_step >= (
+        SETTLED_STEPS if best <= ACCEPT else STALL_STEPS
+    ):
         return best, best_step, True
     return best, best_step, best <= POLISH or step == REFINE_STEPS
 
@@ -152,7 +190,8 @@ def _refine_branch(chain: FloatArray, target: FloatArray, q: FloatArray, work) -
     Steps are taken until the residual is :data:`POLISH` times the tolerance,
     has not decreased for :data:`STALL_STEPS` steps (next to a singularity a
     step may first increase it), or :data:`REFINE_STEPS` are taken; ``q`` is
-    then the best iterate. ``work``: (30, 12) scratch.
+    then the best iterate, and ``work[29, 11]`` its residual in tolerances.
+    ``work``: (30, 12) scratch.
     """
     frames = work[0:7]
     jac, normal = work[7:13, 0:6], work[13:19, 0:6]
@@ -175,6 +214,7 @@ def _refine_branch(chain: FloatArray, target: FloatArray, q: FloatArray, work) -
             q[k] -= remainder(dq[k])
     for k in range(6):
         q[k] = best_q[k]
+    work[29, 11] = best
     return best <= ACCEPT
 
 
@@ -257,27 +297,76 @@ def _normal_part(work, previous) -> float:
 
 
 @helper()
-def _valley_search(chain, target, q, work) -> bool:
-    """Find the model's solution along a singular family of the idealised arm.
+def solution_gap(a: FloatArray, b: FloatArray) -> float:
+    """Largest joint difference [rad, mod 2π] of two configurations (n,)."""
+    gap = 0.0
+    for k in range(a.shape[0]):
+        gap = max(gap, abs(remainder(a[k] - b[k])))
+    return gap
 
-    Where the idealised arm has a one-parameter family of solutions (a singular
-    wrist's θ4/θ6 split, θ1 with the wrist centre on the base axis, θ2 with it
-    on the shoulder axis), the model's deviations fix one member, along a
-    valley of residuals ~1e-9 too curved for Newton to follow. The joint that
-    moves most along J's null direction is fixed at :data:`VALLEY_SCAN` values
-    over a turn, the five others solved by least squares at each; the normal
-    part of the remaining error changes sign at the model's solutions, found
-    by regula falsi (Illinois) and refined by :func:`_refine_branch`. The two
-    joints that move most are tried in turn.
 
-    Returns whether ``q`` (6,) now holds a solution within the tolerances.
+@helper()
+def _keep(sols: FloatArray, count: int, x: FloatArray) -> int:
+    """Add ``x`` (6,) to the first ``count`` rows of ``sols`` unless it is there.
+
+    Returns the new count (rows beyond ``sols``' size are not stored, but
+    counted: the caller reports them).
+    """
+    for i in range(min(count, sols.shape[0])):
+        if solution_gap(sols[i], x) <= TWIN_TOL:
+            return count
+    if count < sols.shape[0]:
+        for k in range(6):
+            sols[count, k] = x[k]
+    return count + 1
+
+
+@helper()
+def _keep_near(chain, target, start, x, work, sols, count: int) -> int:
+    """:func:`_keep` of solution ``x`` (6,), each angle the turn nearest ``start``.
+
+    Along an exactly singular family an angle may drift by many turns (Newton
+    moves freely along it), and the turn taken off it rounds away its last
+    bits (1e-10 rad at 1e6 rad): the wrapped solution is refined again, and
+    kept only if it is still within the tolerances.
+    """
+    moved = False
+    for k in range(6):
+        wrapped = start[k] + remainder(x[k] - start[k])
+        moved |= wrapped != x[k]
+        x[k] = wrapped
+    if moved and not _refine_branch(chain, target, x, work):
+        return count
+    return _keep(sols, count, x)
+
+
+@helper()
+def _valley_search(chain, target, start, work, sols, count: int) -> int:
+    """Every solution of the model along a near-singular valley through ``start``.
+
+    Where the idealised arm has a one-parameter family of solutions, or is
+    near one (a singular wrist's θ4/θ6 split, θ1 with the wrist centre on the
+    base axis, θ2 with it on the shoulder axis, a stretched or folded elbow),
+    the model's deviations fix finitely many members, along a valley of small
+    residuals too curved for Newton to follow. The joint that moves most
+    along J's null direction at ``start`` (6,) is fixed at :data:`VALLEY_SCAN`
+    values over a turn, the five others solved by least squares at each; the
+    normal part of the remaining error changes sign at the model's solutions,
+    each found by regula falsi (Illinois) and refined by
+    :func:`_refine_branch`. The two joints that move most are tried in turn;
+    where neither finds a sign change that leads to a solution (a double
+    root, where two branches meet: the normal part only touches 0), the
+    least |e| by golden section.
+
+    Returns:
+        The new count of ``sols`` (as :func:`_keep`), every solution found
+        added.
     """
     frames, jac, normal = work[0:7], work[7:13, 0:6], work[13:19, 0:6]
     e, v = work[19, 0:6], work[22, 0:6]
     previous = np.empty(6)
-    start = np.empty(6)
+    x = np.empty(6)
     for k in range(6):
-        start[k] = q[k]
         v[k] = 1.0
     _forward(chain, start, frames)
     _error(target, frames, e)
@@ -285,7 +374,7 @@ def _valley_search(chain, target, q, work) -> bool:
     for _ in range(4):  # inverse iteration: J's right singular vector of least σ
         _gram(jac, 6, normal)
         if not _solve(normal, v, 6):
-            return False
+            return count
         length = 0.0
         for k in range(6):
             length += v[k] * v[k]
@@ -294,8 +383,8 @@ def _valley_search(chain, target, q, work) -> bool:
             v[k] /= length
     order = np.argsort(-np.abs(v))
     scanned, parts = np.empty((VALLEY_SCAN + 1, 6)), np.empty(VALLEY_SCAN + 1)
-    x = np.empty(6)
     width = 2.0 * math.pi / VALLEY_SCAN
+    found = count
     for choice in range(2):
         j = order[choice]
         for k in range(6):
@@ -335,12 +424,9 @@ def _valley_search(chain, target, q, work) -> bool:
                     a, ga = b, gb
                 b, gb = t, g
             if _refine_branch(chain, target, x, work):
-                for k in range(6):  # the turn of each angle nearest the start
-                    q[k] = start[k] + remainder(x[k] - start[k])
-                return True
-        # no sign change that leads there: a double root (where the two arms
-        # or elbows meet, the normal part only touches 0), the least |e| by
-        # golden section around the scanned value of least |e|
+                count = _keep_near(chain, target, start, x, work, sols, count)
+        if found < count:
+            continue
         least = np.argmin(np.abs(parts[:VALLEY_SCAN]))
         for k in range(6):
             x[k] = scanned[least, k]
@@ -364,90 +450,174 @@ def _valley_search(chain, target, q, work) -> bool:
         x[j] = c if size_c < size_d else d
         _inner(chain, target, x, j, work)
         if _refine_branch(chain, target, x, work):
-            for k in range(6):
-                q[k] = start[k] + remainder(x[k] - start[k])
-            return True
-    return False
+            count = _keep_near(chain, target, start, x, work, sols, count)
+    return count
 
 
 @helper()
 def _refine_pose(
     chain: FloatArray, target: FloatArray, q: FloatArray, work: FloatArray
 ) -> int:
-    """Refine the reached rows (not NaN) of ``q`` (8, 6); NaN the ones that fail.
+    """Carry the reached rows (not NaN) of ``q`` (8, 6) to the chain; NaN the others.
 
-    A branch that Newton does not bring within the tolerances from the closed
-    form gets the valley search (:func:`_valley_search`) from there.
+    Every branch of the idealised arm is the start of Newton steps on the
+    model (:func:`_refine_branch`); one that lands on a solution found before
+    (twins that start at or near one point of a fold of the idealised arm,
+    e.g. its stretched elbow: the model's two solutions lie on either side) is
+    also carried from its start mirrored through that solution. A start that
+    moves more than
+    :data:`SHIFT_GATE`, or does not converge with a residual within
+    :data:`VALLEY_GATE`, is near a singularity of the model, where solutions
+    that no start leads to may lie: the valley through it is searched for
+    every solution (:func:`_valley_search`). The solutions found are then
+    given to the branches, the nearest (start, solution) pair first, each
+    solution and branch once; a solution left over goes to a branch the
+    idealised arm does not reach.
 
-    Returns a bit mask of the branches that reach.
+    Returns:
+        A bit mask of the branches that reach (bits 0–7), plus
+        :data:`VANISHED` (a branch of the idealised arm found no solution of
+        its own: it did not converge), :data:`MERGED` (it converged, onto the
+        solution another branch holds) and :data:`UNLISTED` (more solutions
+        than branches).
     """
-    start = np.empty(6)
-    reached = 0
+    starts, sols = np.empty((8, 6)), np.empty((MAX_SOLUTIONS, 6))
+    owner = np.empty(MAX_SOLUTIONS, dtype=np.int64)
+    x = np.empty(6)
+    alive, converged, near, count = 0, 0, 0, 0
     for b in range(8):
-        row = q[b]
-        if not row[0] == row[0]:
+        if not q[b, 0] == q[b, 0]:
             continue
+        alive |= 1 << b
         for k in range(6):
-            start[k] = row[k]
-        if _refine_branch(chain, target, row, work):
-            reached |= 1 << b
+            starts[b, k] = q[b, k]
+            x[k] = q[b, k]
+        if _refine_branch(chain, target, x, work):
+            converged |= 1 << b
+            if solution_gap(x, starts[b]) > SHIFT_GATE:
+                near |= 1 << b
+            before = count
+            count = _keep(sols, count, x)
+            if count > before:
+                continue
+            for k in range(6):  # a twin's solution: the start mirrored through it
+                x[k] = starts[b, k] + remainder(starts[b, k] - x[k])
+            if _refine_branch(chain, target, x, work):
+                count = _keep(sols, count, x)
+        elif work[29, 11] <= VALLEY_GATE:
+            near |= 1 << b
+    for b in range(8):
+        if near >> b & 1:
+            count = _valley_search(chain, target, starts[b], work, sols, count)
+    events = UNLISTED if count > MAX_SOLUTIONS else 0
+    count = min(count, MAX_SOLUTIONS)
+    for i in range(count):
+        owner[i] = -1
+    free = alive
+    while free:  # the nearest (start, solution) pair first
+        best, pick, row = math.inf, -1, -1
+        for b in range(8):
+            if free >> b & 1:
+                for i in range(count):
+                    if owner[i] < 0:
+                        gap = solution_gap(starts[b], sols[i])
+                        if gap < best:
+                            best, pick, row = gap, i, b
+        if pick < 0:
+            break
+        owner[pick] = row
+        free &= ~(1 << row)
+    reached = alive & ~free
+    for i in range(count):  # left over: to a branch the idealised arm misses
+        if owner[i] >= 0:
             continue
+        for b in range(8):
+            if (reached | free) >> b & 1 == 0:
+                owner[i] = b
+                reached |= 1 << b
+                break
+        if owner[i] < 0:
+            events |= UNLISTED
+    for b in range(8):
         for k in range(6):
-            row[k] = start[k]
-        if _valley_search(chain, target, row, work):
-            reached |= 1 << b
-        else:
+            q[b, k] = np.nan
+    for i in range(count):
+        if owner[i] >= 0:
             for k in range(6):
-                row[k] = np.nan
-    return reached
+                q[owner[i], k] = sols[i, k]
+    if free & converged:
+        events |= MERGED
+    if free & ~converged:
+        events |= VANISHED
+    return reached | events
+
+
+@helper()
+def write_flags(chain: FloatArray, q: FloatArray, flags, reached: int) -> int:
+    """The per-branch bytes of refined rows ``q`` (B, n); the solve-level byte.
+
+    A branch that reaches (bit b of ``reached``) keeps the closed form's
+    :data:`KEPT_BITS`, gets ``REACHED`` and ``WITHIN_LIMITS`` of its refined
+    joint values (± ``LIMIT_TOL``, the limits of ``chain``); the others get 0
+    (a branch the idealised arm does not reach may hold a solution of the
+    model: its singular bits are then 0).
+
+    Returns:
+        The solve-level bits (``_flags.SolveFlag``) of ``reached``.
+    """
+    for b in range(q.shape[0]):
+        if reached >> b & 1 == 0:
+            flags[b] = 0
+            continue
+        within = True
+        for k in range(q.shape[1]):
+            within &= chain[k, 16] - LIMIT_TOL <= q[b, k] <= chain[k, 17] + LIMIT_TOL
+        kept = flags[b] & KEPT_BITS
+        flags[b] = kept | REACHED | (WITHIN_LIMITS if within else 0)
+    return (reached >> EVENT_SHIFT) & 0xFF
 
 
 @entry_point(outputs=("q", "flags"), contiguous=("chain", "pose"))
 def refine_pose(
-    chain: FloatArray, pose: FloatArray, q: FloatArray, flags: npt.NDArray[np.bool_]
+    chain: FloatArray, pose: FloatArray, q: FloatArray, flags: npt.NDArray[np.uint8]
 ) -> int:
-    """Refine the branches of one pose on the true chain.
+    """Carry the branches of one pose to the model's chain.
 
     Args:
         chain: (7, CHAIN_WIDTH) packed true chain (``_chain_kernel``).
         pose: (4, 4) target pose of the tool frame in the base frame [m].
         q: (8, 6) branches of the closed form [rad], NaN rows for those that
-            do not reach; refined in place, NaN where refinement fails.
-        flags: (FLAG_COUNT,) flags of ``solve_pose``: "within limits" and
-            "some branches do not reach" (slot 13) are updated.
+            do not reach; carried in place, NaN where no solution is found.
+        flags: (8,) uint8 bits of ``_flags`` per branch (the closed form's),
+            rewritten as :func:`write_flags` says.
 
     Returns:
-        The number of branches that reach.
+        The solve-level byte (``ik.SolveFlag`` bits): a branch vanished,
+        branches merged, solutions unlisted; 0 when every branch carried over.
     """
     work = np.empty((30, 12))
     reached = _refine_pose(chain, pose, q, work)
-    count = 0
-    for b in range(8):
-        alive = reached >> b & 1 != 0
-        count += alive
-        within = alive
-        for k in range(6):
-            within &= chain[k, 16] - LIMIT_TOL <= q[b, k] <= chain[k, 17] + LIMIT_TOL
-        flags[FLAG_WITHIN_LIMITS + b] = within
-    flags[FLAG_SOME_UNREACHED] = count < 8
-    return count
+    return write_flags(chain, q, flags, reached)
 
 
-@entry_point(outputs=("q", "valid"), contiguous=("chain", "targets"))
+@entry_point(outputs=("q", "valid", "solve_flags"), contiguous=("chain", "targets"))
 def refine_batch(
     chain: FloatArray,
     targets: FloatArray,
     q: FloatArray,
     valid: npt.NDArray[np.bool_],
+    solve_flags: npt.NDArray[np.uint8],
 ) -> int:
-    """Refine the branches of N poses on the true chain.
+    """Carry the branches of N poses to the model's chain.
 
     Args:
         chain: (7, CHAIN_WIDTH) packed true chain.
         targets: (N, 4, 4) target poses [m].
-        q: (N, 8, 6) branches [rad] (NaN rows where not valid), refined in
-            place; NaN where refinement fails.
-        valid: (N, 8) True where a branch reaches; cleared where it fails.
+        q: (N, 8, 6) branches [rad] (NaN rows where not valid), carried in
+            place; NaN where no solution is found.
+        valid: (N, 8) True where a branch reaches; rewritten.
+        solve_flags: (N,) uint8 output, the solve-level byte of each pose (as
+            :func:`refine_pose`'s).
 
     Returns:
         The number of branches that were valid and failed.
@@ -460,4 +630,5 @@ def refine_batch(
             alive = reached >> b & 1 != 0
             failed += valid[i, b] and not alive
             valid[i, b] = alive
+        solve_flags[i] = (reached >> EVENT_SHIFT) & 0xFF
     return failed

@@ -70,8 +70,6 @@ from workbench.ik._atan2_kernel import atan2_into
 from workbench.ik._chain import compiled_entry
 from workbench.ik._flags import WITHIN_LIMITS
 from workbench.ik._kernel_common import (
-    FLAG_COUNT,
-    FLAG_WITHIN_LIMITS,
     IN_CYLINDER,
     NOT_RIGID,
     OK,
@@ -88,7 +86,7 @@ from workbench.ik.redundant import (
     format_intervals,
 )
 from workbench.ik.solution import IKSolution
-from workbench.ik.structure import get_structure
+from workbench.ik.structure import StructureDeviation, get_structure
 from workbench.model.per_robot import per_robot
 from workbench.model.robot import Robot
 from workbench.validation import as_finite_array
@@ -182,17 +180,19 @@ class Solver:
         return robot
 
     @property
-    def deviation(self) -> object | None:
+    def deviation(self) -> StructureDeviation | None:
         """How far the robot's model is from its family's ideal structure.
 
-        The ``deviation`` of its :class:`~workbench.ik.KinematicStructure`
-        (None where the structure does not report one).
+        The ``deviation`` of its :class:`~workbench.ik.KinematicStructure`:
+        the largest angle [rad] and distance [m] of the family's tests
+        (``.calibrated`` when beyond URDF rounding, ``STRUCTURE_TOL``); None
+        for a PUMA DH table whose axes fit no structure.
         """
         try:
             structure = get_structure(self.robot)
         except UnsupportedRobotError:  # a PUMA DH table the axes do not fit
             return None
-        return getattr(structure, "deviation", None)
+        return structure.deviation
 
     def __repr__(self) -> str:
         robot = self._robot()
@@ -246,7 +246,7 @@ class Solver:
             if self._refine is not None or self._solve_pose(
                 self.geometry, pose, prev, q, flags, True
             ):  # not OK (rechecked, or raises), or refined on the model
-                q, flags = self.solve_arrays(pose, prev)
+                q, flags, _ = self.solve_arrays(pose, prev)
         else:
             if redundancy is None:
                 if q_previous is None:
@@ -260,7 +260,7 @@ class Solver:
             if self._refine is not None or self._solve_pose(
                 self.geometry, pose, redundancy, prev, q, flags, True
             ):
-                q, flags = self.solve_arrays(pose, prev, redundancy=redundancy)
+                q, flags, _ = self.solve_arrays(pose, prev, redundancy=redundancy)
         q.setflags(write=False)
         labels = self.branches
         return [  # (IKSolution(items) is tuple.__new__ through type's fast call)
@@ -289,7 +289,7 @@ class Solver:
         q_previous: FloatArray,
         *,
         redundancy: float | None = None,
-    ) -> tuple[FloatArray, FlagArray]:
+    ) -> tuple[FloatArray, FlagArray, int]:
         """The kernel's solve of one pose, as arrays, its failures as errors.
 
         Args:
@@ -303,7 +303,10 @@ class Solver:
         Returns:
             ``q`` (B, nq) [rad], NaN rows for branches that do not reach, and
             ``flags`` (B,) uint8, the bits of :class:`~workbench.ik.Flag` per
-            branch (0 where it does not reach).
+            branch (0 where it does not reach), and the solve-level byte, the
+            bits of :class:`~workbench.ik.SolveFlag` (0 on an exact model: on
+            a calibrated arm, a branch of the idealised arm vanished or merged
+            on the model, or solutions may be unlisted).
 
         Raises:
             UnreachableError, NonFiniteError, InputError: As :meth:`solve`.
@@ -323,9 +326,12 @@ class Solver:
         if status != OK:
             self._raise(status, pose, redundancy)
         chain = self._refine
-        if chain is not None and not self._refined(chain, pose, redundancy, q, flags):
+        if chain is None:
+            return q, flags, 0
+        solve_flags = self._refined(chain, pose, redundancy, q, flags)
+        if not flags.any():
             raise UnreachableError(0.0, (0.0, 0.0), "model")
-        return q, flags
+        return q, flags, solve_flags
 
     def _refined(
         self,
@@ -335,28 +341,22 @@ class Solver:
         q: FloatArray,
         flags: FlagArray,
     ) -> int:
-        """Refine the branches ``q`` (B, nq) on the model's own chain, in place.
+        """Carry the branches ``q`` (B, nq) to the model's own chain, in place.
+
+        Rows without a solution of the model are NaN, their ``flags`` 0; the
+        ``REACHED`` and ``WITHIN_LIMITS`` bits are those of the model.
 
         Returns:
-            The number of branches that reach the pose on the model; the
-            others are NaN rows now, their ``flags`` 0, and the
-            ``WITHIN_LIMITS`` bits of the others are those of the model.
+            The solve-level byte (:class:`~workbench.ik.SolveFlag` bits).
         """
         if value is None:
-            slots = np.empty(FLAG_COUNT, dtype=np.bool_)
-            count = int(refine_pose(chain, pose, q, slots))
-            within = slots[FLAG_WITHIN_LIMITS : FLAG_WITHIN_LIMITS + 8]
-            flags &= ~np.uint8(WITHIN_LIMITS)
-            flags |= within.astype(np.uint8) * np.uint8(WITHIN_LIMITS)
-        else:
-            count = int(
-                refine_redundant.refine_pose(
-                    chain, self._arm_angle_geometry, self.family.parameter_periodic,
-                    pose, value, q, flags,
-                )
-            )  # fmt: skip
-        flags[np.isnan(q[:, 0])] = 0
-        return count
+            return int(refine_pose(chain, pose, q, flags))
+        return int(
+            refine_redundant.refine_pose(
+                chain, self._arm_angle_geometry, self.family.parameter_periodic,
+                pose, value, q, flags,
+            )
+        )  # fmt: skip
 
     def track(
         self,
@@ -444,7 +444,10 @@ class Solver:
             status = self._kernel.solve_pose(
                 self.geometry, pose, q_predicted, q_all, flags, True
             )
-        if status != OK or not self._refined(chain, pose, redundancy, q_all, flags):
+        if status != OK:
+            return None
+        self._refined(chain, pose, redundancy, q_all, flags)
+        if not flags.any():
             return None
         if seven:
             index = int(nearest_or_kept(q_all, q_predicted, branch, max_step2))
@@ -545,6 +548,7 @@ class Solver:
         targets: npt.ArrayLike,
         *,
         redundancy: float | npt.ArrayLike | None = None,
+        solve_flags: FlagArray | None = None,
     ) -> tuple[FloatArray, BoolArray]:
         """Every branch of N poses: see :func:`workbench.ik.analytic_batch`.
 
@@ -552,6 +556,10 @@ class Solver:
             targets: (N, 4, 4) poses of the tool frame in the base frame [m].
             redundancy: Seven-axis arms, required: the redundancy parameter
                 [rad], one for all or (N,); six-axis arms: None.
+            solve_flags: Optional (N,) uint8 output: each pose's solve-level
+                byte, the bits of :class:`~workbench.ik.SolveFlag` (0 on an
+                exact model; on a calibrated arm what carrying the branches to
+                the model could not place).
 
         Returns:
             ``q`` (N, B, nq) [rad], NaN where a branch does not reach;
@@ -568,7 +576,9 @@ class Solver:
         count = len(poses)
         q = np.empty((count, len(self._indices), self.nq))
         valid = np.empty((count, len(self._indices)), dtype=bool)
-        self.solve_batch_into(poses, q, valid, redundancy=redundancy)
+        self.solve_batch_into(
+            poses, q, valid, redundancy=redundancy, solve_flags=solve_flags
+        )
         return q, valid
 
     def solve_batch_into(
@@ -578,6 +588,7 @@ class Solver:
         valid: BoolArray,
         *,
         redundancy: float | npt.ArrayLike | None = None,
+        solve_flags: FlagArray | None = None,
     ) -> None:
         """:meth:`solve_batch` into given arrays (no allocation of the results).
 
@@ -587,6 +598,7 @@ class Solver:
             q: (N, B, nq) float64 output [rad], as :meth:`solve_batch`'s.
             valid: (N, B) bool output.
             redundancy: As :meth:`solve_batch`.
+            solve_flags: As :meth:`solve_batch`: optional (N,) uint8 output.
 
         Raises:
             DimensionError: If the shapes do not match.
@@ -600,12 +612,21 @@ class Solver:
         ):
             if array.shape != shape:
                 raise DimensionError(name, shape, array.shape)
+        if solve_flags is not None:
+            if solve_flags.shape != (count,):
+                raise DimensionError("solve_flags", (count,), solve_flags.shape)
+            if solve_flags.dtype != _UINT8:
+                raise InputError(
+                    f"solve_flags must be a uint8 array, got {solve_flags.dtype}"
+                )
+            solve_flags[:] = 0
+        events = np.empty(count, _UINT8) if solve_flags is None else solve_flags
         if self.parameter is None:
             if redundancy is not None:
                 raise self._no_redundancy()
             self._batch_six(poses, q, valid)
             if self._refine is not None:
-                refine_batch(self._refine, poses, q, valid)
+                refine_batch(self._refine, poses, q, valid, events)
             return
         if redundancy is None:
             raise self._missing_redundancy()
@@ -620,7 +641,7 @@ class Solver:
         if self._refine is not None:
             refine_redundant.refine_batch(
                 self._refine, self._arm_angle_geometry, self.family.parameter_periodic,
-                poses, values, q, valid,
+                poses, values, q, valid, events,
             )  # fmt: skip
 
     def _batch_six(self, poses: FloatArray, q: FloatArray, valid: BoolArray) -> None:
