@@ -74,6 +74,15 @@ ACCEPT = 0.5
 #: Newton steps a branch may take (a regular one needs one or two; next to a
 #: singularity of the true chain convergence is linear, halving per step).
 REFINE_STEPS = 60
+#: Newton steps of the fast path of a regular branch (:func:`_newton`; it needs
+#: three from the closed form of a calibrated arm's idealised structure).
+FAST_STEPS = 6
+#: How far [rad, in joint space] twins that start at one fold point of the
+#: idealised arm are moved apart along J's null direction (the model's
+#: solutions lie about √deviation from the fold: 0.01–0.06 rad for 1e-4…1e-3),
+#: and the inverse iterations that find that direction.
+FOLD_STEP = 0.05
+NULL_ITERATIONS = 4
 #: Refinement stops when the residual has not decreased for this many steps.
 STALL_STEPS = 20
 #: ... or for this many once it is within :data:`ACCEPT` (a residual at the
@@ -454,8 +463,232 @@ def _valley_search(chain, target, start, work, sols, count: int) -> int:
     return count
 
 
+@helper(forceinline=True)
+def _fast_error(target: FloatArray, frames: FloatArray, e: FloatArray) -> float:
+    r"""The tool's error to first order into ``e`` (6,); its size in tolerances.
+
+    ``e`` = [R_tᵀ(p − p_t); vee(R − Rᵀ)/2], R = R_tᵀ R(q): log6(T⁻¹ M(q)) up
+    to second order, so that Newton steps on it converge quadratically as on
+    log6 itself, without its atan2 and square roots. The size is the larger
+    of |p − p_t| [m] over :data:`POSITION_TOL` and |vee(R − Rᵀ)|/2 = sin θ
+    [rad] over :data:`ROTATION_TOL` (θ itself to 1e-13 relative below 1e-6
+    rad; a rotation by more than π/2, trace R < 1, is infinitely far).
+    """
+    f = frames[frames.shape[0] - 1]
+    dx, dy, dz = f[9] - target[0, 3], f[10] - target[1, 3], f[11] - target[2, 3]
+    t00, t10, t20 = target[0, 0], target[1, 0], target[2, 0]
+    t01, t11, t21 = target[0, 1], target[1, 1], target[2, 1]
+    t02, t12, t22 = target[0, 2], target[1, 2], target[2, 2]
+    r00 = t00 * f[0] + t10 * f[3] + t20 * f[6]
+    r11 = t01 * f[1] + t11 * f[4] + t21 * f[7]
+    r22 = t02 * f[2] + t12 * f[5] + t22 * f[8]
+    r01 = t00 * f[1] + t10 * f[4] + t20 * f[7]
+    r10 = t01 * f[0] + t11 * f[3] + t21 * f[6]
+    r02 = t00 * f[2] + t10 * f[5] + t20 * f[8]
+    r20 = t02 * f[0] + t12 * f[3] + t22 * f[6]
+    r12 = t01 * f[2] + t11 * f[5] + t21 * f[8]
+    r21 = t02 * f[1] + t12 * f[4] + t22 * f[7]
+    e[0] = t00 * dx + t10 * dy + t20 * dz
+    e[1] = t01 * dx + t11 * dy + t21 * dz
+    e[2] = t02 * dx + t12 * dy + t22 * dz
+    e[3] = 0.5 * (r21 - r12)
+    e[4] = 0.5 * (r02 - r20)
+    e[5] = 0.5 * (r10 - r01)
+    position = dx * dx + dy * dy + dz * dz
+    rotation = e[3] * e[3] + e[4] * e[4] + e[5] * e[5]
+    if not r00 + r11 + r22 >= 1.0:  # (NaN too)
+        return math.inf
+    return max(math.sqrt(position) / POSITION_TOL, math.sqrt(rotation) / ROTATION_TOL)
+
+
+@helper()
+def _newton(chain: FloatArray, target: FloatArray, x: FloatArray, work) -> bool:
+    """Newton steps J dq = e on ``x`` (6,) in place; whether it converged.
+
+    The fast path of a regular branch: the LOCAL Jacobian of the model's chain
+    (``_chain_kernel``), LU of the 6 × 6 system itself (no damping), the
+    first-order error of :func:`_fast_error`. Steps stop at :data:`POLISH`
+    times the tolerances, or where the residual stops decreasing (the FK's
+    rounding) within :data:`ACCEPT`; ``x`` is then the best iterate. Anything
+    else (no convergence in :data:`FAST_STEPS`, a singular J) returns False,
+    and the caller takes the complete search. ``work``: (30, 12) scratch.
+    """
+    frames = work[0:7]
+    jac, lu = work[7:13, 0:6], work[13:19, 0:6]
+    e, previous = work[19, 0:6], work[20, 0:6]
+    last = math.inf
+    for step in range(FAST_STEPS + 1):
+        _forward(chain, x, frames)
+        size = _fast_error(target, frames, e)
+        if size <= POLISH:
+            return True
+        if not size < last:  # the previous iterate was the best
+            for k in range(6):
+                x[k] = previous[k]
+            return last <= ACCEPT
+        if step == FAST_STEPS:
+            return False
+        last = size
+        _jacobian(chain, frames, jac)
+        for i in range(6):
+            for k in range(6):
+                lu[i, k] = jac[i, k]
+        if not _solve(lu, e, 6):
+            return False
+        for k in range(6):
+            previous[k] = x[k]
+            x[k] -= e[k]
+    return False
+
+
+@helper()
+def _farther(a: FloatArray, b: FloatArray, limit: float) -> bool:
+    """Whether a joint of ``a``, ``b`` (6,) differs by over ``limit`` (mod 2π)."""
+    for k in range(6):
+        if abs(remainder(a[k] - b[k])) > limit:
+            return True
+    return False
+
+
+@helper()
+def _null_direction(chain, start, work, v) -> bool:
+    """J's right singular vector of least σ at ``start`` (6,) into ``v`` (6,).
+
+    Inverse iteration on JᵀJ + :data:`GRAM_SHIFT` I; False if it is singular
+    even so. ``work``: (30, 12) scratch (rows 0–18).
+    """
+    frames, jac, normal = work[0:7], work[7:13, 0:6], work[13:19, 0:6]
+    _forward(chain, start, frames)
+    _jacobian(chain, frames, jac)
+    for k in range(6):
+        v[k] = 1.0
+    for _ in range(NULL_ITERATIONS):
+        _gram(jac, 6, normal)
+        if not _solve(normal, v, 6):
+            return False
+        length = 0.0
+        for k in range(6):
+            length += v[k] * v[k]
+        length = math.sqrt(length)
+        for k in range(6):
+            v[k] /= length
+    return True
+
+
+@helper()
+def _carry_direct(chain, target, q, starts, work) -> int:
+    """Every reached row of ``q`` (8, 6) by :func:`_newton` alone, or −1.
+
+    The regular case of :func:`_search_pose`, at a fraction of its cost.
+    Twins that start at one point (a fold of the idealised arm, e.g. its
+    stretched elbow, where J is singular and the model's two solutions lie on
+    either side) start from that point moved by ±:data:`FOLD_STEP` along J's
+    null direction. The case is regular when every branch converges, none
+    moves more than :data:`SHIFT_GATE`, and no start other than its own (or
+    its twin's) is as near a branch's solution as the farthest-moved branch
+    is to its own: the solutions are then distinct and the nearest-pair
+    matching of the complete search would give each branch its own.
+    ``starts`` (8, 6) gets the rows of ``q`` first.
+
+    Twins at a fold from which neither side converges, where the least
+    residual (Levenberg–Marquardt from the fold point, :func:`_refine_branch`)
+    is above :data:`VALLEY_GATE` (the pose is past the model's fold), both
+    vanish, as the complete search finds.
+
+    Returns:
+        The mask of reached branches plus ``VANISHED``, or −1 where the case
+        is not regular (``q`` then partly carried: the caller restores it
+        from ``starts``).
+    """
+    alive = 0
+    for b in range(8):
+        for k in range(6):
+            starts[b, k] = q[b, k]
+        if q[b, 0] == q[b, 0]:
+            alive |= 1 << b
+    twin = np.empty(8, dtype=np.int64)
+    for b in range(8):
+        twin[b] = -1
+        if alive >> b & 1 == 0:
+            continue
+        for c in range(8):
+            if (
+                c != b
+                and alive >> c & 1
+                and not _farther(starts[b], starts[c], TWIN_TOL)
+            ):
+                twin[b] = c
+    v = work[21, 0:6]
+    largest, events = 0.0, 0
+    for b in range(8):
+        if alive >> b & 1 == 0:
+            continue
+        c = twin[b]
+        if c >= 0:
+            if c < b:  # (moved with its twin)
+                continue
+            if not _null_direction(chain, starts[b], work, v):
+                return -1
+            for k in range(6):
+                q[b, k] = starts[b, k] + FOLD_STEP * v[k]
+                q[c, k] = starts[b, k] - FOLD_STEP * v[k]
+            one = _newton(chain, target, q[b], work)
+            other = _newton(chain, target, q[c], work)
+            if one != other:
+                return -1
+            if not one:  # no solution on either side: past the model's fold?
+                for k in range(6):
+                    q[b, k] = starts[b, k]
+                if _refine_branch(chain, target, q[b], work):
+                    return -1
+                if not work[29, 11] > VALLEY_GATE:  # a valley: search it
+                    return -1
+                for k in range(6):  # the least residual is no solution: both vanish
+                    q[b, k] = np.nan
+                    q[c, k] = np.nan
+                alive &= ~(1 << b | 1 << c)
+                events |= VANISHED
+                continue
+            largest = max(largest, solution_gap(q[c], starts[c]))
+        elif not _newton(chain, target, q[b], work):
+            return -1
+        largest = max(largest, solution_gap(q[b], starts[b]))
+    if largest > SHIFT_GATE:
+        return -1
+    for b in range(8):
+        if alive >> b & 1 == 0:
+            continue
+        for c in range(8):
+            if c == b or alive >> c & 1 == 0:
+                continue
+            if not _farther(q[b], q[c], TWIN_TOL):  # one solution, twice
+                return -1
+            if twin[b] != c and not _farther(starts[b], q[c], largest):
+                return -1
+    return alive | events
+
+
 @helper()
 def _refine_pose(
+    chain: FloatArray, target: FloatArray, q: FloatArray, work: FloatArray
+) -> int:
+    """Carry the reached rows of ``q`` (8, 6) to the chain: :func:`_search_pose`.
+
+    Tried first: :func:`_carry_direct`, which gives the same answer where the
+    pose is regular; elsewhere the complete search from the closed form's rows.
+    """
+    starts = np.empty((8, 6))
+    reached = _carry_direct(chain, target, q, starts, work)
+    if reached >= 0:
+        return reached
+    for b in range(8):
+        for k in range(6):
+            q[b, k] = starts[b, k]
+    return _search_pose(chain, target, q, work)
+
+
+@helper()
+def _search_pose(
     chain: FloatArray, target: FloatArray, q: FloatArray, work: FloatArray
 ) -> int:
     """Carry the reached rows (not NaN) of ``q`` (8, 6) to the chain; NaN the others.
