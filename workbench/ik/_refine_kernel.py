@@ -712,7 +712,8 @@ def _search_pose(
         :data:`VANISHED` (a branch of the idealised arm found no solution of
         its own: it did not converge), :data:`MERGED` (it converged, onto the
         solution another branch holds) and :data:`UNLISTED` (more solutions
-        than branches).
+        than branches, or a valley was searched: its scan may step over
+        solutions, so the solve says it may not list them all).
     """
     starts, sols = np.empty((8, 6)), np.empty((MAX_SOLUTIONS, 6))
     owner = np.empty(MAX_SOLUTIONS, dtype=np.int64)
@@ -742,7 +743,8 @@ def _search_pose(
     for b in range(8):
         if near >> b & 1:
             count = _valley_search(chain, target, starts[b], work, sols, count)
-    events = UNLISTED if count > MAX_SOLUTIONS else 0
+    # a scanned valley may hold solutions between its samples: said, not hidden
+    events = UNLISTED if count > MAX_SOLUTIONS or near != 0 else 0
     count = min(count, MAX_SOLUTIONS)
     for i in range(count):
         owner[i] = -1

@@ -39,13 +39,16 @@ from workbench.ik._kernel_common import remainder
 from workbench.ik._refine_kernel import (
     ACCEPT,
     EVENT_SHIFT,
+    FAST_STEPS,
     MERGED,
+    POLISH,
     REFINE_STEPS,
     ROTATION_TOL,
     SHIFT_GATE,
     TWIN_TOL,
     UNLISTED,
     VANISHED,
+    _fast_error,
     keep_best,
     pose_error,
     solution_gap,
@@ -76,6 +79,63 @@ def _arm_angle_of(geo, q: FloatArray, theta: FloatArray) -> float:
     for j in range(7):
         theta[j] = geo.joint_sign[j] * q[j] + geo.theta_offset[j]
     return _arm_angle(geo, theta)
+
+
+@helper()
+def _newton_srs(chain, geo, target, value: float, q, work) -> bool:
+    """Newton steps on the square system [e; ψ(q) − ψ*] of one SRS row, or False.
+
+    The fast path of a regular row (``_refine_kernel._newton``'s, for seven
+    joints): A = [J; ∇ψ] (7, 7) by LU, no damping, ∇ψ by forward differences
+    (:data:`PARAMETER_STEP`) at the start only (the row of ψ then converges
+    linearly, at a rate of its change over the step), the first-order error of
+    ``_refine_kernel._fast_error``. Stops at ``POLISH`` times the
+    tolerances, or where the residual stops decreasing within ``ACCEPT``
+    (``q`` the best iterate); anything else returns False and the caller
+    takes :func:`_refine_row`. ``work``: (:data:`WORK_ROWS`, 12) scratch.
+    """
+    frames = work[0:8]
+    jac, lu = work[8:15, 0:7], work[15:22, 0:7]
+    r, previous = work[22, 0:7], work[23, 0:7]
+    theta, shifted = work[26, 0:7], work[27, 0:7]
+    gradient = work[24, 0:7]
+    last = math.inf
+    for step in range(FAST_STEPS + 1):
+        _forward(chain, q, frames)
+        size = _fast_error(target, frames, r)
+        psi = _arm_angle_of(geo, q, theta)
+        r[6] = remainder(psi - value)
+        size = max(size, abs(r[6]) / ROTATION_TOL)
+        if size <= POLISH:
+            return True
+        if not size < last:  # the previous iterate was the best
+            for k in range(7):
+                q[k] = previous[k]
+            return last <= ACCEPT
+        if step == FAST_STEPS:
+            return False
+        last = size
+        _jacobian(chain, frames, jac)  # (rows 0-5; row 6 holds ∇ψ)
+        if step == 0:  # ∇ψ of the start: ψ is smooth, the start near the end
+            for k in range(7):
+                shifted[k] = q[k]
+            for k in range(7):
+                shifted[k] = q[k] + PARAMETER_STEP
+                gradient[k] = (
+                    remainder(_arm_angle_of(geo, shifted, theta) - psi) / PARAMETER_STEP
+                )
+                shifted[k] = q[k]
+        for k in range(7):
+            jac[6, k] = gradient[k]
+        for i in range(7):
+            for k in range(7):
+                lu[i, k] = jac[i, k]
+        if not _solve(lu, r, 7):
+            return False
+        for k in range(7):
+            previous[k] = q[k]
+            q[k] -= r[k]
+    return False
 
 
 @helper()
@@ -213,7 +273,9 @@ def _refine_branches(chain, geo, srs: bool, target, value: float, q, work) -> in
             continue
         for k in range(7):
             starts[b, k] = row[k]
-        if not _refine_row(chain, geo, srs, target, value, row, work):
+        if not _newton_srs(chain, geo, target, value, row, work) and not _refine_row(
+            chain, geo, srs, target, value, row, work
+        ):
             for k in range(7):
                 solution[k] = np.nan
             if _other_start(
