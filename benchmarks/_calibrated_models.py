@@ -18,11 +18,14 @@ from pathlib import Path
 import numpy as np
 
 from workbench import Robot, load_robot
+from workbench.ik import get_solver
 from workbench.model.catalog import CATALOG
 
 #: Range of the calibration deltas: ``rpy`` [rad] and ``xyz`` [m].
 CALIBRATION_RPY = (1e-4, 1e-3)
 CALIBRATION_XYZ = (1e-4, 1e-3)
+#: Step [rad] of the central differences of the arm angle ψ(q).
+PARAMETER_STEP = 1e-6
 #: How far ROS-Industrial's iiwa 14 R820 URDF has its joint 2 and 4 origins
 #: off axis [m].
 IIWA_OFF_AXIS = 0.43624e-3
@@ -99,3 +102,27 @@ def off_axis_iiwa(folder: Path, *, offset: float = IIWA_OFF_AXIS) -> Robot:
         x, y, z = (float(v) for v in origin.get("xyz", "0 0 0").split())
         origin.set("xyz", f"{x + offset!r} {y!r} {z!r}")
     return _write(robot, tree, Path(folder) / f"iiwa14-off-axis-{offset:g}.urdf")
+
+
+def least_singular(robot: Robot, q: np.ndarray) -> float:
+    """Least singular value of the system a solve at held redundancy inverts.
+
+    A 6R arm: the tool Jacobian (LOCAL, 6 × 6); a Franka arm at held q7: its
+    first six columns; an SRS arm at held arm angle ψ: [J; ∇ψ] (7 × 7, ∇ψ by
+    central differences of ``Solver.parameter_of``), whose rank also drops
+    where ψ is degenerate (the wrist centre near axis 1). Small near the
+    singularities where a solve may miss solutions [m or rad per rad].
+    """
+    jac = robot.jacobian_local(q)
+    solver = get_solver(robot)
+    if robot.nq == 6 or not solver.family.parameter_periodic:
+        return float(np.linalg.svd(jac[:, :6], compute_uv=False)[-1])
+    gradient = np.empty(7)
+    for k in range(7):
+        up, down = q.copy(), q.copy()
+        up[k] += PARAMETER_STEP
+        down[k] -= PARAMETER_STEP
+        step = float(solver.parameter_of(up)) - float(solver.parameter_of(down))
+        gradient[k] = np.angle(np.exp(1j * step)) / (2 * PARAMETER_STEP)
+    square = np.vstack([jac, gradient])
+    return float(np.linalg.svd(square, compute_uv=False)[-1])

@@ -7,7 +7,8 @@ calibration deltas, the iiwa 14 0.436 mm off axis, a calibrated Panda at held
 q7). Per arm, for N random in-limit configurations: the largest FK residual
 of every branch by Pinocchio [m, rad]; the configurations whose generating q
 is not among the branches (to 1e-9 rad), how many of them are near a
-singularity (least singular value of the tool Jacobian below 0.02) and how
+singularity (``least_singular`` below 0.02: the tool Jacobian, [J; ∇ψ] for
+an SRS arm at held ψ) and how
 many the solve flags (``ik.SolveFlag``); the poses with a non-zero solve
 byte. Then a 100-start ``ik.numeric_batch`` search at P poses: the solutions
 it finds outside the branches (to 1e-6 rad), and at how many poses, flagged
@@ -25,7 +26,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from benchmarks._calibrated_models import calibrated_urdf, off_axis_iiwa
+from benchmarks._calibrated_models import calibrated_urdf, least_singular, off_axis_iiwa
 from workbench import Robot
 from workbench.ik import get_solver, get_structure, numeric_batch
 
@@ -78,11 +79,7 @@ def round_trip(robot: Robot, samples: int) -> dict[str, object]:
     gaps = _wrapped(q_all - qs[:, None, :]).max(axis=2)
     gaps[~valid] = np.inf
     missed = np.flatnonzero(gaps.min(axis=1) > ATOL_SAME_Q)
-    columns = 7 if get_structure(robot).family == "srs" else 6
-    sigmas = [
-        float(np.linalg.svd(robot.jacobian_local(qs[i])[:, :columns])[1][-1])
-        for i in missed
-    ]
+    sigmas = [least_singular(robot, qs[i]) for i in missed]
     near = sum(s < NEAR_SINGULAR for s in sigmas)
     flagged = int(np.count_nonzero(events[missed]))
     both = sum(

@@ -28,7 +28,12 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from benchmarks._calibrated_models import IIWA_OFF_AXIS, calibrated_urdf, off_axis_iiwa
+from benchmarks._calibrated_models import (
+    IIWA_OFF_AXIS,
+    calibrated_urdf,
+    least_singular,
+    off_axis_iiwa,
+)
 from workbench import Robot, ik, load_robot
 from workbench.ik import (
     CALIBRATION_ANGLE_TOL,
@@ -101,12 +106,6 @@ def _residuals(robot: Robot, qs: np.ndarray, targets: np.ndarray) -> np.ndarray:
     return out
 
 
-def _least_singular(robot: Robot, q: np.ndarray, columns: int) -> float:
-    """Least singular value of the first ``columns`` columns of the tool Jacobian."""
-    jac = robot.jacobian_local(q)[:, :columns]
-    return float(np.linalg.svd(jac, compute_uv=False)[-1])
-
-
 def _solve_all(robot: Robot, qs: np.ndarray, targets: np.ndarray):
     """Every branch of each target: q (N, B, n), valid (N, B), solve flags (N,)."""
     solver = get_solver(robot)
@@ -149,11 +148,9 @@ def _check_round_trip(
     gaps = _wrapped(q_all - qs[:, None, :]).max(axis=2)
     gaps[~valid] = np.inf
     missed = np.flatnonzero(gaps.min(axis=1) > ATOL_SAME_Q)
-    # the joints solved for: six (a 6R arm, a Franka arm at held q7), or seven
-    columns = 7 if get_structure(robot).family == "srs" else 6
     values = None if robot.nq == 6 else get_solver(robot).parameter_of(qs)
     for i in missed:  # near a singularity, and said so by the solve
-        sigma = _least_singular(robot, qs[i], columns)
+        sigma = least_singular(robot, qs[i])
         value = None if values is None else float(values[i])
         assert sigma < NEAR_SINGULAR, (i, sigma)
         assert events[i] != 0 and _flagged(robot, targets[i], value), (i, sigma)
@@ -278,7 +275,7 @@ def test_property_round_trip(seed: int, name: str, unit: list[float], folder) ->
     qs = np.array([s.q for s in solutions])
     assert _residuals(robot, qs, np.array([target] * len(qs))).max() <= ATOL_RESIDUAL
     gap = _wrapped(qs - q).max(axis=1).min()
-    assert gap <= ATOL_SAME_Q or _least_singular(robot, q, 6) < NEAR_SINGULAR
+    assert gap <= ATOL_SAME_Q or least_singular(robot, q) < NEAR_SINGULAR
     for s in solutions:  # within-limits is the final q's
         inside = bool(
             np.all((robot.lower - 1e-12 <= s.q) & (s.q <= robot.upper + 1e-12))

@@ -105,6 +105,11 @@ KEPT_BITS = SHOULDER_SINGULAR | ELBOW_SINGULAR | WRIST_SINGULAR | PARAMETER_SING
 #: is about the deviation over the least singular value of J): the valley
 #: through its start is searched for every solution.
 SHIFT_GATE = 0.2
+#: A branch that moves farther than this [rad, a joint] from the idealised
+#: arm's solution is near a singularity (the shift is about the deviation over
+#: σ): the model may have solutions there that no branch holds (more than the
+#: idealised arm's), so the solve says so (``SOLUTIONS_UNLISTED``).
+UNLISTED_SHIFT = 0.05
 #: Solutions one pose may have on a calibrated arm that are kept (the 8
 #: branches, and as many more found near singularities, then reported).
 MAX_SOLUTIONS = 16
@@ -650,9 +655,14 @@ def _carry_direct(chain, target, q, starts, work) -> int:
                 events |= VANISHED
                 continue
             largest = max(largest, solution_gap(q[c], starts[c]))
-        elif not _newton(chain, target, q[b], work):
+            largest = max(largest, solution_gap(q[b], starts[b]))
+            continue  # (a fold's two solutions, both held: none unlisted)
+        if not _newton(chain, target, q[b], work):
             return -1
-        largest = max(largest, solution_gap(q[b], starts[b]))
+        shift = solution_gap(q[b], starts[b])
+        largest = max(largest, shift)
+        if shift > UNLISTED_SHIFT:
+            events |= UNLISTED
     if largest > SHIFT_GATE:
         return -1
     for b in range(8):
@@ -713,12 +723,14 @@ def _search_pose(
         its own: it did not converge), :data:`MERGED` (it converged, onto the
         solution another branch holds) and :data:`UNLISTED` (more solutions
         than branches, or a valley was searched: its scan may step over
-        solutions, so the solve says it may not list them all).
+        solutions, or a branch moved more than :data:`UNLISTED_SHIFT`: the
+        solve says it may not list them all).
     """
     starts, sols = np.empty((8, 6)), np.empty((MAX_SOLUTIONS, 6))
     owner = np.empty(MAX_SOLUTIONS, dtype=np.int64)
     x = np.empty(6)
     alive, converged, near, count = 0, 0, 0, 0
+    moved = False
     for b in range(8):
         if not q[b, 0] == q[b, 0]:
             continue
@@ -728,8 +740,11 @@ def _search_pose(
             x[k] = q[b, k]
         if _refine_branch(chain, target, x, work):
             converged |= 1 << b
-            if solution_gap(x, starts[b]) > SHIFT_GATE:
+            shift = solution_gap(x, starts[b])
+            if shift > SHIFT_GATE:
                 near |= 1 << b
+            elif shift > UNLISTED_SHIFT:
+                moved = True
             before = count
             count = _keep(sols, count, x)
             if count > before:
@@ -744,7 +759,7 @@ def _search_pose(
         if near >> b & 1:
             count = _valley_search(chain, target, starts[b], work, sols, count)
     # a scanned valley may hold solutions between its samples: said, not hidden
-    events = UNLISTED if count > MAX_SOLUTIONS or near != 0 else 0
+    events = UNLISTED if count > MAX_SOLUTIONS or near != 0 or moved else 0
     count = min(count, MAX_SOLUTIONS)
     for i in range(count):
         owner[i] = -1

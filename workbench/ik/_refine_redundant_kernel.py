@@ -44,9 +44,9 @@ from workbench.ik._refine_kernel import (
     POLISH,
     REFINE_STEPS,
     ROTATION_TOL,
-    SHIFT_GATE,
     TWIN_TOL,
     UNLISTED,
+    UNLISTED_SHIFT,
     VANISHED,
     _fast_error,
     keep_best,
@@ -256,7 +256,7 @@ def _refine_branches(chain, geo, srs: bool, target, value: float, q, work) -> in
     carried again from other starts near its own (:func:`_other_start`). A
     row that still finds no solution of its own is NaN and sets ``MERGED``
     (it had converged onto another's) or ``VANISHED``. A row that moves more
-    than ``SHIFT_GATE`` from its start is in a valley of the model's
+    than ``UNLISTED_SHIFT`` from its start is in a valley of the model's
     near-singular solutions (e.g. θ2 → 0, axes 1 and 3 aligned), which is not
     searched here: ``UNLISTED`` says the model may have solutions there that
     no row holds.
@@ -289,7 +289,7 @@ def _refine_branches(chain, geo, srs: bool, target, value: float, q, work) -> in
                 events |= VANISHED
             continue
         reached |= 1 << b
-        if solution_gap(starts[b], row) > SHIFT_GATE:  # a valley, not searched
+        if solution_gap(starts[b], row) > UNLISTED_SHIFT:  # a valley, not searched
             events |= UNLISTED
         a = -1
         for c in range(q.shape[0]):
