@@ -27,7 +27,7 @@ import numpy as np
 from tests._cli_fuzz import PLAN
 from workbench.atomic_files import get_temporaries
 from workbench.errors import InputError
-from workbench.trajectory.csv_io import read_trajectory_csv
+from workbench.trajectory.csv_io import read_trajectory_csv, record_path
 
 OLD = b"old output, from an earlier run\n"
 #: Seconds a forked worker may take to end after its parent was killed.
@@ -93,7 +93,7 @@ def _is_complete(path: Path, reference: bytes) -> bool:
             read_trajectory_csv(path)
         except InputError:
             return False
-        return data.split(b"\n", 2)[1].startswith(b"# samples=")
+        return record_path(path).exists()  # checked against it when read
     if path.suffix == ".html":  # a page ends with its closing tag
         return data.rstrip().endswith(b"</html>")
     if path.suffix == ".json":

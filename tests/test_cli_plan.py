@@ -262,3 +262,58 @@ def test_pose_options_exit_codes(capsys, robot, args, code, fragment) -> None:
         "--no-collision",
     )  # fmt: skip
     assert result[0] == code and fragment in result[2], result[2]
+
+
+def _bare_ur5(tmp_path: Path, *, zero_velocity: tuple[int, ...]) -> Path:
+    """The catalog ur5 without <collision> elements, some velocity="0" (no limit)."""
+    import re
+
+    from workbench import load_robot
+
+    text = Path(load_robot("ur5").urdf_path).read_text()
+    text = re.sub(r"<collision>.*?</collision>", "", text, flags=re.S)
+    limits = list(re.finditer(r'velocity="[^"]*"', text))
+    for index in sorted(zero_velocity, reverse=True):
+        match = limits[index]
+        text = text[: match.start()] + 'velocity="0"' + text[match.end() :]
+    path = tmp_path / "bare_ur5.urdf"
+    path.write_text(text)
+    return path
+
+
+def test_an_arm_without_collision_geometry_or_limits_is_told_so(
+    capsys, tmp_path: Path
+) -> None:
+    urdf = _bare_ur5(tmp_path, zero_velocity=(1, 4))
+    args = ("plan", "pick-place", "--robot", str(urdf), "--pick-deg", *["0"] * 6)
+    args += ("--place-deg", "10", "20", "30", "0", "0", "0", "--duration", "5")
+    code, out, err = run(capsys, *args)
+    assert (code, err) == (0, "")
+    assert "no collision geometry in the URDF: collision check not possible" in out
+    assert "--no-collision" not in out
+    joints = [f"{j}_joint" for j in ("shoulder_lift", "wrist_2")]
+    assert (
+        f"note: the model gives no velocity limit for {', '.join(joints)}; no "
+        "acceleration limit for any joint: the minimum duration respects the "
+        "known limits only"
+    ) in out
+    code, out, err = run(capsys, *args, "--json")
+    result = json.loads(out)
+    assert result["collision_skipped"] == "no collision geometry in the URDF"
+    assert result["unknown_limits"]["velocity"] == joints
+    assert len(result["unknown_limits"]["acceleration"]) == 6
+    code, out, err = run(capsys, *args, "--no-collision", "--json")
+    assert json.loads(out)["collision_skipped"] == "--no-collision"
+
+
+def test_no_known_limit_says_no_minimum_is_known(capsys, tmp_path: Path) -> None:
+    urdf = _bare_ur5(tmp_path, zero_velocity=tuple(range(6)))
+    args = ("plan", "pick-place", "--robot", str(urdf), "--pick-deg", *["0"] * 6)
+    args += ("--place-deg", "10", "20", "30", "0", "0", "0", "--duration", "5")
+    code, out, err = run(capsys, *args)
+    assert (code, err) == (0, "")
+    assert (
+        "note: the model gives no velocity limit for any joint; no acceleration "
+        "limit for any joint: no minimum duration is known (0 s stands for none)"
+    ) in out
+    assert "(minimum 0 s)" in out

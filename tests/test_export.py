@@ -1,4 +1,4 @@
-"""``workbench export`` and ``workbench.export``: bags, URScript, named CSV."""
+"""``workbench export`` and ``workbench.export``: bags, URScript, the trajectory CSV."""
 
 from __future__ import annotations
 
@@ -21,16 +21,16 @@ from workbench.cli import EXIT_BAD_INPUT
 from workbench.export import (
     UR_JOINTS,
     generate_urscript,
-    get_named_header,
     read_ros2_bag,
     resample_hermite,
-    write_named_csv,
     write_ros2_bag,
 )
 from workbench.trajectory import pick_and_place
 from workbench.trajectory.csv_io import (
     JointTrajectorySamples,
+    header,
     read_trajectory_csv,
+    record_path,
     write_trajectory_csv,
 )
 
@@ -176,21 +176,26 @@ def test_urscript_refuses_other_arms(capsys, tmp_path: Path) -> None:
         generate_urscript(read_trajectory_csv, NAMES)  # type: ignore[arg-type]
 
 
-def test_named_csv(capsys, tmp_path: Path, ur5_csv: Path) -> None:
-    out = tmp_path / "named.csv"
+def test_csv_is_the_one_trajectory_dialect(
+    capsys, tmp_path: Path, ur5_csv: Path
+) -> None:
+    out = tmp_path / "exported.csv"
     code, _, _ = run(capsys, "export", "--format", "csv", "--robot", "ur5",
                      "--trajectory", str(ur5_csv), "--out", str(out))  # fmt: skip
     assert code == 0
     with out.open(newline="") as stream:
         rows = list(csv.reader(stream))
-    assert rows[0] == get_named_header(list(UR_JOINTS))
-    assert rows[0][:2] == ["t [s]", "shoulder_pan_joint [rad]"]
-    assert rows[0][-1] == "wrist_3_joint acceleration [rad/s^2]"
+    assert rows[0] == header(6)  # the columns of every trajectory CSV
     table = np.array(rows[1:], dtype=float)
     samples = read_trajectory_csv(ur5_csv, 6)
     np.testing.assert_array_equal(
         table, np.column_stack([samples.t, samples.q, samples.qd, samples.qdd])
     )
+    entry = json.loads(record_path(out).read_text())
+    assert entry["joint_names"] == list(UR_JOINTS)
+    assert entry["samples"] == samples.t.size
+    again = read_trajectory_csv(out, 6)
+    np.testing.assert_array_equal(again.q, samples.q)
 
 
 @pytest.mark.parametrize("fmt", ["ros2-bag", "urscript", "csv"])
@@ -225,11 +230,11 @@ def test_failed_write_leaves_nothing(monkeypatch, tmp_path: Path) -> None:
     )
 
     def broken(*args, **kwargs):
-        raise OSError("disk full")
+        raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr("csv.writer", broken)
-    with pytest.raises(InputError, match="disk full"):
-        write_named_csv(tmp_path / "x.csv", s, NAMES)
+    monkeypatch.setattr(Path, "write_text", broken)  # the record, after the CSV
+    with pytest.raises(InputError, match="No space left"):
+        write_trajectory_csv(tmp_path / "x.csv", s, joint_names=NAMES)
     assert list(tmp_path.iterdir()) == []
 
 

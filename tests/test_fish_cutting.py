@@ -39,7 +39,7 @@ from workbench.tasks.fish_program import (
     get_world_transforms,
 )
 from workbench.tasks.fish_scene import get_fish_cutting_scene
-from workbench.trajectory.csv_io import read_trajectory_csv
+from workbench.trajectory.csv_io import read_trajectory_csv, record_path
 
 SETUP = FishCuttingSetup()
 
@@ -255,7 +255,7 @@ def test_cli_json_csv_and_html(tmp_path, capsys, run):
     samples = read_trajectory_csv(path, nq=6)
     np.testing.assert_allclose(samples.q, run.servo.q, atol=0)
     assert "<html" in page.read_text(encoding="utf-8")[:200]
-    assert sorted(tmp_path.iterdir()) == [path, page]
+    assert sorted(tmp_path.iterdir()) == sorted([path, record_path(path), page])
 
 
 @pytest.mark.parametrize(

@@ -121,13 +121,15 @@ def _solve_flags(robot: Robot, target: np.ndarray, value: float | None) -> Solve
     (All three when it raises ``UnreachableError(kind="model")``: no branch
     on the model.)
     """
+    solver = get_solver(robot)
     try:
-        _, _, events = get_solver(robot).solve_arrays(
-            target, np.empty(0), redundancy=value
-        )
+        _, _, events = solver.solve_arrays(target, np.empty(0), redundancy=value)
     except ik.UnreachableError as err:
         assert err.kind == "model"
         return ~SolveFlag(0)
+    solutions = solver.solve(target, redundancy=value)  # the same byte, named
+    assert solutions.solve_flags == events
+    assert isinstance(solutions.solve_flags, SolveFlag)
     return SolveFlag(events)
 
 

@@ -1,4 +1,4 @@
-"""``workbench.ik.IKSolution``: one solution type for every family, one flag byte."""
+"""``workbench.ik.IKSolution`` and ``Solutions``: one solution type for every family."""
 
 from __future__ import annotations
 
@@ -8,12 +8,16 @@ from dataclasses import FrozenInstanceError
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from workbench import load_robot
 from workbench.ik import (
     Flag,
     IKResult,
     IKSolution,
+    Solutions,
+    SolveFlag,
     analytic,
     get_solver,
     nearest,
@@ -131,3 +135,81 @@ def test_numerical_result_is_the_same_kind_of_record() -> None:
         result.position_error, result.rotation_error, result.restarts,
     )  # fmt: skip
     assert built == result
+
+
+# -- Solutions: the sequence a solve returns -----------------------------------
+LABELS = tuple(f"b{i}" for i in range(8))
+
+
+def _solutions(
+    mask: int, nq: int = 6, solve_flags: int = 0
+) -> tuple[Solutions, np.ndarray]:
+    """A Solutions whose branch i reaches where bit i of ``mask`` is set."""
+    q_all = np.arange(8.0 * nq).reshape(8, nq)
+    flags = np.zeros(8, dtype=np.uint8)
+    for i in range(8):
+        if mask >> i & 1:
+            flags[i] = Flag.REACHED | (Flag.WITHIN_LIMITS if i % 2 else 0)
+        else:
+            q_all[i] = np.nan
+    return Solutions.from_arrays(q_all, flags, LABELS, None, solve_flags), q_all
+
+
+@given(mask=st.integers(0, 255))
+def test_solutions_read_as_the_sequence_of_the_reached_branches(mask: int) -> None:
+    solutions, q_all = _solutions(mask)
+    reached = [i for i in range(8) if mask >> i & 1]
+    assert len(solutions) == len(reached) and bool(solutions) == bool(reached)
+    assert solutions.indices == tuple(reached)
+    assert [s.index for s in solutions] == reached
+    assert [s.branch for s in solutions] == [LABELS[i] for i in reached]
+    assert [s.index for s in reversed(solutions)] == reached[::-1]
+    for k, i in enumerate(reached):
+        assert solutions[k] == solutions[k - len(reached)] == list(solutions)[k]
+        assert solutions[k].index == i and solutions[k] in solutions
+        assert solutions.index(solutions[k]) == k and solutions.count(solutions[k]) == 1
+        np.testing.assert_array_equal(solutions[k].q, q_all[i])
+        assert solutions[k].within_limits == bool(i % 2)
+    assert solutions[1:] == tuple(list(solutions)[1:])
+    np.testing.assert_array_equal(solutions.q, q_all[reached].reshape(-1, 6))
+    np.testing.assert_array_equal(solutions.q_all, q_all)
+    assert ((solutions.flags_all != 0) == [bool(mask >> i & 1) for i in range(8)]).all()
+    for k in (len(reached), -len(reached) - 1):
+        with pytest.raises(IndexError):
+            solutions[k]
+
+
+def test_solutions_are_immutable_equal_by_value_and_pickle() -> None:
+    solutions, _ = _solutions(0b10110110, solve_flags=SolveFlag.BRANCH_VANISHED)
+    assert solutions.solve_flags is SolveFlag.BRANCH_VANISHED
+    with pytest.raises(FrozenInstanceError):
+        solutions.q_all = np.zeros((8, 6))  # type: ignore[misc]
+    with pytest.raises(ValueError, match="read-only"):
+        solutions.q_all[0, 0] = 1.0
+    with pytest.raises(ValueError, match="read-only"):
+        solutions.flags_all[0] = 1
+    with pytest.raises(ValueError, match="read-only"):
+        solutions[0].q[0] = 1.0
+    again, _ = _solutions(0b10110110, solve_flags=SolveFlag.BRANCH_VANISHED)
+    assert again == solutions and hash(again) == hash(solutions)
+    assert _solutions(0b10110111)[0] != solutions
+    for copied in (pickle.loads(pickle.dumps(solutions)), copy.deepcopy(solutions)):
+        assert copied == solutions and list(copied) == list(solutions)
+    with pytest.raises(TypeError):
+        solutions + solutions
+    with pytest.raises(TypeError):
+        solutions * 2
+    assert "b1" in repr(solutions) and "BRANCH_VANISHED" in repr(solutions)
+
+
+def test_a_solve_returns_solutions_of_its_arrays(arm) -> None:
+    robot, q, solutions = arm
+    assert type(solutions) is Solutions and solutions.solve_flags == 0
+    q_all, flags, solve_flags = get_solver(robot).solve_arrays(
+        robot.fk(q).homogeneous, np.empty(0), redundancy=solutions.redundancy
+    )
+    assert solve_flags == solutions.solve_flags
+    np.testing.assert_array_equal(solutions.q_all, q_all)
+    np.testing.assert_array_equal(solutions.flags_all, flags)
+    assert solutions.branches == get_solver(robot).branches
+    assert not solutions.q_all.flags.writeable

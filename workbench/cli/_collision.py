@@ -123,19 +123,54 @@ def check_fish_cutting_path(
     return scene, checker, clearance
 
 
+#: Why a collision check did not run (``collision_skipped`` of the JSON output).
+SKIPPED_BY_FLAG = "--no-collision"
+SKIPPED_NO_GEOMETRY = "no collision geometry in the URDF"
+
+
+def get_skip_reason(robot: Robot, args: argparse.Namespace) -> str | None:
+    """Why the collision check of this run is skipped, or None if it runs."""
+    if args.no_collision:
+        return SKIPPED_BY_FLAG
+    if robot.collision_model.ngeoms == 0:
+        return SKIPPED_NO_GEOMETRY
+    return None
+
+
 def get_collision_keys(
-    scene: Scene | None, report: PathClearance | None
+    scene: Scene | None, report: PathClearance | None, skipped: str | None
 ) -> dict[str, Any]:
-    """JSON keys: ``scene``, ``min_clearance``, ``collisions`` and details."""
+    """JSON keys: ``scene``, ``min_clearance``, ``collisions``, ``collision_skipped``.
+
+    ``collision_skipped`` is :func:`get_skip_reason`'s reason, None when the
+    check ran.
+    """
     if report is None:
-        return {"scene": None, "min_clearance": None, "collisions": []}
-    return {"scene": scene.name if scene else None, **report.as_dict()}
+        return {
+            "scene": None,
+            "min_clearance": None,
+            "collisions": [],
+            "collision_skipped": skipped,
+        }
+    return {
+        "scene": scene.name if scene else None,
+        **report.as_dict(),
+        "collision_skipped": None,
+    }
 
 
-def print_collision_summary(report: PathClearance | None) -> None:
-    """Human-readable lines of the collision check (stdout)."""
+def print_collision_summary(report: PathClearance | None, skipped: str | None) -> None:
+    """Human-readable lines of the collision check (stdout).
+
+    Args:
+        report: The clearance, None when the check was skipped.
+        skipped: Why it was skipped (:func:`get_skip_reason`).
+    """
     if report is None:
-        print("collision check skipped (--no-collision)")
+        if skipped == SKIPPED_NO_GEOMETRY:
+            print("no collision geometry in the URDF: collision check not possible")
+        else:
+            print("collision check skipped (--no-collision)")
         return
     print(
         f"min clearance {report.min_clearance:.4g} m ({report.body_a} - "

@@ -17,6 +17,7 @@ from workbench.errors import InputError, NonFiniteError
 from workbench.json_numbers import to_json_ready
 from workbench.model.loading import load_robot
 from workbench.model.robot import Robot
+from workbench.trajectory.csv_io import record_path
 
 #: Exit code of a request the robot cannot meet (an unreachable pose, a
 #: limit violation), printed as one line on stderr.
@@ -189,13 +190,16 @@ def bounded_int(minimum: int, maximum: int) -> Callable[[str], int]:
 def get_input_paths(args: argparse.Namespace, *extra: Path | None) -> list[Path]:
     """The files a command reads; its outputs must be none of them.
 
-    ``--robot`` when it is a URDF path, ``--scene``, ``--trajectory`` and
-    ``extra`` (None entries and paths that are no file are left out).
+    ``--robot`` when it is a URDF path, ``--scene``, ``--trajectory`` with its
+    record (``trajectory.csv_io.record_path``) and ``extra`` (None entries
+    and paths that are no file are left out).
     """
     paths = [Path(args.robot)] if getattr(args, "robot", None) else []
     for key in ("scene", "trajectory"):
         if getattr(args, key, None) is not None:
             paths.append(getattr(args, key))
+    if getattr(args, "trajectory", None) is not None:
+        paths.append(record_path(args.trajectory))
     return [p for p in (*paths, *extra) if p is not None and p.is_file()]
 
 

@@ -1,4 +1,4 @@
-"""``workbench export``: a joint trajectory to a ROS 2 bag, URScript or named CSV."""
+"""``workbench export``: a joint trajectory to a ROS 2 bag, URScript or a CSV."""
 
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ from workbench.cli._common import (
 )
 from workbench.collision import PathClearance
 from workbench.errors import InfeasibleError, InputError
-from workbench.export import write_named_csv, write_ros2_bag, write_urscript
+from workbench.export import write_ros2_bag, write_urscript
 from workbench.export.ros2_bag import DEFAULT_TOPIC
 from workbench.export.urscript import (
     DEFAULT_SERVO_RATE,
@@ -34,7 +34,12 @@ from workbench.export.urscript import (
     check_ur_joints,
 )
 from workbench.model.robot import Robot
-from workbench.trajectory.csv_io import JointTrajectorySamples, read_trajectory_csv
+from workbench.trajectory.csv_io import (
+    JointTrajectorySamples,
+    get_output_paths,
+    read_trajectory_csv,
+    write_trajectory_csv,
+)
 
 FORMATS = ("ros2-bag", "urscript", "csv")
 PICK_PLACE_RATE_HZ = 100.0
@@ -48,9 +53,10 @@ def register(commands: argparse._SubParsersAction) -> None:
         description=(
             "Export a joint trajectory: a ROS 2 bag (MCAP) with one "
             "trajectory_msgs/msg/JointTrajectory message, a URScript program "
-            "(servoj at the servo rate; UR arms only) or a CSV file whose header "
-            "names the joints and units. Nothing is written unless the export "
-            "succeeds."
+            "(servoj at the servo rate; UR arms only) or the trajectory CSV of "
+            "plan and fishcut (t,q1..qn,qd1..qdn,qdd1..qddn in SI units, with its "
+            "record FILE.csv.json naming the joints). Nothing is written unless "
+            "the export succeeds."
         ),
     )
     parser.add_argument("--format", required=True, choices=FORMATS)
@@ -144,9 +150,10 @@ def _refuse_contact(clearance: PathClearance | None) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Export; returns the exit code."""
-    check_output(
-        args.out, folder=args.format == "ros2-bag", inputs=get_input_paths(args)
-    )
+    inputs = get_input_paths(args)
+    check_output(args.out, folder=args.format == "ros2-bag", inputs=inputs)
+    if args.format == "csv":
+        check_output(get_output_paths(args.out)[1], inputs=inputs)
     if args.velocity_limit is not None and not args.fishcut:
         raise InputError("--velocity-limit applies to --fishcut (its planner) only")
     if args.trajectory is not None and (args.scene or args.no_collision):
@@ -170,7 +177,7 @@ def run(args: argparse.Namespace) -> int:
             args.out, samples, names, servo_rate=args.servo_rate, robot_name=robot.name
         )
     else:
-        write_named_csv(args.out, samples, names)
+        write_trajectory_csv(args.out, samples, joint_names=names)
     result = {
         "format": args.format,
         "out": str(args.out),

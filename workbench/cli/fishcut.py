@@ -11,6 +11,7 @@ from workbench.cli._collision import (
     add_collision_arguments,
     check_fish_cutting_path,
     get_collision_keys,
+    get_skip_reason,
     load_scene,
     print_collision_summary,
     report_collision_error,
@@ -32,7 +33,7 @@ from workbench.planning.redundancy_policy import REDUNDANCY_POLICIES
 from workbench.tasks import FishCuttingSetup, SimulatedFish, run_fish_cutting
 from workbench.tasks.fish_cutting import FishCuttingResult, summarize_fish_cutting
 from workbench.tasks.fish_program import get_cell_scale, is_redundant
-from workbench.trajectory.csv_io import write_trajectory_csv
+from workbench.trajectory.csv_io import get_output_paths, write_trajectory_csv
 
 DEFAULT_ROBOT = "puma560-kang"
 _DEFAULTS = FishCuttingSetup()
@@ -121,15 +122,17 @@ def register(commands: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the program; write the CSV and the page only if it completes."""
-    check_outputs([args.csv, args.html], get_input_paths(args))
+    csv_files = [] if args.csv is None else get_output_paths(args.csv)
+    check_outputs([*csv_files, args.html], get_input_paths(args))
     robot = load_robot_from_args(args)
     given = load_scene(args, lambda: None)  # a --scene file is checked first
     result = _run_fish_cutting(robot, args)
     scene, checker, clearance = check_fish_cutting_path(robot, result, given, args)
+    skipped = get_skip_reason(robot, args)
     _write_outputs(args, robot, result, checker)
     summary = {
         **summarize_fish_cutting(result, robot.name),
-        **get_collision_keys(scene, clearance),
+        **get_collision_keys(scene, clearance, skipped),
     }
     if args.json:
         print_json(summary)
@@ -164,7 +167,7 @@ def run(args: argparse.Namespace) -> int:
     for option, path in (("csv", args.csv), ("html", args.html)):
         if path is not None:
             print(f"{option} written to {path}")
-    print_collision_summary(clearance)
+    print_collision_summary(clearance, skipped)
     return 3 if report_collision_error(clearance) else 0
 
 
@@ -193,7 +196,8 @@ def _write_outputs(
     checker: CollisionChecker | None,
 ) -> None:
     """``--html`` and ``--csv``, together (all or none)."""
-    outputs = [p for p in (args.html, args.csv) if p is not None]
+    csv_files = [] if args.csv is None else get_output_paths(args.csv)
+    outputs = [*([] if args.html is None else [args.html]), *csv_files]
     with atomic_files(*outputs) as temps:
         staged = dict(zip(outputs, temps, strict=True))
         if args.html is not None:  # viewer imported lazily (optional extra)
@@ -207,4 +211,10 @@ def _write_outputs(
                 checker=checker,
             )
         if args.csv is not None:
-            write_trajectory_csv(staged[args.csv], result.servo)
+            csv_file, record = csv_files
+            write_trajectory_csv(
+                staged[csv_file],
+                result.servo,
+                joint_names=robot.joint_names,
+                record=staged[record],
+            )

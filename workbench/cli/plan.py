@@ -19,6 +19,7 @@ from workbench.cli._collision import (
     add_collision_arguments,
     check_pick_and_place_path,
     get_collision_keys,
+    get_skip_reason,
     print_collision_summary,
     report_collision_error,
 )
@@ -38,8 +39,17 @@ from workbench.cli._plan_poses import get_configurations
 from workbench.cli._redundancy import add_redundancy_argument
 from workbench.cli.ik import CRITERIA
 from workbench.errors import InputError
-from workbench.trajectory import minimum_duration, pick_and_place
-from workbench.trajectory.csv_io import check_sample_count, write_trajectory_csv
+from workbench.trajectory import (
+    describe_unknown_limits,
+    get_unknown_limits,
+    minimum_duration,
+    pick_and_place,
+)
+from workbench.trajectory.csv_io import (
+    check_sample_count,
+    get_output_paths,
+    write_trajectory_csv,
+)
 from workbench.trajectory.normal_spline import DEFAULT_N_POINTS, MIN_N_POINTS
 
 DEFAULT_RATE_HZ = 100.0
@@ -150,7 +160,8 @@ def run_pick_place(args: argparse.Namespace) -> int:
     The outputs are checked before any work and written together at the end
     (all or none, :func:`workbench.atomic_files.atomic_files`).
     """
-    check_outputs([args.csv, args.plot], get_input_paths(args))
+    csv_files = [] if args.csv is None else get_output_paths(args.csv)
+    check_outputs([*csv_files, args.plot], get_input_paths(args))
     if args.plot is not None:
         check_plot_format(args.plot)
     check_sample_count(
@@ -163,12 +174,19 @@ def run_pick_place(args: argparse.Namespace) -> int:
     t_min = minimum_duration(robot, q_pick, q_place, n_points=args.n_points)
     violations = traj.check_limits()
     scene, clearance = check_pick_and_place_path(robot, traj, args, args.rate)
+    skipped = get_skip_reason(robot, args)
     samples = traj.sample_uniform(args.rate) if args.csv else None
-    outputs = [p for p in (args.csv, args.plot) if p is not None]
+    outputs = [*csv_files, *([] if args.plot is None else [args.plot])]
     with atomic_files(*outputs) as temps:
         staged = dict(zip(outputs, temps, strict=True))
         if samples is not None:
-            write_trajectory_csv(staged[args.csv], samples)
+            csv_file, record = csv_files
+            write_trajectory_csv(
+                staged[csv_file],
+                samples,
+                joint_names=robot.joint_names,
+                record=staged[record],
+            )
         if args.plot:
             from workbench.plots.trajectory import plot_joint_trajectory
 
@@ -183,6 +201,7 @@ def run_pick_place(args: argparse.Namespace) -> int:
         "joint_names": robot.joint_names,
         "duration": traj.duration,
         "min_duration": t_min,
+        "unknown_limits": get_unknown_limits(robot),
         "n_points": traj.spline.n_points,
         "amplitude": traj.spline.amplitude,
         "q_pick": traj.q_pick,
@@ -194,13 +213,13 @@ def run_pick_place(args: argparse.Namespace) -> int:
         "samples": 0 if samples is None else int(samples.t.size),
         "plot": None if args.plot is None else str(args.plot),
         **ik_keys,
-        **get_collision_keys(scene, clearance),
+        **get_collision_keys(scene, clearance, skipped),
     }
     if args.json:
         print_json(result)
     else:
         _print_human(robot, traj, result)
-        print_collision_summary(clearance)
+        print_collision_summary(clearance, skipped)
     if violations:
         more = f" (and {len(violations) - 1} more)" if len(violations) > 1 else ""
         print(f"workbench: error: {violations[0].message}{more}", file=sys.stderr)
@@ -251,6 +270,9 @@ def _print_human(robot, traj, result: dict) -> None:
             f"{np.rad2deg(result['peak_acceleration'][i]):11.3f}"
             f"{np.rad2deg(robot.acceleration_limit[i]):9.2f}"
         )
+    note = describe_unknown_limits(robot)
+    if note is not None:
+        print(note)
     redundancy = result["redundancy"]
     if result["branch"] is not None:
         print(f"pick and place poses on branch {result['branch']}")

@@ -140,7 +140,9 @@ def run_pick_and_place_demo(
     ends = np.abs(np.concatenate([cart.velocity[[0, -1]], cart.acceleration[[0, -1]]]))
     comparison = compare_time_optimal(robot, q3_pick, q3_place, use_toppra=False)
     write_trajectory_csv(
-        out_dir / "pick_and_place.csv", traj.sample_uniform(CSV_RATE_HZ)
+        out_dir / "pick_and_place.csv",
+        traj.sample_uniform(CSV_RATE_HZ),
+        joint_names=robot.joint_names,
     )
     try:
         singular = _singularities(robot, t, traj.sample(t)[0])

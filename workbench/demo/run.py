@@ -149,7 +149,9 @@ def _run_fish_cutting(out_dir: Path, *, pages: bool) -> dict[str, Any]:
     load_kernels()
     kang = load_robot("puma560-kang")
     result = run_fish_cutting(kang)
-    write_trajectory_csv(out_dir / "fishcut.csv", result.servo)
+    write_trajectory_csv(
+        out_dir / "fishcut.csv", result.servo, joint_names=kang.joint_names
+    )
     summary = summarize_fish_cutting(result, kang.name)
     checker = CollisionChecker(
         kang, get_fish_cutting_scene(kang, result.fish, result.setup)

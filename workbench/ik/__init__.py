@@ -57,7 +57,7 @@ from workbench.ik.selection import (
     compute_limit_margin,
     select,
 )
-from workbench.ik.solution import IKSolution
+from workbench.ik.solution import IKSolution, Solutions
 from workbench.ik.solver import Solver, get_solver
 from workbench.ik.structure import (
     CALIBRATION_ANGLE_TOL,
@@ -94,6 +94,7 @@ __all__ = [
     "IKSolution",
     "KinematicStructure",
     "RedundancyChoice",
+    "Solutions",
     "SolveFlag",
     "Solver",
     "StructureDeviation",

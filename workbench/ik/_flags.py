@@ -10,10 +10,12 @@ reads its flags from them. A branch that does not reach the pose has the byte
 The same bits as an :class:`enum.IntFlag`: :class:`Flag` (``IKSolution.flags``).
 The kernels use the plain ints (compiled code reads module constants).
 
-A solve as a whole has one more byte, :class:`SolveFlag`: what carrying the
-branches of a calibrated arm from its idealised structure to the model
-(``_refine_kernel``, ``_refine_redundant_kernel``) could not place. It is 0 on
-an exact model, and on every pose whose branches all carried over one to one.
+What holds for a whole solve rather than for one branch is a second byte,
+:class:`SolveFlag` (``Solutions.solve_flags``): on an arm solved through the
+ideal structure of its family and refined on its own model (a calibrated
+arm), a branch of the ideal arm that has no counterpart on the model, two
+that meet, or solutions of the model no branch holds. It is 0 on an exact
+model.
 """
 
 from __future__ import annotations
@@ -38,19 +40,6 @@ WRIST_SINGULAR = 16
 PARAMETER_SINGULAR = 32
 
 
-#: Solve-level bits (:class:`SolveFlag`). A branch of the idealised arm that
-#: reaches the pose found no solution of the model continuing it (it vanished
-#: at a fold of the model, e.g. where the two elbows meet): its row is NaN.
-BRANCH_VANISHED = 1
-#: Two branches of the idealised arm led to one solution of the model and no
-#: other solution was found for the second: its row is NaN.
-BRANCHES_MERGED = 2
-#: The model may have solutions near a singularity that no branch holds (more
-#: solutions than free branches, or a valley of near-singular solutions that
-#: is not searched).
-SOLUTIONS_UNLISTED = 4
-
-
 class Flag(enum.IntFlag):
     """The flag bits of a branch (module docs), as an :class:`enum.IntFlag`."""
 
@@ -62,8 +51,20 @@ class Flag(enum.IntFlag):
     PARAMETER_SINGULAR = PARAMETER_SINGULAR
 
 
+#: A calibrated arm: a branch of the ideal arm that reaches the pose has no
+#: solution of the model continuing it (it vanished at a fold of the model);
+#: it is not among the solutions.
+BRANCH_VANISHED = 1
+#: A calibrated arm: two branches of the ideal arm led to one solution of the
+#: model and no other was found for the second; it is not among the solutions.
+BRANCHES_MERGED = 2
+#: A calibrated arm: near a singularity the model may have solutions that no
+#: branch holds.
+SOLUTIONS_UNLISTED = 4
+
+
 class SolveFlag(enum.IntFlag):
-    """The solve-level bits of one pose (module docs), as an :class:`enum.IntFlag`."""
+    """The flag bits of a whole solve (module docs), an :class:`enum.IntFlag`."""
 
     BRANCH_VANISHED = BRANCH_VANISHED
     BRANCHES_MERGED = BRANCHES_MERGED

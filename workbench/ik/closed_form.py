@@ -31,7 +31,7 @@ import pinocchio as pin
 
 from workbench.errors import InputError
 from workbench.ik._puma import TAU, WRIST_SINGULAR_TOL
-from workbench.ik.solution import IKSolution
+from workbench.ik.solution import IKSolution, Solutions
 from workbench.ik.solver import BRANCHES, UR_BRANCHES, get_solver
 from workbench.model.robot import Robot
 from workbench.validation import as_vector
@@ -45,7 +45,7 @@ def analytic(
     *,
     q_previous: npt.ArrayLike | None = None,
     redundancy: float | None = None,
-) -> list[IKSolution]:
+) -> Solutions:
     """Every closed-form IK branch of a 6R (OPW, UR) or 7R (SRS, Franka) arm.
 
     Args:

@@ -85,7 +85,7 @@ from workbench.ik.redundant import (
     feasible_union,
     format_intervals,
 )
-from workbench.ik.solution import IKSolution
+from workbench.ik.solution import Solutions
 from workbench.ik.structure import StructureDeviation, get_structure
 from workbench.model.per_robot import per_robot
 from workbench.model.robot import Robot
@@ -108,6 +108,9 @@ _NO_PREVIOUS = np.empty(0)
 _FLOAT64 = np.dtype(np.float64)
 _UINT8 = np.dtype(np.uint8)
 _empty = np.empty
+_NDARRAY = np.ndarray
+_INF = math.inf
+_solutions = Solutions.from_arrays
 #: The SRS record the refinement of a Franka arm is given (it holds q7, not ψ).
 _NO_ARM_ANGLE = np.zeros(1, dtype=_srs_kernel.GEOMETRY_DTYPE)
 _NO_ARM_ANGLE.setflags(write=False)
@@ -206,7 +209,7 @@ class Solver:
         *,
         redundancy: float | None = None,
         q_previous: npt.ArrayLike | None = None,
-    ) -> list[IKSolution]:
+    ) -> Solutions:
         """Every branch that reaches ``target``: see :func:`workbench.ik.analytic`.
 
         Args:
@@ -218,8 +221,9 @@ class Solver:
                 the representative (mod 2π) nearest it.
 
         Returns:
-            One :class:`~workbench.ik.IKSolution` per branch that reaches, in
-            the order of ``branches``.
+            The :class:`~workbench.ik.Solutions` of the solve: one
+            :class:`~workbench.ik.IKSolution` per branch that reaches, in the
+            order of ``branches``, built when read.
 
         Raises:
             UnreachableError: If no branch reaches the pose (the message says
@@ -229,7 +233,7 @@ class Solver:
                 arm, none for a seven-axis arm without ``q_previous``).
         """
         if (
-            target.__class__ is np.ndarray
+            target.__class__ is _NDARRAY
             and target.shape == (4, 4)
             and target.dtype is _FLOAT64
         ):
@@ -243,31 +247,25 @@ class Solver:
             if redundancy is not None:
                 raise self._no_redundancy()
             q, flags = _empty((8, 6)), _empty(8, _UINT8)  # (positional: faster)
+            events = 0
             if self._refine is not None or self._solve_pose(
                 self.geometry, pose, prev, q, flags, True
             ):  # not OK (rechecked, or raises), or refined on the model
-                q, flags, _ = self.solve_arrays(pose, prev)
+                q, flags, events = self.solve_arrays(pose, prev)
         else:
             if redundancy is None:
                 if q_previous is None:
                     raise self._missing_redundancy()
                 redundancy = float(self.parameter_of(prev))
-            elif redundancy.__class__ is not float or not (
-                -math.inf < redundancy < math.inf
-            ):
+            elif redundancy.__class__ is not float or not -_INF < redundancy < _INF:
                 redundancy = check_redundancy(redundancy, self.parameter)
             q, flags = _empty((8, 7)), _empty(8, _UINT8)
+            events = 0
             if self._refine is not None or self._solve_pose(
                 self.geometry, pose, redundancy, prev, q, flags, True
             ):
-                q, flags, _ = self.solve_arrays(pose, prev, redundancy=redundancy)
-        q.setflags(write=False)
-        labels = self.branches
-        return [  # (IKSolution(items) is tuple.__new__ through type's fast call)
-            IKSolution((q, i, bits, labels, redundancy))
-            for i, bits in zip(self._indices, flags.tolist(), strict=True)
-            if bits
-        ]
+                q, flags, events = self.solve_arrays(pose, prev, redundancy=redundancy)
+        return _solutions(q, flags, self.branches, redundancy, events)
 
     def _first_solve_pose(self, *args: Any) -> int:
         """The kernel's ``solve_pose``, then its compiled code for later calls.

@@ -6,7 +6,9 @@ computed once per robot object with :func:`per_robot` and forgotten with the
 robot: the cache holds no strong reference to it (an entry leaves when the
 robot is garbage-collected), and an entry is rebuilt when the robot's model,
 limits or tool frame have been replaced since (its *stamp*) by objects that are
-not equal to them (an equal copy of the model describes the same arm).
+not equal to them (an equal copy of the model describes the same arm). A
+lookup first compares the robot's ``_revision`` (renewed by every attribute
+assignment): the stamp is built and compared only after an assignment.
 """
 
 from __future__ import annotations
@@ -51,21 +53,28 @@ def per_robot(build: Callable[[Robot], T]) -> Callable[[Robot], T]:
     """Cache ``build(robot)`` per robot object, weakly (module docstring).
 
     The decorated function takes the robot only. A lookup costs a dict access
-    and an identity comparison of the stamp; ``cache_clear()`` empties it.
+    and the comparison of two ints; ``cache_clear()`` empties it.
     """
-    entries: dict[int, tuple[weakref.ref[Robot], tuple[Any, ...], T]] = {}
+    # entries: [robot (weakly), revision, stamp, value]
+    entries: dict[int, list[Any]] = {}
 
     @functools.wraps(build)
     def cached(robot: Robot) -> T:
         key = id(robot)
         entry = entries.get(key)
-        stamp = _stamp(robot)
-        if entry is not None and entry[0]() is robot and _same(entry[1], stamp):
-            return entry[2]
+        if entry is not None and entry[0]() is robot:
+            if entry[1] == robot._revision:  # nothing assigned since
+                return entry[3]
+            revision, stamp = robot._revision, _stamp(robot)
+            if _same(entry[2], stamp):
+                entry[1] = revision
+                return entry[3]
+        else:
+            revision, stamp = robot._revision, _stamp(robot)
         value = build(robot)
         if entry is None or entry[0]() is not robot:
             weakref.finalize(robot, entries.pop, key, None)
-        entries[key] = (weakref.ref(robot), stamp, value)
+        entries[key] = [weakref.ref(robot), revision, stamp, value]
         return value
 
     cached.cache_clear = entries.clear  # type: ignore[attr-defined]

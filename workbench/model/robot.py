@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 from functools import cached_property
 from pathlib import Path
@@ -29,6 +30,8 @@ _LOCAL_WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
 _FLOAT64 = np.dtype(np.float64)
+#: Revisions of the robots' attributes, unique over all robots (``Robot._revision``).
+_REVISIONS = itertools.count()
 
 # Module-level names for the per-call paths of fk / jacobian.
 _forward_kinematics = pin.forwardKinematics
@@ -101,6 +104,7 @@ class Robot:
         acceleration_limit: npt.ArrayLike | None = None,
         dh_table: DHTable | None = None,
     ):
+        self._revision: int
         self.name = name
         self.dh_table = dh_table
         self.model = model
@@ -118,6 +122,16 @@ class Robot:
         self.acceleration_limit = _read_only(
             _positive_limits(acceleration_limit, model.nv, "acceleration_limit")
         )
+
+    def __setattr__(self, name: str, value: object) -> None:
+        """Set an attribute, and give the robot a new ``_revision``.
+
+        ``_revision`` tells the per-robot caches
+        (:func:`~workbench.model.per_robot.per_robot`) in one comparison
+        that no attribute was assigned since a value was derived.
+        """
+        object.__setattr__(self, name, value)
+        object.__setattr__(self, "_revision", next(_REVISIONS))
 
     def with_limits(
         self,

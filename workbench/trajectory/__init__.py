@@ -27,6 +27,8 @@ from workbench.trajectory.limits import (
     JointExtrema,
     LimitViolation,
     check_limits,
+    describe_unknown_limits,
+    get_unknown_limits,
     minimum_duration,
     raise_for_violations,
 )
@@ -70,7 +72,9 @@ __all__ = [
     "compute_normal_spline",
     "compute_time_optimal_duration",
     "compute_toppra_duration",
+    "describe_unknown_limits",
     "get_normal_spline",
+    "get_unknown_limits",
     "minimum_duration",
     "pick_and_place",
     "pick_and_place_from_poses",

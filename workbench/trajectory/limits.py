@@ -247,6 +247,51 @@ def minimum_duration(
     return float(max(by_speed.max(initial=0.0), by_acc.max(initial=0.0)))
 
 
+def get_unknown_limits(robot: Robot) -> dict[str, list[str]]:
+    """The joints whose speed or acceleration limit the model does not give.
+
+    Such a limit is infinite (a URDF's ``velocity="0"`` or missing
+    ``<limit>``; a URDF has no acceleration limits): :func:`minimum_duration`
+    and :func:`check_limits` then respect the known limits only.
+
+    Returns:
+        ``{"velocity": names, "acceleration": names}``, joint names in
+        model order (empty lists when every limit is known).
+    """
+    names = robot.joint_names
+    return {
+        kind: [
+            n
+            for n, v in zip(names, _rate_limit(robot, order), strict=True)
+            if not np.isfinite(v)
+        ]
+        for kind, order in (("velocity", 1), ("acceleration", 2))
+    }
+
+
+def describe_unknown_limits(robot: Robot) -> str | None:
+    """One line saying which limits are unknown and what the minimum means.
+
+    None when every speed and acceleration limit is known.
+    """
+    unknown = get_unknown_limits(robot)
+    count = len(robot.joint_names)
+    parts = []
+    for kind in ("velocity", "acceleration"):
+        names = unknown[kind]
+        if len(names) == count:
+            parts.append(f"no {kind} limit for any joint")
+        elif names:
+            parts.append(f"no {kind} limit for {', '.join(names)}")
+    if not parts:
+        return None
+    if len(unknown["velocity"]) == len(unknown["acceleration"]) == count:
+        meaning = "no minimum duration is known (0 s stands for none)"
+    else:
+        meaning = "the minimum duration respects the known limits only"
+    return f"note: the model gives {'; '.join(parts)}: {meaning}"
+
+
 def _require_vector_space(robot: Robot) -> None:
     if robot.nq != robot.nv:
         raise InputError(
