@@ -41,6 +41,7 @@ from workbench.ik._chain_kernel import (
     _error,
     _forward,
     _jacobian,
+    _products,
     _solve,
 )
 from workbench.ik._flags import (
@@ -77,6 +78,10 @@ REFINE_STEPS = 60
 #: Newton steps of the fast path of a regular branch (:func:`_newton`; it needs
 #: three from the closed form of a calibrated arm's idealised structure).
 FAST_STEPS = 6
+#: Steps shorter than this [rad] turn the sines and cosines of :func:`_newton`
+#: by their Taylor series (to d⁷; the first term left out, d⁸/40320, is 3e-23
+#: at 0.005) instead of calling the library per joint.
+TRIG_STEP = 0.005
 #: How far [rad, in joint space] twins that start at one fold point of the
 #: idealised arm are moved apart along J's null direction (the model's
 #: solutions lie about √deviation from the fold: 0.01–0.06 rad for 1e-4…1e-3),
@@ -521,9 +526,14 @@ def _newton(chain: FloatArray, target: FloatArray, x: FloatArray, work) -> bool:
     frames = work[0:7]
     jac, lu = work[7:13, 0:6], work[13:19, 0:6]
     e, previous = work[19, 0:6], work[20, 0:6]
+    sines, cosines = work[24, 0:6], work[25, 0:6]
+    for k in range(6):
+        sines[k], cosines[k] = math.sin(x[k]), math.cos(x[k])
     last = math.inf
     for step in range(FAST_STEPS + 1):
-        _forward(chain, x, frames)
+        for k in range(6):
+            frames[k, 0], frames[k, 1] = sines[k], cosines[k]
+        _products(chain, x, frames)
         size = _fast_error(target, frames, e)
         if size <= POLISH:
             return True
@@ -542,7 +552,16 @@ def _newton(chain: FloatArray, target: FloatArray, x: FloatArray, work) -> bool:
             return False
         for k in range(6):
             previous[k] = x[k]
-            x[k] -= e[k]
+            d = e[k]
+            x[k] -= d
+            if abs(d) < TRIG_STEP:  # sin, cos of x - d from those of x
+                d2 = d * d
+                sd = d * (1.0 - d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0)))
+                cd = 1.0 - d2 / 2.0 * (1.0 - d2 / 12.0 * (1.0 - d2 / 30.0))
+                s, c = sines[k], cosines[k]
+                sines[k], cosines[k] = s * cd - c * sd, c * cd + s * sd
+            else:
+                sines[k], cosines[k] = math.sin(x[k]), math.cos(x[k])
     return False
 
 
