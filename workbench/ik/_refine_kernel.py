@@ -1,26 +1,35 @@
-r"""Compiled Newton refinement of closed-form branches on the robot's true chain.
+r"""Compiled carrying of closed-form branches to the robot's own chain.
 
 The closed forms solve the *idealised* structure fitted to the joint axes
 (:mod:`workbench.ik.structure`: right angles exact, lengths within
 ``STRUCTURE_TOL`` of 0 set to 0). A URDF that is of a family only up to its
-rounding (α = π/2 written ``1.570796325``, 1.8e-9 rad off) then gets branches
-that miss its pose by about that deviation times the reach. Each such branch
-is the start of a few Newton steps on the true chain (``_chain.get_chain``),
-with the forward kinematics, Jacobian and error of ``_chain_kernel``:
+rounding (α = π/2 written ``1.570796325``, 1.8e-9 rad off), or a calibrated
+arm within ``CALIBRATION_ANGLE_TOL`` and ``CALIBRATION_DISTANCE_TOL`` of it
+(joint-origin deltas of 1e-4…1e-3 rad and 0.1…1 mm), then gets branches that
+miss its pose by about that deviation times the reach. Each such branch is
+the start of Newton steps on the true chain (``_chain.get_chain``), with the
+forward kinematics and Jacobian of ``_chain_kernel``:
 
-.. math:: q \leftarrow q - J^T (J J^T + \lambda I)^{-1} e, \quad
-   e = \log_6(T^{-1} M(q)), \quad \lambda = |e|^2
+* the fast path (:func:`_carry_direct`, :func:`_newton`): J dq = e by LU,
+  e the first-order error of :func:`_fast_error`; fold twins (one start, J
+  singular there) moved apart along J's null direction; taken when every
+  branch converges to a solution of its own;
+* elsewhere the complete search (:func:`_search_pose`): damped steps
 
-(J the LOCAL Jacobian of the tool; λ = |e|² is Levenberg–Marquardt's damping
-of Yamashita and Fukushima: Newton's quadratic convergence where J is regular,
-bounded steps where it is singular). Where the idealised arm has a
-one-parameter family of solutions (singular wrist, wrist centre on the base
-or shoulder axis) and Newton cannot follow the model's valley to its member,
-:func:`_valley_search` looks for it. A branch is kept when its FK residual,
-position :math:`|p(q) - p_T|` [m] and rotation :math:`|\log_3(R_T^T R(q))|`
-[rad], is within :data:`ACCEPT` times :data:`POSITION_TOL` and
+  .. math:: q \leftarrow q - J^T (J J^T + \lambda I)^{-1} e, \quad
+     e = \log_6(T^{-1} M(q)), \quad \lambda = |e|^2
+
+  (λ = |e|² is Levenberg–Marquardt's damping of Yamashita and Fukushima),
+  restarts of twins mirrored through the solution found, the valley scan of
+  :func:`_valley_search` where the idealised arm has (or is near) a
+  one-parameter family of solutions, and a matching of solutions to branches.
+
+A branch is kept when its FK residual, position :math:`|p(q) - p_T|` [m] and
+rotation [rad], is within :data:`ACCEPT` times :data:`POSITION_TOL` and
 :data:`ROTATION_TOL`; else it is reported as not reaching (its row NaN),
-never returned with a larger residual.
+never returned with a larger residual. What the carrying could not place is
+the solve-level byte (``ik.SolveFlag``: a branch vanished, branches merged,
+solutions may be unlisted), which the entry points return.
 
 Only robots whose model differs from the idealised structure are refined
 (:func:`refinement_chain`): the DH tables of the PUMA models and clean URDFs
@@ -511,6 +520,25 @@ def _fast_error(target: FloatArray, frames: FloatArray, e: FloatArray) -> float:
     return max(math.sqrt(position) / POSITION_TOL, math.sqrt(rotation) / ROTATION_TOL)
 
 
+@helper(forceinline=True)
+def step_back(x: FloatArray, k: int, d: float, sines, cosines) -> None:
+    """``x[k] -= d``, and its sine and cosine in ``sines[k]``, ``cosines[k]``.
+
+    A step shorter than :data:`TRIG_STEP` turns them by the Taylor series of
+    sin d and cos d (Newton's last steps: no library call); a longer one
+    calls the library.
+    """
+    x[k] -= d
+    if abs(d) < TRIG_STEP:
+        d2 = d * d
+        sd = d * (1.0 - d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0)))
+        cd = 1.0 - d2 / 2.0 * (1.0 - d2 / 12.0 * (1.0 - d2 / 30.0))
+        s, c = sines[k], cosines[k]
+        sines[k], cosines[k] = s * cd - c * sd, c * cd + s * sd
+    else:
+        sines[k], cosines[k] = math.sin(x[k]), math.cos(x[k])
+
+
 @helper()
 def _newton(chain: FloatArray, target: FloatArray, x: FloatArray, work) -> bool:
     """Newton steps J dq = e on ``x`` (6,) in place; whether it converged.
@@ -552,16 +580,7 @@ def _newton(chain: FloatArray, target: FloatArray, x: FloatArray, work) -> bool:
             return False
         for k in range(6):
             previous[k] = x[k]
-            d = e[k]
-            x[k] -= d
-            if abs(d) < TRIG_STEP:  # sin, cos of x - d from those of x
-                d2 = d * d
-                sd = d * (1.0 - d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0)))
-                cd = 1.0 - d2 / 2.0 * (1.0 - d2 / 12.0 * (1.0 - d2 / 30.0))
-                s, c = sines[k], cosines[k]
-                sines[k], cosines[k] = s * cd - c * sd, c * cd + s * sd
-            else:
-                sines[k], cosines[k] = math.sin(x[k]), math.cos(x[k])
+            step_back(x, k, e[k], sines, cosines)
     return False
 
 

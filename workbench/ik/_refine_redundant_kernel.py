@@ -34,7 +34,13 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench._compiled import entry_point, helper
-from workbench.ik._chain_kernel import _damped_step, _forward, _jacobian, _solve
+from workbench.ik._chain_kernel import (
+    _damped_step,
+    _forward,
+    _jacobian,
+    _products,
+    _solve,
+)
 from workbench.ik._kernel_common import remainder
 from workbench.ik._refine_kernel import (
     ACCEPT,
@@ -52,6 +58,7 @@ from workbench.ik._refine_kernel import (
     keep_best,
     pose_error,
     solution_gap,
+    step_back,
     write_flags,
 )
 from workbench.ik._refine_kernel import _refine_pose as refine_six
@@ -69,8 +76,9 @@ PARAMETER_STEP = 1e-6
 #: 1e-4…1e-3 of deviation).
 FOLD_JOINTS = (3, 1, 5)
 FOLD_STEP = 0.05
-#: Rows of the scratch array of :func:`_refine_row` (12 columns).
-WORK_ROWS = 28
+#: Rows of the scratch array of :func:`_refine_row` and :func:`_newton_srs`
+#: (12 columns).
+WORK_ROWS = 30
 
 
 @helper()
@@ -99,9 +107,14 @@ def _newton_srs(chain, geo, target, value: float, q, work) -> bool:
     r, previous = work[22, 0:7], work[23, 0:7]
     theta, shifted = work[26, 0:7], work[27, 0:7]
     gradient = work[24, 0:7]
+    sines, cosines = work[28, 0:7], work[29, 0:7]
+    for k in range(7):
+        sines[k], cosines[k] = math.sin(q[k]), math.cos(q[k])
     last = math.inf
     for step in range(FAST_STEPS + 1):
-        _forward(chain, q, frames)
+        for k in range(7):
+            frames[k, 0], frames[k, 1] = sines[k], cosines[k]
+        _products(chain, q, frames)
         size = _fast_error(target, frames, r)
         psi = _arm_angle_of(geo, q, theta)
         r[6] = remainder(psi - value)
@@ -134,7 +147,7 @@ def _newton_srs(chain, geo, target, value: float, q, work) -> bool:
             return False
         for k in range(7):
             previous[k] = q[k]
-            q[k] -= r[k]
+            step_back(q, k, r[k], sines, cosines)
     return False
 
 

@@ -18,10 +18,15 @@ line all solve through it. Every solve returns
 :class:`~workbench.ik.IKSolution`\ s, whose flags are the per-branch bits of
 :mod:`workbench.ik._flags` (one encoding for every kernel).
 
-On a model that is of its family only up to its rounding, every reached
-branch is then refined on the model's own chain (``_refine_kernel``,
-``_refine_redundant_kernel``; a seven-axis arm with the parameter held):
-exact to 1e-12 there too; a branch that does not converge does not reach.
+On a model that is of its family only up to its rounding, or a calibrated
+arm within ``CALIBRATION_ANGLE_TOL`` and ``CALIBRATION_DISTANCE_TOL`` of it
+(:attr:`Solver.deviation`), every reached branch is then carried to the
+model's own chain (``_refine_kernel``, ``_refine_redundant_kernel``; a
+seven-axis arm with the parameter held): exact to 1e-12 there too; a branch
+without a solution of the model does not reach, and what could not be placed
+is the solve's :class:`~workbench.ik.SolveFlag` byte
+(``Solutions.solve_flags``, the third value of :meth:`Solver.solve_arrays`,
+``solve_batch(..., solve_flags=)``).
 
 OPW branch labels (UR labels: :data:`UR_BRANCHES`) are physical, so that one
 posture of the PUMA carries the same label in both DH models of the workbench
