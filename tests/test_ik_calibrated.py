@@ -325,6 +325,37 @@ def test_single_poses_agree_with_the_batch_and_report_lost_branches(folder) -> N
     assert not clean_events.any()
 
 
+def test_a_pose_just_past_the_ideal_reach_is_flagged(folder) -> None:
+    """The idealised Franka arm refuses a pose the calibrated model reaches: said.
+
+    Configuration 4214 of 10⁴ random ones (seed 1) of the calibrated Panda puts
+    the wrist point 0.18 mm past the idealised arm's stretched elbow at its q7:
+    the kernel finds no start, the single solve raises ``kind="model"`` (the
+    model may reach it) and the batch sets ``SOLUTIONS_UNLISTED``.
+    """
+    robot = calibrated_urdf("panda", folder, seed=0)
+    solver = get_solver(robot)
+    rng = np.random.default_rng(1)
+    q = rng.uniform(robot.lower, robot.upper, (10_000, 7))[4214]
+    target = robot.fk(q).homogeneous
+    value = float(solver.parameter_of(q))
+    with pytest.raises(ik.UnreachableError, match="may reach it") as err:
+        solver.solve(target, redundancy=value)
+    assert err.value.kind == "model"
+    distance, high = err.value.distance, err.value.bounds[1]
+    assert 0.0 < distance - high <= solver._slack  # past the reach, within the slack
+    events = np.empty(1, dtype=np.uint8)
+    _, valid = solver.solve_batch(target[None], redundancy=value, solve_flags=events)
+    assert not valid.any() and events[0] == SolveFlag.SOLUTIONS_UNLISTED
+    far = target.copy()
+    far[:3, 3] *= 3.0  # far out of every reach: refused as before
+    with pytest.raises(ik.UnreachableError) as err:
+        solver.solve(far, redundancy=value)
+    assert err.value.kind == "reach"
+    get_solver(robot).solve_batch(far[None], redundancy=value, solve_flags=events)
+    assert events[0] == 0
+
+
 # -- no solution outside the branches -------------------------------------------
 
 

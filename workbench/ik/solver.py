@@ -73,7 +73,7 @@ from workbench.ik import _refine_redundant_kernel as refine_redundant
 from workbench.ik import _srs_kernel
 from workbench.ik._atan2_kernel import atan2_into
 from workbench.ik._chain import compiled_entry
-from workbench.ik._flags import WITHIN_LIMITS
+from workbench.ik._flags import SOLUTIONS_UNLISTED, WITHIN_LIMITS
 from workbench.ik._kernel_common import (
     IN_CYLINDER,
     NOT_RIGID,
@@ -81,6 +81,7 @@ from workbench.ik._kernel_common import (
     continuing_branch,
     nearest_or_kept,
 )
+from workbench.ik._puma import MODEL_ERROR_SLACK
 from workbench.ik._refine_kernel import refine_batch, refine_pose, refinement_chain
 from workbench.ik._targets import as_targets, check_poses, pose_rows
 from workbench.ik.families import BRANCHES, UR_BRANCHES, Family, require_family
@@ -140,7 +141,8 @@ class Solver:
 
     __slots__ = (
         "__weakref__", "_arm_angle_geometry", "_indices", "_intervals",
-        "_kernel", "_name", "_refine", "_robot", "_solve_pose", "_work", "branches",
+        "_kernel", "_name", "_refine", "_robot", "_slack", "_solve_pose", "_work",
+        "branches",
         "family", "geometry", "nq", "parameter", "parameter_range",
     )  # fmt: skip
 
@@ -164,6 +166,12 @@ class Solver:
         self._name = robot.name  # for the messages
         # the model's chain when it differs from the idealised structure
         self._refine: FloatArray | None = refinement_chain(robot)
+        # how far past the idealised arm's reach the model may reach [m]
+        self._slack = (
+            0.0
+            if self._refine is None
+            else MODEL_ERROR_SLACK * get_structure(robot).residual
+        )
         self._work = threading.local()  # each thread's buffers of solve_batch_into
         self.nq: int = family.joint_count
         self.branches: tuple[str, ...] = family.branches
@@ -327,6 +335,8 @@ class Solver:
                 self.geometry, pose, redundancy, q_previous, q, flags, True
             )
         if status != OK:
+            if self._refine is not None and status != NOT_RIGID:
+                self._raise_near_reach(pose, redundancy)
             self._raise(status, pose, redundancy)
         chain = self._refine
         if chain is None:
@@ -508,6 +518,34 @@ class Solver:
             "configuration), or q_previous= to keep its value"
         )
 
+    def _near_reach(self, pose: FloatArray, value: float | None) -> bool:
+        """Whether the idealised arm misses ``pose`` by at most the model's slack.
+
+        On a calibrated arm the kernels' reach tests are widened by
+        ``MODEL_ERROR_SLACK`` times the structure's residual; a pose they
+        still refuse within that distance of the idealised reach (or, inside
+        the reach, refused by another of the idealised arm's tests) may be
+        reached by the model, whose solutions are then unlisted.
+        """
+        distance, low, high = self.diagnose(pose, redundancy=value)
+        return low - self._slack <= distance <= high + self._slack
+
+    def _raise_near_reach(self, pose: FloatArray, value: float | None) -> None:
+        """Raise ``UnreachableError(kind="model")`` if :meth:`_near_reach`."""
+        if not self._near_reach(pose, value):
+            return
+        distance, low, high = self.diagnose(pose, redundancy=value)
+        raise UnreachableError(
+            distance,
+            (low, high),
+            "model",
+            f"the idealised {self.family.name.upper()} arm does not reach the pose "
+            f"(wrist point at {distance:.6g} m from the shoulder, reach [{low:.6g}, "
+            f"{high:.6g}] m), but within the model's deviation ({self._slack:.2g} m): "
+            "the calibrated model may reach it, and its solutions are not listed; "
+            "use numerical IK",
+        )
+
     def _raise(self, status: int, pose: FloatArray, value: float | None) -> None:
         """Raise the error of a pose the kernel refused (``status`` not OK)."""
         if status == NOT_RIGID:  # the kernel's test is the exact one
@@ -630,6 +668,7 @@ class Solver:
             self._batch_six(poses, q, valid)
             if self._refine is not None:
                 refine_batch(self._refine, poses, q, valid, events)
+                self._flag_near_reach(poses, None, valid, events)
             return
         if redundancy is None:
             raise self._missing_redundancy()
@@ -646,6 +685,24 @@ class Solver:
                 self._refine, self._arm_angle_geometry, self.family.parameter_periodic,
                 poses, values, q, valid, events,
             )  # fmt: skip
+            self._flag_near_reach(poses, values, valid, events)
+
+    def _flag_near_reach(
+        self,
+        poses: FloatArray,
+        values: FloatArray | None,
+        valid: BoolArray,
+        events: FlagArray,
+    ) -> None:
+        """``SOLUTIONS_UNLISTED`` on the poses of a batch :meth:`_near_reach` says.
+
+        (Those no branch reaches and no other bit explains, on a calibrated
+        arm.)
+        """
+        for i in np.flatnonzero(~valid.any(axis=1) & (events == 0)).tolist():
+            value = None if values is None else float(values[i])
+            if self._near_reach(poses[i], value):
+                events[i] |= SOLUTIONS_UNLISTED
 
     def _batch_six(self, poses: FloatArray, q: FloatArray, valid: BoolArray) -> None:
         """The six-axis kernels' three batch stages, chunk by chunk."""
