@@ -8,10 +8,11 @@ origins 0.436 mm off axis (as in ROS-Industrial's URDF) and a calibrated
 Panda. For random in-limit configurations: every branch reproduces the pose
 to 1e-12 by Pinocchio's FK; the generating configuration is among the branches
 to 1e-9 rad, except for at most a fraction :data:`NEAR_SINGULAR_MISSES`, each
-within :data:`NEAR_SINGULAR` of a singularity (the least singular value of the
-tool Jacobian) or reported by the solve's flags (a branch vanished, merged or
-unlisted); a 100-start numerical search finds a solution outside the branches
-at no more than :data:`OUTSIDE_POSES` of its poses, each reported so; and the
+within :data:`NEAR_SINGULAR` of a singularity (``least_singular``: of the tool
+Jacobian, or of [J; ∇ψ] for an SRS arm at held ψ) and reported by the solve's
+``ik.SolveFlag`` byte (a branch vanished, merged, or solutions unlisted); a
+100-start numerical search finds a solution outside the branches at no more
+than :data:`OUTSIDE_POSES` of its poses, each reported so; and the
 bound of :data:`~workbench.ik.structure.CALIBRATION_ANGLE_TOL` and
 ``CALIBRATION_DISTANCE_TOL`` is where the closed form stops.
 """
