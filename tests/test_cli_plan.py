@@ -270,7 +270,7 @@ def _bare_ur5(tmp_path: Path, *, zero_velocity: tuple[int, ...]) -> Path:
 
     from workbench import load_robot
 
-    text = Path(load_robot("ur5").urdf_path).read_text()
+    text = load_robot("ur5").description  # mesh paths resolved
     text = re.sub(r"<collision>.*?</collision>", "", text, flags=re.S)
     limits = list(re.finditer(r'velocity="[^"]*"', text))
     for index in sorted(zero_velocity, reverse=True):

@@ -34,7 +34,7 @@ def modified_ur5(folder: Path, kind: str) -> Robot:
     """UR5 variants: 'mixed' (a prismatic elbow, an unaligned wrist axis) or
     'continuous' (a continuous shoulder pan joint, nq = 7, nv = 6)."""
     ur5 = load_robot("ur5")
-    text = ur5.urdf_path.read_text(encoding="utf-8")
+    text = ur5.description
     if kind == "continuous":
         text = text.replace(
             'name="shoulder_pan_joint" type="revolute"',
@@ -115,7 +115,7 @@ def test_batch_jacobians_refuse_bad_input(tmp_path) -> None:
         compute_jacobians_local(ur5, np.zeros(6))
     with pytest.raises(NonFiniteError, match="q must be finite"):
         compute_jacobians_local(ur5, np.full((2, 6), np.nan))
-    text = ur5.urdf_path.read_text(encoding="utf-8")
+    text = ur5.description
     end = text.index("</joint>", text.index('name="wrist_3_joint"'))
     path = tmp_path / "mimic.urdf"
     path.write_text(text[:end] + '<mimic joint="wrist_1_joint"/>' + text[end:])

@@ -238,7 +238,7 @@ def test_state_blocks_hand_out_each_state_once_across_threads() -> None:
 def test_continuous_joint_robot(tmp_path, rng: np.random.Generator) -> None:
     """nq != nv: a UR5 whose first joint is continuous (cos, sin)."""
     ur5 = load_robot("ur5")
-    text = ur5.urdf_path.read_text(encoding="utf-8")
+    text = ur5.description
     head, tail = text.split('name="shoulder_pan_joint" type="revolute"', 1)
     path = tmp_path / "ur5_continuous.urdf"
     path.write_text(head + 'name="shoulder_pan_joint" type="continuous"' + tail)

@@ -124,7 +124,7 @@ def test_unreachable_targets_fail_within_the_step_budget(robot: Robot) -> None:
 
 def test_continuous_joint_robot(tmp_path, rng: np.random.Generator) -> None:
     ur5 = load_robot("ur5")
-    text = ur5.urdf_path.read_text(encoding="utf-8").replace(
+    text = ur5.description.replace(
         'name="shoulder_pan_joint" type="revolute"',
         'name="shoulder_pan_joint" type="continuous"',
     )

@@ -24,6 +24,7 @@ from workbench.model.catalog import (
     get_catalog_urdf,
     get_example_robot_data_dir,
 )
+from workbench.model.packages import MeshNotFoundError
 
 ARMS = {"ur5": (6, "tool0"), "panda": (7, "panda_hand_tcp"), "xarm7": (7, "link_eef")}
 
@@ -134,9 +135,13 @@ def test_missing_mesh_is_a_clear_error(tmp_path: Path) -> None:
         "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint></robot>",
         encoding="utf-8",
     )
-    robot = load_robot(path)
-    with pytest.raises(URDFLoadError, match=r"b\.stl"):
-        _ = robot.visual_model
+    with pytest.raises(MeshNotFoundError) as info:  # at load, not when drawn
+        load_robot(path)
+    message = str(info.value)
+    assert "package://nowhere/meshes/b.stl: package 'nowhere' not found" in message
+    assert f"looked in {tmp_path} and its parents" in message
+    assert "--package-dir DIR or --package-dir nowhere=DIR" in message
+    assert "\n" not in message and isinstance(info.value, URDFLoadError)
 
 
 def test_unknown_tool_frame_lists_frames() -> None:

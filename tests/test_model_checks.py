@@ -372,7 +372,7 @@ def test_package_uris_need_a_package_folder(tmp_path, monkeypatch) -> None:
     with pytest.raises(
         URDFLoadError, match=re.escape("package://mypkg/meshes/tri.stl")
     ):
-        _ = load_robot(urdf).visual_model
+        load_robot(urdf)  # every mesh is resolved when the robot is loaded
     expected = packages / "mypkg" / "meshes" / "tri.stl"
     for given_dir in (packages, packages / "mypkg"):  # a package's own folder too
         robot = load_robot(urdf, package_dirs=[given_dir])

@@ -290,7 +290,7 @@ def test_missing_mesh_is_a_urdf_load_error(tmp_path, capsys) -> None:
         ),
         encoding="utf-8",
     )
-    with pytest.raises(URDFLoadError, match="could not be found"):
+    with pytest.raises(URDFLoadError, match="package 'gone' not found"):
         Viewer(load_robot(urdf))
     code, _, err = run_cli(
         capsys, "view", "--robot", str(urdf), "--html", str(tmp_path / "x.html")

@@ -17,7 +17,7 @@ import pinocchio as pin
 from PIL import Image
 
 from tests._chromium import take_screenshot
-from workbench import Robot
+from workbench import Robot, load_robot
 from workbench.viz import Viewer
 
 WIDTH, HEIGHT = 800, 600
@@ -183,3 +183,85 @@ def test_legend_starts_folded_in_a_small_view(chromium, puma, tmp_path) -> None:
     assert rows.max() < 0.12 * height  # one line at the top
     assert changed(bare, folded).sum() < 0.05 * width * height
     assert changed(bare, opened).sum() > 2.0 * changed(bare, folded).sum()
+
+
+def _boxed_arm(tmp_path: Path, mesh_of) -> Path:
+    """A three-link arm (0.9 m tall at q = 0), each link drawn by ``mesh_of(i)``."""
+    links, joints = [], []
+    for i in (1, 2, 3):
+        geometry = f'<geometry><mesh filename="{mesh_of(i)}"/></geometry>'
+        links.append(
+            f'<link name="l{i}"><visual><origin xyz="0 0 0.15"/>{geometry}</visual>'
+            f'<collision><origin xyz="0 0 0.15"/>{geometry}</collision></link>'
+        )
+        parent, z = ("base", 0.0) if i == 1 else (f"l{i - 1}", 0.3)
+        axis = "0 0 1" if i == 1 else "0 1 0"
+        joints.append(
+            f'<joint name="j{i}" type="revolute"><parent link="{parent}"/>'
+            f'<child link="l{i}"/><origin xyz="0 0 {z}"/><axis xyz="{axis}"/>'
+            '<limit lower="-3" upper="3" effort="1" velocity="1"/></joint>'
+        )
+    urdf = tmp_path / "boxed.urdf"
+    urdf.write_text(
+        f'<robot name="boxed"><link name="base"/>{"".join(links)}{"".join(joints)}'
+        "</robot>"
+    )
+    return urdf
+
+
+def test_an_arm_whose_meshes_are_in_inches_is_framed_and_drawn(
+    chromium, tmp_path
+) -> None:
+    from tests._meshes import write_dae
+
+    # 4 × 4 × 11.8 inches (0.1 × 0.1 × 0.3 m) per link, in a Y-up file
+    def mesh_of(i: int) -> Path:
+        extent = (4.0, 11.811, 4.0)  # the file's y is up
+        return write_dae(
+            tmp_path / f"l{i}.dae", meter=0.0254, up_axis="Y_UP", extent=extent
+        )
+
+    robot = load_robot(_boxed_arm(tmp_path, mesh_of))
+    q = np.array([0.3, 0.4, -0.8])
+    viewer = Viewer(robot, q)
+    camera = viewer.get_camera()
+    distance = np.linalg.norm(np.subtract(camera.position, camera.target))
+    assert distance < 5.0, "the camera is placed for the arm's real size (~1 m)"
+    with_arm = screenshot(
+        chromium, viewer.render_html(legend=False), tmp_path / "a.png"
+    )
+    viewer.set_visible("robot", False)
+    empty = screenshot(chromium, viewer.render_html(legend=False), tmp_path / "e.png")
+    left, top, right, bottom = arm_region(robot, q, viewer)
+    assert 0 <= left < right <= WIDTH and 0 <= top < bottom <= HEIGHT
+    assert (bottom - top) > 0.4 * HEIGHT
+    diff = changed(with_arm, empty)
+    inside = np.zeros_like(diff)
+    inside[top:bottom, left:right] = True
+    assert diff[inside].mean() > 0.2, "too few arm pixels where the arm stands"
+    margin = np.zeros_like(diff)
+    margin[max(top - 4, 0) : bottom + 4, max(left - 4, 0) : right + 4] = True
+    assert diff[~margin].sum() <= 0.01 * diff.sum(), "the arm is drawn off its box"
+
+
+def test_stl_meshes_without_normals_are_shaded_in_colour(chromium, tmp_path) -> None:
+    from tests._meshes import write_stl
+
+    def mesh_of(i: int) -> Path:
+        return write_stl(tmp_path / f"l{i}.stl", size=0.2, zero_normals=True)
+
+    robot = load_robot(_boxed_arm(tmp_path, mesh_of))
+    q = np.array([0.3, 0.4, -0.8])
+    viewer = Viewer(robot, q, color_by_singularity=True)
+    with_arm = screenshot(
+        chromium, viewer.render_html(legend=False), tmp_path / "a.png"
+    )
+    viewer.set_visible("robot", False)
+    empty = screenshot(chromium, viewer.render_html(legend=False), tmp_path / "e.png")
+    arm = changed(with_arm, empty)
+    assert arm.mean() > 0.02, "the arm is drawn"
+    pixels = with_arm[arm]
+    brightness = pixels.max(axis=1)
+    assert np.median(brightness) > 80, "the arm is shaded, not black"
+    chroma = pixels.max(axis=1) - pixels.min(axis=1)
+    assert np.median(chroma) > 40, "the singularity colour shows"

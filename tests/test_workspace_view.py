@@ -27,6 +27,7 @@ from workbench import load_robot
 from workbench.collision import parse_scene
 from workbench.errors import DimensionError, InputError
 from workbench.plots.workspace import (
+    EMPTY_LABEL,
     VoxelField,
     get_layer_coordinates,
     get_volume,
@@ -146,6 +147,37 @@ def test_histograms_count_the_voxels_with_a_value(puma_map) -> None:
     fig = plot_histograms([field], bins=10)
     heights = [patch.get_height() for patch in fig.axes[0].patches]
     assert sum(heights) == np.isfinite(field.values).sum()
+
+
+def _legend_texts(fig) -> list[str]:
+    return [t.get_text() for legend in fig.legends for t in legend.get_texts()]
+
+
+def test_map_figures_have_a_title_and_a_legend_for_every_mark(puma_map) -> None:
+    grid = puma_map.grid
+    reach = _field(puma_map)
+    values = np.where(reach.values > 0.0, reach.values, np.nan)  # grey: none
+    reach = VoxelField(reach.name, reach.label, values, 0.0, 1.0)
+    slices = plot_horizontal_slices(grid, reach, [-0.3, 0.0])
+    assert slices.get_suptitle() == (
+        "reachability: horizontal slices seen from above, base frame"
+    )
+    assert _legend_texts(slices) == ["base axis (x = y = 0)", EMPTY_LABEL]
+    titled = plot_horizontal_slices(grid, reach, [0.0], title="puma560: reach")
+    assert titled.get_suptitle() == "puma560: reach"
+    sections = plot_vertical_sections(grid, [reach], title="puma560")
+    assert sections.get_suptitle().startswith("puma560: section y = +0.000 m")
+    assert _legend_texts(sections) == [
+        "robot base (origin of the base frame)",
+        "base axis (x = 0)",
+        EMPTY_LABEL,
+    ]
+    full = VoxelField("one", "one [1]", np.ones(grid.voxel_count), 0.0, 2.0)
+    assert EMPTY_LABEL not in _legend_texts(plot_vertical_sections(grid, [full]))
+    histograms = plot_histograms([reach])
+    assert histograms.get_suptitle()
+    (ax,) = histograms.axes
+    assert ax.get_xlabel() == reach.label and ax.get_ylabel().startswith("voxels")
 
 
 def test_figure_input_errors(puma_map) -> None:

@@ -30,7 +30,7 @@ def add_robot_argument(
     *,
     help_text: str | None = None,
 ) -> None:
-    """``--robot NAME|PATH`` (required unless a default is given), ``--package-dir``.
+    """``--robot NAME|PATH`` (unless defaulted), ``--package-dir``, ``--xacro-arg``.
 
     Load the robot they name with :func:`load_robot_from_args`.
     """
@@ -39,18 +39,36 @@ def add_robot_argument(
         required=default is None and help_text is None,
         default=default,
         help=help_text
-        or "robot name (puma560, puma560-kang, ur5, panda, ...) or path to a .urdf"
+        or "robot name (puma560, puma560-kang, ur5, panda, ...) or path to a .urdf "
+        "or .xacro file"
         + (f" (default: {default})" if default else ""),
     )
     parser.add_argument(
         "--package-dir",
         action="append",
         default=[],
-        type=Path,
-        metavar="DIR",
-        help="folder holding the ROS packages of the URDF's package:// mesh URIs "
-        "(repeatable; searched before ROS_PACKAGE_PATH and the URDF's folders)",
+        metavar="DIR|NAME=DIR",
+        help="folder holding ROS packages (found by the name in their package.xml "
+        "or by folder name) or one package's folder, or NAME=DIR for one package; "
+        "for package:// mesh URIs and $(find NAME) (repeatable; searched before "
+        "ROS_PACKAGE_PATH and the description's folders)",
     )
+    parser.add_argument(
+        "--xacro-arg",
+        action="append",
+        default=[],
+        type=xacro_argument,
+        metavar="NAME:=VALUE",
+        help="the value of a xacro file's <xacro:arg> (repeatable)",
+    )
+
+
+def xacro_argument(text: str) -> tuple[str, str]:
+    """Argparse type: ``NAME:=VALUE`` (as on the xacro command line)."""
+    name, sep, value = text.partition(":=")
+    if not sep or not name.strip():
+        raise argparse.ArgumentTypeError(f"expected NAME:=VALUE, got {text!r}")
+    return name.strip(), value
 
 
 def add_limit_arguments(
@@ -94,6 +112,7 @@ def load_robot_from_args(
         args.robot if name is None else name,
         tool_frame=tool_frame,
         package_dirs=getattr(args, "package_dir", ()),
+        xacro_args=dict(getattr(args, "xacro_arg", ())) or None,
     )
     limits = {
         key: _per_joint(robot, getattr(args, key, None), option)

@@ -100,11 +100,11 @@ def run_base_placement_demo(
         "seconds": done - built,
     }
     if plots:
-        summary["figure"] = str(_plot_slices(atlas, out_dir / FIGURE))
+        summary["figure"] = str(_plot_slices(robot, atlas, out_dir / FIGURE))
     return summary
 
 
-def _plot_slices(atlas: TaskMap, path: Path) -> Path:
+def _plot_slices(robot: Robot, atlas: TaskMap, path: Path) -> Path:
     """The reachability of each voxel in horizontal slices, as a PNG."""
     from workbench.plots.workspace import VoxelField, plot_horizontal_slices
 
@@ -116,7 +116,11 @@ def _plot_slices(atlas: TaskMap, path: Path) -> Path:
         0.0,
         1.0,
     )
-    plot_horizontal_slices(atlas.grid, field, SLICE_HEIGHTS, path)
+    title = (
+        f"{robot.name}: share of {MAP_ORIENTATIONS} tool orientations reached in "
+        f"each {100 * MAP_RESOLUTION:g} cm voxel, seen from above (base frame)"
+    )
+    plot_horizontal_slices(atlas.grid, field, SLICE_HEIGHTS, path, title=title)
     return path
 
 

@@ -1,11 +1,11 @@
-"""``load_robot``: a Robot from a catalog name or a URDF path."""
+"""``load_robot``: a Robot from a catalog name, a URDF or a xacro file."""
 
 from __future__ import annotations
 
 import contextlib
 import os
 import tempfile
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 
 import pinocchio as pin
@@ -13,16 +13,18 @@ import pinocchio as pin
 from workbench.errors import JointNotFoundError, RobotNotFoundError, URDFLoadError
 from workbench.model.catalog import CATALOG, get_catalog_urdf
 from workbench.model.dh import DHTable
+from workbench.model.packages import (
+    get_package_lookup,
+    resolve_mesh_uris,
+    split_package_dir,
+)
 from workbench.model.robot import Robot
 from workbench.model.urdf_joints import (
     MimicJoint,
     apply_mimic_joints,
     parse_urdf_joints,
 )
-
-_ROS_PACKAGE_PATH = (
-    "ROS_PACKAGE_PATH"  # folders holding ROS packages, os.pathsep-separated
-)
+from workbench.model.xacro_files import expand_xacro, is_xacro
 
 
 def get_robot_names() -> list[str]:
@@ -35,25 +37,30 @@ def load_robot(
     *,
     tool_frame: str | None = None,
     package_dirs: Sequence[str | Path] = (),
+    xacro_args: Mapping[str, str] | None = None,
 ) -> Robot:
-    """Load a robot by catalog name or from a URDF file.
+    r"""Load a robot by catalog name or from a URDF or xacro file.
 
     The URDF's joints are checked (zero-length axis, lower limit above the
     upper one: refused) and its ``<mimic>`` joints honoured: a mimicking joint
     has no coordinate of its own and follows its leader in FK and Jacobians
-    (:attr:`Robot.mimic_joints`).
+    (:attr:`Robot.mimic_joints`). Every mesh URI is resolved here
+    (:mod:`workbench.model.packages`): a missing mesh is an error now, not
+    when the geometry is first drawn or checked.
 
     Args:
         name: ``"puma560"``, ``"puma560-kang"``, an example-robot-data name
             (``"ur5"``, ``"panda"``, …; see :func:`get_robot_names`), or a path
-            to a ``.urdf`` file.
+            to a ``.urdf`` file or a ``.xacro`` file (expanded by the ROS
+            ``xacro`` package, :mod:`workbench.model.xacro_files`).
         tool_frame: Tool frame name. Default: the catalog's tool frame, else
             the last frame of the model.
-        package_dirs: Folders that hold ROS packages, searched first for a
-            ``package://PKG/...`` mesh URI (as ``DIR/PKG/...``); a package's
-            own folder may be given too. Then come the folders of the
-            ``ROS_PACKAGE_PATH`` environment variable, then the URDF's folder
-            and each of its parents.
+        package_dirs: Folders that hold ROS packages (at any depth, found by
+            the ``<name>`` of their ``package.xml`` or by folder name), or a
+            package's own folder, or ``"NAME=DIR"`` for one package; searched
+            for ``package://PKG/...`` and ``$(find PKG)`` before the folders
+            of ``ROS_PACKAGE_PATH`` and the file's own folders.
+        xacro_args: Values of a xacro file's ``<xacro:arg>``\ s.
 
     Returns:
         The robot, base fixed (no free flyer).
@@ -63,7 +70,11 @@ def load_robot(
             to an existing file; the message lists the valid names.
         URDFLoadError: If the URDF is unreadable or malformed, has a joint
             with a zero axis or inverted limits, or a mimic joint Pinocchio
-            cannot represent (the message names the joints and values).
+            cannot represent (the message names the joints and values); if
+            xacro refuses the file; if a mesh is not found
+            (:class:`~workbench.model.packages.MeshNotFoundError`: the
+            message names the URI, where it looked and ``--package-dir``);
+            if ``xacro_args`` are given for a file that is no xacro.
         FrameNotFoundError: If ``tool_frame`` is not in the model.
     """
     key = str(name)
@@ -77,12 +88,22 @@ def load_robot(
             dh_table = DHTable.from_json(path.with_name(f"{key}.dh.json"))
     else:
         path = Path(key).expanduser()
-        if not (path.suffix.lower() == ".urdf" or path.exists()):
+        if not (path.suffix.lower() == ".urdf" or is_xacro(path) or path.exists()):
             raise RobotNotFoundError(key, get_robot_names())
         if not path.is_file():
-            raise URDFLoadError(f"URDF file not found: {path}")
+            kind = "xacro" if is_xacro(path) else "URDF"
+            raise URDFLoadError(f"{kind} file not found: {path}")
         locked = ()
-    model, mimics = _build_model(path)
+    lookup = get_package_lookup(path, package_dirs)
+    if is_xacro(path):
+        text = expand_xacro(path, lookup, xacro_args)
+    elif xacro_args:
+        raise URDFLoadError(
+            f"{path}: xacro arguments given for a file that is no xacro"
+        )
+    else:
+        text = _read_text(path)
+    model, mimics = _build_model(text, path)
     if locked:
         model = _lock_joints(model, locked)
     model = apply_mimic_joints(model, mimics, path)
@@ -93,39 +114,31 @@ def load_robot(
         model,
         path,
         tool_frame,
-        package_dirs=_get_package_dirs(path, package_dirs),
+        package_dirs=_absolute(package_dirs),
         dh_table=dh_table,
+        description=resolve_mesh_uris(text, lookup),
     )
 
 
-def _get_package_dirs(urdf: Path, given: Sequence[str | Path] = ()) -> list[str]:
-    """Folders searched for ``package://`` URIs, in order, without repeats.
-
-    Each folder of ``given`` (and its parent, so that a package's own folder
-    works too), then each of ``ROS_PACKAGE_PATH`` (likewise), then the URDF's
-    folder and its parents.
-
-    Raises:
-        URDFLoadError: If a folder of ``given`` does not exist.
-    """
-    found: list[Path] = []
-    for folder in given:
-        folder = Path(folder).expanduser()
-        if not folder.is_dir():
-            raise URDFLoadError(f"package folder not found: {folder}")
-        found += [folder.resolve(), folder.resolve().parent]
-    for entry in os.environ.get(_ROS_PACKAGE_PATH, "").split(os.pathsep):
-        if entry and Path(entry).is_dir():
-            found += [Path(entry).resolve(), Path(entry).resolve().parent]
-    found += [urdf.resolve().parent, *urdf.resolve().parents]
-    return [str(p) for p in dict.fromkeys(found)]
+def _absolute(package_dirs: Sequence[str | Path]) -> tuple[str, ...]:
+    """The given package folders (and ``NAME=DIR`` entries), absolute."""
+    out = []
+    for entry in package_dirs:
+        name, folder = split_package_dir(entry)
+        path = str(Path(folder).expanduser().resolve())
+        out.append(path if name is None else f"{name}={path}")
+    return tuple(out)
 
 
-def _build_model(path: Path) -> tuple[pin.Model, list[MimicJoint]]:
+def _read_text(path: Path) -> str:
     try:
-        text = path.read_text(encoding="utf-8")
+        return path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as err:
         raise URDFLoadError(f"cannot read URDF {path}: {err}") from err
+
+
+def _build_model(text: str, path: Path) -> tuple[pin.Model, list[MimicJoint]]:
+    """The kinematic model of the URDF ``text`` (read from ``path``)."""
     if "<robot" not in text:
         raise URDFLoadError(f"{path}: not a URDF (no <robot> element)")
     try:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Sequence
 from functools import cached_property
 from pathlib import Path
 
@@ -18,6 +19,8 @@ from workbench.errors import (
     URDFLoadError,
 )
 from workbench.model.dh import DHTable
+from workbench.model.mesh_files import honour_collada_frames
+from workbench.model.packages import get_package_lookup, resolve_mesh_uris
 from workbench.model.urdf_joints import MimicJoint
 from workbench.validation import as_vector
 
@@ -100,9 +103,10 @@ class Robot:
         urdf_path: Path,
         tool_frame: str,
         *,
-        package_dirs: list[str],
+        package_dirs: Sequence[str],
         acceleration_limit: npt.ArrayLike | None = None,
         dh_table: DHTable | None = None,
+        description: str | None = None,
     ):
         self._revision: int
         self.name = name
@@ -111,7 +115,8 @@ class Robot:
         self.data = model.createData()
         self._finite_test = np.full(model.nq, 1e-300)  # see check_configuration
         self.urdf_path = urdf_path
-        self._package_dirs = package_dirs
+        self._package_dirs = tuple(package_dirs)
+        self._description = description
         self.tool_frame = tool_frame
         self.tool_frame_id = self.get_frame_id(tool_frame)
         self.lower = _read_only(model.lowerPositionLimit)
@@ -162,6 +167,7 @@ class Robot:
             self.urdf_path,
             self.tool_frame,
             package_dirs=self._package_dirs,
+            description=self._description,
             acceleration_limit=(
                 self.acceleration_limit
                 if acceleration_limit is None
@@ -175,12 +181,32 @@ class Robot:
 
     @property
     def package_dirs(self) -> tuple[str, ...]:
-        """Folders searched for ``package://`` mesh URIs, in order (absolute).
+        """The package folders (and ``NAME=DIR`` mappings) given, absolute.
 
         ``load_robot(robot.name, package_dirs=robot.package_dirs)`` finds the
-        same meshes again (e.g. in another process of a cluster).
+        same meshes again (e.g. in another process of a cluster); see
+        :mod:`workbench.model.packages` for the lookup.
         """
-        return tuple(self._package_dirs)
+        return self._package_dirs
+
+    @property
+    def description(self) -> str:
+        """The URDF text of the model, every mesh URI an absolute file path.
+
+        Raises:
+            URDFLoadError: If the file cannot be read or a mesh is not found
+                (a robot built without the text reads its ``urdf_path``).
+        """
+        if self._description is None:
+            try:
+                text = Path(self.urdf_path).read_text(encoding="utf-8")
+            except (OSError, UnicodeDecodeError) as err:
+                raise URDFLoadError(
+                    f"cannot read URDF {self.urdf_path}: {err}"
+                ) from err
+            lookup = get_package_lookup(self.urdf_path, self._package_dirs)
+            object.__setattr__(self, "_description", resolve_mesh_uris(text, lookup))
+        return self._description  # type: ignore[return-value]
 
     @property
     def nq(self) -> int:
@@ -357,21 +383,27 @@ class Robot:
 
     @cached_property
     def visual_model(self) -> pin.GeometryModel:
-        """Visual geometry, meshes resolved (built on first use)."""
+        """Visual geometry, meshes resolved (built on first use).
+
+        Collada meshes carry their file's unit and up axis in ``meshScale``
+        and ``placement`` (:mod:`workbench.model.mesh_files`).
+        """
         return self._build_geometry(pin.GeometryType.VISUAL)
 
     @cached_property
     def collision_model(self) -> pin.GeometryModel:
-        """Collision geometry, meshes resolved (built on first use)."""
+        """Collision geometry, meshes resolved (built on first use; see above)."""
         return self._build_geometry(pin.GeometryType.COLLISION)
 
     def _build_geometry(self, kind: pin.GeometryType) -> pin.GeometryModel:
         try:
-            return pin.buildGeomFromUrdf(
-                self.model, str(self.urdf_path), kind, package_dirs=self._package_dirs
+            model = pin.buildGeomFromUrdfString(  # type: ignore[attr-defined]
+                self.model, self.description, kind
             )
         except (ValueError, RuntimeError) as err:
             raise URDFLoadError(f"{self.urdf_path}: {err}") from err
+        honour_collada_frames(model)  # the files' units and up axes
+        return model
 
     def check_configuration(self, q: npt.ArrayLike) -> FloatArray:
         """Validate ``q``: shape (nq,), finite. Returns it as float64.

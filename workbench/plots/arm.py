@@ -25,6 +25,9 @@ if TYPE_CHECKING:
 
 FloatArray = npt.NDArray[np.float64]
 
+#: Legend label of the tool frame origin (the red star).
+TOOL_LABEL = "tool frame origin"
+
 
 def compute_arm_points(robot: Robot, q: npt.ArrayLike) -> FloatArray:
     """Points of the stick figure at configuration ``q``.
@@ -78,7 +81,11 @@ def plot_arm(
 
     Returns:
         The Figure of ``ax``. It holds the links (line), the joints (markers),
-        the tool (red star) and the x axis of ``axis_frame`` (orange line).
+        the tool (red star, labelled :data:`TOOL_LABEL`) and the x axis of
+        ``axis_frame`` (orange line, labelled ``"x axis of frame4"``); the
+        star and the axis are labelled once per axes, so that ``ax.legend()``
+        names each once however many arms are drawn. A new Figure gets a
+        title and that legend.
     """
     if ax is None:
         from matplotlib.figure import Figure
@@ -90,22 +97,32 @@ def plot_arm(
     p = compute_arm_points(robot, q)
     ax.plot(p[:, 0], p[:, 1], p[:, 2], "-", color=color, lw=3, label=label)
     ax.plot(p[:-1, 0], p[:-1, 1], p[:-1, 2], "o", color=color, ms=4)
-    ax.plot(p[-1:, 0], p[-1:, 1], p[-1:, 2], "*", color="tab:red", ms=10)
+    tool = _first_label(ax, TOOL_LABEL)
+    ax.plot(p[-1:, 0], p[-1:, 1], p[-1:, 2], "*", color="tab:red", ms=10, label=tool)
     if axis_length > 0.0 and axis_frame in robot.frame_names:
         frame = robot.fk(q, axis_frame)
         ends = np.array([frame.translation, frame * np.array([axis_length, 0, 0])])
-        ax.plot(*ends.T, "-", color="tab:orange", lw=2)
+        wrist = _first_label(ax, f"x axis of {axis_frame}")
+        ax.plot(*ends.T, "-", color="tab:orange", lw=2, label=wrist)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_zlabel("z [m]")
     if new_axes:
         set_equal_axes(ax, p)
+        ax.set_title(f"{robot.name}, base frame", fontsize=10)
+        ax.legend(loc="upper left", fontsize=8)
     fig = ax.get_figure()
     if path is not None:
         from workbench.plots.trajectory import save_figure
 
         save_figure(fig, path)
     return fig
+
+
+def _first_label(ax: Any, label: str) -> str:
+    """``label``, or ``"_"`` + it (left out of legends) when ``ax`` has it already."""
+    taken = {line.get_label() for line in ax.lines}
+    return "_" + label if label in taken else label
 
 
 def set_equal_axes(ax: Any, points: npt.ArrayLike, *, margin: float = 0.05) -> None:

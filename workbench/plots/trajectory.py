@@ -119,7 +119,7 @@ def plot_normal_spline(
         ls, lsd, _ = literal.evaluate(tl)
         ax3.plot(tl, ls, color="C0", label="s")
         ax3.plot(tl, lsd, color="C1", label="ds/dt")
-        ax3.axvline(1.0, color="k", lw=0.8, ls=":")
+        ax3.axvline(1.0, color="k", lw=0.8, ls=":", label="t = 1, where s must be 1")
         ax3.plot([0.0, 1.0], [0.0, 1.0], "kx", label="required s(0) = 0, s(1) = 1")
         amp = "" if literal_amplitude is None else f", A = {literal_amplitude:g}"
         ax3.set_title(
@@ -133,6 +133,8 @@ def plot_normal_spline(
     return _finish(fig, path)
 
 
+#: Said in a panel whose limits are not drawn (infinite or unknown).
+NO_LIMIT = "no limit known"
 _QUANTITIES = ("position [deg]", "speed [deg/s]", "acceleration [deg/s²]")
 
 
@@ -236,16 +238,16 @@ def _limit_lines(ax: Axes, lower: float, upper: float, color: str) -> None:
             color=color,
             annotation_clip=False,
         )
-    if not finite:
-        ax.text(
-            0.98,
-            0.95,
-            "no limit known",
-            transform=ax.transAxes,
-            ha="right",
-            va="top",
+    if not finite:  # a legend entry, so that it is placed clear of the curve
+        ax.legend(
+            [Line2D([], [], ls="none")],
+            [NO_LIMIT],
+            loc="best",
+            handlelength=0.0,
+            handletextpad=0.0,
             fontsize=7,
-            color="0.4",
+            labelcolor="0.4",
+            framealpha=0.8,
         )
 
 
@@ -327,7 +329,7 @@ def _velocity_panel(ax: Axes, samples: CartesianSamples) -> None:
         np.linalg.norm(samples.acceleration[:, 3:], axis=1),
         label="|dω/dt| [rad/s²]",
     )
-    ax.set_ylabel("tool speed, acceleration")
+    ax.set_ylabel("norm [m/s, rad/s, m/s², rad/s²]")
     ax.set_title("J q̇ and J q̈ + J̇ q̇ of the tool frame (zero at both ends)")
     ax.legend(loc="best", fontsize="small")
     ax.grid(alpha=0.3)

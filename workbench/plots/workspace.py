@@ -31,6 +31,8 @@ FloatArray = npt.NDArray[np.float64]
 EMPTY_COLOR = "#e4e4e4"
 #: Colour of the base axis marker.
 BASE_COLOR = "#d62728"
+#: Legend text of the light grey voxels.
+EMPTY_LABEL = "no value (nothing reachable)"
 
 
 class VoxelGridLike(Protocol):
@@ -163,6 +165,29 @@ def _mark_base(ax: Any, *, vertical: bool) -> None:
         )
 
 
+def _legend(fig: Figure, *, vertical: bool, empty: bool) -> None:
+    """One legend under the panels for the base marks and the grey voxels."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    handles: list[Any]
+    if vertical:
+        handles = [
+            Line2D([], [], color=BASE_COLOR, ls="none", marker="^", ms=9, mec="white"),
+            Line2D([], [], color=BASE_COLOR, ls=":", lw=1.0),
+        ]
+        labels = ["robot base (origin of the base frame)", "base axis (x = 0)"]
+    else:
+        marker = Line2D([], [], color=BASE_COLOR, ls="none", marker="+", ms=12, mew=2.5)
+        handles, labels = [marker], ["base axis (x = y = 0)"]
+    if empty:
+        handles.append(Patch(facecolor=EMPTY_COLOR, edgecolor="#999999"))
+        labels.append(EMPTY_LABEL)
+    fig.legend(
+        handles, labels, loc="outside lower center", ncol=len(handles), fontsize=9
+    )
+
+
 def _check_field(grid: VoxelGridLike, field: VoxelField) -> FloatArray:
     if not field.vmax > field.vmin:
         raise InputError(
@@ -180,11 +205,14 @@ def plot_horizontal_slices(
     *,
     columns: int = 3,
     fig: Figure | None = None,
+    title: str | None = None,
 ) -> Figure:
     """Horizontal slices of one field at several heights, one colour bar.
 
     Each panel is the voxel layer whose centres lie nearest the asked height
     (its own height in the panel title), seen from above: x right, y up [m].
+    A legend under the panels names the base axis cross and, when some are
+    drawn, the grey voxels without a value.
 
     Args:
         grid: The map's grid (origin, resolution, shape).
@@ -193,6 +221,7 @@ def plot_horizontal_slices(
         path: PNG file to write, if any.
         columns: Panels per row.
         fig: Figure to draw into (cleared), else a new one.
+        title: Figure title; default the field's name and the view.
 
     Raises:
         InputError: If ``heights`` is empty or the colour scale is empty.
@@ -203,10 +232,11 @@ def plot_horizontal_slices(
         raise InputError("plot_horizontal_slices needs at least one height")
     columns = max(1, min(columns, len(heights)))
     rows = -(-len(heights) // columns)
-    fig = _figure(fig, (3.4 * columns + 1.0, 3.2 * rows + 0.4))
+    fig = _figure(fig, (3.4 * columns + 1.0, 3.2 * rows + 1.0))
     axes = fig.subplots(rows, columns, squeeze=False, sharex=True, sharey=True)
     extent = _extent(grid, (0, 1))
     image: Any = None
+    empty = False
     for k, ax in enumerate(axes.flat):
         if k >= len(heights):
             ax.set_visible(False)
@@ -214,6 +244,7 @@ def plot_horizontal_slices(
         iz = get_nearest_layer(grid, 2, float(heights[k]))
         z = get_layer_coordinates(grid, 2)[iz]
         image = _image(ax, volume[:, :, iz].T, extent, field)
+        empty = empty or bool(np.isnan(volume[:, :, iz]).any())
         _mark_base(ax, vertical=False)
         ax.set_title(f"z = {z:+.3f} m", fontsize=10)
         ax.set_aspect("equal")
@@ -222,6 +253,9 @@ def plot_horizontal_slices(
         if k >= len(heights) - columns:
             ax.set_xlabel("x [m]")
     fig.colorbar(image, ax=axes, label=field.label, shrink=0.9)
+    _legend(fig, vertical=False, empty=empty)
+    default = f"{field.name}: horizontal slices seen from above, base frame"
+    fig.suptitle(default if title is None else title, fontsize=11)
     return _finish(fig, path)
 
 
@@ -233,8 +267,12 @@ def plot_vertical_sections(
     y: float = 0.0,
     columns: int = 2,
     fig: Figure | None = None,
+    title: str | None = None,
 ) -> Figure:
     """Vertical sections in the x–z plane through the base axis, one per field.
+
+    A legend under the panels names the base marks and, when some are drawn,
+    the grey voxels without a value.
 
     Args:
         grid: The map's grid.
@@ -244,6 +282,8 @@ def plot_vertical_sections(
             (default the one through the base axis).
         columns: Panels per row.
         fig: Figure to draw into (cleared), else a new one.
+        title: Figure title, followed by the section's plane; default the
+            fields' names.
 
     Raises:
         InputError: If ``fields`` is empty or a colour scale is empty.
@@ -256,21 +296,28 @@ def plot_vertical_sections(
     y_layer = get_layer_coordinates(grid, 1)[iy]
     columns = max(1, min(columns, len(fields)))
     rows = -(-len(fields) // columns)
-    fig = _figure(fig, (4.6 * columns, 3.9 * rows + 0.3))
+    fig = _figure(fig, (4.6 * columns, 3.9 * rows + 0.9))
     axes = fig.subplots(rows, columns, squeeze=False, sharex=True, sharey=True)
     extent = _extent(grid, (0, 2))
+    empty = False
     for k, ax in enumerate(axes.flat):
         if k >= len(fields):
             ax.set_visible(False)
             continue
         image = _image(ax, volumes[k][:, iy, :].T, extent, fields[k])
+        empty = empty or bool(np.isnan(volumes[k][:, iy, :]).any())
         _mark_base(ax, vertical=True)
         ax.set_aspect("equal")
         ax.set_title(fields[k].name, fontsize=10)
         ax.set_xlabel("x [m]")
         ax.set_ylabel("z [m]")
         fig.colorbar(image, ax=ax, label=fields[k].label, shrink=0.85)
-    fig.suptitle(f"section y = {y_layer:+.3f} m (through the base axis)", fontsize=11)
+    _legend(fig, vertical=True, empty=empty)
+    heading = ", ".join(f.name for f in fields) if title is None else title
+    fig.suptitle(
+        f"{heading}: section y = {y_layer:+.3f} m (through the base axis), base frame",
+        fontsize=11,
+    )
     return _finish(fig, path)
 
 
@@ -280,6 +327,7 @@ def plot_histograms(
     *,
     bins: int = 40,
     fig: Figure | None = None,
+    title: str | None = None,
 ) -> Figure:
     """Histogram of each field over the voxels that have a value (log counts).
 
@@ -289,6 +337,7 @@ def plot_histograms(
         path: PNG file to write, if any.
         bins: Bins per histogram.
         fig: Figure to draw into (cleared), else a new one.
+        title: Figure title; default says what is counted.
 
     Raises:
         InputError: If ``fields`` is empty or a colour scale is empty.
@@ -326,11 +375,14 @@ def plot_histograms(
             ax.set_yscale("log")
             ax.set_ylabel("voxels (log scale)")
         ax.set_title(f"{field.name} ({values.size} voxels)", fontsize=10)
+    default = "voxels per value, over the voxels that have one"
+    fig.suptitle(default if title is None else title, fontsize=11)
     return _finish(fig, path)
 
 
 __all__ = [
     "EMPTY_COLOR",
+    "EMPTY_LABEL",
     "VoxelField",
     "VoxelGridLike",
     "get_layer_coordinates",

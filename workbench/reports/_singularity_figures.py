@@ -11,7 +11,7 @@ from __future__ import annotations
 import io
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -53,9 +53,13 @@ def _axes(ax: Any, figsize: tuple[float, float]) -> tuple[Figure, Any]:
     return ax.get_figure(), ax
 
 
-def _figure(fig: Figure | None, figsize: tuple[float, float]) -> Figure:
+def _figure(
+    fig: Figure | None,
+    figsize: tuple[float, float],
+    layout: Literal["constrained"] | None = None,
+) -> Figure:
     if fig is None:
-        return Figure(figsize=figsize)
+        return Figure(figsize=figsize, layout=layout)
     fig.clear()
     return fig
 
@@ -119,12 +123,14 @@ def _overlay(
         label="joint limits",
     )
     ax.add_patch(box)
+    label = "singular configuration (numbered)"
     for k, (name, q) in enumerate(examples.items()):
         if name == "wrist":  # θ5 = 0: not on this θ5 = 90° map
             continue
         px = x[0] + np.mod(np.degrees(q[j2]) - x[0], 360.0)
         py = y[0] + np.mod(np.degrees(q[j3]) - y[0], 360.0)
-        ax.plot(px, py, "o", mfc="white", mec="black", ms=7)
+        ax.plot(px, py, "o", mfc="white", mec="black", ms=7, label=label)
+        label = "_" + label  # named once
         ax.annotate(str(k + 1), (px, py), xytext=(5, 5), textcoords="offset points")
     ax.set_xlim(x[0], x[-1])
     ax.set_ylim(y[0], y[-1])
@@ -193,7 +199,14 @@ def plot_sigma_map(
     fig, ax = _axes(ax, (7.2, 5.8))
     sigma = np.log10(np.maximum(grid.values["sigma_min"], SIGMA_FLOOR))
     title = f"{robot.name}: smallest singular value of J"
-    _image(ax, grid, sigma, "viridis", "log10 σmin (clipped at 1e-6)", title)
+    _image(
+        ax,
+        grid,
+        sigma,
+        "viridis",
+        "log10 σmin, σmin in mixed units m/rad and 1 (clipped at 1e-6)",
+        title,
+    )
     _overlay(ax, robot, grid, shoulder, elbow_theta3, examples, thin=True)
     return _finish(fig, path)
 
@@ -225,10 +238,10 @@ def plot_measure_map(
     values = grid.values[measure]
     if measure == "condition_number":
         shown = np.log10(np.minimum(values, CONDITION_CEILING))
-        label = "log10 σmax/σmin (clipped at 1e6)"
+        label = "log10 σmax/σmin, mixed units m/rad and 1 (clipped at 1e6)"
         _image(ax, grid, shown, "viridis_r", label, f"{robot.name}: condition number")
     else:
-        label = "manipulability √det(J Jᵀ)"
+        label = "manipulability √det(J Jᵀ) [m³]"
         _image(ax, grid, values, "viridis", label, f"{robot.name}: manipulability")
     _overlay(ax, robot, grid, None, None, {}, thin=True)
     return _finish(fig, path)
@@ -296,7 +309,7 @@ def plot_singular_arms(
     spherical_wrist = get_factorisation(robot).spherical_wrist
     names = [n for n in examples if not n.startswith("wrist")]
     rows = (len(names) + 1) // 2
-    fig = _figure(fig, (9.0, 4.3 * rows))
+    fig = _figure(fig, (9.0, 4.3 * rows + 0.4))
     legend: dict[str, Artist] = {}
     for k, name in enumerate(names):
         ax = fig.add_subplot(rows, 2, k + 1, projection="3d")
@@ -330,7 +343,12 @@ def plot_singular_arms(
     fig.legend(
         list(legend.values()), list(legend), loc="lower center", ncol=3, fontsize=8
     )
-    fig.subplots_adjust(left=0.0, right=0.95, top=0.95, bottom=0.1, wspace=0.1)
+    fig.suptitle(
+        f"{robot.name}: the arm at each shoulder and elbow singularity "
+        "(base frame, axes in m)",
+        fontsize=11,
+    )
+    fig.subplots_adjust(left=0.0, right=0.95, top=0.92, bottom=0.1, wspace=0.1)
     return _finish(fig, path, tight=False)
 
 
@@ -400,7 +418,9 @@ def plot_distances_along_path(
     Returns:
         The Figure, one panel per signal.
     """
-    fig = _figure(fig, (8.0, 1.9 * len(signals) + 0.6))
+    from matplotlib.lines import Line2D
+
+    fig = _figure(fig, (8.0, 1.9 * len(signals) + 1.0), layout="constrained")
     first = None
     for k, (kind, values) in enumerate(signals.items()):
         ax = fig.add_subplot(len(signals), 1, k + 1, sharex=first)
@@ -416,5 +436,13 @@ def plot_distances_along_path(
             ax.set_xlabel("t [s]")
         else:
             ax.tick_params(labelbottom=False)
-    fig.suptitle("Signed distances along the trajectory (● closest, ┆ crossing)")
+    handles = [
+        Line2D([], [], lw=1.5, color="C0"),
+        Line2D([], [], color="grey", lw=0.8),
+        Line2D([], [], ls="none", marker="o", color="crimson"),
+        Line2D([], [], color="crimson", ls=":", lw=1),
+    ]
+    labels = ["signed distance", "zero: singular", "closest approach", "crossing"]
+    fig.legend(handles, labels, loc="outside lower center", ncol=4, fontsize=9)
+    fig.suptitle("Signed distances to each singularity along the trajectory")
     return _finish(fig, path)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import re
 import warnings
 
@@ -12,6 +13,7 @@ import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
 
 from workbench.errors import DimensionError, NonFiniteError, URDFLoadError
+from workbench.model.mesh_files import get_stl_with_normals
 from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
@@ -33,6 +35,23 @@ def _corners(geometry: pin.GeometryObject) -> FloatArray:
             for z in (lo[2], hi[2])
         ]
     )
+
+
+class _Visualizer(MeshcatVisualizer):
+    """Pinocchio's Meshcat visualiser, STL meshes drawn with their facet normals.
+
+    An STL file whose normals are zero is sent as the same triangles with
+    normals computed from the vertices (:func:`get_stl_with_normals`): the page
+    shades with the file's normals, and zero ones draw the mesh black.
+    """
+
+    def loadMeshFromFile(self, geometry_object: pin.GeometryObject) -> object:
+        path = geometry_object.meshPath
+        if path.lower().endswith(".stl"):
+            fixed = get_stl_with_normals(path)
+            if fixed is not None:
+                return meshcat.geometry.StlMeshGeometry.from_stream(io.BytesIO(fixed))
+        return super().loadMeshFromFile(geometry_object)  # type: ignore[misc]
 
 
 class Arm:
@@ -59,7 +78,7 @@ class Arm:
     ):
         if geometry_model is None:
             geometry_model = robot.visual_model
-        self.viz = MeshcatVisualizer(robot.model, None, geometry_model)
+        self.viz = _Visualizer(robot.model, None, geometry_model)
         self.viz.initViewer(viewer=scene)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
@@ -112,8 +131,13 @@ class Arm:
                 scene[node].set_transform(pose)
 
     def compute_points(self, q: FloatArray, *, base_only: bool = False) -> FloatArray:
-        """World corners of the geometry bounding boxes at ``q``, shape (N, 3) [m]."""
-        poses = self.place(q)
+        """World corners of the geometry bounding boxes at ``q``, shape (N, 3) [m].
+
+        The boxes are those of the loaded geometry, whose vertices already
+        carry the mesh scale: they are placed by the geometry poses alone.
+        """
+        self.place(q)
+        poses = [m.homogeneous for m in self.viz.visual_data.oMg]
         chosen = [
             (t, c)
             for t, c, b in zip(poses, self.corners, self.on_base, strict=True)
