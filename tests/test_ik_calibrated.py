@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -35,6 +36,7 @@ from benchmarks._calibrated_models import (
     least_singular,
     off_axis_iiwa,
 )
+from tests._meshes import write_meshes_of
 from workbench import Robot, ik, load_robot
 from workbench.ik import (
     CALIBRATION_ANGLE_TOL,
@@ -50,6 +52,8 @@ from workbench.ik import (
 )
 from workbench.ik._refine_kernel import refinement_chain
 
+#: ROS-Industrial's description packages, vendored (``tests/data``).
+ROS_INDUSTRIAL = Path(__file__).parent / "data" / "ros_industrial"
 #: Every branch's FK residual by Pinocchio [m, rad].
 ATOL_RESIDUAL = 1e-12
 #: The generating configuration is a branch to this [rad, each joint mod 2π].
@@ -188,6 +192,27 @@ def test_off_axis_iiwa_is_srs_with_its_offset(folder) -> None:
     assert deviation.angle <= 1e-12
     assert get_solver(robot).parameter == "arm angle"
     assert get_solver(robot).deviation == deviation
+
+
+def test_ros_industrial_iiwa_urdf_itself(tmp_path) -> None:
+    """ROS-Industrial's own ``lbr_iiwa_14_r820.urdf`` (vendored in ``tests/data``).
+
+    Its joint 2 and 4 origins are 0.43624 mm off axis (of opposite signs, unlike
+    :func:`off_axis_iiwa`'s): SRS, the deviation said, every configuration back.
+    """
+    root = tmp_path / "src"
+    shutil.copytree(ROS_INDUSTRIAL, root)
+    folders = {p.name: p for p in root.iterdir() if p.is_dir()}
+    urdf = root / "kuka_lbr_iiwa_support" / "urdf" / "lbr_iiwa_14_r820.urdf"
+    write_meshes_of(urdf.read_text(), folders)
+    robot = load_robot(urdf, tool_frame="tool0")
+    solver = get_solver(robot)
+    assert solver.family.name == "srs" and solver.deviation is not None
+    np.testing.assert_allclose(
+        solver.deviation.distance, IIWA_OFF_AXIS, rtol=1e-6, atol=0
+    )
+    rng = np.random.default_rng(9)
+    _check_round_trip(robot, rng.uniform(robot.lower, robot.upper, (500, 7)))
 
 
 def _moved(robot: Robot, joint: int, placement: pin.SE3) -> Robot:
