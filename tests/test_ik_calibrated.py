@@ -477,7 +477,9 @@ def test_cli_ik_shows_the_deviation(capsys, folder) -> None:
 
     robot = calibrated_urdf("ur5", folder, seed=0)
     pose = ("--xyz-quat-wxyz", "0.3", "0.1", "0.4", "0", "1", "0", "0")
-    args = ("ik", "--robot", str(robot.urdf_path), "--tool-frame", "tool0", *pose)
+    share = Path(load_robot("ur5").urdf_path).parents[3]  # example-robot-data
+    args = ("ik", "--robot", str(robot.urdf_path), "--tool-frame", "tool0",
+            "--package-dir", f"example-robot-data={share}", *pose)  # fmt: skip
     code, out, err = run_cli(capsys, *args)
     assert code == 0, err
     assert "calibrated arm: structure deviation 0.0017 rad (3∥4)" in out
