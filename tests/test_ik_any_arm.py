@@ -117,7 +117,7 @@ def test_family_is_recognised(arm) -> None:
     assert get_solver(arm).branches == (UR_BRANCHES if family == "ur" else BRANCHES)
     structure = get_structure(arm)
     assert structure.family == family
-    assert structure.deviation <= STRUCTURE_TOL
+    assert max(structure.deviation.angle, structure.deviation.distance) <= STRUCTURE_TOL
     assert structure.residual <= 1e-12
 
 
@@ -343,12 +343,12 @@ def _rotated(robot: Robot, joint: int, angle: float) -> Robot:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["puma560", "ur5", "abb-irb2400"])
-def test_urdf_rounding_passes_and_1e3_is_refused(name: str) -> None:
+def test_urdf_rounding_passes_and_2e2_is_refused(name: str) -> None:
     robot = load_robot(name)
     rounded = _rotated(robot, 3, 1.8e-9)  # alpha written 1.570796325
     structure = get_structure(rounded)
     assert structure.family == MODELS[name]
-    assert structure.deviation <= 2e-9
+    assert max(structure.deviation.angle, structure.deviation.distance) <= 2e-9
     rng = np.random.default_rng(6)
     for q in rng.uniform(robot.lower, robot.upper, size=(50, 6)):
         target = rounded.fk(q).homogeneous
@@ -356,8 +356,8 @@ def test_urdf_rounding_passes_and_1e3_is_refused(name: str) -> None:
         errors = fk_errors(rounded, qs, [target] * len(qs))
         assert errors.max() <= 1e-8  # the model itself is 1.8e-9 rad off
     with pytest.raises(UnsupportedRobotError, match=r"axes 2 and 3 are not") as err:
-        get_structure(_rotated(robot, 3, 1e-3))
-    assert re.search(r"not parallel \(off by 0\.001\d* rad\)", str(err.value))
+        get_structure(_rotated(robot, 3, 2e-2))
+    assert re.search(r"not parallel \(off by 0\.02\d* rad\)", str(err.value))
 
 
 def test_no_family_is_refused_naming_the_axes() -> None:

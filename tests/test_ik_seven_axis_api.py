@@ -160,7 +160,7 @@ def test_batch_equals_single_pose(arm: Robot) -> None:
     assert q_all.shape == (64, count, 7) and valid.shape == (64, count)
     solver = get_solver(arm)
     for i in range(64):
-        single, _ = solver.solve_arrays(
+        single, _, _ = solver.solve_arrays(
             targets[i], np.empty(0), redundancy=float(values[i])
         )
         np.testing.assert_array_equal(valid[i], np.isfinite(single[:, 0]))
@@ -170,7 +170,9 @@ def test_batch_equals_single_pose(arm: Robot) -> None:
     q_one, valid_one = analytic_batch(arm, targets, redundancy=value)
     for i in range(64):
         try:
-            single, _ = solver.solve_arrays(targets[i], np.empty(0), redundancy=value)
+            single, _, _ = solver.solve_arrays(
+                targets[i], np.empty(0), redundancy=value
+            )
         except UnreachableError:
             assert not valid_one[i].any() and np.isnan(q_one[i]).all()
             continue

@@ -64,7 +64,7 @@ def test_six_and_seven_axis_arms_share_one_solution_type(arm) -> None:
 
 def test_flags_are_named_bits_of_one_byte(arm) -> None:
     robot, _, solutions = arm
-    q_all, flags = get_solver(robot).solve_arrays(
+    q_all, flags, _ = get_solver(robot).solve_arrays(
         robot.fk(arm[1]).homogeneous,
         np.empty(0),
         redundancy=solutions[0].redundancy,
@@ -205,9 +205,10 @@ def test_solutions_are_immutable_equal_by_value_and_pickle() -> None:
 def test_a_solve_returns_solutions_of_its_arrays(arm) -> None:
     robot, q, solutions = arm
     assert type(solutions) is Solutions and solutions.solve_flags == 0
-    q_all, flags = get_solver(robot).solve_arrays(
+    q_all, flags, solve_flags = get_solver(robot).solve_arrays(
         robot.fk(q).homogeneous, np.empty(0), redundancy=solutions.redundancy
     )
+    assert solve_flags == solutions.solve_flags
     np.testing.assert_array_equal(solutions.q_all, q_all)
     np.testing.assert_array_equal(solutions.flags_all, flags)
     assert solutions.branches == get_solver(robot).branches

@@ -127,11 +127,12 @@ def test_solve_and_front_door_agree(puma) -> None:
 
 def test_solve_arrays_gives_one_byte_of_flags_per_branch(puma) -> None:
     q0 = np.array([0.1, -0.4, 0.3, 0.2, 0.5, -0.1])
-    q, flags = get_solver(puma).solve_arrays(puma.fk(q0).homogeneous, q0)
+    q, flags, solve_flags = get_solver(puma).solve_arrays(puma.fk(q0).homogeneous, q0)
     assert q.shape == (8, 6) and flags.shape == (8,) and flags.dtype == np.uint8
     solutions = analytic(puma, puma.fk(q0), q_previous=q0)
     assert [int(s.flags) for s in solutions] == flags.tolist()
     assert all(Flag.REACHED in s.flags for s in solutions)
+    assert solve_flags == 0  # an exact model: every branch is the closed form's
 
 
 def test_deviation_is_the_structure_s() -> None:

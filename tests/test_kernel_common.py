@@ -13,6 +13,7 @@ from workbench import load_robot
 from workbench.errors import InputError
 from workbench.ik import (
     Flag,
+    SolveFlag,
     _flags,
     _puma_kernel,
     _redundant_common,
@@ -46,9 +47,10 @@ def test_one_flag_encoding_for_every_kernel() -> None:
         assert getattr(_puma_kernel, name) == getattr(common, name)
         assert getattr(_ur_kernel, name) == getattr(common, name)
     assert len({getattr(common, name) for name in _STATUSES}) == 4
-    # the refinement's own (FLAG_COUNT,) slots: 8 "within limits", one "unreached"
-    assert common.FLAG_WITHIN_LIMITS + 8 <= common.FLAG_SOME_UNREACHED
-    assert common.FLAG_SOME_UNREACHED < common.FLAG_COUNT
+    # the solve-level bits (ik.SolveFlag): each once, and none is a branch bit
+    solve = [_flags.BRANCH_VANISHED, _flags.BRANCHES_MERGED, _flags.SOLUTIONS_UNLISTED]
+    assert sorted(solve) == [1, 2, 4]
+    assert [int(flag) for flag in SolveFlag] == solve
 
 
 @pytest.fixture(scope="module")

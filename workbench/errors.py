@@ -153,10 +153,12 @@ class UnreachableError(InfeasibleError):
         kind: ``"reach"`` (too far or too close to the shoulder),
             ``"cylinder"`` (inside the cylinder of radius |d2 + d3| around the
             base axis that the shoulder offset keeps the wrist out of) or
-            ``"model"`` (at the edge of the reach, where a model that is of
-            its family only up to rounding reaches less than its idealised
-            structure: no branch refines onto the pose; distance and bounds
-            then 0).
+            ``"model"`` (at the edge of the reach, where the model and its
+            idealised structure differ: no branch refines onto the pose,
+            distance and bounds then 0; or, on a calibrated arm, the
+            idealised arm misses the pose by less than the model's deviation,
+            so that the model may reach it: solutions unlisted, distance and
+            bounds those of the idealised arm).
 
     A seven-axis arm's solver words its own ``message`` (the redundancy
     parameter's value and the values that reach).

@@ -21,7 +21,13 @@ import pinocchio as pin
 from workbench import ik
 from workbench.cli import _redundancy
 from workbench.cli._common import print_json
-from workbench.cli._ik_output import print_infeasible, print_rows, residual
+from workbench.cli._ik_output import (
+    deviation_head,
+    print_deviation,
+    print_infeasible,
+    print_rows,
+    residual,
+)
 from workbench.errors import InfeasibleError, InputError
 from workbench.model.robot import Robot
 
@@ -56,6 +62,7 @@ def solve_and_print_redundant(
         "solver": "closed-form",
         "solver_note": f"{solver.family.name.upper()} family (seven axes, redundancy "
         f"parameter {solver.parameter})",
+        **deviation_head(solver),
     }
     feasible: FeasibleRedundancy | None = None
     if args.feasible:
@@ -152,6 +159,7 @@ def _print_text(
         f"robot {head['robot']}   frame {head['frame']}   solver closed-form "
         f"({solver.family.name.upper()} family, seven axes)"
     )
+    print_deviation(head)
     if redundancy["source"] == "given":
         print(f"{solver.parameter} = {value} (given)")
     else:

@@ -29,6 +29,8 @@ from workbench.cli._common import (
     print_json,
 )
 from workbench.cli._ik_output import (
+    deviation_head,
+    print_deviation,
     print_infeasible,
     print_rows,
     residual,
@@ -261,19 +263,23 @@ def _solve_and_print(args: argparse.Namespace, robot: Robot, target: pin.SE3) ->
     for option in ("deg", "feasible"):
         if getattr(args, option):
             raise _redundancy.refuse_redundancy(robot, f"--{option}")
+    deviation: dict[str, Any] = {}
     try:
-        family = get_solver(robot).family.name
+        closed_form = get_solver(robot)
     except UnsupportedRobotError as err:
         solver, reason = "numeric", str(err)
         if args.all and not args.json:
             print(f"no closed form: {reason}", file=sys.stderr)
     else:
-        solver, reason = "closed-form", f"{family.upper()} family"
+        solver = "closed-form"
+        reason = f"{closed_form.family.name.upper()} family"
+        deviation = deviation_head(closed_form)
     head = {
         "robot": robot.name,
         "frame": robot.tool_frame,
         "solver": solver,
         "solver_note": reason,
+        **deviation,
     }
     try:
         rows = _solve(args, robot, target, solver)
@@ -285,6 +291,7 @@ def _solve_and_print(args: argparse.Namespace, robot: Robot, target: pin.SE3) ->
         print_json({**head, "solutions": rows, "feasible": True})
         return 0
     print(f"robot {robot.name}   frame {robot.tool_frame}   solver {solver}")
+    print_deviation(head)
     print_rows(rows, SIX_AXIS_FLAGS)
     return 0
 

@@ -60,13 +60,18 @@ from workbench.ik.selection import (
 from workbench.ik.solution import IKSolution, Solutions
 from workbench.ik.solver import Solver, get_solver
 from workbench.ik.structure import (
+    CALIBRATION_ANGLE_TOL,
+    CALIBRATION_DISTANCE_TOL,
     STRUCTURE_TOL,
     KinematicStructure,
+    StructureDeviation,
     get_structure,
 )
 
 __all__ = [
     "BRANCHES",
+    "CALIBRATION_ANGLE_TOL",
+    "CALIBRATION_DISTANCE_TOL",
     "DEFAULT_RULE",
     "DLS_EPSILON",
     "DLS_LAMBDA_MAX",
@@ -93,6 +98,7 @@ __all__ = [
     "Solutions",
     "SolveFlag",
     "Solver",
+    "StructureDeviation",
     "UnreachableError",
     "UnsupportedRobotError",
     "analytic",

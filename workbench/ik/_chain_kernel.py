@@ -119,6 +119,17 @@ def _forward(chain: FloatArray, q: FloatArray, frames: FloatArray):
     for k in range(n):
         if chain[k, 15] != PRISMATIC:
             frames[k, 0], frames[k, 1] = math.sin(q[k]), math.cos(q[k])
+    _products(chain, q, frames)
+
+
+@helper(forceinline=True)
+def _products(chain: FloatArray, q: FloatArray, frames: FloatArray):
+    """:func:`_forward` given the sines and cosines: ``frames[k, 0:2]`` = sin, cos q_k.
+
+    (For callers that carry them from step to step instead of calling the
+    library per joint: Newton's small steps, ``_refine_kernel``.)
+    """
+    n = chain.shape[0] - 1
     for k in range(n + 1):
         c, f = chain[k], frames[k]
         s, co = f[0], f[1]  # (a revolute joint's)

@@ -38,14 +38,6 @@ Row = tuple[float, float, float, float]
 #: reach; it is inside the cylinder the shoulder offset keeps it out of.
 OK, NOT_RIGID, OUT_OF_REACH, IN_CYLINDER = 0, 1, 2, 3
 
-#: Slots of the (FLAG_COUNT,) bool flags that the 6R refinement
-#: (``_refine_kernel.refine_pose``) updates: branch ``b`` within the joint
-#: limits, slot ``FLAG_WITHIN_LIMITS + b`` (8 slots); some branches do not
-#: reach. The kernels' own flags are the per-branch bits of ``_flags``.
-FLAG_WITHIN_LIMITS = 0
-FLAG_SOME_UNREACHED = 13
-FLAG_COUNT = 14
-
 PI = math.pi
 TAU = 2.0 * math.pi
 
@@ -511,9 +503,6 @@ def track_one(
 
 
 __all__ = [
-    "FLAG_COUNT",
-    "FLAG_SOME_UNREACHED",
-    "FLAG_WITHIN_LIMITS",
     "IN_CYLINDER",
     "NOT_RIGID",
     "OK",

@@ -34,17 +34,34 @@ import numpy as np
 import numpy.typing as npt
 
 from workbench._compiled import entry_point, helper
-from workbench.ik._chain_kernel import _damped_step, _forward, _jacobian, _solve
+from workbench.ik._chain_kernel import (
+    _damped_step,
+    _forward,
+    _jacobian,
+    _products,
+    _solve,
+)
 from workbench.ik._kernel_common import remainder
-from workbench.ik._puma import LIMIT_TOL
-from workbench.ik._redundant_common import WITHIN_LIMITS
 from workbench.ik._refine_kernel import (
     ACCEPT,
+    EVENT_SHIFT,
+    FAST_STEPS,
+    MERGED,
+    POLISH,
     REFINE_STEPS,
     ROTATION_TOL,
+    TWIN_TOL,
+    UNLISTED,
+    UNLISTED_SHIFT,
+    VANISHED,
+    _fast_error,
     keep_best,
     pose_error,
+    solution_gap,
+    step_back,
+    write_flags,
 )
+from workbench.ik._refine_kernel import _refine_pose as refine_six
 from workbench.ik._srs_kernel import _arm_angle
 
 FloatArray = npt.NDArray[np.float64]
@@ -52,10 +69,16 @@ FloatArray = npt.NDArray[np.float64]
 #: Step [rad] of the central differences of ψ(q): their truncation error,
 #: ~1e-12 relative, and rounding, ~1e-10, only slow Newton's last step.
 PARAMETER_STEP = 1e-6
-#: Two refined branches this close [rad, each joint mod 2π] are one solution.
-TWIN_TOL = 1e-8
-#: Rows of the scratch array of :func:`_refine_row` (12 columns).
-WORK_ROWS = 28
+#: Joints (0-based) whose DH angle is 0 or π where the idealised arm folds
+#: (the elbow θ4, the shoulder θ2, the wrist θ6), and the step [rad] a start on
+#: the fold is moved across it when Newton finds nothing from it (the model's
+#: solutions near a fold lie about √deviation from it: 0.02–0.06 rad for
+#: 1e-4…1e-3 of deviation).
+FOLD_JOINTS = (3, 1, 5)
+FOLD_STEP = 0.05
+#: Rows of the scratch array of :func:`_refine_row` and :func:`_newton_srs`
+#: (12 columns).
+WORK_ROWS = 30
 
 
 @helper()
@@ -64,6 +87,68 @@ def _arm_angle_of(geo, q: FloatArray, theta: FloatArray) -> float:
     for j in range(7):
         theta[j] = geo.joint_sign[j] * q[j] + geo.theta_offset[j]
     return _arm_angle(geo, theta)
+
+
+@helper()
+def _newton_srs(chain, geo, target, value: float, q, work) -> bool:
+    """Newton steps on the square system [e; ψ(q) − ψ*] of one SRS row, or False.
+
+    The fast path of a regular row (``_refine_kernel._newton``'s, for seven
+    joints): A = [J; ∇ψ] (7, 7) by LU, no damping, ∇ψ by forward differences
+    (:data:`PARAMETER_STEP`) at the start only (the row of ψ then converges
+    linearly, at a rate of its change over the step), the first-order error of
+    ``_refine_kernel._fast_error``. Stops at ``POLISH`` times the
+    tolerances, or where the residual stops decreasing within ``ACCEPT``
+    (``q`` the best iterate); anything else returns False and the caller
+    takes :func:`_refine_row`. ``work``: (:data:`WORK_ROWS`, 12) scratch.
+    """
+    frames = work[0:8]
+    jac, lu = work[8:15, 0:7], work[15:22, 0:7]
+    r, previous = work[22, 0:7], work[23, 0:7]
+    theta, shifted = work[26, 0:7], work[27, 0:7]
+    gradient = work[24, 0:7]
+    sines, cosines = work[28, 0:7], work[29, 0:7]
+    for k in range(7):
+        sines[k], cosines[k] = math.sin(q[k]), math.cos(q[k])
+    last = math.inf
+    for step in range(FAST_STEPS + 1):
+        for k in range(7):
+            frames[k, 0], frames[k, 1] = sines[k], cosines[k]
+        _products(chain, q, frames)
+        size = _fast_error(target, frames, r)
+        psi = _arm_angle_of(geo, q, theta)
+        r[6] = remainder(psi - value)
+        size = max(size, abs(r[6]) / ROTATION_TOL)
+        if size <= POLISH:
+            return True
+        if not size < last:  # the previous iterate was the best
+            for k in range(7):
+                q[k] = previous[k]
+            return last <= ACCEPT
+        if step == FAST_STEPS:
+            return False
+        last = size
+        _jacobian(chain, frames, jac)  # (rows 0-5; row 6 holds ∇ψ)
+        if step == 0:  # ∇ψ of the start: ψ is smooth, the start near the end
+            for k in range(7):
+                shifted[k] = q[k]
+            for k in range(7):
+                shifted[k] = q[k] + PARAMETER_STEP
+                gradient[k] = (
+                    remainder(_arm_angle_of(geo, shifted, theta) - psi) / PARAMETER_STEP
+                )
+                shifted[k] = q[k]
+        for k in range(7):
+            jac[6, k] = gradient[k]
+        for i in range(7):
+            for k in range(7):
+                lu[i, k] = jac[i, k]
+        if not _solve(lu, r, 7):
+            return False
+        for k in range(7):
+            previous[k] = q[k]
+            step_back(q, k, r[k], sines, cosines)
+    return False
 
 
 @helper()
@@ -130,57 +215,181 @@ def _refine_row(chain, geo, srs: bool, target, value: float, q, work) -> bool:
 
 
 @helper()
-def _twin_of(q, b: int, reached: int) -> int:
-    """An earlier reached row of ``q`` (B, 7) as row b (:data:`TWIN_TOL`), else −1."""
-    for a in range(b):
-        if reached >> a & 1 == 0:
-            continue
-        gap = 0.0
+def _unheld(q, x, reached: int, skip: int) -> bool:
+    """No reached row of ``q`` (B, 7) but ``skip`` holds ``x`` (:data:`TWIN_TOL`)."""
+    for c in range(q.shape[0]):
+        if c != skip and reached >> c & 1 and solution_gap(q[c], x) <= TWIN_TOL:
+            return False
+    return True
+
+
+@helper()
+def _other_start(chain, geo, srs, target, value, start, solution, q, reached, b, work):
+    """Carry row ``b`` to a solution no other row holds, from near ``start`` (7,).
+
+    Tried in turn: the start mirrored through ``solution`` (7,) (the model's
+    two solutions near a fold of the idealised arm lie on either side of it),
+    if ``solution`` is a solution; then the start with one of the fold joints
+    (4, 2, 6: elbow, shoulder, wrist) moved by ±:data:`FOLD_STEP` (a start on
+    the fold itself, where the idealised arm's reach test is widened, gives
+    Newton no direction across it). Leaves the solution in ``q[b]``.
+
+    Returns:
+        Whether one was found.
+    """
+    x = np.empty(7)
+    for attempt in range(-1, 6):
         for k in range(7):
-            gap = max(gap, abs(remainder(q[a, k] - q[b, k])))
-        if gap <= TWIN_TOL:
-            return a
-    return -1
+            x[k] = start[k]
+        if attempt < 0:
+            if not solution[0] == solution[0]:
+                continue
+            for k in range(7):
+                x[k] = start[k] + remainder(start[k] - solution[k])
+        else:
+            joint = FOLD_JOINTS[attempt >> 1]
+            x[joint] += FOLD_STEP if attempt & 1 == 0 else -FOLD_STEP
+        if _refine_row(chain, geo, srs, target, value, x, work) and _unheld(
+            q, x, reached, b
+        ):
+            for k in range(7):
+                q[b, k] = x[k]
+            return True
+    return False
 
 
 @helper()
 def _refine_branches(chain, geo, srs: bool, target, value: float, q, work) -> int:
-    """Refine the reached rows (not NaN) of ``q`` (B, 7); NaN the ones that fail.
+    """Carry the reached rows (not NaN) of ``q`` (B, 7) to the chain; NaN the others.
 
-    A row that lands on the solution of an earlier one (twins that start at,
-    or near, the idealised arm's fold, e.g. its wrist edge: the model's two
-    solutions lie on either side, about √deviation apart) is refined again
-    from its start mirrored through the solution found, and keeps what it
-    reaches from there if that is another solution.
+    A row that lands on the solution of another (twins that start at, or
+    near, the idealised arm's fold, e.g. its stretched elbow: the model's two
+    solutions lie on either side, about √deviation apart) leaves it to the row
+    whose start is nearer; that row, or one that does not converge, is
+    carried again from other starts near its own (:func:`_other_start`). A
+    row that still finds no solution of its own is NaN and sets ``MERGED``
+    (it had converged onto another's) or ``VANISHED``. A row that moves more
+    than ``UNLISTED_SHIFT`` from its start is in a valley of the model's
+    near-singular solutions (e.g. θ2 → 0, axes 1 and 3 aligned), which is not
+    searched here: ``UNLISTED`` says the model may have solutions there that
+    no row holds.
 
-    Returns a bit mask of the branches that reach.
+    Returns:
+        A bit mask of the branches that reach, plus ``VANISHED`` and
+        ``MERGED`` (``_refine_kernel``'s bits).
     """
-    start, other = np.empty(7), np.empty(7)
-    reached = 0
+    starts, solution = np.empty((q.shape[0], 7)), np.empty(7)
+    reached, events = 0, 0
     for b in range(q.shape[0]):
         row = q[b]
         if not row[0] == row[0]:
             continue
         for k in range(7):
-            start[k] = row[k]
-        if not _refine_row(chain, geo, srs, target, value, row, work):
+            starts[b, k] = row[k]
+        if not _newton_srs(chain, geo, target, value, row, work) and not _refine_row(
+            chain, geo, srs, target, value, row, work
+        ):
             for k in range(7):
-                row[k] = np.nan
+                solution[k] = np.nan
+            if _other_start(
+                chain, geo, srs, target, value, starts[b], solution, q, reached, b,
+                work,
+            ):  # fmt: skip
+                reached |= 1 << b
+            else:
+                for k in range(7):
+                    row[k] = np.nan
+                events |= VANISHED
             continue
         reached |= 1 << b
-        a = _twin_of(q, b, reached)
+        if solution_gap(starts[b], row) > UNLISTED_SHIFT:  # a valley, not searched
+            events |= UNLISTED
+        a = -1
+        for c in range(q.shape[0]):
+            if c != b and reached >> c & 1 and solution_gap(q[c], row) <= TWIN_TOL:
+                a = c
         if a < 0:
             continue
+        near_a = solution_gap(starts[a], q[a]) <= solution_gap(starts[b], row)
+        loser = b if near_a else a
         for k in range(7):
-            other[k] = 2.0 * start[k] - row[k]
-        if not _refine_row(chain, geo, srs, target, value, other, work):
-            continue
-        gap = 0.0
-        for k in range(7):
-            gap = max(gap, abs(remainder(other[k] - q[a, k])))
-        if gap > TWIN_TOL:
+            solution[k] = row[k]
+        if not _other_start(
+            chain, geo, srs, target, value, starts[loser], solution, q, reached,
+            loser, work,
+        ):  # fmt: skip
             for k in range(7):
-                row[k] = other[k]
+                q[loser, k] = np.nan
+            reached &= ~(1 << loser)
+            events |= MERGED
+    return reached | events
+
+
+@helper()
+def _fixed_last(chain: FloatArray, value: float, out: FloatArray) -> None:
+    """The six-joint chain ``out`` (7, CHAIN_WIDTH) of ``chain`` (8, ·), q7 = value.
+
+    Rows 0–5 are the first six joints; row 6 is the tool placement in joint
+    6's frame with joint 7 turned to ``value``: P7 · exp(a7 q7) · P_tool.
+    """
+    for r in range(6):
+        for c in range(chain.shape[1]):
+            out[r, c] = chain[r, c]
+    for c in range(chain.shape[1]):
+        out[6, c] = 0.0
+    x, y, z = chain[6, 12], chain[6, 13], chain[6, 14]
+    s, co = math.sin(value), math.cos(value)
+    vers = 1.0 - co
+    turn = np.empty(9)  # Rodrigues: cos I + sin a^ + (1 - cos) a aᵀ, row-major
+    turn[0], turn[4], turn[8] = co + vers * x * x, co + vers * y * y, co + vers * z * z
+    turn[1], turn[3] = vers * x * y - s * z, vers * x * y + s * z
+    turn[2], turn[6] = vers * x * z + s * y, vers * x * z - s * y
+    turn[5], turn[7] = vers * y * z - s * x, vers * y * z + s * x
+    middle = np.empty(9)  # R7 · turn
+    for i in range(3):
+        for j in range(3):
+            middle[3 * i + j] = (
+                chain[6, 3 * i] * turn[j]
+                + chain[6, 3 * i + 1] * turn[3 + j]
+                + chain[6, 3 * i + 2] * turn[6 + j]
+            )
+    for i in range(3):  # (R7 turn, p7) · (R_tool, p_tool)
+        for j in range(3):
+            out[6, 3 * i + j] = (
+                middle[3 * i] * chain[7, j]
+                + middle[3 * i + 1] * chain[7, 3 + j]
+                + middle[3 * i + 2] * chain[7, 6 + j]
+            )
+        out[6, 9 + i] = (
+            chain[6, 9 + i]
+            + middle[3 * i] * chain[7, 9]
+            + middle[3 * i + 1] * chain[7, 10]
+            + middle[3 * i + 2] * chain[7, 11]
+        )
+
+
+@helper()
+def _refine_fixed_last(chain, target, value: float, q, six, rows, work) -> int:
+    """A Franka arm's rows ``q`` (B, 7) at q7 = ``value``, carried as a 6R arm.
+
+    With q7 held the arm is a six-joint chain (:func:`_fixed_last` into
+    ``six``), carried by the six-axis refinement (``_refine_kernel``: its
+    valley search finds the model's solutions where the idealised arm has a
+    one-parameter family, e.g. θ2 = 0, axes 1 and 3 aligned). ``rows`` (B, 6)
+    and ``work`` (30, 12) are scratch.
+
+    Returns:
+        As ``_refine_kernel``'s: the reached mask plus its event bits.
+    """
+    _fixed_last(chain, value, six)
+    for b in range(q.shape[0]):
+        for k in range(6):
+            rows[b, k] = q[b, k]
+    reached = refine_six(six, target, rows, work)
+    for b in range(q.shape[0]):
+        for k in range(6):
+            q[b, k] = rows[b, k]
+        q[b, 6] = value if reached >> b & 1 else np.nan
     return reached
 
 
@@ -206,26 +415,29 @@ def refine_pose(
         value: The redundancy parameter [rad]: ψ (SRS) or q7 (Franka).
         q: (B, 7) branches of the closed form [rad], NaN rows for those that
             do not reach; refined in place, NaN where refinement fails.
-        flags: (B,) uint8 flag bits of the kernels' ``solve_pose``: the bit
-            ``WITHIN_LIMITS`` is updated.
+        flags: (B,) uint8 bits of ``_flags`` per branch (the closed form's),
+            rewritten as ``_refine_kernel.write_flags`` says.
 
     Returns:
-        The number of branches that reach.
+        The solve-level byte (``ik.SolveFlag`` bits): a branch vanished,
+        branches merged, solutions unlisted; 0 when every branch carried over.
     """
     work = np.empty((WORK_ROWS, 12))
-    reached = _refine_branches(chain, arm_angle_geometry[0], srs, pose, value, q, work)
-    count = 0
-    for b in range(q.shape[0]):
-        alive = reached >> b & 1 != 0
-        count += alive
-        within = alive
-        for k in range(7):
-            within &= chain[k, 16] - LIMIT_TOL <= q[b, k] <= chain[k, 17] + LIMIT_TOL
-        flags[b] = (flags[b] & ~WITHIN_LIMITS) | (WITHIN_LIMITS if within else 0)
-    return count
+    if srs:
+        reached = _refine_branches(
+            chain, arm_angle_geometry[0], srs, pose, value, q, work
+        )
+    else:
+        reached = _refine_fixed_last(
+            chain, pose, value, q, np.empty((7, chain.shape[1])),
+            np.empty((q.shape[0], 6)), np.empty((30, 12)),
+        )  # fmt: skip
+    return write_flags(chain, q, flags, reached)
 
 
-@entry_point(outputs=("q", "valid"), contiguous=("chain", "targets", "values"))
+@entry_point(
+    outputs=("q", "valid", "solve_flags"), contiguous=("chain", "targets", "values")
+)
 def refine_batch(
     chain: FloatArray,
     arm_angle_geometry: np.ndarray,
@@ -234,6 +446,7 @@ def refine_batch(
     values: FloatArray,
     q: FloatArray,
     valid: npt.NDArray[np.bool_],
+    solve_flags: npt.NDArray[np.uint8],
 ) -> int:
     """Refine the branches of N poses on the true chain.
 
@@ -245,18 +458,32 @@ def refine_batch(
         values: (N,) the redundancy parameter of each pose [rad].
         q: (N, B, 7) branches [rad] (NaN rows where not valid), refined in
             place; NaN where refinement fails.
-        valid: (N, B) True where a branch reaches; cleared where it fails.
+        valid: (N, B) True where a branch reaches; rewritten.
+        solve_flags: (N,) uint8 output, the solve-level byte of each pose.
 
     Returns:
         The number of branches that were valid and failed.
     """
     work = np.empty((WORK_ROWS, 12))
+    six, rows, six_work = (
+        np.empty((7, chain.shape[1])),
+        np.empty((q.shape[1], 6)),
+        np.empty((30, 12)),
+    )
     geo = arm_angle_geometry[0]
     failed = 0
     for i in range(targets.shape[0]):
-        reached = _refine_branches(chain, geo, srs, targets[i], values[i], q[i], work)
+        if srs:
+            reached = _refine_branches(
+                chain, geo, srs, targets[i], values[i], q[i], work
+            )
+        else:
+            reached = _refine_fixed_last(
+                chain, targets[i], values[i], q[i], six, rows, six_work
+            )
         for b in range(q.shape[1]):
             alive = reached >> b & 1 != 0
             failed += valid[i, b] and not alive
             valid[i, b] = alive
+        solve_flags[i] = (reached >> EVENT_SHIFT) & 0xFF
     return failed

@@ -18,10 +18,15 @@ line all solve through it. Every solve returns
 :class:`~workbench.ik.IKSolution`\ s, whose flags are the per-branch bits of
 :mod:`workbench.ik._flags` (one encoding for every kernel).
 
-On a model that is of its family only up to its rounding, every reached
-branch is then refined on the model's own chain (``_refine_kernel``,
-``_refine_redundant_kernel``; a seven-axis arm with the parameter held):
-exact to 1e-12 there too; a branch that does not converge does not reach.
+On a model that is of its family only up to its rounding, or a calibrated
+arm within ``CALIBRATION_ANGLE_TOL`` and ``CALIBRATION_DISTANCE_TOL`` of it
+(:attr:`Solver.deviation`), every reached branch is then carried to the
+model's own chain (``_refine_kernel``, ``_refine_redundant_kernel``; a
+seven-axis arm with the parameter held): exact to 1e-12 there too; a branch
+without a solution of the model does not reach, and what could not be placed
+is the solve's :class:`~workbench.ik.SolveFlag` byte
+(``Solutions.solve_flags``, the third value of :meth:`Solver.solve_arrays`,
+``solve_batch(..., solve_flags=)``).
 
 OPW branch labels (UR labels: :data:`UR_BRANCHES`) are physical, so that one
 posture of the PUMA carries the same label in both DH models of the workbench
@@ -68,16 +73,15 @@ from workbench.ik import _refine_redundant_kernel as refine_redundant
 from workbench.ik import _srs_kernel
 from workbench.ik._atan2_kernel import atan2_into
 from workbench.ik._chain import compiled_entry
-from workbench.ik._flags import WITHIN_LIMITS
+from workbench.ik._flags import SOLUTIONS_UNLISTED, WITHIN_LIMITS
 from workbench.ik._kernel_common import (
-    FLAG_COUNT,
-    FLAG_WITHIN_LIMITS,
     IN_CYLINDER,
     NOT_RIGID,
     OK,
     continuing_branch,
     nearest_or_kept,
 )
+from workbench.ik._puma import MODEL_ERROR_SLACK
 from workbench.ik._refine_kernel import refine_batch, refine_pose, refinement_chain
 from workbench.ik._targets import as_targets, check_poses, pose_rows
 from workbench.ik.families import BRANCHES, UR_BRANCHES, Family, require_family
@@ -88,7 +92,7 @@ from workbench.ik.redundant import (
     format_intervals,
 )
 from workbench.ik.solution import Solutions
-from workbench.ik.structure import get_structure
+from workbench.ik.structure import StructureDeviation, get_structure
 from workbench.model.per_robot import per_robot
 from workbench.model.robot import Robot
 from workbench.validation import as_finite_array
@@ -137,7 +141,8 @@ class Solver:
 
     __slots__ = (
         "__weakref__", "_arm_angle_geometry", "_indices", "_intervals",
-        "_kernel", "_name", "_refine", "_robot", "_solve_pose", "_work", "branches",
+        "_kernel", "_name", "_refine", "_robot", "_slack", "_solve_pose", "_work",
+        "branches",
         "family", "geometry", "nq", "parameter", "parameter_range",
     )  # fmt: skip
 
@@ -161,6 +166,12 @@ class Solver:
         self._name = robot.name  # for the messages
         # the model's chain when it differs from the idealised structure
         self._refine: FloatArray | None = refinement_chain(robot)
+        # how far past the idealised arm's reach the model may reach [m]
+        self._slack = (
+            0.0
+            if self._refine is None
+            else MODEL_ERROR_SLACK * get_structure(robot).residual
+        )
         self._work = threading.local()  # each thread's buffers of solve_batch_into
         self.nq: int = family.joint_count
         self.branches: tuple[str, ...] = family.branches
@@ -185,17 +196,19 @@ class Solver:
         return robot
 
     @property
-    def deviation(self) -> object | None:
+    def deviation(self) -> StructureDeviation | None:
         """How far the robot's model is from its family's ideal structure.
 
-        The ``deviation`` of its :class:`~workbench.ik.KinematicStructure`
-        (None where the structure does not report one).
+        The ``deviation`` of its :class:`~workbench.ik.KinematicStructure`:
+        the largest angle [rad] and distance [m] of the family's tests
+        (``.calibrated`` when beyond URDF rounding, ``STRUCTURE_TOL``); None
+        for a PUMA DH table whose axes fit no structure.
         """
         try:
             structure = get_structure(self.robot)
         except UnsupportedRobotError:  # a PUMA DH table the axes do not fit
             return None
-        return getattr(structure, "deviation", None)
+        return structure.deviation
 
     def __repr__(self) -> str:
         robot = self._robot()
@@ -247,10 +260,11 @@ class Solver:
             if redundancy is not None:
                 raise self._no_redundancy()
             q, flags = _empty((8, 6)), _empty(8, _UINT8)  # (positional: faster)
+            events = 0
             if self._refine is not None or self._solve_pose(
                 self.geometry, pose, prev, q, flags, True
             ):  # not OK (rechecked, or raises), or refined on the model
-                q, flags = self.solve_arrays(pose, prev)
+                q, flags, events = self.solve_arrays(pose, prev)
         else:
             if redundancy is None:
                 if q_previous is None:
@@ -259,11 +273,12 @@ class Solver:
             elif redundancy.__class__ is not float or not -_INF < redundancy < _INF:
                 redundancy = check_redundancy(redundancy, self.parameter)
             q, flags = _empty((8, 7)), _empty(8, _UINT8)
+            events = 0
             if self._refine is not None or self._solve_pose(
                 self.geometry, pose, redundancy, prev, q, flags, True
             ):
-                q, flags = self.solve_arrays(pose, prev, redundancy=redundancy)
-        return _solutions(q, flags, self.branches, redundancy)
+                q, flags, events = self.solve_arrays(pose, prev, redundancy=redundancy)
+        return _solutions(q, flags, self.branches, redundancy, events)
 
     def _first_solve_pose(self, *args: Any) -> int:
         """The kernel's ``solve_pose``, then its compiled code for later calls.
@@ -285,7 +300,7 @@ class Solver:
         q_previous: FloatArray,
         *,
         redundancy: float | None = None,
-    ) -> tuple[FloatArray, FlagArray]:
+    ) -> tuple[FloatArray, FlagArray, int]:
         """The kernel's solve of one pose, as arrays, its failures as errors.
 
         Args:
@@ -299,7 +314,10 @@ class Solver:
         Returns:
             ``q`` (B, nq) [rad], NaN rows for branches that do not reach, and
             ``flags`` (B,) uint8, the bits of :class:`~workbench.ik.Flag` per
-            branch (0 where it does not reach).
+            branch (0 where it does not reach), and the solve-level byte, the
+            bits of :class:`~workbench.ik.SolveFlag` (0 on an exact model: on
+            a calibrated arm, a branch of the idealised arm vanished or merged
+            on the model, or solutions may be unlisted).
 
         Raises:
             UnreachableError, NonFiniteError, InputError: As :meth:`solve`.
@@ -317,11 +335,16 @@ class Solver:
                 self.geometry, pose, redundancy, q_previous, q, flags, True
             )
         if status != OK:
+            if self._refine is not None and status != NOT_RIGID:
+                self._raise_near_reach(pose, redundancy)
             self._raise(status, pose, redundancy)
         chain = self._refine
-        if chain is not None and not self._refined(chain, pose, redundancy, q, flags):
+        if chain is None:
+            return q, flags, 0
+        solve_flags = self._refined(chain, pose, redundancy, q, flags)
+        if not flags.any():
             raise UnreachableError(0.0, (0.0, 0.0), "model")
-        return q, flags
+        return q, flags, solve_flags
 
     def _refined(
         self,
@@ -331,28 +354,22 @@ class Solver:
         q: FloatArray,
         flags: FlagArray,
     ) -> int:
-        """Refine the branches ``q`` (B, nq) on the model's own chain, in place.
+        """Carry the branches ``q`` (B, nq) to the model's own chain, in place.
+
+        Rows without a solution of the model are NaN, their ``flags`` 0; the
+        ``REACHED`` and ``WITHIN_LIMITS`` bits are those of the model.
 
         Returns:
-            The number of branches that reach the pose on the model; the
-            others are NaN rows now, their ``flags`` 0, and the
-            ``WITHIN_LIMITS`` bits of the others are those of the model.
+            The solve-level byte (:class:`~workbench.ik.SolveFlag` bits).
         """
         if value is None:
-            slots = np.empty(FLAG_COUNT, dtype=np.bool_)
-            count = int(refine_pose(chain, pose, q, slots))
-            within = slots[FLAG_WITHIN_LIMITS : FLAG_WITHIN_LIMITS + 8]
-            flags &= ~np.uint8(WITHIN_LIMITS)
-            flags |= within.astype(np.uint8) * np.uint8(WITHIN_LIMITS)
-        else:
-            count = int(
-                refine_redundant.refine_pose(
-                    chain, self._arm_angle_geometry, self.family.parameter_periodic,
-                    pose, value, q, flags,
-                )
-            )  # fmt: skip
-        flags[np.isnan(q[:, 0])] = 0
-        return count
+            return int(refine_pose(chain, pose, q, flags))
+        return int(
+            refine_redundant.refine_pose(
+                chain, self._arm_angle_geometry, self.family.parameter_periodic,
+                pose, value, q, flags,
+            )
+        )  # fmt: skip
 
     def track(
         self,
@@ -440,7 +457,10 @@ class Solver:
             status = self._kernel.solve_pose(
                 self.geometry, pose, q_predicted, q_all, flags, True
             )
-        if status != OK or not self._refined(chain, pose, redundancy, q_all, flags):
+        if status != OK:
+            return None
+        self._refined(chain, pose, redundancy, q_all, flags)
+        if not flags.any():
             return None
         if seven:
             index = int(nearest_or_kept(q_all, q_predicted, branch, max_step2))
@@ -498,6 +518,34 @@ class Solver:
             "configuration), or q_previous= to keep its value"
         )
 
+    def _near_reach(self, pose: FloatArray, value: float | None) -> bool:
+        """Whether the idealised arm misses ``pose`` by at most the model's slack.
+
+        On a calibrated arm the kernels' reach tests are widened by
+        ``MODEL_ERROR_SLACK`` times the structure's residual; a pose they
+        still refuse within that distance of the idealised reach (or, inside
+        the reach, refused by another of the idealised arm's tests) may be
+        reached by the model, whose solutions are then unlisted.
+        """
+        distance, low, high = self.diagnose(pose, redundancy=value)
+        return low - self._slack <= distance <= high + self._slack
+
+    def _raise_near_reach(self, pose: FloatArray, value: float | None) -> None:
+        """Raise ``UnreachableError(kind="model")`` if :meth:`_near_reach`."""
+        if not self._near_reach(pose, value):
+            return
+        distance, low, high = self.diagnose(pose, redundancy=value)
+        raise UnreachableError(
+            distance,
+            (low, high),
+            "model",
+            f"the idealised {self.family.name.upper()} arm does not reach the pose "
+            f"(wrist point at {distance:.6g} m from the shoulder, reach [{low:.6g}, "
+            f"{high:.6g}] m), but within the model's deviation ({self._slack:.2g} m): "
+            "the calibrated model may reach it, and its solutions are not listed; "
+            "use numerical IK",
+        )
+
     def _raise(self, status: int, pose: FloatArray, value: float | None) -> None:
         """Raise the error of a pose the kernel refused (``status`` not OK)."""
         if status == NOT_RIGID:  # the kernel's test is the exact one
@@ -541,6 +589,7 @@ class Solver:
         targets: npt.ArrayLike,
         *,
         redundancy: float | npt.ArrayLike | None = None,
+        solve_flags: FlagArray | None = None,
     ) -> tuple[FloatArray, BoolArray]:
         """Every branch of N poses: see :func:`workbench.ik.analytic_batch`.
 
@@ -548,6 +597,10 @@ class Solver:
             targets: (N, 4, 4) poses of the tool frame in the base frame [m].
             redundancy: Seven-axis arms, required: the redundancy parameter
                 [rad], one for all or (N,); six-axis arms: None.
+            solve_flags: Optional (N,) uint8 output: each pose's solve-level
+                byte, the bits of :class:`~workbench.ik.SolveFlag` (0 on an
+                exact model; on a calibrated arm what carrying the branches to
+                the model could not place).
 
         Returns:
             ``q`` (N, B, nq) [rad], NaN where a branch does not reach;
@@ -564,7 +617,9 @@ class Solver:
         count = len(poses)
         q = np.empty((count, len(self._indices), self.nq))
         valid = np.empty((count, len(self._indices)), dtype=bool)
-        self.solve_batch_into(poses, q, valid, redundancy=redundancy)
+        self.solve_batch_into(
+            poses, q, valid, redundancy=redundancy, solve_flags=solve_flags
+        )
         return q, valid
 
     def solve_batch_into(
@@ -574,6 +629,7 @@ class Solver:
         valid: BoolArray,
         *,
         redundancy: float | npt.ArrayLike | None = None,
+        solve_flags: FlagArray | None = None,
     ) -> None:
         """:meth:`solve_batch` into given arrays (no allocation of the results).
 
@@ -583,6 +639,7 @@ class Solver:
             q: (N, B, nq) float64 output [rad], as :meth:`solve_batch`'s.
             valid: (N, B) bool output.
             redundancy: As :meth:`solve_batch`.
+            solve_flags: As :meth:`solve_batch`: optional (N,) uint8 output.
 
         Raises:
             DimensionError: If the shapes do not match.
@@ -596,12 +653,22 @@ class Solver:
         ):
             if array.shape != shape:
                 raise DimensionError(name, shape, array.shape)
+        if solve_flags is not None:
+            if solve_flags.shape != (count,):
+                raise DimensionError("solve_flags", (count,), solve_flags.shape)
+            if solve_flags.dtype != _UINT8:
+                raise InputError(
+                    f"solve_flags must be a uint8 array, got {solve_flags.dtype}"
+                )
+            solve_flags[:] = 0
+        events = np.empty(count, _UINT8) if solve_flags is None else solve_flags
         if self.parameter is None:
             if redundancy is not None:
                 raise self._no_redundancy()
             self._batch_six(poses, q, valid)
             if self._refine is not None:
-                refine_batch(self._refine, poses, q, valid)
+                refine_batch(self._refine, poses, q, valid, events)
+                self._flag_near_reach(poses, None, valid, events)
             return
         if redundancy is None:
             raise self._missing_redundancy()
@@ -616,8 +683,26 @@ class Solver:
         if self._refine is not None:
             refine_redundant.refine_batch(
                 self._refine, self._arm_angle_geometry, self.family.parameter_periodic,
-                poses, values, q, valid,
+                poses, values, q, valid, events,
             )  # fmt: skip
+            self._flag_near_reach(poses, values, valid, events)
+
+    def _flag_near_reach(
+        self,
+        poses: FloatArray,
+        values: FloatArray | None,
+        valid: BoolArray,
+        events: FlagArray,
+    ) -> None:
+        """``SOLUTIONS_UNLISTED`` on the poses of a batch :meth:`_near_reach` says.
+
+        (Those no branch reaches and no other bit explains, on a calibrated
+        arm.)
+        """
+        for i in np.flatnonzero(~valid.any(axis=1) & (events == 0)).tolist():
+            value = None if values is None else float(values[i])
+            if self._near_reach(poses[i], value):
+                events[i] |= SOLUTIONS_UNLISTED
 
     def _batch_six(self, poses: FloatArray, q: FloatArray, valid: BoolArray) -> None:
         """The six-axis kernels' three batch stages, chunk by chunk."""

@@ -25,8 +25,7 @@ base-to-frame-0 transform and the frame-n-to-tool transform are kept, so that
 FK(q) = base · DH(q) · tool exactly for the fitted chain.
 
 Four families have a closed form (two of 6R arms, two of 7R arms), each a
-conjunction of geometric tests on the lines (angles in rad, distances in m,
-each within :data:`STRUCTURE_TOL`):
+conjunction of geometric tests on the lines (angles in rad, distances in m):
 
 * ``"opw"`` (ortho-parallel shoulder, spherical wrist: PUMA, KUKA KR, ABB
   IRB, Fanuc, Stäubli): axes 1 ⊥ 2, 2 ∥ 3, 3 ⊥ 4, 4 ⊥ 5, 5 ⊥ 6, and axes 4, 5, 6
@@ -42,8 +41,17 @@ each within :data:`STRUCTURE_TOL`):
   normals (the elbow offsets a3, a4); 5 ⊥ 6, meeting; 6 ⊥ 7 with a non-zero
   common normal (a6); any lengths of this pattern.
 
-A chain that fits none of the families of its joint count raises
-:class:`UnsupportedRobotError` naming each failed test of each family.
+An arm passes a family's tests when every angle test is within
+:data:`CALIBRATION_ANGLE_TOL` and every distance test within
+:data:`CALIBRATION_DISTANCE_TOL`: a calibrated URDF (joint-origin deltas of
+1e-4…1e-3 rad and 0.1…1 mm, or the iiwa 14 of ROS-Industrial, whose joint 2
+and 4 origins are 0.436 mm off axis) is of its family, its closed form is
+that of the idealised structure (the fitted chain with the family's right
+angles and zeros made exact) and every branch is carried to the model
+(:mod:`workbench.ik._refine_kernel`). How far the model is from the idealised
+structure is :attr:`KinematicStructure.deviation`. A chain that fits none of
+the families of its joint count raises :class:`UnsupportedRobotError` naming
+each failed test of each family and the deviation from the nearest one.
 """
 
 from __future__ import annotations
@@ -71,12 +79,59 @@ FloatArray = npt.NDArray[np.float64]
 #: removes, and a structure broken by 1e-4 rad or 1e-4 m is refused.
 STRUCTURE_TOL = 1e-5
 
+#: Largest angle deviation [rad] of a family's tests that is still of the family
+#: (a calibrated arm, solved through the closed form of the idealised structure
+#: and carried to the model): the bound certified by
+#: ``tests/test_ik_calibrated.py``, against 1e-4…1e-3 rad of a robot calibration.
+CALIBRATION_ANGLE_TOL = 1e-2
+
+#: Largest distance deviation [m] of a family's tests that is still of the
+#: family, against 0.1…1 mm of a robot calibration (see
+#: :data:`CALIBRATION_ANGLE_TOL`).
+CALIBRATION_DISTANCE_TOL = 5e-3
+
 #: Lengths below this [m] count as zero when choosing a common normal.
 _TINY = 1e-12
 
 #: Joint counts of the chains with a closed form: 6R arms (OPW, UR) and 7R
 #: arms (SRS, Franka), whose seventh joint is the redundancy.
 JOINT_COUNTS = (6, 7)
+
+
+@dataclass(frozen=True, slots=True)
+class StructureDeviation:
+    """How far a model is from the idealised structure of its family.
+
+    Attributes:
+        angle: Largest deviation of the family's angle tests [rad] (axes that
+            should be perpendicular or parallel).
+        angle_test: The test it comes from, e.g. ``"2∥3"``.
+        distance: Largest deviation of the family's distance tests [m] (axes
+            that should meet, or meet in one point).
+        distance_test: The test it comes from, e.g. ``"1,2,3 meet"``.
+    """
+
+    angle: float
+    angle_test: str
+    distance: float
+    distance_test: str
+
+    @property
+    def calibrated(self) -> bool:
+        """True if the model is off its family by more than URDF rounding.
+
+        (More than :data:`STRUCTURE_TOL` in angle or distance: a calibrated
+        arm, whose branches are carried from the idealised structure to the
+        model.)
+        """
+        return max(self.angle, self.distance) > STRUCTURE_TOL
+
+    def describe(self) -> str:
+        """``"3.2e-04 rad (2∥3), 4.4e-04 m (1,2,3 meet)"``: for messages and output."""
+        return (
+            f"{self.angle:.2g} rad ({self.angle_test}), "
+            f"{self.distance:.2g} m ({self.distance_test})"
+        )
 
 
 @dataclass(frozen=True, slots=True)
@@ -90,8 +145,9 @@ class KinematicStructure:
         joint_sign: (n,) ±1.0: DH angle θ_k = s_k q_k + θ_{0,k}.
         base: (4, 4) pose of DH frame 0 in the robot's base frame [m].
         tool: (4, 4) pose of the tool frame in DH frame n [m].
-        deviation: Largest departure of the model from the idealised
-            structure [rad or m], at most ``tol``.
+        deviation: How far the model is from the idealised structure, the
+            largest angle [rad] and distance [m] of the family's tests: within
+            :data:`CALIBRATION_ANGLE_TOL` and :data:`CALIBRATION_DISTANCE_TOL`.
         residual: Largest FK difference [m, rad] between the model and
             base · DH(q) · tool on a few configurations.
     """
@@ -101,7 +157,7 @@ class KinematicStructure:
     joint_sign: tuple[float, ...]
     base: FloatArray
     tool: FloatArray
-    deviation: float
+    deviation: StructureDeviation
     residual: float
 
 
@@ -182,7 +238,10 @@ def fit_dh(
     Args:
         robot: A 6R or 7R chain (see :func:`axis_lines`).
         signs: (n,) ±1, multiplying each joint's axis direction.
-        tol: Axes closer than this to parallel [rad] count as parallel.
+        tol: Axes closer than this to parallel [rad] count as parallel (the
+            common normal is then taken through the previous origin, as for
+            the family's parallel axes of a calibrated arm, whose common
+            normal proper may be metres away).
 
     Returns:
         The n rows, the base pose of DH frame 0 and the tool pose in frame n,
@@ -410,32 +469,52 @@ def _zero_lengths(
     return None
 
 
-def compute_structure(robot: Robot, tol: float = STRUCTURE_TOL) -> KinematicStructure:
+def _deviation(
+    tests: dict[str, tuple[str, float, str]], names: tuple[str, ...]
+) -> StructureDeviation:
+    """The largest angle and distance deviation of the tests ``names``."""
+    angle = max((tests[n][1], n) for n in names if tests[n][2] == "rad")
+    distance = max((tests[n][1], n) for n in names if tests[n][2] == "m")
+    return StructureDeviation(angle[0], angle[1], distance[0], distance[1])
+
+
+def compute_structure(
+    robot: Robot,
+    *,
+    angle_tol: float = CALIBRATION_ANGLE_TOL,
+    distance_tol: float = CALIBRATION_DISTANCE_TOL,
+) -> KinematicStructure:
     """Recognise the family of a 6R or 7R arm and fit its DH chain.
 
     Args:
         robot: Any robot; its tool frame is folded into ``tool``.
-        tol: Tolerance of every structure test [rad or m].
+        angle_tol: Largest deviation of a family's angle tests [rad].
+        distance_tol: Largest deviation of a family's distance tests [m].
 
     Raises:
         UnsupportedRobotError: If the robot is not a 6R or 7R chain, or fits
             none of the families of its joint count; the message names every
-            failed test with its deviation.
+            failed test with its deviation, and the deviation from the
+            nearest family.
     """
     w, p = axis_lines(robot)
     tests = _tests(w, p)
+    bound = {"rad": angle_tol, "m": distance_tol}
     failures = {}
+    nearest: tuple[float, str] = (math.inf, "")
     for family, names in FAMILIES.items():
         if FAMILY_JOINTS[family] != len(w):
             continue
-        failed = [tests[n] for n in names if not tests[n][1] <= tol]
+        failed = [tests[n] for n in names if not tests[n][1] <= bound[tests[n][2]]]
         if failed:
             failures[family] = failed
+            excess = max(tests[n][1] / bound[tests[n][2]] for n in names)
+            nearest = min(nearest, (excess, family))
             continue
         signs = _signs(family, w)
-        rows, base, tool = fit_dh(robot, signs, tol)
-        rows = _ideal_rows(family, rows, tol)
-        zero = _zero_lengths(family, rows, tol)
+        rows, base, tool = fit_dh(robot, signs, angle_tol)
+        rows = _ideal_rows(family, rows, STRUCTURE_TOL)
+        zero = _zero_lengths(family, rows, STRUCTURE_TOL)
         if zero is not None:
             failures[family] = [(zero, 0.0, "m")]
             continue
@@ -455,7 +534,7 @@ def compute_structure(robot: Robot, tol: float = STRUCTURE_TOL) -> KinematicStru
             joint_sign=signs,
             base=base,
             tool=tool,
-            deviation=max(tests[n][1] for n in names),
+            deviation=_deviation(tests, names),
             residual=_residual(robot, rows, signs, base, tool),
         )
     reasons = "; ".join(
@@ -463,7 +542,14 @@ def compute_structure(robot: Robot, tol: float = STRUCTURE_TOL) -> KinematicStru
         + ", ".join(f"{what} (off by {dev:.3g} {unit})" for what, dev, unit in failed)
         for f, failed in failures.items()
     )
+    closest = ""
+    if nearest[1]:
+        found = _deviation(tests, FAMILIES[nearest[1]])
+        closest = (
+            f"; deviation from the nearest family ({nearest[1].upper()}): "
+            f"{found.describe()}"
+        )
     raise UnsupportedRobotError(
-        f"robot {robot.name!r} has no closed-form IK (tolerance {tol:g} rad/m): "
-        f"{reasons}; use numerical IK"
+        f"robot {robot.name!r} has no closed-form IK (bound {angle_tol:g} rad, "
+        f"{distance_tol:g} m): {reasons}{closest}; use numerical IK"
     )
