@@ -72,7 +72,11 @@ def solve_and_print_redundant(
         value, redundancy = _get_value(args, solver)
         solutions: list[Any]
         if args.all and value is not None:  # every branch at the given value
-            solutions = list(ik.analytic(robot, target, redundancy=value))
+            solutions = list(
+                ik.analytic(
+                    robot, target, redundancy=value, representatives=_turns(args)
+                )
+            )
         else:
             choice = ik.select(
                 robot, target, redundancy=value, criterion=redundancy["criterion"]
@@ -83,7 +87,12 @@ def solve_and_print_redundant(
             solutions = [choice.solution]
             if args.all:  # every branch at the chosen value
                 solutions = list(
-                    ik.analytic(robot, target, redundancy=choice.redundancy)
+                    ik.analytic(
+                        robot,
+                        target,
+                        redundancy=choice.redundancy,
+                        representatives=_turns(args),
+                    )
                 )
         head["redundancy"] = redundancy
         rows = _rows(robot, target, solutions)
@@ -170,3 +179,8 @@ def _print_text(
     if feasible is not None:
         print(_redundancy.describe_feasible(feasible, args.deg))
     print_rows(rows, SINGULAR_FLAGS)
+
+
+def _turns(args: argparse.Namespace) -> str:
+    """``representatives=`` of ``--all-turns``."""
+    return "all" if args.all_turns else "one"

@@ -125,6 +125,12 @@ def register(commands: argparse._SubParsersAction) -> None:
         help="print every closed-form branch (seven-axis arms: at the given or "
         "chosen value; also when none is within the limits, exit 0)",
     )
+    parser.add_argument(
+        "--all-turns",
+        action="store_true",
+        help="with --all: every representative within the limits of a joint whose "
+        "range exceeds a full turn (q ± 2πk, each labelled with its turns)",
+    )
     add_redundancy_argument(
         parser,
         "[rad, or degrees with --deg]; the branch of largest limit margin at that "
@@ -191,6 +197,8 @@ def run(args: argparse.Namespace) -> int:
     choice of the value and the feasible intervals call them hundreds of
     times (0.3 s compiled, cache warm; 3 s interpreted).
     """
+    if args.all_turns and not args.all:
+        raise InputError("--all-turns lists the turns of every branch: give --all too")
     robot = load_robot_from_args(args, tool_frame=args.tool_frame)
     target = target_from_args(args)
     if args.position_only or args.free_axis:
@@ -209,11 +217,11 @@ def _solve_part_and_print(
 ) -> int:
     """``--position-only`` / ``--free-axis``: numerical IK of part of the pose."""
     part = "position" if args.position_only else f"free-{args.free_axis}"
-    for option in ("redundancy", "criterion", "all", "feasible"):
+    for option in ("redundancy", "criterion", "all", "all_turns", "feasible"):
         if getattr(args, option) not in (None, False):
             raise InputError(
-                f"--{option} does not apply to a target of part of a pose "
-                f"(--position-only, --free-axis): it is solved numerically"
+                f"--{option.replace('_', '-')} does not apply to a target of part "
+                "of a pose (--position-only, --free-axis): it is solved numerically"
             )
     head = {
         "robot": robot.name,
@@ -308,7 +316,8 @@ def _solve(
     if solver == "numeric":
         return [_row(robot, ik.select(robot, target), target)]
     if args.all:
-        solutions: list[Any] = list(ik.analytic(robot, target))
+        turns = "all" if args.all_turns else "one"
+        solutions: list[Any] = list(ik.analytic(robot, target, representatives=turns))
     else:
         try:
             solutions = [ik.select(robot, target).solution]

@@ -33,6 +33,7 @@ from workbench.errors import InputError
 from workbench.ik._puma import TAU, WRIST_SINGULAR_TOL
 from workbench.ik.solution import IKSolution, Solutions
 from workbench.ik.solver import BRANCHES, UR_BRANCHES, get_solver
+from workbench.ik.turns import REPRESENTATIVES, expand_turns
 from workbench.model.robot import Robot
 from workbench.validation import as_vector
 
@@ -45,6 +46,7 @@ def analytic(
     *,
     q_previous: npt.ArrayLike | None = None,
     redundancy: float | None = None,
+    representatives: str = "one",
 ) -> Solutions:
     """Every closed-form IK branch of a 6R (OPW, UR) or 7R (SRS, Franka) arm.
 
@@ -62,6 +64,10 @@ def analytic(
         redundancy: 7R arms only: the redundancy parameter [rad], the arm
             angle ψ (SRS) or q7 (Franka). None takes that of ``q_previous``
             (continuity); one of the two is required.
+        representatives: ``"one"``: each angle once (below); ``"all"``: every
+            representative within the limits of a joint whose range exceeds
+            2π, each a solution labelled with its turns
+            (:func:`workbench.ik.turns.expand_turns`).
 
     Returns:
         One :class:`IKSolution` per branch that reaches the pose, in the order
@@ -81,9 +87,20 @@ def analytic(
         NonFiniteError: If an entry is NaN or infinite.
         InputError: If ``target`` is not rigid (see ``poses.RIGIDITY_TOL``),
             ``redundancy`` is given for a 6R arm, or a 7R arm has neither
-            ``redundancy`` nor ``q_previous``.
+            ``redundancy`` nor ``q_previous``; or ``representatives`` is
+            neither ``"one"`` nor ``"all"``.
     """
-    return get_solver(robot).solve(target, redundancy=redundancy, q_previous=q_previous)
+    solutions = get_solver(robot).solve(
+        target, redundancy=redundancy, q_previous=q_previous
+    )
+    if representatives == "one":
+        return solutions
+    if representatives == "all":
+        return expand_turns(robot, solutions)
+    raise InputError(
+        f"representatives must be one of {', '.join(REPRESENTATIVES)}, "
+        f"got {representatives!r}"
+    )
 
 
 def analytic_batch(
