@@ -20,6 +20,7 @@ from tests.conftest import run_cli
 from workbench import URDFLoadError, load_robot
 from workbench.cli import EXIT_BAD_INPUT
 from workbench.model.packages import MeshNotFoundError, get_package_lookup
+from workbench.workspace.robot_spec import get_robot_spec, load_spec_robot
 
 DATA = Path(__file__).parent / "data" / "ros_industrial"
 #: The shipped KR16 URDF prints π/2 with 11 decimals (1.57079632679): its tool0
@@ -234,6 +235,13 @@ def test_xacro_arguments_and_find(capsys, tmp_path: Path, no_ros_path) -> None:
                              "--rad", "0", "0", "--json")  # fmt: skip
     assert (code, err) == (0, "")
     assert json.loads(out)["position"][2] == pytest.approx(0.5, abs=1e-15)
+    assert robot.xacro_args == (("length", "0.25"),)
+    again = load_spec_robot(get_robot_spec(robot))  # as a workspace worker loads it
+    assert (
+        again.joint_names == robot.joint_names and again.xacro_args == robot.xacro_args
+    )
+    np.testing.assert_array_equal(again.fk(np.zeros(2)).homogeneous,
+                                  robot.fk(np.zeros(2)).homogeneous)  # fmt: skip
     code, out, err = run_cli(capsys, "fk", "--robot", str(top), "--rad", "0", "0")
     assert code == EXIT_BAD_INPUT and err.count("\n") == 1
     assert "$(find arm_description): package 'arm_description' not found" in err

@@ -117,6 +117,7 @@ def load_robot(
         package_dirs=_absolute(package_dirs),
         dh_table=dh_table,
         description=resolve_mesh_uris(text, lookup),
+        xacro_args=tuple((xacro_args or {}).items()),
     )
 
 

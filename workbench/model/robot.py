@@ -107,6 +107,7 @@ class Robot:
         acceleration_limit: npt.ArrayLike | None = None,
         dh_table: DHTable | None = None,
         description: str | None = None,
+        xacro_args: Sequence[tuple[str, str]] = (),
     ):
         self._revision: int
         self.name = name
@@ -117,6 +118,7 @@ class Robot:
         self.urdf_path = urdf_path
         self._package_dirs = tuple(package_dirs)
         self._description = description
+        self._xacro_args = tuple(sorted((str(k), str(v)) for k, v in xacro_args))
         self.tool_frame = tool_frame
         self.tool_frame_id = self.get_frame_id(tool_frame)
         self.lower = _read_only(model.lowerPositionLimit)
@@ -168,6 +170,7 @@ class Robot:
             self.tool_frame,
             package_dirs=self._package_dirs,
             description=self._description,
+            xacro_args=self._xacro_args,
             acceleration_limit=(
                 self.acceleration_limit
                 if acceleration_limit is None
@@ -188,6 +191,15 @@ class Robot:
         :mod:`workbench.model.packages` for the lookup.
         """
         return self._package_dirs
+
+    @property
+    def xacro_args(self) -> tuple[tuple[str, str], ...]:
+        """The ``(name, value)`` arguments a xacro description was expanded with.
+
+        Sorted by name; empty for a URDF. ``load_robot(robot.urdf_path,
+        xacro_args=dict(robot.xacro_args))`` expands it the same way again.
+        """
+        return self._xacro_args
 
     @property
     def description(self) -> str:

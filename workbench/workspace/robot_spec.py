@@ -36,6 +36,7 @@ class RobotSpec:
         tool_frame: Name of the tool frame.
         urdf_sha256: SHA-256 (hex) of the URDF file's bytes.
         lower, upper: Position limits, nq values each [rad, m for prismatic].
+        xacro_args: The arguments of a xacro description (:attr:`Robot.xacro_args`).
     """
 
     name: str
@@ -44,6 +45,7 @@ class RobotSpec:
     urdf_sha256: str
     lower: tuple[float, ...]
     upper: tuple[float, ...]
+    xacro_args: tuple[tuple[str, str], ...] = ()
 
 
 def compute_file_sha256(path: str | Path) -> str:
@@ -72,6 +74,7 @@ def get_robot_spec(robot: Robot) -> RobotSpec:
         urdf_sha256=compute_file_sha256(robot.urdf_path),
         lower=tuple(float(x) for x in robot.lower),
         upper=tuple(float(x) for x in robot.upper),
+        xacro_args=robot.xacro_args,
     )
 
 
@@ -90,7 +93,10 @@ def load_spec_robot(spec: RobotSpec) -> Robot:
     robot = robots.get(spec)
     if robot is None:
         robot = load_robot(
-            spec.name, tool_frame=spec.tool_frame, package_dirs=spec.package_dirs
+            spec.name,
+            tool_frame=spec.tool_frame,
+            package_dirs=spec.package_dirs,
+            xacro_args=dict(spec.xacro_args) or None,
         )
         _check_same_robot(robot, spec)
         robots[spec] = robot
