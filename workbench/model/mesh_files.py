@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import struct
 import xml.etree.ElementTree as ET
-from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -42,7 +41,6 @@ UP_AXIS_ROTATIONS: dict[str, FloatArray] = {
 ZERO_NORMAL_TOL = 1e-12
 
 
-@lru_cache(maxsize=512)
 def read_collada_frame(path: str) -> tuple[float, str]:
     """``(metres per unit, up axis)`` of a Collada file; ``(1.0, "Z_UP")`` if unstated.
 

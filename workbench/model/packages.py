@@ -61,10 +61,16 @@ class PackageLookup:
     roots: tuple[Path, ...]
     description: Path
     _crawled: dict[str, str] | None = field(default=None, repr=False)
+    _found: dict[str, Path | None] = field(default_factory=dict, repr=False)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     def find(self, name: str) -> Path | None:
         """The folder of package ``name``, or None where it is in none of them."""
+        if name not in self._found:
+            self._found[name] = self._find(name)
+        return self._found[name]
+
+    def _find(self, name: str) -> Path | None:
         if name in self.mapped:
             return self.mapped[name]
         crawled = self._packages_in_roots().get(name)
