@@ -118,8 +118,7 @@ def write_trajectory_csv(
     Raises:
         DimensionError: If q, qd, qdd do not have one row per time, or the
             names do not match the joints.
-        InputError: If ``path`` cannot be written, a joint name holds a
-            comma, a quote or a line break, or there are more than
+        InputError: If ``path`` cannot be written, or there are more than
             :data:`MAX_SAMPLES` samples.
     """
     t, q, qd, qdd = samples.t, samples.q, samples.qd, samples.qdd
@@ -140,8 +139,8 @@ def write_trajectory_csv(
         "version": 1,
         "columns": header(q.shape[1]),
         "samples": int(t.shape[0]),
-        "t_first": float(t[0]),
-        "t_last": float(t[-1]),
+        "t_first": float(t[0]) if t.size else None,
+        "t_last": float(t[-1]) if t.size else None,
         "joint_names": names,
         "sha256": hashlib.sha256(data).hexdigest(),
     }
