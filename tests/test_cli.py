@@ -14,7 +14,7 @@ import pytest
 from tests.conftest import run_cli as run
 from workbench import paper_data
 from workbench.cli import EXIT_BAD_INPUT, main
-from workbench.cli import demo as demo_command
+from workbench.demo import run as demo_module
 from workbench.demo.summary_text import format_demo_summary
 from workbench.model.catalog import get_own_urdf_dir
 
@@ -172,7 +172,7 @@ def test_demo_text_and_flags(capsys, monkeypatch, demo_run, tmp_path: Path) -> N
         calls.append((robot.name, out, plots))
         return summary
 
-    monkeypatch.setattr(demo_command, "run_demo", recorded_demo)
+    monkeypatch.setattr(demo_module, "run_demo", recorded_demo)
     code, out, _ = run(capsys, "demo", "--out", str(tmp_path))
     assert code == 0 and out == format_demo_summary(summary, tmp_path) + "\n"
     assert "match Table II" in out and "DO NOT" not in out

@@ -23,6 +23,7 @@ LAYERS: dict[str, int] = {
     "validation": 0,
     "paper_data": 0,
     "_compiled": 0,
+    "_lazy": 0,
     "progress": 0,
     "model": 1,
     "poses": 2,

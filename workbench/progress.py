@@ -38,6 +38,7 @@ from collections.abc import Callable
 from types import TracebackType
 from typing import TextIO
 
+from workbench._lazy import call_when_imported
 from workbench._sigint import block_interrupts_in_this_thread
 
 #: ``progress(done, total)``: what every long job calls after each chunk of
@@ -83,6 +84,7 @@ class Progress:
         self._finished = False
         self._said_compiling = False
         self._listener: object | None = None
+        self._stop_waiting: Callable[[], None] = lambda: None
         self._environ: str | None = None
         self._started = time.monotonic()
         #: (label, time [s], done) at the first count of the current label
@@ -101,7 +103,7 @@ class Progress:
         self._timer = _Timer(self.delay, self._say, args=(self.message,))
         self._timer.daemon = True
         self._timer.start()
-        self._listener = _listen_to_numba(self)
+        self._stop_waiting = call_when_imported("numba", self._listen_to_numba)
         return self
 
     def __exit__(
@@ -115,11 +117,16 @@ class Progress:
             os.environ.pop(_ENVIRON, None)
         else:
             os.environ[_ENVIRON] = self._environ
+        self._stop_waiting()
         if self._listener is not None:
             from numba.core import event
 
             event.unregister("numba:compile", self._listener)
             self._listener = None
+
+    def _listen_to_numba(self) -> None:
+        """Hear Numba's compiles (called once Numba is imported, if ever)."""
+        self._listener = _listen_to_numba(self)
 
     def finish(self) -> None:
         """No more lines: the job is done or now waits on the user (a server)."""

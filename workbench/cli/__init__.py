@@ -9,12 +9,17 @@ SIGPIPE). Errors print a single line on stderr and no traceback (set
 stderr: warnings by default, ``-v`` adds info, ``-vv`` debug, ``-q`` keeps only
 errors (and no progress line; ``WORKBENCH_PROGRESS=0`` turns off only the
 progress line).
+
+A command imports what it uses when it runs: :func:`main` imports only the
+module of the command it is given (every command's, to list them, when it is
+given none), and :func:`build_parser` every command's.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import importlib
 import logging
 import os
 import re
@@ -29,19 +34,6 @@ import numpy as np
 
 import workbench
 from workbench._sigint import EXIT_INTERRUPTED, is_workbench_command
-from workbench.cli import (
-    demo,
-    export,
-    fishcut,
-    fk,
-    ik,
-    plan,
-    report,
-    singularities,
-    urdf,
-    view,
-    workspace,
-)
 from workbench.cli._common import EXIT_INFEASIBLE, print_json
 from workbench.cli._interrupt_guard import interrupts_wait_for_compiler
 from workbench.errors import InfeasibleError, InputError, WorkbenchError
@@ -62,19 +54,24 @@ EXIT_INTERNAL = 1
 EXIT_BAD_INPUT = 2
 EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for `yes | head`
 
+#: The commands, in the order ``workbench --help`` lists them: each is the
+#: module ``workbench.cli.<name>``, with ``register`` (its arguments) and the
+#: ``run`` it sets as default.
 _COMMANDS = (
-    fk,
-    ik,
-    urdf,
-    demo,
-    singularities,
-    report,
-    plan,
-    view,
-    fishcut,
-    export,
-    workspace,
+    "fk",
+    "ik",
+    "urdf",
+    "demo",
+    "singularities",
+    "report",
+    "plan",
+    "view",
+    "fishcut",
+    "export",
+    "workspace",
 )
+#: Options of the top-level parser that take no value (before the command).
+_TOP_FLAGS = frozenset({"-v", "-vv", "-vvv", "--verbose", "-q", "--quiet"})
 
 #: A number, as typed: ``-1``, ``-.5``, ``-1e-10``, ``-2.5E+3`` are values, not
 #: options (argparse's own pattern misses exponents).
@@ -95,8 +92,12 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The top-level parser with every command registered."""
+def build_parser(commands: Sequence[str] = _COMMANDS) -> argparse.ArgumentParser:
+    """The top-level parser with ``commands`` registered (default: every command).
+
+    Args:
+        commands: Names of the commands to register (each imports its module).
+    """
     parser = _Parser(
         prog="workbench",
         description="Kinematics workbench for the PUMA 560 and any URDF arm.",
@@ -121,10 +122,24 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="only errors on stderr (no warnings, no progress line)",
     )
-    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for module in _COMMANDS:
-        module.register(commands)
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for name in commands:
+        importlib.import_module(f"workbench.cli.{name}").register(subparsers)
     return parser
+
+
+def _commands_for(argv: Sequence[str]) -> Sequence[str]:
+    """The command that ``argv`` names, alone; every command if it names none.
+
+    The command is the first word after the top-level flags (``-v``, ``-q``);
+    anything else there (``--help``, ``--version``, a typo) gets the whole
+    parser, which lists every command or says what is wrong.
+    """
+    for word in argv:
+        if word in _TOP_FLAGS:
+            continue
+        return (word,) if word in _COMMANDS else _COMMANDS
+    return _COMMANDS
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -159,7 +174,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _main(argv: Sequence[str] | None) -> int:
     try:
-        args = build_parser().parse_args(argv)
+        argv = sys.argv[1:] if argv is None else list(argv)
+        args = build_parser(_commands_for(argv)).parse_args(argv)
     except SystemExit as stop:  # --help, --version (0), a usage error (2)
         return stop.code if isinstance(stop.code, int) else EXIT_BAD_INPUT
     message = getattr(args, "progress_message", f"{args.command}: working")

@@ -17,7 +17,6 @@ from workbench.errors import InputError, NonFiniteError
 from workbench.json_numbers import to_json_ready
 from workbench.model.loading import load_robot
 from workbench.model.robot import Robot
-from workbench.trajectory.csv_io import record_path
 
 #: Exit code of a request the robot cannot meet (an unreachable pose, a
 #: limit violation), printed as one line on stderr.
@@ -213,6 +212,8 @@ def get_input_paths(args: argparse.Namespace, *extra: Path | None) -> list[Path]
     record (``trajectory.csv_io.record_path``) and ``extra`` (None entries
     and paths that are no file are left out).
     """
+    from workbench.trajectory.csv_io import record_path
+
     paths = [Path(args.robot)] if getattr(args, "robot", None) else []
     for key in ("scene", "trajectory"):
         if getattr(args, key, None) is not None:

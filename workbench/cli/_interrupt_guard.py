@@ -7,6 +7,10 @@ place of Python's for a moment; a Ctrl-C then kills the process by the signal
 holds Numba's compiler lock, and in the command's other threads always, so
 that a Ctrl-C stays pending until the lock is released; then it is Python's
 ``KeyboardInterrupt`` as anywhere else.
+
+A command that never compiles (``workbench fk``) never imports Numba: when it
+is not imported yet, the guard starts once it is
+(:func:`workbench._lazy.call_when_imported`).
 """
 
 from __future__ import annotations
@@ -15,6 +19,9 @@ import contextlib
 import signal
 import threading
 from collections.abc import Iterator
+from typing import Any
+
+from workbench._lazy import call_when_imported
 
 
 class _BlockWhileLocked:
@@ -44,20 +51,28 @@ def interrupts_wait_for_compiler() -> Iterator[None]:
     if not hasattr(signal, "pthread_sigmask"):  # Windows: no LLVM signal handlers
         yield
         return
-    from numba.core import event
-
     guard = _BlockWhileLocked()
+    listeners: list[Any] = []
 
-    class _Listener(event.Listener):
-        def on_start(self, event: event.Event) -> None:
-            guard.start()
+    def start_listening() -> None:
+        from numba.core import event
 
-        def on_end(self, event: event.Event) -> None:
-            guard.end()
+        class _Listener(event.Listener):
+            def on_start(self, event: event.Event) -> None:
+                guard.start()
 
-    listener = _Listener()
-    event.register("numba:compiler_lock", listener)
+            def on_end(self, event: event.Event) -> None:
+                guard.end()
+
+        listeners.append(_Listener())
+        event.register("numba:compiler_lock", listeners[0])
+
+    stop_waiting = call_when_imported("numba", start_listening)
     try:
         yield
     finally:
-        event.unregister("numba:compiler_lock", listener)
+        stop_waiting()
+        if listeners:
+            from numba.core import event
+
+            event.unregister("numba:compiler_lock", listeners[0])

@@ -6,9 +6,6 @@ import argparse
 from pathlib import Path
 
 from workbench.cli._common import add_json_flag, print_json
-from workbench.demo.run import run_demo
-from workbench.demo.summary_text import format_demo_summary
-from workbench.model.loading import load_robot
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -37,8 +34,12 @@ def register(commands: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the demo; returns the exit code."""
+    from workbench.demo import run as demo_run
+    from workbench.demo.summary_text import format_demo_summary
+    from workbench.model.loading import load_robot
+
     robot = load_robot("puma560")
-    summary = run_demo(robot, args.out, plots=not args.no_plots)
+    summary = demo_run.run_demo(robot, args.out, plots=not args.no_plots)
     if args.json:
         print_json(summary)
     else:

@@ -19,7 +19,6 @@ import numpy as np
 import pinocchio as pin
 
 from workbench import ik
-from workbench._compiled import interpreted
 from workbench.cli import _redundancy
 from workbench.cli._common import (
     add_json_flag,
@@ -36,8 +35,12 @@ from workbench.cli._ik_output import (
     residual,
 )
 from workbench.cli._redundancy import add_redundancy_argument
-from workbench.errors import InfeasibleError, InputError
-from workbench.ik import UnreachableError, UnsupportedRobotError, get_solver
+from workbench.errors import (
+    InfeasibleError,
+    InputError,
+    UnreachableError,
+    UnsupportedRobotError,
+)
 from workbench.model.robot import Robot
 from workbench.poses import ANGELES7_PRINTED_TOL, TARGET_FORMS, parse_target
 
@@ -197,6 +200,8 @@ def run(args: argparse.Namespace) -> int:
     choice of the value and the feasible intervals call them hundreds of
     times (0.3 s compiled, cache warm; 3 s interpreted).
     """
+    from workbench._compiled import interpreted  # (the kernels: imported to run)
+
     if args.all_turns and not args.all:
         raise InputError("--all-turns lists the turns of every branch: give --all too")
     robot = load_robot_from_args(args, tool_frame=args.tool_frame)
@@ -273,7 +278,7 @@ def _solve_and_print(args: argparse.Namespace, robot: Robot, target: pin.SE3) ->
             raise _redundancy.refuse_redundancy(robot, f"--{option}")
     deviation: dict[str, Any] = {}
     try:
-        closed_form = get_solver(robot)
+        closed_form = ik.get_solver(robot)
     except UnsupportedRobotError as err:
         solver, reason = "numeric", str(err)
         if args.all and not args.json:

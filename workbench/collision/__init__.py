@@ -11,21 +11,28 @@ Example::
     report.min_clearance, report.contacts     # [m], contact intervals
 """
 
-from workbench.collision.along_path import check_path
-from workbench.collision.checker import CollisionChecker, PairInfo
-from workbench.collision.clearance_report import Contact, PathClearance
-from workbench.collision.paper_scenes import (
-    get_angeles_scene,
-    get_pedestal,
-    get_pick_and_place_scene,
-)
-from workbench.collision.scene import Obstacle, Scene
-from workbench.collision.scene_file import parse_scene, read_scene, write_scene
-from workbench.collision.self_filter import (
-    DisabledPair,
-    SelfCollisionFilter,
-    compute_self_collision_filter,
-)
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from workbench._lazy import attach
+
+if TYPE_CHECKING:
+    from workbench.collision.along_path import check_path
+    from workbench.collision.checker import CollisionChecker, PairInfo
+    from workbench.collision.clearance_report import Contact, PathClearance
+    from workbench.collision.paper_scenes import (
+        get_angeles_scene,
+        get_pedestal,
+        get_pick_and_place_scene,
+    )
+    from workbench.collision.scene import Obstacle, Scene
+    from workbench.collision.scene_file import parse_scene, read_scene, write_scene
+    from workbench.collision.self_filter import (
+        DisabledPair,
+        SelfCollisionFilter,
+        compute_self_collision_filter,
+    )
 
 __all__ = [
     "CollisionChecker",
@@ -45,3 +52,5 @@ __all__ = [
     "read_scene",
     "write_scene",
 ]
+
+__getattr__, __dir__ = attach(__name__, __file__, __all__)

@@ -11,13 +11,20 @@ A trajectory CSV (``workbench export --format csv``) is the one dialect of
 :func:`workbench.trajectory.write_trajectory_csv`.
 """
 
-from workbench.export.ros2_bag import BagTrajectory, read_ros2_bag, write_ros2_bag
-from workbench.export.urscript import (
-    UR_JOINTS,
-    generate_urscript,
-    resample_hermite,
-    write_urscript,
-)
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from workbench._lazy import attach
+
+if TYPE_CHECKING:
+    from workbench.export.ros2_bag import BagTrajectory, read_ros2_bag, write_ros2_bag
+    from workbench.export.urscript import (
+        UR_JOINTS,
+        generate_urscript,
+        resample_hermite,
+        write_urscript,
+    )
 
 __all__ = [
     "UR_JOINTS",
@@ -28,3 +35,5 @@ __all__ = [
     "write_ros2_bag",
     "write_urscript",
 ]
+
+__getattr__, __dir__ = attach(__name__, __file__, __all__)

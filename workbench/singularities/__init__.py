@@ -19,66 +19,76 @@ Modules, in the order they build on each other:
   (``workbench singularities``).
 """
 
-from workbench.singularities.along_path import ClosestApproach, find_closest_approaches
-from workbench.singularities.analysis import (
-    ConfigurationAnalysis,
-    SRSAnalysis,
-    analyse_configuration,
-)
-from workbench.singularities.conditions import (
-    CONDITION_UNITS,
-    ELBOW_TOL,
-    SHOULDER_TOL,
-    SINGULARITY_KINDS,
-    WRIST_TOL,
-    NotPumaTypeError,
-    PumaFactorisation,
-    SingularityConditions,
-    URFactorisation,
-    classify_configuration,
-    compute_conditions,
-    compute_det_j_analytic,
-    find_factorisation,
-    find_puma_factorisation,
-    get_factorisation,
-    get_puma_factorisation,
-)
-from workbench.singularities.directions import (
-    DegenerateDirection,
-    compute_degenerate_direction,
-    compute_joint_axes,
-    compute_wrist_center_jacobian,
-    compute_wrist_point,
-)
-from workbench.singularities.loci import (
-    compute_example_configurations,
-    get_elbow_singular_theta3,
-    solve_shoulder_theta2,
-)
-from workbench.singularities.measures import (
-    DetCrossCheck,
-    JacobianMeasures,
-    JointGrid,
-    compute_dh_jacobians,
-    compute_joint_grid,
-    compute_measures,
-    compute_measures_from_jacobians,
-    compute_singular_values,
-    cross_check_det_j,
-)
-from workbench.singularities.redundant import (
-    SRS_CONDITION_UNITS,
-    SRS_SINGULARITY_KINDS,
-    NotSRSArmError,
-    SRSConditions,
-    SRSDegenerateDirection,
-    SRSFactorisation,
-    compute_srs_conditions,
-    compute_srs_degenerate_direction,
-    compute_srs_det_jjt,
-    find_srs_factorisation,
-    get_srs_factorisation,
-)
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from workbench._lazy import attach
+
+if TYPE_CHECKING:
+    from workbench.singularities.along_path import (
+        ClosestApproach,
+        find_closest_approaches,
+    )
+    from workbench.singularities.analysis import (
+        ConfigurationAnalysis,
+        SRSAnalysis,
+        analyse_configuration,
+    )
+    from workbench.singularities.conditions import (
+        CONDITION_UNITS,
+        ELBOW_TOL,
+        SHOULDER_TOL,
+        SINGULARITY_KINDS,
+        WRIST_TOL,
+        NotPumaTypeError,
+        PumaFactorisation,
+        SingularityConditions,
+        URFactorisation,
+        classify_configuration,
+        compute_conditions,
+        compute_det_j_analytic,
+        find_factorisation,
+        find_puma_factorisation,
+        get_factorisation,
+        get_puma_factorisation,
+    )
+    from workbench.singularities.directions import (
+        DegenerateDirection,
+        compute_degenerate_direction,
+        compute_joint_axes,
+        compute_wrist_center_jacobian,
+        compute_wrist_point,
+    )
+    from workbench.singularities.loci import (
+        compute_example_configurations,
+        get_elbow_singular_theta3,
+        solve_shoulder_theta2,
+    )
+    from workbench.singularities.measures import (
+        DetCrossCheck,
+        JacobianMeasures,
+        JointGrid,
+        compute_dh_jacobians,
+        compute_joint_grid,
+        compute_measures,
+        compute_measures_from_jacobians,
+        compute_singular_values,
+        cross_check_det_j,
+    )
+    from workbench.singularities.redundant import (
+        SRS_CONDITION_UNITS,
+        SRS_SINGULARITY_KINDS,
+        NotSRSArmError,
+        SRSConditions,
+        SRSDegenerateDirection,
+        SRSFactorisation,
+        compute_srs_conditions,
+        compute_srs_degenerate_direction,
+        compute_srs_det_jjt,
+        find_srs_factorisation,
+        get_srs_factorisation,
+    )
 
 __all__ = [
     "CONDITION_UNITS",
@@ -131,3 +141,5 @@ __all__ = [
     "get_srs_factorisation",
     "solve_shoulder_theta2",
 ]
+
+__getattr__, __dir__ = attach(__name__, __file__, __all__)

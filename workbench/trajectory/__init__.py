@@ -8,46 +8,53 @@ with a time-optimal parametrisation; joint trajectory CSV files. Kang's online
 Cartesian planning is in :mod:`workbench.planning`.
 """
 
-from workbench.trajectory.cartesian import (
-    CartesianSamples,
-    PosePickAndPlace,
-    as_target_pose,
-    compute_cartesian_trajectory,
-    pick_and_place_from_poses,
-)
-from workbench.trajectory.csv_io import (
-    MAX_SAMPLES,
-    JointTrajectorySamples,
-    TrajectoryFileError,
-    check_sample_count,
-    read_trajectory_csv,
-    write_trajectory_csv,
-)
-from workbench.trajectory.limits import (
-    JointExtrema,
-    LimitViolation,
-    check_limits,
-    describe_unknown_limits,
-    get_unknown_limits,
-    minimum_duration,
-    raise_for_violations,
-)
-from workbench.trajectory.normal_spline import (
-    NormalSpline,
-    SplineExtremum,
-    UniformCubicSpline,
-    compute_literal_spline,
-    compute_normal_spline,
-    get_normal_spline,
-)
-from workbench.trajectory.pick_and_place import JointTrajectory, pick_and_place
-from workbench.trajectory.segments import SegmentedTrajectory, pick_via_place
-from workbench.trajectory.time_optimal import (
-    TimeOptimalComparison,
-    compare_time_optimal,
-    compute_time_optimal_duration,
-    compute_toppra_duration,
-)
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from workbench._lazy import attach
+
+if TYPE_CHECKING:
+    from workbench.trajectory.cartesian import (
+        CartesianSamples,
+        PosePickAndPlace,
+        as_target_pose,
+        compute_cartesian_trajectory,
+        pick_and_place_from_poses,
+    )
+    from workbench.trajectory.csv_io import (
+        MAX_SAMPLES,
+        JointTrajectorySamples,
+        TrajectoryFileError,
+        check_sample_count,
+        read_trajectory_csv,
+        write_trajectory_csv,
+    )
+    from workbench.trajectory.limits import (
+        JointExtrema,
+        LimitViolation,
+        check_limits,
+        describe_unknown_limits,
+        get_unknown_limits,
+        minimum_duration,
+        raise_for_violations,
+    )
+    from workbench.trajectory.normal_spline import (
+        NormalSpline,
+        SplineExtremum,
+        UniformCubicSpline,
+        compute_literal_spline,
+        compute_normal_spline,
+        get_normal_spline,
+    )
+    from workbench.trajectory.pick_and_place import JointTrajectory, pick_and_place
+    from workbench.trajectory.segments import SegmentedTrajectory, pick_via_place
+    from workbench.trajectory.time_optimal import (
+        TimeOptimalComparison,
+        compare_time_optimal,
+        compute_time_optimal_duration,
+        compute_toppra_duration,
+    )
 
 __all__ = [
     "MAX_SAMPLES",
@@ -83,3 +90,5 @@ __all__ = [
     "read_trajectory_csv",
     "write_trajectory_csv",
 ]
+
+__getattr__, __dir__ = attach(__name__, __file__, __all__)

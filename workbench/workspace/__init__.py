@@ -10,74 +10,81 @@ from :mod:`.task_poses`); maps built on Dask
 (:mod:`.build`) into a Zarr store, opened and queried (:mod:`.store`).
 """
 
-from workbench.workspace._block_tasks import SAMPLES_PER_BLOCK
-from workbench.workspace.build import (
-    DEFAULT_BLOCK_VOXELS,
-    DEFAULT_SAMPLES,
-    MapSummary,
-    build_map,
-)
-from workbench.workspace.grid import (
-    PoseGrid,
-    cone_orientations,
-    default_bounds,
-    make_pose_grid,
-    uniform_orientations,
-)
-from workbench.workspace.joint_space import JointSpaceMap, compute_joint_space_map
-from workbench.workspace.map_query import MapQuery
-from workbench.workspace.measures import (
-    POSE_KEYS,
-    VOXEL_KEYS,
-    check_voxel_range,
-    evaluate_block,
-    get_core_count,
-    singularity_margin,
-)
-from workbench.workspace.placement import (
-    Placement,
-    PlacementInfeasibleError,
-    place_base,
-)
-from workbench.workspace.placement_check import (
-    PATH_STEP_MAX,
-    PlacementEvaluator,
-    base_transform,
-    follow_path,
-)
-from workbench.workspace.placement_region import default_region
-from workbench.workspace.redundant import (
-    DEFAULT_REDUNDANCY_SAMPLES,
-    MAX_REDUNDANCY_SAMPLES,
-    REDUNDANT_POSE_KEYS,
-    REDUNDANT_VOXEL_KEYS,
-    evaluate_redundant_block,
-    redundancy_values,
-)
-from workbench.workspace.robot_spec import (
-    RobotSpec,
-    get_robot_spec,
-    load_spec_robot,
-)
-from workbench.workspace.sampled import accumulate, sample_block
-from workbench.workspace.store import (
-    ARRAYS,
-    FORMAT,
-    FORMAT_VERSION,
-    WorkspaceMap,
-    get_partial_path,
-    open_map,
-)
-from workbench.workspace.task_map import (
-    TaskMap,
-    build_task_map,
-)
-from workbench.workspace.task_poses import (
-    TaskPoses,
-    read_task_poses,
-    read_trajectory_task_poses,
-    task_poses_from_trajectory,
-)
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from workbench._lazy import attach
+
+if TYPE_CHECKING:
+    from workbench.workspace._block_tasks import SAMPLES_PER_BLOCK
+    from workbench.workspace.build import (
+        DEFAULT_BLOCK_VOXELS,
+        DEFAULT_SAMPLES,
+        MapSummary,
+        build_map,
+    )
+    from workbench.workspace.grid import (
+        PoseGrid,
+        cone_orientations,
+        default_bounds,
+        make_pose_grid,
+        uniform_orientations,
+    )
+    from workbench.workspace.joint_space import JointSpaceMap, compute_joint_space_map
+    from workbench.workspace.map_query import MapQuery
+    from workbench.workspace.measures import (
+        POSE_KEYS,
+        VOXEL_KEYS,
+        check_voxel_range,
+        evaluate_block,
+        get_core_count,
+        singularity_margin,
+    )
+    from workbench.workspace.placement import (
+        Placement,
+        PlacementInfeasibleError,
+        place_base,
+    )
+    from workbench.workspace.placement_check import (
+        PATH_STEP_MAX,
+        PlacementEvaluator,
+        base_transform,
+        follow_path,
+    )
+    from workbench.workspace.placement_region import default_region
+    from workbench.workspace.redundant import (
+        DEFAULT_REDUNDANCY_SAMPLES,
+        MAX_REDUNDANCY_SAMPLES,
+        REDUNDANT_POSE_KEYS,
+        REDUNDANT_VOXEL_KEYS,
+        evaluate_redundant_block,
+        redundancy_values,
+    )
+    from workbench.workspace.robot_spec import (
+        RobotSpec,
+        get_robot_spec,
+        load_spec_robot,
+    )
+    from workbench.workspace.sampled import accumulate, sample_block
+    from workbench.workspace.store import (
+        ARRAYS,
+        FORMAT,
+        FORMAT_VERSION,
+        WorkspaceMap,
+        get_partial_path,
+        open_map,
+    )
+    from workbench.workspace.task_map import (
+        TaskMap,
+        build_task_map,
+    )
+    from workbench.workspace.task_poses import (
+        TaskPoses,
+        read_task_poses,
+        read_trajectory_task_poses,
+        task_poses_from_trajectory,
+    )
 
 __all__ = [
     "ARRAYS",
@@ -131,3 +138,5 @@ __all__ = [
     "task_poses_from_trajectory",
     "uniform_orientations",
 ]
+
+__getattr__, __dir__ = attach(__name__, __file__, __all__)
