@@ -1,5 +1,8 @@
 """A command imports what it uses: ``fk`` and ``ik`` load no map, plot or viewer code.
 
+Nor Numba: ``fk`` runs no kernel, ``ik`` of one pose of a six-axis arm runs
+them interpreted (``workbench._compiled.interpreted``).
+
 Each case runs in a new Python process (this one has imported everything) and
 lists the heavy packages in ``sys.modules`` after the command ran.
 """
@@ -18,8 +21,8 @@ pytestmark = pytest.mark.subprocess
 #: Packages no ``fk`` or ``ik`` needs: the workspace maps' (Zarr, Dask), the
 #: figures' and the viewer's.
 NEVER = ("zarr", "dask", "distributed", "matplotlib", "meshcat")
-#: Packages ``fk`` does not need either: the compiled kernels' and SciPy.
-NOT_FOR_FK = ("numba", "scipy")
+#: Packages of the compiled kernels (and SciPy, which Numba imports).
+KERNELS = ("numba", "llvmlite", "scipy")
 
 _PROBE = """
 import json, sys
@@ -50,12 +53,13 @@ def _imported(*argv: str) -> tuple[int, set[str]]:
 @pytest.mark.parametrize(
     ("argv", "absent"),
     [
-        (FK, NEVER + NOT_FOR_FK),
-        (["-q", *FK, "--json"], NEVER + NOT_FOR_FK),
-        (IK, NEVER),
-        (["ik", "--help"], NEVER + NOT_FOR_FK),
+        (FK, NEVER + KERNELS),
+        (["-q", *FK, "--json"], NEVER + KERNELS),
+        (IK, NEVER + KERNELS),
+        ([*IK[:2], "ur5", *IK[3:], "--all", "--json"], NEVER + KERNELS),
+        (["ik", "--help"], NEVER + KERNELS),
     ],
-    ids=["fk", "fk-json", "ik", "ik-help"],
+    ids=["fk", "fk-json", "ik", "ik-ur5-all", "ik-help"],
 )
 def test_command_imports_only_what_it_uses(argv: list[str], absent: tuple) -> None:
     code, modules = _imported(*argv)

@@ -15,7 +15,7 @@ import pytest
 from numba.core import types
 
 import workbench
-from workbench import _compiled
+from workbench import _compiled, _dispatchers
 from workbench._compiled import entry_point, helper, interpreted, source_digest
 
 
@@ -139,7 +139,8 @@ def test_entry_points_take_no_defaults() -> None:
 
 
 def test_workbench_kernels_are_entry_points_or_helpers() -> None:
-    from workbench._compiled import _EntryPoint, _Helper
+    from workbench._compiled import _Kernel
+    from workbench._dispatchers import _EntryPoint, _Helper
     from workbench.ik import _chain_kernel, _puma_kernel, _ur_kernel, _velocity_kernel
     from workbench.planning import _tracking
 
@@ -151,7 +152,8 @@ def test_workbench_kernels_are_entry_points_or_helpers() -> None:
             if hasattr(value, "py_func") and value.py_func.__module__ == module.__name__
         ]
         assert compiled
-        assert all(isinstance(value, _EntryPoint | _Helper) for value in compiled)
+        built = [v.dispatcher if isinstance(v, _Kernel) else v for v in compiled]
+        assert all(isinstance(value, _EntryPoint | _Helper) for value in built)
 
 
 _MODULE = """
@@ -208,7 +210,7 @@ def test_vectorize_sets_llvm_options_only_while_the_kernel_compiles(
 ) -> None:
     """The assumption budget and the width are set for the compile, then restored."""
     calls: list[str] = []
-    monkeypatch.setattr(_compiled.llvm, "set_option", lambda _, o: calls.append(o))
+    monkeypatch.setattr(_dispatchers.llvm, "set_option", lambda _, o: calls.append(o))
     out = np.empty(9)
     _halves(np.arange(9.0), out)
     np.testing.assert_array_equal(out, np.arange(9.0) / 2)

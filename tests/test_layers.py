@@ -24,6 +24,7 @@ LAYERS: dict[str, int] = {
     "paper_data": 0,
     "_compiled": 0,
     "_lazy": 0,
+    "_dispatchers": 0,
     "progress": 0,
     "model": 1,
     "poses": 2,

@@ -93,6 +93,17 @@ and loading the compiled code from the cache takes longer than interpreting one
 call. The source is the same, so are the results (tested); record fields are
 read as attributes (``geo.d1``) through :class:`numpy.recarray` views, and
 numpy's floating-point errors are silenced as in the compiled code.
+
+Numba itself is imported only when a kernel is first compiled: the decorators
+return a kernel (:class:`_Kernel`) whose dispatcher, of
+:mod:`workbench._dispatchers`, is built on first need (a call outside
+:func:`interpreted`, or one of its attributes: ``signatures``, ...).
+Building one builds every kernel's and puts each dispatcher in place of its
+kernel in the modules that hold it, so compiled code sees only dispatchers;
+kernels decorated later get theirs at once. Until then a call runs the Python
+source, as a dispatcher would within :func:`interpreted`: ``workbench ik`` of
+one pose of a six-axis arm imports neither Numba nor LLVM (a few tenths of a
+second of a command's start).
 """
 
 from __future__ import annotations
@@ -107,40 +118,24 @@ import sys
 import threading
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
-from typing import IO, Any, TypeVar, cast
+from typing import Any, TypeVar, cast
 
 import numpy as np
-from llvmlite import binding as llvm
-from numba.core import config, registry, sigutils, types
-from numba.core.caching import FunctionCache
-from numba.core.compiler_lock import global_compiler_lock
-
-try:
-    import fcntl
-except ImportError:  # Windows: no file locks, each process compiles its own
-    fcntl = None  # type: ignore[assignment]
 
 F = TypeVar("F", bound=Callable[..., Any])
 
 #: True within :func:`interpreted`.
 _interpreting = False
 
-# Numba sets the attributes of its dispatchers and of its config at run time.
-_CPUDispatcher: Any = registry.CPUDispatcher
-_config: Any = config
-
 #: Options of every kernel (``njit`` implies ``nopython=True``).
-_OPTIONS = {"nopython": True, "nogil": True, "error_model": "numpy"}
+OPTIONS = {"nopython": True, "nogil": True, "error_model": "numpy"}
 
 #: LLVM's options while a ``vectorize=True`` entry point compiles (module
 #: docstring): the budget of runtime assumptions and the vector width.
 VECTORIZE_ASSUMPTIONS = 1000
 VECTOR_WIDTH = 4
 #: Their LLVM defaults, restored after (0: the cost model chooses the width).
-_LLVM_DEFAULTS = {"vectorize-scev-check-threshold": 16, "force-vector-width": 0}
-
-#: Scalar types fixed by a parameter's annotation.
-_ANNOTATED = {"float": types.float64, "int": types.int64, "bool": types.boolean}
+LLVM_DEFAULTS = {"vectorize-scev-check-threshold": 16, "force-vector-width": 0}
 
 #: The line said on stderr when this process first compiles a kernel (module
 #: docstring), unless the environment sets ``WORKBENCH_PROGRESS=0``.
@@ -168,7 +163,12 @@ def interpreted() -> Iterator[None]:
         _interpreting = before
 
 
-def _as_attributes(arg: Any) -> Any:
+def is_interpreting() -> bool:
+    """Whether this thread's code runs within :func:`interpreted`."""
+    return _interpreting
+
+
+def as_attributes(arg: Any) -> Any:
     """A record or record array whose fields read as attributes, else ``arg``."""
     if isinstance(arg, np.void):
         return np.asarray(arg).view(np.recarray)[()]
@@ -266,29 +266,7 @@ def source_digest(name: str) -> str:
     return digest.hexdigest()
 
 
-class _SourceKeyedCache(FunctionCache):
-    """Numba's disk cache of a kernel, keyed on the source it can reach too.
-
-    Numba keys a cache entry on the kernel's own bytecode and checks only the
-    timestamp of the kernel's own file, so code compiled in from another
-    module (an inlined helper, a kernel it calls, a constant it reads) would
-    stay as it was when first cached. The key here also holds
-    :func:`source_digest` of the kernel's module: an edit of any module it
-    imports, directly or not, makes a new entry.
-    """
-
-    def _index_key(self, sig: Any, codegen: Any) -> tuple[Any, ...]:
-        key = super()._index_key(sig, codegen)
-        return (*key, source_digest(self._py_func.__module__))
-
-    def load_overload(self, sig: Any, target_context: Any) -> Any:
-        loaded = super().load_overload(sig, target_context)
-        if loaded is None and self._enabled:
-            _announce_compile(self._py_func)
-        return loaded
-
-
-def _announce_compile(func: Callable[..., Any]) -> None:
+def announce_compile(func: Callable[..., Any]) -> None:
     """Say once per process, on stderr, that a kernel is being compiled.
 
     The line (:data:`COMPILING`) names the kernel and what its module
@@ -309,127 +287,6 @@ def _announce_compile(func: Callable[..., Any]) -> None:
         sys.stderr.flush()
     except (OSError, ValueError, AttributeError):  # no stderr: the line is optional
         pass
-
-
-class _Interpretable(_CPUDispatcher):
-    """A dispatcher that runs its Python function within :func:`interpreted`."""
-
-    def _compile_for_args(self, *args: Any, **kws: Any) -> Any:
-        # Numba's C dispatcher calls this on a call no compiled code matches,
-        # then calls what it returns with the arguments.
-        if _interpreting:
-            return self._interpret
-        return super()._compile_for_args(*args, **kws)
-
-    def _interpret(self, *args: Any) -> Any:
-        with np.errstate(all="ignore"):
-            return self.py_func(*(_as_attributes(arg) for arg in args))
-
-
-class _Helper(_Interpretable):
-    """A dispatcher for kernels only: constant scalars compile as plain types.
-
-    Compiled without the wrappers that a call from Python needs (module
-    docstring), so a call from Python runs the Python source, as within
-    :func:`interpreted`.
-    """
-
-    def __call__(self, *args: Any) -> Any:
-        return self._interpret(*args)
-
-    def compile(self, sig: Any) -> Any:
-        args, return_type = sigutils.normalize_signature(sig)
-        args = tuple(types.unliteral(a) for a in args)
-        return super().compile(args if return_type is None else return_type(*args))
-
-
-class _EntryPoint(_Interpretable):
-    """A dispatcher with one signature, built on first use (module docstring)."""
-
-    _outputs: frozenset[str] = frozenset()
-    _contiguous: frozenset[str] = frozenset()
-    _vectorize = False
-
-    def compile(self, sig: Any) -> Any:
-        args, _ = sigutils.normalize_signature(sig)
-        with global_compiler_lock:  # one thread builds the signature
-            if self._can_compile:
-                with self._one_process_at_a_time(), self._vectorizer_options():
-                    entry = super().compile(self._signature(args))  # or load it
-                self.disable_compile()
-            else:  # another thread built it meanwhile
-                entry = next(iter(self.overloads.values())).entry_point
-        # Numba runs the entry it gets here on the arguments of the call that
-        # compiled it, unconverted: a strided array where the one signature
-        # takes layout "C" would be read as if it were contiguous.
-        self._refuse_strided(args)
-        return entry
-
-    def _refuse_strided(self, args: Iterable[Any]) -> None:
-        """Raise ``TypeError`` if an array named in ``contiguous`` is strided."""
-        parameters = inspect.signature(self.py_func).parameters
-        strided = [
-            name
-            for name, arg in zip(parameters, args, strict=True)
-            if name in self._contiguous
-            and isinstance(arg, types.Array)
-            and arg.layout != "C"
-        ]
-        if strided:
-            raise TypeError(
-                f"{self.py_func.__qualname__}: {', '.join(strided)} must be "
-                "C-contiguous arrays"
-            )
-
-    def _signature(self, args: Iterable[Any]) -> tuple[Any, ...]:
-        """The one signature, from the argument types of the first use."""
-        parameters = inspect.signature(self.py_func).parameters.values()
-        result = []
-        for parameter, arg in zip(parameters, args, strict=True):
-            name = parameter.name
-            if isinstance(arg, types.Array) and name not in self._outputs:
-                contiguous = name in self._contiguous
-                arg = arg.copy(layout="C" if contiguous else "A", readonly=True)
-            elif isinstance(arg, types.Number | types.Boolean | types.Literal):
-                annotation = getattr(parameter.annotation, "__name__", None)
-                annotation = annotation or parameter.annotation  # a string
-                arg = _ANNOTATED.get(annotation, types.unliteral(arg))
-            result.append(arg)
-        return tuple(result)
-
-    @contextlib.contextmanager
-    def _vectorizer_options(self) -> Iterator[None]:
-        """LLVM's options set while a ``vectorize`` kernel compiles (module doc)."""
-        if not self._vectorize:
-            yield
-            return
-        llvm.set_option("", f"-vectorize-scev-check-threshold={VECTORIZE_ASSUMPTIONS}")
-        llvm.set_option("", f"-force-vector-width={VECTOR_WIDTH}")
-        try:
-            yield
-        finally:
-            for name, value in _LLVM_DEFAULTS.items():
-                llvm.set_option("", f"-{name}={value}")
-
-    @contextlib.contextmanager
-    def _one_process_at_a_time(self) -> Iterator[None]:
-        """Hold this kernel's file lock in the cache folder (module docstring)."""
-        func = self.py_func
-        folder = Path(self._cache.cache_path)
-        lock: IO[str] | None = None
-        if fcntl is not None:
-            try:
-                folder.mkdir(parents=True, exist_ok=True)
-                name = f"{func.__module__}.{func.__qualname__}.lock"
-                lock = (folder / name).open("a")
-            except OSError:  # a read-only cache: Numba compiles without saving
-                pass
-        if lock is None:
-            yield
-            return
-        with lock:  # closing the file releases the lock (so does an exit)
-            fcntl.flock(lock, fcntl.LOCK_EX)
-            yield
 
 
 def entry_point(
@@ -461,13 +318,16 @@ def entry_point(
         if not (outputs | contiguous) <= names:
             unknown = sorted((outputs | contiguous) - names)
             raise TypeError(f"{func.__qualname__}: no parameters {unknown}")
-        if _config.DISABLE_JIT:  # NUMBA_DISABLE_JIT=1: plain Python, as njit
-            return func
-        dispatcher = _EntryPoint(func, targetoptions=dict(_OPTIONS))
-        dispatcher._outputs, dispatcher._contiguous = outputs, contiguous
-        dispatcher._vectorize = vectorize
-        dispatcher._cache = _SourceKeyedCache(func)
-        return cast(F, dispatcher)
+        return cast(
+            F,
+            _Kernel(
+                func,
+                "entry point",
+                functools.partial(
+                    _build_entry_point, func, outputs, contiguous, vectorize
+                ),
+            ),
+        )
 
     return decorate
 
@@ -491,15 +351,112 @@ def helper(
     """
 
     def decorate(func: F) -> F:
-        if _config.DISABLE_JIT:
-            return func
-        options = dict(_OPTIONS, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+        options: dict[str, Any] = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True}
         if forceinline:
             options["forceinline"] = True
         if inline_source:
             options["inline"] = "always"
-        dispatcher = _Helper(func, targetoptions=options)
-        dispatcher._cache = _SourceKeyedCache(func)
-        return cast(F, dispatcher)
+        return cast(
+            F, _Kernel(func, "helper", functools.partial(_build_helper, func, options))
+        )
 
     return decorate
+
+
+def _build_entry_point(
+    func: Any, outputs: frozenset[str], contiguous: frozenset[str], vectorize: bool
+) -> Any:
+    from workbench._dispatchers import build_entry_point
+
+    return build_entry_point(
+        sys.modules[__name__], func, outputs, contiguous, vectorize
+    )
+
+
+def _build_helper(func: Any, options: dict[str, Any]) -> Any:
+    from workbench._dispatchers import build_helper
+
+    return build_helper(sys.modules[__name__], func, options)
+
+
+class _Kernel:
+    """A kernel whose Numba dispatcher is built when first needed (module docs).
+
+    Until then (no call outside :func:`interpreted`, no attribute of the
+    dispatcher asked for), a call runs the Python source, as a dispatcher
+    would within :func:`interpreted` (a helper's call from Python always
+    does). Building one kernel's dispatcher builds every kernel's and puts
+    each dispatcher in place of its kernel in the modules that hold it, so
+    that compiled code sees only dispatchers.
+    """
+
+    def __init__(self, func: Any, kind: str, build: Callable[[], Any]) -> None:
+        self.py_func = func
+        self.kind = kind  # "entry point" or "helper"
+        self._build = build
+        self._dispatcher: Any = None
+        functools.update_wrapper(self, func)
+        with _kernels_lock:
+            if _built:
+                self._dispatcher = build()
+            else:
+                _kernels.append(self)
+
+    def __call__(self, *args: Any) -> Any:
+        dispatcher = self._dispatcher
+        if dispatcher is None:
+            if _interpreting or self.kind == "helper":
+                with np.errstate(all="ignore"):
+                    return self.py_func(*(as_attributes(arg) for arg in args))
+            dispatcher = self.dispatcher
+        return dispatcher(*args)
+
+    @property
+    def dispatcher(self) -> Any:
+        """The Numba dispatcher (built on first use, every kernel's with it)."""
+        if self._dispatcher is None:
+            _build_every_kernel()
+        return self._dispatcher
+
+    def __getattr__(self, name: str) -> Any:  # signatures, overloads, ...
+        if name.startswith("__") or name in ("_dispatcher", "_build", "py_func"):
+            raise AttributeError(name)
+        return getattr(self.dispatcher, name)
+
+    def __repr__(self) -> str:
+        return f"<kernel {self.py_func.__module__}.{self.py_func.__qualname__}>"
+
+
+def get_built(kernel: Any) -> Any:
+    """The Numba dispatcher of ``kernel`` if built, else None (no Numba import).
+
+    Anything else (a dispatcher, a plain function) is returned as it is.
+    """
+    return kernel._dispatcher if isinstance(kernel, _Kernel) else kernel
+
+
+#: Kernels whose dispatcher is not built yet, and whether every one is.
+_kernels: list[_Kernel] = []
+_built = False
+_kernels_lock = threading.RLock()
+
+
+def _build_every_kernel() -> None:
+    """Build every kernel's dispatcher; put each in place of its kernel."""
+    global _built
+    with _kernels_lock:
+        if _built:
+            return
+        dispatchers = {id(kernel): kernel._build() for kernel in _kernels}
+        for kernel in _kernels:
+            kernel._dispatcher = dispatchers[id(kernel)]
+        packages = {kernel.py_func.__module__.split(".")[0] for kernel in _kernels}
+        for name, module in list(sys.modules.items()):
+            if module is None or name.split(".")[0] not in packages:
+                continue
+            namespace = vars(module)
+            for key, value in list(namespace.items()):
+                if isinstance(value, _Kernel) and value._dispatcher is not None:
+                    namespace[key] = value._dispatcher
+        _kernels.clear()
+        _built = True

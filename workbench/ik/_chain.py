@@ -25,11 +25,11 @@ import weakref
 from collections.abc import Callable
 from typing import Any
 
-import numba
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from workbench._compiled import get_built
 from workbench.errors import InputError
 from workbench.ik import _chain_kernel as kernel
 from workbench.model.per_robot import per_robot
@@ -300,9 +300,12 @@ def compiled_entry(dispatcher: Callable[..., Any], args: tuple[Any, ...]) -> Any
         That entry point, if the dispatcher has compiled exactly one signature
         and ``args`` match it; else the dispatcher itself.
     """
-    signatures = getattr(dispatcher, "signatures", None)  # none without JIT
+    built = get_built(dispatcher)  # None: not compiled (nor Numba imported) yet
+    signatures = getattr(built, "signatures", None)  # none without JIT
     if not signatures or len(signatures) != 1 or len(signatures[0]) != len(args):
         return dispatcher
+    import numba
+
     for expected, value in zip(signatures[0], args, strict=True):
         actual = numba.typeof(value)
         if isinstance(expected, numba.types.Array):
@@ -316,7 +319,7 @@ def compiled_entry(dispatcher: Callable[..., Any], args: tuple[Any, ...]) -> Any
                 return dispatcher
         elif numba.types.unliteral(actual) != expected:
             return dispatcher
-    return dispatcher.get_overload(signatures[0])  # type: ignore[attr-defined]
+    return built.get_overload(signatures[0])
 
 
 def _pack_placement(row: FloatArray, placement: pin.SE3) -> None:
