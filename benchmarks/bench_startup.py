@@ -115,8 +115,6 @@ def _paired(command: list[str], runs: int) -> tuple[float, float, float]:
 
 def main() -> None:
     """Print both tables (module docstring)."""
-    from benchmarks.bench_ik_closed_form import _reference_us  # imports workbench
-
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--robots", default="puma560,ur5,iiwa14,panda")
     parser.add_argument("--runs", type=int, default=5, help="pairs per command")
@@ -125,6 +123,8 @@ def main() -> None:
     if args.child:
         _child(args.child)
         return
+    from benchmarks.bench_ik_closed_form import _reference_us  # imports workbench
+
     print(
         f"first ik.analytic per arm, new process, CPU [s] (machine reference: "
         f"sum(range(1000)) = {_reference_us():.1f} µs)"
