@@ -230,8 +230,9 @@ def _round_trip_bound(robot: Robot, q: np.ndarray) -> float:
     (the shoulder and the elbow both within 1e-4 of theirs, the wrist centre
     then near axis 1) they lose ulps / (c1 c2), the product of the two least.
     """
-    first, second = _measures(robot, q)[:2]
-    return ATOL_Q + CONDITION_ULPS / (first * second) if first > 0.0 else math.inf
+    first, second = (float(c) for c in _measures(robot, q)[:2])
+    product = first * second
+    return ATOL_Q + CONDITION_ULPS / product if product > 0.0 else math.inf
 
 
 @settings(max_examples=300)
