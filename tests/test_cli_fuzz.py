@@ -330,3 +330,44 @@ def test_infeasible_placement_prints_its_json(tmp_path: Path) -> None:
     assert result["robot"] == "puma560" and result["poses"] == 1
     assert all(not p["all_reachable"] for p in result["placements"])
     assert err.count("\n") == 1 and result["error"] in err
+
+
+#: An output that is one of the command's inputs, or inside an input folder, in
+#: every command that writes files: refused (exit 2, one line), the input unchanged.
+#: ``puma.urdf`` is the catalog PUMA's URDF, ``link.urdf`` a symbolic link to it.
+OUTPUT_IS_INPUT = [
+    ["workspace", "view", "map.zarr", "--robot", "puma.urdf", "--html", "puma.urdf"],
+    ["workspace", "view", "map.zarr", "--robot", "puma.urdf", "--html", "link.urdf"],
+    ["workspace", "view", "map.zarr", "--html", "map.zarr/view.html"],
+    ["workspace", "report", "map.zarr", "--out", "map.zarr/zarr.json"],
+    ["view", "--robot", "puma.urdf", "--deg", *["0"] * 6, "--html", "puma.urdf"],
+    ["plan", "pick-place", "--robot", "puma.urdf", "--pick-deg", *["0"] * 6,
+     "--place-deg", *["10"] * 6, "--duration", "5", "--csv", "link.urdf"],
+    ["plan", "pick-place", "--robot", "puma560", "--pick-deg", *["0"] * 6,
+     "--place-deg", *["10"] * 6, "--duration", "5", "--scene", "scene.json",
+     "--plot", "scene.json"],
+    ["fishcut", "--robot", "puma.urdf", "--html", "puma.urdf"],
+    ["export", "--format", "csv", "--trajectory", "traj.csv", "--out", "traj.csv"],
+    ["report", "singularities", "--robot", "puma.urdf", "--out", "puma.urdf"],
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("argv", OUTPUT_IS_INPUT, ids=lambda a: " ".join(a[:2]))
+def test_no_output_overwrites_an_input(tmp_path: Path, argv: list[str]) -> None:
+    from workbench import load_robot
+
+    write_inputs(tmp_path, workspace=True)
+    puma = tmp_path / "puma.urdf"
+    puma.write_bytes(Path(load_robot("puma560").urdf_path).read_bytes())
+    (tmp_path / "link.urdf").symlink_to(puma)
+    before = {
+        p: p.read_bytes()
+        for p in tmp_path.rglob("*")
+        if p.is_file() and not p.is_symlink()
+    }
+    outcome = run_case(argv, tmp_path)
+    assert contract_violations(outcome) == [], outcome
+    assert outcome.code == 2 and outcome.stdout == "", outcome
+    assert "also an input" in outcome.stderr or "inside the input" in outcome.stderr
+    after = {p: p.read_bytes() for p in before}
+    assert after == before  # no input changed

@@ -17,6 +17,7 @@ from workbench.cli._common import (
     add_json_flag,
     add_robot_argument,
     finite_float,
+    get_input_paths,
     load_robot_from_args,
     print_json,
 )
@@ -89,7 +90,7 @@ def run_view(args: argparse.Namespace) -> int:
     from workbench.viz.workspace_view import write_workspace_view
     from workbench.workspace.store import open_map
 
-    check_outputs([args.html], [args.map])
+    check_outputs([args.html], [*get_input_paths(args), args.map])
     workspace_map = open_map(args.map)
     robot = load_robot_from_args(args) if args.robot is not None else None
     path = write_workspace_view(
@@ -108,7 +109,7 @@ def run_report(args: argparse.Namespace) -> int:
     from workbench.reports.workspace_report import build_workspace_report
     from workbench.workspace.store import open_map
 
-    check_outputs([args.out], [args.map])
+    check_outputs([args.out], [*get_input_paths(args), args.map])
     workspace_map = open_map(args.map)
     report = build_workspace_report(workspace_map, heights=args.heights)
     write_text_atomic(args.out, report.html)
