@@ -89,6 +89,15 @@ def test_bag_round_trip_property(tmp_path_factory, steps, values) -> None:
     _same(back.samples, samples)
 
 
+@pytest.mark.parametrize("rate", [100, 125, 500, 1000])
+def test_bag_times_come_back_to_the_bit(tmp_path: Path, rate: int) -> None:
+    t = np.arange(1001) / rate  # as the workbench samples (4.56 came back 4.56...05)
+    q = np.zeros((t.size, 1))
+    write_ros2_bag(tmp_path / "b", JointTrajectorySamples(t, q, q, q), ["j"])
+    back = read_ros2_bag(tmp_path / "b").samples.t
+    assert np.array_equal(back, t), np.flatnonzero(back != t)[:5]
+
+
 def test_bag_times_round_to_nanoseconds(tmp_path: Path) -> None:
     t = np.array([0.0, 1.0 / 3.0])
     q = np.zeros((2, 1))

@@ -7,8 +7,10 @@ The bag holds one message on :data:`DEFAULT_TOPIC`: the whole trajectory, as a
 ``joint_trajectory_controller`` takes it, with the joint names, and per point
 the positions [rad], velocities [rad/s], accelerations [rad/s²] and
 ``time_from_start``. ROS durations count whole nanoseconds, so times are
-rounded to the nearest nanosecond (exact for the workbench's 100 Hz and
-1 kHz samples).
+rounded to the nearest nanosecond and read back as the integer count over 1e9
+in one correctly rounded division: a time that is the double nearest a whole
+number of nanoseconds (``k / 100`` s, ``k / 1000`` s: the workbench's 100 Hz and
+1 kHz samples) comes back to the bit.
 """
 
 from __future__ import annotations
@@ -166,8 +168,13 @@ def read_ros2_bag(path: str | Path, *, topic: str = DEFAULT_TOPIC) -> BagTraject
             raise
         raise InputError(f"cannot read bag {path}: {err}") from err
     points = message.points
+    # Whole nanoseconds over 1e9 in one correctly rounded division (not
+    # sec + nanosec / 1e9, which rounds twice: 4.56 came back 4.5600000000000005).
     t = np.array(
-        [p.time_from_start.sec + p.time_from_start.nanosec / _NS for p in points]
+        [
+            (p.time_from_start.sec * _NS + p.time_from_start.nanosec) / _NS
+            for p in points
+        ]
     )
     samples = JointTrajectorySamples(
         t=t,
