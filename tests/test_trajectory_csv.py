@@ -180,3 +180,14 @@ def test_too_many_samples_are_refused() -> None:
     check_sample_count(MAX_SAMPLES, "fine")
     with pytest.raises(InputError, match=f"at most {MAX_SAMPLES}"):
         check_sample_count(MAX_SAMPLES + 1, "--rate")
+
+
+@pytest.mark.parametrize("field", ["1_0", "\u0661\u0660", "\uff11\uff10"])
+def test_numbers_are_plain_ascii_as_pandas_reads_them(
+    tmp_path: Path, field: str
+) -> None:
+    path = tmp_path / "t.csv"
+    path.write_text(f"t,q1,qd1,qdd1\n0,0,0,0\n1,{field},0,0\n", encoding="utf-8")
+    with pytest.raises(TrajectoryFileError, match="line 3: not a number"):
+        read_trajectory_csv(path)
+    assert not pd.api.types.is_numeric_dtype(pd.read_csv(path)["q1"])  # pandas too

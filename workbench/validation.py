@@ -64,6 +64,33 @@ def check_positive(value: float, name: str, *, strict: bool) -> None:
         raise InputError(f"{name} must be a finite number {bound}, got {value!r}")
 
 
+def parse_float(text: str) -> float:
+    """A number as numpy and pandas read it: ASCII text of a Python float.
+
+    Python's ``float`` also takes ``"1_0"`` (as 10) and digits of other scripts
+    (Arabic-Indic, full-width), which the tools a file goes to next refuse.
+
+    Raises:
+        ValueError: If ``text`` is not ASCII, holds an underscore, or is no
+            float.
+    """
+    if not text.isascii() or "_" in text:
+        raise ValueError(f"not a plain ASCII number: {text!r}")
+    return float(text)
+
+
+def parse_int(text: str) -> int:
+    """An integer as :func:`parse_float` reads numbers (ASCII, no underscore).
+
+    Raises:
+        ValueError: If ``text`` is not ASCII, holds an underscore, or is no
+            integer.
+    """
+    if not text.isascii() or "_" in text:
+        raise ValueError(f"not a plain ASCII integer: {text!r}")
+    return int(text)
+
+
 def read_json_file(path: str | Path, error: type[InputError], what: str) -> Any:
     """The parsed JSON of a file, every failure an ``error`` with one line.
 

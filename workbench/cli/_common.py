@@ -17,6 +17,7 @@ from workbench.errors import InputError, NonFiniteError
 from workbench.json_numbers import to_json_ready
 from workbench.model.loading import load_robot
 from workbench.model.robot import Robot
+from workbench.validation import parse_float, parse_int
 
 #: Exit code of a request the robot cannot meet (an unreachable pose, a
 #: limit violation), printed as one line on stderr.
@@ -156,7 +157,7 @@ def add_angle_arguments(parser: argparse.ArgumentParser, name: str = "q") -> Non
 def finite_float(text: str) -> float:
     """Argparse type: a finite float."""
     try:
-        value = float(text)
+        value = parse_float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
     if not math.isfinite(value):
@@ -193,7 +194,7 @@ def bounded_int(minimum: int, maximum: int) -> Callable[[str], int]:
 
     def parse(text: str) -> int:
         try:
-            value = int(text)
+            value = parse_int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
         if not minimum <= value <= maximum:

@@ -28,6 +28,7 @@ from workbench.trajectory.csv_io import (
     TrajectoryFileError,
     read_trajectory_csv,
 )
+from workbench.validation import parse_int
 
 if TYPE_CHECKING:
     from workbench.viz import Viewer
@@ -35,7 +36,7 @@ if TYPE_CHECKING:
 
 def _port(text: str) -> int:
     try:
-        value = int(text)
+        value = parse_int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a port number: {text!r}") from None
     if not 0 <= value <= 65535:

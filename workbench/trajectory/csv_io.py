@@ -36,7 +36,7 @@ import numpy.typing as npt
 
 from workbench.atomic_files import atomic_files
 from workbench.errors import DimensionError, InputError
-from workbench.validation import iter_data_rows, read_csv_file
+from workbench.validation import iter_data_rows, parse_float, read_csv_file
 
 #: Most samples (rows) of a trajectory the workbench writes or reads.
 MAX_SAMPLES = 1_000_000
@@ -208,7 +208,7 @@ def read_trajectory_csv(
                 f"{path}, line {line}: {len(row)} fields, expected {len(columns)}"
             )
         try:
-            numbers = [float(field) for field in row]
+            numbers = [parse_float(field.strip()) for field in row]
         except ValueError:
             raise TrajectoryFileError(
                 f"{path}, line {line}: not a number in {row}"

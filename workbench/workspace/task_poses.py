@@ -26,7 +26,7 @@ import numpy.typing as npt
 from workbench.errors import InputError
 from workbench.model.robot import Robot
 from workbench.trajectory.csv_io import JointTrajectorySamples, read_trajectory_csv
-from workbench.validation import iter_data_rows, read_csv_file
+from workbench.validation import iter_data_rows, parse_float, read_csv_file
 from workbench.workspace.orientations import rotations_from_quat_xyzw
 
 FloatArray = npt.NDArray[np.float64]
@@ -130,7 +130,7 @@ def _parse_row(row: list[str], line: int, path: Path) -> list[float]:
             f"{path}, line {line}: {len(row)} fields, expected {len(TASK_POSE_HEADER)}"
         )
     try:
-        numbers = [float(field) for field in row]
+        numbers = [parse_float(field.strip()) for field in row]
     except ValueError:
         raise TaskPoseFileError(f"{path}, line {line}: not a number in {row}") from None
     if not all(math.isfinite(x) for x in numbers):
