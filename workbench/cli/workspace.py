@@ -27,6 +27,7 @@ from workbench.cli._common import (
     print_json,
 )
 from workbench.collision import read_scene
+from workbench.errors import InputError
 from workbench.workspace.build import DEFAULT_BLOCK_VOXELS, MapSummary, build_map
 from workbench.workspace.grid import (
     DEFAULT_ORIENTATIONS,
@@ -154,9 +155,21 @@ def _register_map(subcommands: argparse._SubParsersAction) -> None:
     parser.set_defaults(run=run_map, progress_message="workspace map: building…")
 
 
+def _refuse_inside_a_store(path: Path) -> None:
+    """Refuse a new map inside a Zarr store (a folder holding ``zarr.json``).
+
+    Raises:
+        InputError: Naming the store.
+    """
+    for folder in path.resolve().parents:
+        if (folder / "zarr.json").is_file():
+            raise InputError(f"cannot write {path}: it is inside the store {folder}")
+
+
 def run_map(args: argparse.Namespace) -> int:
     """Build the map and print its summary; returns the exit code."""
     check_output(args.out, folder=True, inputs=get_input_paths(args))
+    _refuse_inside_a_store(args.out)
     robot = load_robot_from_args(args)
     scene = None
     if args.scene is not None:
