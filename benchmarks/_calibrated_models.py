@@ -16,6 +16,7 @@ import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 
 from workbench import Robot, load_robot
 from workbench.ik import get_solver
@@ -102,6 +103,30 @@ def off_axis_iiwa(folder: Path, *, offset: float = IIWA_OFF_AXIS) -> Robot:
         x, y, z = (float(v) for v in origin.get("xyz", "0 0 0").split())
         origin.set("xyz", f"{x + offset!r} {y!r} {z!r}")
     return _write(robot, tree, Path(folder) / f"iiwa14-off-axis-{offset:g}.urdf")
+
+
+def calibrated_arm(name: str, folder: Path) -> Robot:
+    """``"iiwa14"``: :func:`off_axis_iiwa`; else :func:`calibrated_urdf` (seed 0)."""
+    if name == "iiwa14":
+        return off_axis_iiwa(folder)
+    return calibrated_urdf(name, folder, seed=0)
+
+
+def wrapped(a: np.ndarray) -> np.ndarray:
+    """|a| with each angle wrapped to [0, π] [rad]."""
+    return np.abs(np.angle(np.exp(1j * a)))
+
+
+def fk_residuals(robot: Robot, qs: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """(N, 2) position [m] and rotation [rad] residuals by Pinocchio's FK."""
+    model, data = robot.model, robot.model.createData()
+    out = np.empty((len(qs), 2))
+    for row, q, target in zip(out, qs, targets, strict=True):
+        pin.framesForwardKinematics(model, data, q)
+        pose = data.oMf[robot.tool_frame_id]
+        row[0] = np.linalg.norm(pose.translation - target[:3, 3])
+        row[1] = np.linalg.norm(pin.log3(target[:3, :3].T @ pose.rotation))
+    return out
 
 
 def least_singular(robot: Robot, q: np.ndarray) -> float:

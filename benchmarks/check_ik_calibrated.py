@@ -24,9 +24,13 @@ import time
 from pathlib import Path
 
 import numpy as np
-import pinocchio as pin
 
-from benchmarks._calibrated_models import calibrated_urdf, least_singular, off_axis_iiwa
+from benchmarks._calibrated_models import (
+    calibrated_arm,
+    fk_residuals,
+    least_singular,
+    wrapped,
+)
 from workbench import Robot
 from workbench.ik import get_solver, get_structure, numeric_batch
 
@@ -35,25 +39,6 @@ ARMS = ("ur5", "puma560", "iiwa14", "panda")
 ATOL_SAME_Q = 1e-9
 ATOL_NUMERIC_Q = 1e-6
 NEAR_SINGULAR = 0.02
-
-
-def _arm(name: str, folder: Path) -> Robot:
-    return off_axis_iiwa(folder) if name == "iiwa14" else calibrated_urdf(name, folder)
-
-
-def _wrapped(a: np.ndarray) -> np.ndarray:
-    return np.abs(np.angle(np.exp(1j * a)))
-
-
-def _residuals(robot: Robot, qs: np.ndarray, targets: np.ndarray) -> np.ndarray:
-    model, data = robot.model, robot.model.createData()
-    out = np.empty((len(qs), 2))
-    for row, q, target in zip(out, qs, targets, strict=True):
-        pin.framesForwardKinematics(model, data, q)
-        pose = data.oMf[robot.tool_frame_id]
-        row[0] = np.linalg.norm(pose.translation - target[:3, 3])
-        row[1] = np.linalg.norm(pin.log3(target[:3, :3].T @ pose.rotation))
-    return out
 
 
 def _solve(robot: Robot, targets: np.ndarray, values):
@@ -75,8 +60,8 @@ def round_trip(robot: Robot, samples: int) -> dict[str, object]:
     q_all, valid, events = _solve(robot, targets, values)
     seconds = time.perf_counter() - start
     rows = np.nonzero(valid)
-    residual = _residuals(robot, q_all[rows], targets[rows[0]]).max(axis=0)
-    gaps = _wrapped(q_all - qs[:, None, :]).max(axis=2)
+    residual = fk_residuals(robot, q_all[rows], targets[rows[0]]).max(axis=0)
+    gaps = wrapped(q_all - qs[:, None, :]).max(axis=2)
     gaps[~valid] = np.inf
     missed = np.flatnonzero(gaps.min(axis=1) > ATOL_SAME_Q)
     sigmas = [least_singular(robot, qs[i]) for i in missed]
@@ -119,7 +104,7 @@ def numerical_search(robot: Robot, poses: int, starts: int) -> dict[str, object]
         q_all, valid, events = _solve(
             robot, repeated[ok], np.asarray(solver.parameter_of(q_num))
         )
-    gaps = _wrapped(q_all - q_num[:, None, :]).max(axis=2)
+    gaps = wrapped(q_all - q_num[:, None, :]).max(axis=2)
     gaps[~valid] = np.inf
     outside = np.flatnonzero(gaps.min(axis=1) > ATOL_NUMERIC_Q)
     at = np.unique(ok[outside] // starts)
@@ -141,7 +126,7 @@ def main() -> None:
     args = parser.parse_args()
     folder = Path(tempfile.mkdtemp(prefix="calibrated-"))
     for name in args.robots.split(","):
-        robot = _arm(name, folder)
+        robot = calibrated_arm(name, folder)
         deviation = get_structure(robot).deviation.describe()
         print(f"{name}: {get_structure(robot).family}, deviation {deviation}")
         print(f"  round trip: {round_trip(robot, args.samples)}")

@@ -32,9 +32,12 @@ from hypothesis import strategies as st
 
 from benchmarks._calibrated_models import (
     IIWA_OFF_AXIS,
+    calibrated_arm,
     calibrated_urdf,
+    fk_residuals,
     least_singular,
     off_axis_iiwa,
+    wrapped,
 )
 from tests._meshes import write_meshes_of
 from workbench import Robot, ik, load_robot
@@ -89,28 +92,6 @@ def folder(tmp_path_factory) -> Path:
     return tmp_path_factory.mktemp("calibrated")
 
 
-def _arm(name: str, folder: Path) -> Robot:
-    if name == "iiwa14":
-        return off_axis_iiwa(folder)
-    return calibrated_urdf(name, folder, seed=0)
-
-
-def _wrapped(a: np.ndarray) -> np.ndarray:
-    return np.abs(np.angle(np.exp(1j * a)))
-
-
-def _residuals(robot: Robot, qs: np.ndarray, targets: np.ndarray) -> np.ndarray:
-    """(N, 2) position [m] and rotation [rad] residuals by Pinocchio's FK."""
-    model, data = robot.model, robot.model.createData()
-    out = np.empty((len(qs), 2))
-    for row, q, target in zip(out, qs, targets, strict=True):
-        pin.framesForwardKinematics(model, data, q)
-        pose = data.oMf[robot.tool_frame_id]
-        row[0] = np.linalg.norm(pose.translation - target[:3, 3])
-        row[1] = np.linalg.norm(pin.log3(target[:3, :3].T @ pose.rotation))
-    return out
-
-
 def _solve_all(robot: Robot, qs: np.ndarray, targets: np.ndarray):
     """Every branch of each target: q (N, B, n), valid (N, B), solve flags (N,)."""
     solver = get_solver(robot)
@@ -150,9 +131,9 @@ def _check_round_trip(
     targets = np.array([robot.fk(q).homogeneous for q in qs])
     q_all, valid, events = _solve_all(robot, qs, targets)
     rows = np.nonzero(valid)
-    residuals = _residuals(robot, q_all[rows], targets[rows[0]])
+    residuals = fk_residuals(robot, q_all[rows], targets[rows[0]])
     assert residuals.max() <= ATOL_RESIDUAL, residuals.max()
-    gaps = _wrapped(q_all - qs[:, None, :]).max(axis=2)
+    gaps = wrapped(q_all - qs[:, None, :]).max(axis=2)
     gaps[~valid] = np.inf
     missed = np.flatnonzero(gaps.min(axis=1) > ATOL_SAME_Q)
     values = None if robot.nq == 6 else get_solver(robot).parameter_of(qs)
@@ -268,7 +249,7 @@ def test_the_distance_bound(fraction: float) -> None:
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["ur5", "puma560", "iiwa14"])
 def test_random_configurations_come_back(name: str, folder) -> None:
-    robot = _arm(name, folder)
+    robot = calibrated_arm(name, folder)
     rng = np.random.default_rng(1)
     _check_round_trip(robot, rng.uniform(robot.lower, robot.upper, (SAMPLES, robot.nq)))
 
@@ -301,8 +282,8 @@ def test_property_round_trip(seed: int, name: str, unit: list[float], folder) ->
     target = robot.fk(q).homogeneous
     solutions = analytic(robot, target)
     qs = np.array([s.q for s in solutions])
-    assert _residuals(robot, qs, np.array([target] * len(qs))).max() <= ATOL_RESIDUAL
-    gap = _wrapped(qs - q).max(axis=1).min()
+    assert fk_residuals(robot, qs, np.array([target] * len(qs))).max() <= ATOL_RESIDUAL
+    gap = wrapped(qs - q).max(axis=1).min()
     assert gap <= ATOL_SAME_Q or least_singular(robot, q) < NEAR_SINGULAR
     for s in solutions:  # within-limits is the final q's
         inside = bool(
@@ -393,7 +374,7 @@ def test_numerical_search_finds_no_other_solution(name: str, folder) -> None:
     Seven axes: each numerical solution is compared with the branches at its
     own value of the redundancy parameter.
     """
-    robot = _arm(name, folder)
+    robot = calibrated_arm(name, folder)
     rng = np.random.default_rng(4)
     qs = rng.uniform(robot.lower, robot.upper, size=(SEARCH_POSES, robot.nq))
     targets = np.array([robot.fk(q).homogeneous for q in qs])
@@ -412,7 +393,7 @@ def test_numerical_search_finds_no_other_solution(name: str, folder) -> None:
     else:
         values = solver.parameter_of(q_num)
         q_all, valid = solver.solve_batch(repeated[ok], redundancy=values)
-    gaps = _wrapped(q_all - q_num[:, None, :]).max(axis=2)
+    gaps = wrapped(q_all - q_num[:, None, :]).max(axis=2)
     gaps[~valid] = np.inf
     outside = np.flatnonzero(gaps.min(axis=1) > ATOL_NUMERIC_Q)
     for i in outside:  # a solution the branches miss: the solve reports it
@@ -462,8 +443,8 @@ def test_feasible_intervals_and_choice_keep_working(name: str, folder) -> None:
         choice = choose_redundancy(robot, target)
         chosen = choice.solution
         assert chosen.within_limits
-        assert _residuals(robot, chosen.q[None], target[None]).max() <= ATOL_RESIDUAL
-        gap = _wrapped(np.asarray(solver.parameter_of(chosen.q) - choice.value))
+        assert fk_residuals(robot, chosen.q[None], target[None]).max() <= ATOL_RESIDUAL
+        gap = wrapped(np.asarray(solver.parameter_of(chosen.q) - choice.value))
         assert gap <= 1e-9
     assert inside > 50
     assert worst <= FEASIBLE_MARGIN, worst
