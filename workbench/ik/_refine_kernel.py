@@ -390,25 +390,13 @@ def _valley_search(chain, target, start, work, sols, count: int) -> int:
         The new count of ``sols`` (as :func:`_keep`), every solution found
         added.
     """
-    frames, jac, normal = work[0:7], work[7:13, 0:6], work[13:19, 0:6]
+    frames = work[0:7]
     e, v = work[19, 0:6], work[22, 0:6]
     previous = np.empty(6)
     x = np.empty(6)
-    for k in range(6):
-        v[k] = 1.0
-    _forward(chain, start, frames)
+    if not _null_direction(chain, start, work, v):  # (leaves frames at start)
+        return count
     _error(target, frames, e)
-    _jacobian(chain, frames, jac)
-    for _ in range(4):  # inverse iteration: J's right singular vector of least σ
-        _gram(jac, 6, normal)
-        if not _solve(normal, v, 6):
-            return count
-        length = 0.0
-        for k in range(6):
-            length += v[k] * v[k]
-        length = math.sqrt(length)
-        for k in range(6):
-            v[k] /= length
     order = np.argsort(-np.abs(v))
     scanned, parts = np.empty((VALLEY_SCAN + 1, 6)), np.empty(VALLEY_SCAN + 1)
     width = 2.0 * math.pi / VALLEY_SCAN
