@@ -20,6 +20,7 @@ from workbench.singularities.conditions import ELBOW_TOL, SHOULDER_TOL, WRIST_TO
 from workbench.workspace import evaluate_block, make_pose_grid, singularity_margin
 from workbench.workspace.build import build_map
 from workbench.workspace.grid import PoseGrid
+from workbench.workspace.manifest import write_manifest
 from workbench.workspace.map_query import split_poses
 from workbench.workspace.orientations import (
     quat_xyzw_from_rotations,
@@ -68,7 +69,7 @@ def test_layout_arrays_chunks_and_flags(puma_map) -> None:
     data = {"reached", "branches", "dexterity", "shoulder", "elbow", "wrist"}
     data |= {"limit_margin", "reachability", "dexterity_best", "dexterity_median"}
     data |= {"near_singular_fraction"}
-    assert names == data | {"positions", "orientations", "done"}
+    assert names == data | {"positions", "orientations", "done", "checksums"}
     voxels, orientations = grid.voxel_count, grid.orientation_count
     for name in data:
         array = group[name]
@@ -125,6 +126,7 @@ def test_block_writer_stores_what_zarr_stores(puma_map, tmp_path, monkeypatch) -
         for name in names:
             plain[name][start:stop] = data[name]
         plain[DONE][block] = 1
+    write_manifest(plain, names)
     built = _files(path)
     assert built == _files(reference)
     assert len([k for k in built if "/c/" in k]) < blocks * (len(names) + 1)
@@ -160,7 +162,7 @@ def test_attributes_say_what_the_map_is(puma_map) -> None:
     robot, grid, path = puma_map
     attrs = zarr.open_group(path, mode="r").attrs.asdict()
     assert attrs["format"] == FORMAT == "workbench-workspace-map"
-    assert attrs["format_version"] == FORMAT_VERSION == 1
+    assert attrs["format_version"] == FORMAT_VERSION == 2
     assert attrs["robot"] == "puma560" and attrs["tool_frame"] == robot.tool_frame
     sha = hashlib.sha256(Path(robot.urdf_path).read_bytes()).hexdigest()
     assert attrs["urdf_sha256"] == sha
@@ -339,9 +341,9 @@ def test_open_refuses_other_versions_damage_and_unfinished_builds(
     puma_map, tmp_path
 ) -> None:
     newer = _copy(puma_map, tmp_path, "newer.zarr")
-    zarr.open_group(newer, mode="r+").attrs["format_version"] = 2
+    zarr.open_group(newer, mode="r+").attrs["format_version"] = 3
     with pytest.raises(
-        InputError, match="format version 2; this workbench reads version 1"
+        InputError, match="format version 3; this workbench reads version 2"
     ):
         open_map(newer)
     damaged = _copy(puma_map, tmp_path, "damaged.zarr")
@@ -350,6 +352,9 @@ def test_open_refuses_other_versions_damage_and_unfinished_builds(
         open_map(damaged)
     unfinished = _copy(puma_map, tmp_path, "unfinished.zarr")
     zarr.open_group(unfinished, mode="r+")["done"][1] = 0
+    with pytest.raises(InputError, match=r"damaged .*done flags lost: 1 of \d+ blocks"):
+        open_map(unfinished)  # a finished map (its manifest says so) lost a flag
+    zarr.open_group(unfinished, mode="r+").attrs.pop("manifest")
     with pytest.raises(InputError, match="unfinished map build"):
         open_map(unfinished)
     partial = get_partial_path(tmp_path / "p.zarr")

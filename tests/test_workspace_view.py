@@ -44,7 +44,8 @@ from workbench.reports.workspace_report import (
 from workbench.viz.workspace_view import make_workspace_viewer
 from workbench.workspace import make_pose_grid
 from workbench.workspace.build import build_map
-from workbench.workspace.store import open_map
+from workbench.workspace.manifest import write_manifest
+from workbench.workspace.store import get_array_names, open_map
 
 RESOLUTION = 0.1  # [m], coarse: a map in about a second
 ORIENTATIONS = 16
@@ -323,6 +324,10 @@ def test_view_input_errors(puma_map, map_path, tmp_path) -> None:
     meta = json.loads((renamed / "zarr.json").read_text())
     meta["attributes"]["robot"] = "my-arm"
     (renamed / "zarr.json").write_text(json.dumps(meta))
+    with pytest.raises(InputError, match="attribute 'robot' was changed after"):
+        open_map(renamed)  # an edit: the manifest's digest differs
+    group = zarr.open_group(renamed, mode="r+")  # a map made so elsewhere
+    write_manifest(group, get_array_names(group))
     with pytest.raises(InputError, match="'my-arm' is no catalog name"):
         make_workspace_viewer(open_map(renamed))
     page = make_workspace_viewer(open_map(renamed), robot=load_robot("puma560"))
@@ -494,7 +499,7 @@ def test_cli_bad_map_path(capsys, map_path, tmp_path, command) -> None:
     for path, message in (
         (tmp_path / "missing.zarr", "no workspace map"),
         (not_a_map, "is not a workspace map"),
-        (unfinished, "is an unfinished map build"),
+        (unfinished, "is a damaged workspace map (done flags lost: 1 of"),
     ):
         code, out, err = _workspace(capsys, command, path, flag, out_file)
         assert (code, out) == (2, "")

@@ -1,8 +1,9 @@
 """``workbench workspace``: reachability and dexterity maps, base placement, views.
 
 ``workspace map`` builds a map (:func:`workbench.workspace.build.build_map`);
-``place``, ``view`` and ``report`` are registered by their own modules
-(:mod:`workbench.cli._workspace_place`, :mod:`workbench.cli._workspace_view`),
+``place``, ``view``, ``report`` and ``verify`` are registered by their own
+modules (:mod:`workbench.cli._workspace_place`,
+:mod:`workbench.cli._workspace_view`, :mod:`workbench.cli._workspace_verify`),
 each with a ``register(subcommands)`` function.
 """
 
@@ -14,7 +15,7 @@ import math
 from pathlib import Path
 
 from workbench.atomic_files import check_output
-from workbench.cli import _workspace_place, _workspace_view
+from workbench.cli import _workspace_place, _workspace_verify, _workspace_view
 from workbench.cli._collision import build_checker
 from workbench.cli._common import (
     add_json_flag,
@@ -64,6 +65,7 @@ def register(commands: argparse._SubParsersAction) -> None:
     _register_map(subcommands)
     _workspace_place.register(subcommands)
     _workspace_view.register(subcommands)
+    _workspace_verify.register(subcommands)
 
 
 def _register_map(subcommands: argparse._SubParsersAction) -> None:

@@ -7,7 +7,9 @@ sampled maps of arms without a closed form (:mod:`.sampled`); the joint-space
 singularity map (:mod:`.joint_space`); base placement for a task
 (:mod:`.placement`, its default region :mod:`.placement_region`, task poses
 from :mod:`.task_poses`); maps built on Dask
-(:mod:`.build`) into a Zarr store, opened and queried (:mod:`.store`).
+(:mod:`.build`) into a Zarr store, opened and queried (:mod:`.store`), whose
+manifest (:mod:`.manifest`) and attribute schema (:mod:`.map_schema`) every
+open checks, and :mod:`.verify` checks whole.
 """
 
 from __future__ import annotations
@@ -85,6 +87,7 @@ if TYPE_CHECKING:
         read_trajectory_task_poses,
         task_poses_from_trajectory,
     )
+    from workbench.workspace.verify import MapCheck, verify_map
 
 __all__ = [
     "ARRAYS",
@@ -101,6 +104,7 @@ __all__ = [
     "SAMPLES_PER_BLOCK",
     "VOXEL_KEYS",
     "JointSpaceMap",
+    "MapCheck",
     "MapQuery",
     "MapSummary",
     "Placement",
@@ -137,6 +141,7 @@ __all__ = [
     "singularity_margin",
     "task_poses_from_trajectory",
     "uniform_orientations",
+    "verify_map",
 ]
 
 __getattr__, __dir__ = attach(__name__, __file__, __all__)

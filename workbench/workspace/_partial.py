@@ -31,11 +31,13 @@ from workbench.model.robot import Robot
 from workbench.singularities.conditions import ELBOW_TOL, SHOULDER_TOL, WRIST_TOL
 from workbench.workspace._block_tasks import SAMPLE_SEED, SAMPLES_PER_BLOCK
 from workbench.workspace.grid import PoseGrid
+from workbench.workspace.manifest import write_manifest
 from workbench.workspace.robot_spec import RobotSpec
 from workbench.workspace.store import (
     DONE,
     FORMAT,
     FORMAT_VERSION,
+    get_array_names,
     get_attributes,
     open_group_checked,
     read_array,
@@ -156,7 +158,11 @@ def _lock_file(lock: Path, partial: Path) -> int:
 
 
 def finish(partial: Path, path: Path) -> None:
-    """Check that every block of ``partial`` is done, then rename it ``path``.
+    """Check that every block of ``partial`` is done, write its manifest, rename it.
+
+    The manifest (:func:`~workbench.workspace.manifest.write_manifest`)
+    digests every chunk as it is on disk; then ``partial`` is renamed
+    ``path``.
 
     Raises:
         WorkbenchError: If a block is not done.
@@ -171,6 +177,8 @@ def finish(partial: Path, path: Path) -> None:
     if path.exists():
         raise InputError(f"cannot write {path}: it appeared during the build")
     remove_stray_chunk_files(partial)
+    group = open_group_checked(partial, mode="r+")
+    write_manifest(group, get_array_names(group))
     try:
         move_folder_into_place(partial, path)
     except OSError as err:

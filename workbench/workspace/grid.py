@@ -271,6 +271,24 @@ def _as_bounds(bounds: npt.ArrayLike) -> FloatArray:
     return box
 
 
+def grid_positions(
+    origin: npt.ArrayLike, resolution: float, shape: tuple[int, ...]
+) -> FloatArray:
+    """The voxel centres (V, 3) [m] of a grid, in C order over ``shape``.
+
+    ``positions[(ix·ny + iy)·nz + iz] = origin + resolution · (ix, iy, iz)``,
+    bitwise as a map stores them.
+
+    Args:
+        origin: (3,) centre of voxel (0, 0, 0) [m].
+        resolution: Voxel edge [m].
+        shape: (nx, ny, nz).
+    """
+    start = np.asarray(origin, dtype=np.float64)
+    axes = [start[k] + resolution * np.arange(shape[k]) for k in range(3)]
+    return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+
+
 def make_pose_grid(
     robot: Robot,
     *,
@@ -308,10 +326,8 @@ def make_pose_grid(
     if math.prod(shape) > 2**31:
         raise InputError(f"grid of {shape} voxels is too large; raise the resolution")
     origin = low * res
-    axes = [origin[k] + res * np.arange(shape[k]) for k in range(3)]
-    positions = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     return PoseGrid(
-        positions=_read_only(positions),
+        positions=_read_only(grid_positions(origin, res, shape)),
         origin=_read_only(origin),
         resolution=res,
         shape=(shape[0], shape[1], shape[2]),
@@ -329,6 +345,7 @@ __all__ = [
     "PoseGrid",
     "cone_orientations",
     "default_bounds",
+    "grid_positions",
     "make_pose_grid",
     "uniform_orientations",
 ]

@@ -9,12 +9,12 @@ only up to them.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Collection
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-import zarr
 
 from workbench.errors import InputError
 from workbench.poses import RIGIDITY_TOL, compute_rigidity_errors
@@ -27,18 +27,6 @@ from workbench.workspace.orientations import (
 )
 
 FloatArray = npt.NDArray[np.float64]
-
-
-#: What Zarr raises on chunks that cannot be read (truncated or corrupt files).
-READ_ERRORS = (RuntimeError, ValueError, OSError, zarr.errors.BaseZarrError)
-
-
-def damaged_array(group: zarr.Group, name: str, err: Exception) -> InputError:
-    """The error for array ``name`` of a map whose chunks cannot be read."""
-    message = " ".join(str(err).split()) or type(err).__name__
-    return InputError(
-        f"{group.store_path} is a damaged workspace map (array {name!r}: {message})"
-    )
 
 
 @dataclass(frozen=True, slots=True)
@@ -118,33 +106,39 @@ def split_poses(poses: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
     )
 
 
-def query_map(group: zarr.Group, grid: PoseGrid, poses: npt.ArrayLike) -> MapQuery:
+#: ``gather(name, rows, cols)``: ``array[rows, cols]`` of a per-pose data
+#: array, ``array[rows]`` of a per-voxel one (``cols`` None), read from the map.
+Gather = Callable[[str, npt.NDArray[np.int64], npt.NDArray[np.int64] | None], Any]
+
+
+def query_map(
+    gather: Gather, names: Collection[str], grid: PoseGrid, poses: npt.ArrayLike
+) -> MapQuery:
     """The map's measures at the grid poses nearest to ``poses`` (:class:`MapQuery`).
 
     Args:
-        group: The map's Zarr group.
+        gather: Reads the values of a data array at voxels and orientations
+            (:meth:`~workbench.workspace.manifest.Manifest.gather`: only the
+            chunks they lie in, checked).
+        names: The data arrays the map holds.
         grid: Its pose grid.
         poses: (N, 4, 4) or (N, 7) tool poses in the base frame (see
             :func:`split_poses`).
 
     Raises:
-        InputError: As :func:`split_poses`.
+        InputError: As :func:`split_poses`, or if a chunk read is damaged.
     """
+    names = set(names)
     positions, quats = split_poses(poses)
     voxel = grid.voxel_index(positions)
     orientation = grid.orientation_index(quats)
     inside = voxel >= 0
     rows, cols = voxel[inside], orientation[inside]
-    names = set(group.array_keys())
 
     def read(name: str, fill: Any, dtype: type) -> Any:
         out: npt.NDArray[Any] = np.full(len(voxel), fill, dtype=dtype)
-        array = group[name] if name in names else None
-        if isinstance(array, zarr.Array) and rows.size:
-            try:
-                out[inside] = array.vindex[rows, cols]
-            except READ_ERRORS as err:
-                raise damaged_array(group, name, err) from err
+        if name in names and rows.size:
+            out[inside] = gather(name, rows, cols)
         return out
 
     nan = float("nan")

@@ -10,7 +10,12 @@ lists every array and attribute, for readers without the workbench):
   in chunks of ``(block_voxels, O)`` and ``(block_voxels,)``: one block of
   voxels is one chunk of each array, written by one task;
 * ``done`` (n_blocks,) uint8, one chunk per block, set to 1 after the block's
-  data: a build that stops resumes from the blocks marked done.
+  data: a build that stops resumes from the blocks marked done;
+* ``checksums`` and the ``manifest`` attribute, written when the build
+  finishes (:mod:`workbench.workspace.manifest`): the digests of every chunk,
+  of the attributes and of every array's metadata, which :func:`open_map`
+  checks (the chunks as they are read). The attributes follow a schema
+  (:mod:`workbench.workspace.map_schema`), checked on every open.
 
 A build writes ``MAP.zarr.partial`` and renames it ``MAP.zarr`` when every
 block is done (:mod:`workbench.workspace.build`), so a folder named ``MAP.zarr``
@@ -21,9 +26,9 @@ value (NaN, 0: poses out of reach) are not written at all.
 
 from __future__ import annotations
 
-import os
-import uuid
-from collections.abc import Mapping, Sequence
+import json
+import math
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -33,26 +38,35 @@ import numpy as np
 import numpy.typing as npt
 import zarr
 import zarr.errors
-import zarr.storage
-from zarr.abc.codec import ArrayArrayCodec, SupportsSyncCodec
 from zarr.codecs import BloscCodec
-from zarr.core.buffer import default_buffer_prototype
 
 from workbench.atomic_files import atomic_folder
 from workbench.errors import InputError
+from workbench.workspace._chunk_files import ChunkReader, ChunkWriter
 from workbench.workspace.grid import PoseGrid
-from workbench.workspace.map_query import (
-    READ_ERRORS,
-    MapQuery,
-    damaged_array,
-    query_map,
-)
+from workbench.workspace.manifest import MANIFEST, Manifest
+from workbench.workspace.map_query import MapQuery, query_map
+from workbench.workspace.map_schema import check_attributes
 from workbench.workspace.orientations import rotations_from_quat_xyzw
+
+#: What Zarr raises on chunks that cannot be read (truncated or corrupt files).
+READ_ERRORS = (RuntimeError, ValueError, OSError, zarr.errors.BaseZarrError)
+
+
+def damaged_array(group: zarr.Group, name: str, err: Exception) -> InputError:
+    """The error for array ``name`` of a map whose chunks cannot be read."""
+    message = " ".join(str(err).split()) or type(err).__name__
+    return InputError(
+        f"{group.store_path} is a damaged workspace map (array {name!r}: {message})"
+    )
+
 
 #: The ``format`` attribute of every map.
 FORMAT = "workbench-workspace-map"
-#: The layout version this module writes and reads.
-FORMAT_VERSION = 1
+#: The layout version this module writes and reads (2: with a manifest).
+FORMAT_VERSION = 2
+#: The version of maps without a manifest, which ``verify --upgrade`` upgrades.
+UNCHECKED_VERSION = 1
 #: Suffix of the folder a build writes before renaming it onto the target.
 PARTIAL_SUFFIX = ".partial"
 #: Arrays of the grid (not per block).
@@ -70,12 +84,16 @@ class ArrayInfo:
         per_pose: True for shape (V, O), False for (V,).
         units: Unit of the values (``"1"`` for counts and fractions).
         description: One line, stored as the array's ``description`` attribute.
+        low: Smallest value a map may hold (NaN aside).
+        high: Largest value a map may hold (NaN aside).
     """
 
     dtype: str
     per_pose: bool
     units: str
     description: str
+    low: float = 0.0
+    high: float = math.inf
 
     @property
     def fill_value(self) -> float | int:
@@ -87,13 +105,13 @@ class ArrayInfo:
 #: :func:`get_array_names`).
 ARRAYS: dict[str, ArrayInfo] = {
     "reached": ArrayInfo(
-        "uint8", True, "1", "closed-form branches that reach the pose (0..8)"
+        "uint8", True, "1", "closed-form branches that reach the pose (0..8)", high=8
     ),
     "branches": ArrayInfo(
-        "uint8", True, "1", "branches reaching the pose within the joint limits"
+        "uint8", True, "1", "branches reaching the pose within the joint limits", high=8
     ),
     "collision_free": ArrayInfo(
-        "uint8", True, "1", "in-limit branches free of collision with the scene"
+        "uint8", True, "1", "in-limit branches free of collision with the scene", high=8
     ),
     "dexterity": ArrayInfo(
         "float32",
@@ -105,10 +123,10 @@ ARRAYS: dict[str, ArrayInfo] = {
         "float32", True, "m", "|s| shoulder-singularity distance of the best branch"
     ),
     "elbow": ArrayInfo(
-        "float32", True, "1", "|e| elbow-singularity sine of the best branch"
+        "float32", True, "1", "|e| elbow-singularity sine of the best branch", high=1
     ),
     "wrist": ArrayInfo(
-        "float32", True, "1", "|w| wrist-singularity sine of the best branch"
+        "float32", True, "1", "|w| wrist-singularity sine of the best branch", high=1
     ),
     "limit_margin": ArrayInfo(
         "float32",
@@ -122,9 +140,10 @@ ARRAYS: dict[str, ArrayInfo] = {
         "rad",
         "seven-axis maps: the redundancy parameter (arm angle or q7) of the best "
         "candidate",
+        low=-math.inf,  # within the map's redundancy range (checked by verify)
     ),
     "reachability": ArrayInfo(
-        "float32", False, "1", "fraction of orientations with a usable branch"
+        "float32", False, "1", "fraction of orientations with a usable branch", high=1
     ),
     "dexterity_best": ArrayInfo(
         "float32", False, "m^3", "largest dexterity over the orientations"
@@ -137,6 +156,7 @@ ARRAYS: dict[str, ArrayInfo] = {
         False,
         "1",
         "fraction of the reached orientations with singularity margin < 1",
+        high=1,
     ),
 }
 
@@ -245,8 +265,9 @@ class BlockWriter:
     """Writes blocks into a map being built (its arrays opened once).
 
     Each chunk is encoded and written by the calling thread
-    (``_ChunkWriter``): the blocks of a build are written by as many
-    threads as compute them, not by Zarr's one I/O thread.
+    (:class:`~workbench.workspace._chunk_files.ChunkWriter`): the blocks of
+    a build are written by as many threads as compute them, not by Zarr's
+    one I/O thread.
 
     Args:
         path: The map folder (being built).
@@ -258,10 +279,9 @@ class BlockWriter:
     def __init__(self, path: str | Path):
         group = open_group_checked(path, mode="r+")
         self._arrays = {
-            name: _ChunkWriter(get_array(group, name))
-            for name in get_array_names(group)
+            name: ChunkWriter(get_array(group, name)) for name in get_array_names(group)
         }
-        self._done = _ChunkWriter(get_array(group, DONE))
+        self._done = ChunkWriter(get_array(group, DONE))
 
     def write(self, block: int, start: int, data: Mapping[str, Any]) -> None:
         """Write one block's arrays at voxels ``start:``, then its ``done`` flag.
@@ -280,101 +300,6 @@ class BlockWriter:
 
 #: The value of a block's ``done`` chunk.
 _DONE_FLAG = np.ones(1, dtype=np.uint8)
-
-
-def _only_fill(chunk: np.ndarray, fill: Any) -> bool:
-    """Whether ``chunk`` holds only ``fill`` (Zarr's ``NDBuffer.all_equal``).
-
-    NaN: every value NaN; 0 of an integer array: no value set. Other fills
-    go through Zarr's comparison (a float 0 compares bit patterns there).
-    """
-    fill = np.asarray(fill)
-    if fill.dtype.kind == "f" and np.isnan(fill):
-        return bool(np.isnan(chunk).all())
-    if chunk.dtype.kind in "iub" and fill == 0:
-        return not chunk.any()
-    buffer = default_buffer_prototype().nd_buffer.from_numpy_array(chunk)
-    return bool(buffer.all_equal(fill))
-
-
-class _ChunkWriter:
-    """Writes whole chunks of one array in the calling thread.
-
-    What Zarr's ``array[start:stop] = values`` stores for a selection that is
-    one whole chunk (the last one padded with the fill value; nothing, and
-    any older file removed, for a chunk of fill values only), bitwise: the
-    chunk goes through the array's own codecs (their synchronous
-    ``_encode_sync``) and is written like Zarr's local store does
-    (``NAME.<uuid4 hex>.partial``, then renamed), and flushed to disk
-    first, so that a block's ``done`` flag never outlives its data in a
-    crash (and the final flush of the map finds little left). Zarr's own ``setitem``
-    sends every chunk through its single I/O event-loop thread, which made
-    storing the serial part of a build on several threads. Arrays whose
-    store or codecs do not allow it (another store, an asynchronous-only
-    codec) are written through Zarr.
-
-    Args:
-        array: A Zarr v3 array chunked along its first axis only.
-    """
-
-    def __init__(self, array: zarr.Array):
-        self._array = array
-        metadata = array.metadata
-        store = array.store_path.store
-        codecs = getattr(metadata, "codecs", ())
-        self._folder: Path | None = None
-        if (
-            isinstance(store, zarr.storage.LocalStore)
-            and codecs
-            and all(isinstance(codec, SupportsSyncCodec) for codec in codecs)
-            and not any(isinstance(codec, ArrayArrayCodec) for codec in codecs)
-        ):
-            self._folder = Path(store.root) / array.store_path.path
-        self._codecs = codecs
-        self._length = array.chunks[0]
-        self._spec = (
-            None
-            if self._folder is None
-            else metadata.get_chunk_spec(
-                (0,) * array.ndim, array.async_array.config, default_buffer_prototype()
-            )
-        )
-
-    def write(self, start: int, values: np.ndarray) -> None:
-        """Store ``values`` at rows ``start:`` (one whole chunk, or the last)."""
-        array, length = self._array, self._length
-        if start % length or len(values) > length:
-            raise ValueError(f"rows {start}:+{len(values)} are not one chunk")
-        if self._folder is None or self._spec is None:
-            array[start : start + len(values)] = values
-            return
-        spec = self._spec
-        chunk = np.asarray(values, dtype=array.dtype)
-        if chunk.shape != spec.shape:  # the last chunk, cut by the array's end
-            padded = np.full(spec.shape, spec.fill_value, dtype=array.dtype)
-            padded[: len(chunk)] = chunk
-            chunk = padded
-        coords = (start // length,) + (0,) * (array.ndim - 1)
-        path = self._folder / array.metadata.encode_chunk_key(coords)
-        encoded: Any = spec.prototype.nd_buffer.from_numpy_array(
-            np.ascontiguousarray(chunk)
-        )
-        if not spec.config.write_empty_chunks and _only_fill(chunk, spec.fill_value):
-            path.unlink(missing_ok=True)
-            return
-        for codec in self._codecs:
-            encoded = codec._encode_sync(encoded, spec)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(f"{path.name}.{uuid.uuid4().hex}.partial")
-        try:
-            with tmp.open("wb") as file:
-                file.write(encoded.as_buffer_like())
-                file.flush()
-                os.fsync(file.fileno())  # on disk before the block's done flag
-            tmp.replace(path)
-        except BaseException:
-            tmp.unlink(missing_ok=True)
-            raise
 
 
 def read_done(path: str | Path) -> npt.NDArray[np.bool_]:
@@ -398,14 +323,21 @@ def get_array(group: zarr.Group, name: str) -> zarr.Array:
     return array
 
 
-def read_array(group: zarr.Group, name: str) -> npt.NDArray[Any]:
+def read_array(
+    group: zarr.Group, name: str, array: zarr.Array | None = None
+) -> npt.NDArray[Any]:
     """The whole array ``name`` of a map's group, as NumPy.
+
+    Args:
+        group: The map's group.
+        name: The array.
+        array: The array, if opened already.
 
     Raises:
         InputError: If there is no such array, or its chunks cannot be read
             (truncated, corrupt).
     """
-    array = get_array(group, name)
+    array = get_array(group, name) if array is None else array
     try:
         return np.asarray(array[...])
     except READ_ERRORS as err:
@@ -419,13 +351,39 @@ def get_attributes(group: zarr.Group) -> dict[str, Any]:
 
 
 def open_group_checked(
-    path: str | Path, *, mode: Literal["r", "r+"] = "r"
+    path: str | Path,
+    *,
+    mode: Literal["r", "r+"] = "r",
+    versions: tuple[int, ...] = (FORMAT_VERSION,),
 ) -> zarr.Group:
     """The Zarr group of a map at ``path``, checked to be one of this format.
 
+    :func:`open_arrays_checked` with only the group.
+    """
+    return open_arrays_checked(path, mode=mode, versions=versions)[0]
+
+
+def open_arrays_checked(
+    path: str | Path,
+    *,
+    mode: Literal["r", "r+"] = "r",
+    versions: tuple[int, ...] = (FORMAT_VERSION,),
+) -> tuple[zarr.Group, dict[str, zarr.Array]]:
+    """The Zarr group of a map at ``path`` and its arrays, checked to be of this format.
+
+    The arrays are opened once, together (Zarr opens each one through its
+    event loop: a few milliseconds each).
+
+    Args:
+        path: The map folder (or a partial build).
+        mode: ``"r"`` or ``"r+"``.
+        versions: The format versions accepted.
+
     Raises:
         InputError: If ``path`` does not exist, is no Zarr v3 group, is not a
-            workspace map, is of another format version, or misses arrays.
+            workspace map, is of another format version, its attributes do
+            not follow the schema (:func:`~.map_schema.check_attributes`), or
+            it misses arrays.
     """
     path = Path(path)
     if not path.exists():
@@ -433,6 +391,7 @@ def open_group_checked(
     if not (path / "zarr.json").is_file():
         raise InputError(f"{path} is not a workspace map (no Zarr v3 zarr.json in it)")
     try:
+        _check_group_metadata(path / "zarr.json")  # before Zarr warns of it
         group = zarr.open_group(path, mode=mode, zarr_format=3)
         attrs = get_attributes(group)
     except (OSError, ValueError, KeyError, TypeError, zarr.errors.BaseZarrError) as err:
@@ -444,58 +403,102 @@ def open_group_checked(
             f"{attrs.get('format')!r}, not {FORMAT!r})"
         )
     version = attrs.get("format_version")
-    if version != FORMAT_VERSION:
+    if version == UNCHECKED_VERSION and version not in versions:
+        raise InputError(
+            f"{path} is a workspace map of format version 1, written without "
+            "checksums; 'workbench workspace verify --upgrade "
+            f"{path}' checks every chunk and adds them"
+        )
+    if version not in versions or isinstance(version, bool):
         raise InputError(
             f"{path} is a workspace map of format version {version!r}; this "
             f"workbench reads version {FORMAT_VERSION}"
         )
-    _check_arrays(path, group, attrs)
-    return group
+    check_attributes(path, attrs)
+    try:
+        arrays = {name: array for name, array in group.arrays()}
+    except (OSError, ValueError, KeyError, TypeError, zarr.errors.BaseZarrError) as err:
+        message = " ".join(str(err).split()) or type(err).__name__
+        raise InputError(f"{path} is a damaged workspace map ({message})") from err
+    _check_arrays(path, arrays, attrs)
+    return group, arrays
 
 
-def _check_arrays(path: Path, group: zarr.Group, attrs: Mapping[str, Any]) -> None:
+def _check_group_metadata(file: Path) -> None:
+    """Raise ValueError unless ``file`` is the ``zarr.json`` of a Zarr v3 group."""
+    metadata = json.loads(file.read_bytes())
+    if not isinstance(metadata, dict):
+        raise ValueError("zarr.json holds no object")
+    if metadata.get("zarr_format") != 3 or metadata.get("node_type") != "group":
+        raise ValueError(
+            f"zarr.json is of zarr_format {metadata.get('zarr_format')!r} and "
+            f"node_type {metadata.get('node_type')!r}, not a Zarr v3 group"
+        )
+
+
+def _check_arrays(
+    path: Path, arrays: Mapping[str, zarr.Array], attrs: Mapping[str, Any]
+) -> None:
     """Raise unless the grid, data and ``done`` arrays are there with their shapes."""
     try:
-        names = set(group.array_keys())
+        names = set(arrays)
         shape = tuple(attrs["grid"]["shape"])
         voxels = int(np.prod(shape))
         orientations = int(attrs["orientation_set"]["count"])
     except (KeyError, TypeError, ValueError) as err:
         raise InputError(f"{path} is a damaged workspace map ({err!r})") from err
-    expected: dict[str, tuple[tuple[int, ...], str]] = {
-        "positions": ((voxels, 3), "float64"),
-        "orientations": ((orientations, 4), "float64"),
+    block = int(attrs["block_voxels"])
+    expected: dict[str, tuple[tuple[int, ...], str, tuple[int, ...]]] = {
+        "positions": ((voxels, 3), "float64", (voxels, 3)),
+        "orientations": ((orientations, 4), "float64", (orientations, 4)),
     }
     for name in sorted(names & set(ARRAYS)):
         info = ARRAYS[name]
         per_pose = (voxels, orientations)
-        expected[name] = (per_pose if info.per_pose else (voxels,), info.dtype)
-    for name, (size, dtype) in expected.items():
+        array_shape = per_pose if info.per_pose else (voxels,)
+        chunking = (block, orientations) if info.per_pose else (block,)
+        expected[name] = (array_shape, info.dtype, chunking)
+    for name, (size, dtype, chunks) in expected.items():
         if name not in names:
             raise InputError(f"{path} is a damaged workspace map (no array {name!r})")
-        array = get_array(group, name)
-        if array.shape != size or str(array.dtype) != dtype:
+        array = arrays[name]
+        if array.shape != size or str(array.dtype) != dtype or array.chunks != chunks:
             raise InputError(
                 f"{path} is a damaged workspace map (array {name!r} is "
-                f"{array.shape} {array.dtype}, expected {size} {dtype})"
+                f"{array.shape} {array.dtype} in chunks of {array.chunks}, expected "
+                f"{size} {dtype} in chunks of {chunks})"
             )
     if DONE not in names:
         raise InputError(f"{path} is a damaged workspace map (no array 'done')")
 
 
-def get_array_names(group: zarr.Group) -> list[str]:
-    """The data arrays a map holds, in the order of :data:`ARRAYS`."""
-    present = set(group.array_keys())
+def get_array_names(group: zarr.Group | Mapping[str, zarr.Array]) -> list[str]:
+    """The data arrays a map holds, in the order of :data:`ARRAYS`.
+
+    Args:
+        group: The map's group, or its arrays by name.
+    """
+    present = set(group if isinstance(group, Mapping) else group.array_keys())
     return [name for name in ARRAYS if name in present]
 
 
-def read_grid(group: zarr.Group) -> PoseGrid:
-    """The pose grid stored in a map (bitwise the one it was built on)."""
+def read_grid(
+    group: zarr.Group, read: Callable[[str], npt.NDArray[Any]] | None = None
+) -> PoseGrid:
+    """The pose grid stored in a map (bitwise the one it was built on).
+
+    Args:
+        group: The map's group.
+        read: Reads ``positions`` or ``orientations`` (a finished map's
+            :meth:`Manifest.read_single`, checked); default Zarr's reading.
+    """
     attrs = get_attributes(group)
     grid = attrs["grid"]
-    orientations = _read_only(read_array(group, "orientations"))
+    if read is None:
+        read = lambda name: read_array(group, name)  # noqa: E731
+    orientations = _read_only(read("orientations"))
     return PoseGrid(
-        positions=_read_only(read_array(group, "positions")),
+        positions=_read_only(read("positions")),
         origin=_read_only(grid["origin"]),
         resolution=float(grid["resolution"]),
         shape=tuple(int(n) for n in grid["shape"]),  # type: ignore[arg-type]
@@ -516,7 +519,8 @@ class WorkspaceMap:
     """A finished workspace map, opened for reading (:func:`open_map`).
 
     Arrays are read from disk on each access: ``map["dexterity"]`` is a new
-    NumPy array (V, O). Keep it if you use it twice.
+    NumPy array (V, O). Keep it if you use it twice. Every chunk read is
+    checked against the map's manifest (:mod:`workbench.workspace.manifest`).
 
     Attributes:
         path: The map folder.
@@ -524,11 +528,12 @@ class WorkspaceMap:
         names: The data arrays it holds (keys of :data:`ARRAYS`).
     """
 
-    def __init__(self, path: Path, group: zarr.Group):
+    def __init__(self, path: Path, group: zarr.Group, manifest: Manifest):
         self.path = path
         self._group = group
+        self._manifest = manifest
         self.attrs = get_attributes(group)
-        self.names: tuple[str, ...] = tuple(get_array_names(group))
+        self.names: tuple[str, ...] = manifest.names
 
     def __repr__(self) -> str:
         return f"WorkspaceMap({str(self.path)!r}, robot={self.attrs['robot']!r})"
@@ -536,7 +541,7 @@ class WorkspaceMap:
     @cached_property
     def grid(self) -> PoseGrid:
         """The pose grid of the map."""
-        return read_grid(self._group)
+        return read_grid(self._group, self._manifest.read_single)
 
     @property
     def sampled(self) -> bool:
@@ -550,38 +555,59 @@ class WorkspaceMap:
         """Array ``name`` (a data array, ``positions``, ``orientations``, ``done``).
 
         Raises:
-            InputError: If the map has no such array.
+            InputError: If the map has no such array, or a chunk of it is
+                damaged.
         """
-        if name not in (*self.names, *GRID_ARRAYS, DONE):
-            raise InputError(
-                f"the map {self.path} has no array {name!r}; it has "
-                f"{', '.join(self.names)}"
-            )
-        return read_array(self._group, name)
+        if name in self.names:
+            return self._manifest.read_array(name)
+        if name in GRID_ARRAYS:
+            return self._manifest.read_single(name)
+        if name == DONE:
+            return read_array(self._group, name, self._manifest.arrays[DONE])
+        raise InputError(
+            f"the map {self.path} has no array {name!r}; it has {', '.join(self.names)}"
+        )
 
     def query(self, poses: npt.ArrayLike) -> MapQuery:
         """The map at the grid poses nearest to ``poses`` (N, 4, 4) or (N, 7).
 
         See :func:`~workbench.workspace.map_query.query_map`.
         """
-        return query_map(self._group, self.grid, poses)
+        return query_map(self._manifest.gather, self.names, self.grid, poses)
 
 
 def open_map(path: str | Path) -> WorkspaceMap:
     """Open a finished workspace map for reading.
 
+    Checks its format, its attributes against the schema and the manifest,
+    every array's metadata and the chunk digests (the chunks themselves are
+    checked when read).
+
     Raises:
         InputError: If ``path`` is missing, not a workspace map, of another
-            format version, damaged, an unfinished build (a ``.partial``
-            folder, or blocks not done).
+            format version (of version 1: upgrade it with ``workbench
+            workspace verify --upgrade``), damaged or edited, an unfinished
+            build (a ``.partial`` folder, or blocks not done).
     """
     path = Path(path)
-    group = open_group_checked(path, mode="r")
-    done = read_array(group, DONE)
-    if path.name.endswith(PARTIAL_SUFFIX) or not np.all(done == 1):
+    group, arrays = open_arrays_checked(path, mode="r")
+    attrs = get_attributes(group)
+    try:  # one file per block: read here, not through Zarr's event loop
+        done = ChunkReader(arrays[DONE]).read_all()
+    except READ_ERRORS as err:
+        raise damaged_array(group, DONE, err) from err
+    finished = not path.name.endswith(PARTIAL_SUFFIX) and MANIFEST in attrs
+    if not finished or not np.all(done == 1):
+        if finished:
+            missing = np.flatnonzero(done != 1)
+            raise InputError(
+                f"{path} is a damaged workspace map (done flags lost: "
+                f"{missing.size} of {done.size} blocks, the first block {missing[0]})"
+            )
         raise InputError(
             f"{path} is an unfinished map build ({int(np.sum(done == 1))} of "
             f"{done.size} blocks done); run the command that started it again to "
             "finish it"
         )
-    return WorkspaceMap(path, group)
+    manifest = Manifest(path, arrays, attrs, get_array_names(arrays))
+    return WorkspaceMap(path, group, manifest)
