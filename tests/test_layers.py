@@ -33,6 +33,7 @@ LAYERS: dict[str, int] = {
     "collision": 4,
     "trajectory": 5,
     "planning": 6,
+    "motion": 6,
     "tasks": 7,
     "export": 7,
     "workspace": 7,

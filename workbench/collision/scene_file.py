@@ -1,4 +1,4 @@
-"""Scene files: JSON, strictly validated (see the format below).
+"""Scene files: JSON, strictly validated (see the format below), or MoveIt YAML.
 
 A scene file is one JSON object (SI units, base frame of the robot)::
 
@@ -24,6 +24,10 @@ object (a knife in the fish, the first link on its pedestal), like the allowed
 collision matrix of MoveIt. Every key is checked: unknown keys or shapes,
 non-positive sizes, non-finite numbers, non-unit quaternions, duplicate names
 and missing mesh files are :class:`~workbench.errors.SceneFileError`.
+
+A MoveIt planning scene written as YAML (``*.yaml``, ``*.yml``; e.g. the
+scenes of MotionBenchMaker) is read by :mod:`workbench.collision.moveit_scene`
+into the same :class:`~workbench.collision.Scene`.
 """
 
 from __future__ import annotations
@@ -38,6 +42,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.atomic_files import write_text_atomic
+from workbench.collision.moveit_scene import parse_moveit_scene, read_yaml_file
 from workbench.collision.scene import SHAPES, Obstacle, Scene
 from workbench.errors import InputError, SceneFileError
 from workbench.validation import read_json_file
@@ -45,6 +50,8 @@ from workbench.validation import read_json_file
 FloatArray = npt.NDArray[np.float64]
 
 _COMMON_KEYS = ("name", "shape", "position", "quat_xyzw", "rpy", "allow", "color")
+#: Suffixes of MoveIt planning-scene files (YAML).
+YAML_SUFFIXES = (".yaml", ".yml")
 #: Tolerance on the norm of a scene quaternion.
 QUATERNION_NORM_TOL = 1e-6
 
@@ -62,13 +69,19 @@ def write_scene(scene: Scene, path: str | Path) -> Path:
 
 
 def read_scene(path: str | Path) -> Scene:
-    """Read and validate a scene file.
+    """Read and validate a scene file: JSON (above), or a MoveIt planning scene.
+
+    A file named ``*.yaml`` or ``*.yml`` is a MoveIt planning scene
+    (:mod:`workbench.collision.moveit_scene`), any other one JSON.
 
     Raises:
-        SceneFileError: If the file is missing, not JSON, or invalid; the
-            message names the object and the key.
+        SceneFileError: If the file is missing, not JSON (not YAML), or
+            invalid; the message names the object and the key.
     """
     path = Path(path)
+    if path.suffix.lower() in YAML_SUFFIXES:
+        raw = read_yaml_file(path, "scene")
+        return parse_moveit_scene(raw, source=str(path))
     raw = read_json_file(path, SceneFileError, "scene")
     return parse_scene(raw, source=str(path), folder=path.parent)
 
