@@ -58,7 +58,7 @@ def run_verify(args: argparse.Namespace) -> int:
     print(f"format version    {check.format_version}")
     print(f"checked by        {how}")
     print(
-        f"chunks            {check.chunks} of {check.arrays} arrays "
+        f"chunks            {check.chunks} in {check.arrays} arrays "
         f"({check.chunks_stored} stored, {check.bytes / 1e6:.2f} MB)"
     )
     print(f"values            {check.values}, each within its range")

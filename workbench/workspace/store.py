@@ -26,6 +26,7 @@ value (NaN, 0: poses out of reach) are not written at all.
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -403,13 +404,15 @@ def open_arrays_checked(
             f"{attrs.get('format')!r}, not {FORMAT!r})"
         )
     version = attrs.get("format_version")
+    if isinstance(version, bool):
+        version = repr(version)  # a JSON true is no version
     if version == UNCHECKED_VERSION and version not in versions:
         raise InputError(
             f"{path} is a workspace map of format version 1, written without "
             "checksums; 'workbench workspace verify --upgrade "
             f"{path}' checks every chunk and adds them"
         )
-    if version not in versions or isinstance(version, bool):
+    if version not in versions:
         raise InputError(
             f"{path} is a workspace map of format version {version!r}; this "
             f"workbench reads version {FORMAT_VERSION}"
@@ -495,7 +498,7 @@ def read_grid(
     attrs = get_attributes(group)
     grid = attrs["grid"]
     if read is None:
-        read = lambda name: read_array(group, name)  # noqa: E731
+        read = functools.partial(read_array, group)
     orientations = _read_only(read("orientations"))
     return PoseGrid(
         positions=_read_only(read("positions")),
