@@ -1,7 +1,8 @@
 """A command imports what it uses: ``fk`` and ``ik`` load no map, plot or viewer code.
 
-Nor Numba: ``fk`` runs no kernel, ``ik`` of one pose of a six-axis arm runs
-them interpreted (``workbench._compiled.interpreted``).
+Nor does ``workbench --help``, which registers every command (their arguments
+are cheap to define). Nor Numba: ``fk`` runs no kernel, ``ik`` of one pose of a
+six-axis arm runs them interpreted (``workbench._compiled.interpreted``).
 
 Each case runs in a new Python process (this one has imported everything) and
 lists the heavy packages in ``sys.modules`` after the command ran.
@@ -58,8 +59,10 @@ def _imported(*argv: str) -> tuple[int, set[str]]:
         (IK, NEVER + KERNELS),
         ([*IK[:2], "ur5", *IK[3:], "--all", "--json"], NEVER + KERNELS),
         (["ik", "--help"], NEVER + KERNELS),
+        (["--help"], NEVER + KERNELS),
+        (["workspace", "map", "--help"], NEVER + KERNELS),
     ],
-    ids=["fk", "fk-json", "ik", "ik-ur5-all", "ik-help"],
+    ids=["fk", "fk-json", "ik", "ik-ur5-all", "ik-help", "help", "workspace-help"],
 )
 def test_command_imports_only_what_it_uses(argv: list[str], absent: tuple) -> None:
     code, modules = _imported(*argv)

@@ -13,6 +13,7 @@ import argparse
 import functools
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from workbench.atomic_files import check_output
 from workbench.cli import _workspace_place, _workspace_verify, _workspace_view
@@ -29,8 +30,8 @@ from workbench.cli._common import (
 )
 from workbench.collision import read_scene
 from workbench.errors import InputError
-from workbench.workspace.build import DEFAULT_BLOCK_VOXELS, MapSummary, build_map
 from workbench.workspace.grid import (
+    DEFAULT_BLOCK_VOXELS,
     DEFAULT_ORIENTATIONS,
     DEFAULT_RESOLUTION,
     make_pose_grid,
@@ -39,6 +40,9 @@ from workbench.workspace.redundant import (
     DEFAULT_REDUNDANCY_SAMPLES,
     MAX_REDUNDANCY_SAMPLES,
 )
+
+if TYPE_CHECKING:
+    from workbench.workspace.build import MapSummary
 
 #: Largest ``--orientations`` (a voxel's row of every per-pose array).
 MAX_ORIENTATIONS = 1_000_000
@@ -184,6 +188,8 @@ def run_map(args: argparse.Namespace) -> int:
     grid = make_pose_grid(
         robot, resolution=args.resolution, orientations=args.orientations, cone=cone
     )
+    from workbench.workspace.build import build_map  # (Zarr, Dask: for a map only)
+
     summary = build_map(
         robot,
         grid,

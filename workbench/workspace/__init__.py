@@ -21,12 +21,12 @@ from workbench._lazy import attach
 if TYPE_CHECKING:
     from workbench.workspace._block_tasks import SAMPLES_PER_BLOCK
     from workbench.workspace.build import (
-        DEFAULT_BLOCK_VOXELS,
         DEFAULT_SAMPLES,
         MapSummary,
         build_map,
     )
     from workbench.workspace.grid import (
+        DEFAULT_BLOCK_VOXELS,
         PoseGrid,
         cone_orientations,
         default_bounds,

@@ -53,7 +53,7 @@ from workbench.workspace._partial import (
     map_attributes,
 )
 from workbench.workspace._sampled_fold import SAMPLED_KEYS, run_sampled
-from workbench.workspace.grid import PoseGrid
+from workbench.workspace.grid import DEFAULT_BLOCK_VOXELS, PoseGrid
 from workbench.workspace.measures import POSE_KEYS, VOXEL_KEYS, get_core_count
 from workbench.workspace.redundant import (
     DEFAULT_REDUNDANCY_SAMPLES,
@@ -73,10 +73,6 @@ from workbench.workspace.store import (
 
 logger = logging.getLogger(__name__)
 
-#: Voxels per block (one task, one chunk of every array): 1024 voxels × 512
-#: orientations is 524,288 poses, 2 MiB per float32 chunk; smaller blocks pay
-#: Zarr's fixed cost per chunk written more often (docs/workspace.md, "Speed").
-DEFAULT_BLOCK_VOXELS = 1024
 #: Configurations of a sampled map when none is given.
 DEFAULT_SAMPLES = 10_000_000
 #: ``progress(done, total)``: blocks done so far (those of an earlier run

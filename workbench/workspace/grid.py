@@ -13,12 +13,11 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
-from scipy.spatial import cKDTree
 
 from workbench.errors import InputError
 from workbench.model.robot import Robot
@@ -29,8 +28,16 @@ from workbench.workspace.orientations import (
     uniform_orientations,
 )
 
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
+
 FloatArray = npt.NDArray[np.float64]
 IndexArray = npt.NDArray[np.int64]
+
+#: Voxels per block (one task, one chunk of every array): 1024 voxels × 512
+#: orientations is 524,288 poses, 2 MiB per float32 chunk; smaller blocks pay
+#: Zarr's fixed cost per chunk written more often (docs/workspace.md, "Speed").
+DEFAULT_BLOCK_VOXELS = 1024
 
 #: Default voxel size [m].
 DEFAULT_RESOLUTION = 0.05
@@ -139,6 +146,8 @@ class PoseGrid:
     @functools.cached_property
     def _orientation_tree(self) -> cKDTree:
         """KD-tree of ± the orientations (nearest by chord = nearest by angle)."""
+        from scipy.spatial import cKDTree  # (SciPy: imported when first used)
+
         return cKDTree(np.concatenate([self.orientations, -self.orientations]))
 
     def pose(self, voxel: int, orientation: int) -> FloatArray:

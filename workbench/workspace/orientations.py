@@ -31,13 +31,16 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
-from scipy.spatial import cKDTree
 
 from workbench.errors import InputError
 from workbench.validation import as_finite_array
+
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -303,6 +306,8 @@ def _nearest_angle(tree: cKDTree, quat: FloatArray) -> FloatArray:
 
 def _tree(members: FloatArray) -> cKDTree:
     """KD-tree of the members and their antipodes (nearest by chord = by angle)."""
+    from scipy.spatial import cKDTree  # (SciPy: imported when first used)
+
     return cKDTree(np.concatenate([members, -members]))
 
 
