@@ -20,6 +20,7 @@ from llvmlite import binding as llvm
 from numba.core import config, registry, sigutils, types
 from numba.core.caching import FunctionCache
 from numba.core.compiler_lock import global_compiler_lock
+from numba.core.runtime import rtsys
 
 try:
     import fcntl
@@ -82,7 +83,12 @@ class _SourceKeyedCache(FunctionCache):
         return (*key, self._runtime.source_digest(self._py_func.__module__))
 
     def load_overload(self, sig: Any, target_context: Any) -> Any:
-        loaded = super().load_overload(sig, target_context)
+        # Numba refreshes the whole target context first (every registry of
+        # implementations, SciPy's BLAS among them: half a second), which only
+        # a compile needs (its pipeline refreshes it again); running compiled
+        # code needs Numba's runtime only.
+        rtsys.initialize(target_context)
+        loaded = self._load_overload(sig, target_context)
         if loaded is None and self._enabled:
             self._runtime.announce_compile(self._py_func)
         return loaded
