@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ast
 import json
 import os
 import shutil
@@ -310,6 +311,49 @@ def test_source_digest_covers_the_import_closure() -> None:
         "workbench._compiled",
     } <= closure
     assert "workbench.cli" not in closure  # only what it imports
+
+
+def test_the_import_scan_finds_every_import_the_syntax_tree_has() -> None:
+    """Parsing import lines alone misses none of a whole module's imports."""
+    package = Path(workbench.__file__).parent
+    for file in package.rglob("*.py"):
+        parts = file.relative_to(package.parent).with_suffix("").parts
+        name = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+        source = file.read_bytes()
+        imports = {
+            ast.dump(node)
+            for node in ast.walk(ast.parse(source))
+            if isinstance(node, ast.Import | ast.ImportFrom)
+        }
+        found = {ast.dump(node) for node in _compiled._import_statements(source)}
+        assert imports <= found, name
+
+
+@pytest.mark.subprocess
+def test_a_kernel_loaded_from_the_cache_then_another_compiled(tmp_path: Path) -> None:
+    """A cache load initialises only Numba's runtime; a later compile still works.
+
+    The first process compiles ``triple``; the second loads it (no compile)
+    and compiles ``halve``, which calls nothing loaded, then calls both.
+    """
+    (tmp_path / "twokernels.py").write_text(_TWO_KERNELS)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    env["WORKBENCH_PROGRESS"] = "0"
+    head = "import sys; sys.path.insert(0, sys.argv[1]); import twokernels; "
+    for script in (
+        "print(twokernels.triple(2.0))",
+        "print(twokernels.triple(2.0), twokernels.halve(3.0), "
+        "len(twokernels.halve.signatures))",
+    ):
+        done = subprocess.run(
+            [sys.executable, "-c", head + script, str(tmp_path)],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        assert done.returncode == 0, done.stderr
+    assert done.stdout == "6.0 1.5 1\n"
 
 
 _TWO_KERNELS = """
