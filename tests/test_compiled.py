@@ -333,8 +333,9 @@ def test_the_import_scan_finds_every_import_the_syntax_tree_has() -> None:
 def test_a_kernel_loaded_from_the_cache_then_another_compiled(tmp_path: Path) -> None:
     """A cache load initialises only Numba's runtime; a later compile still works.
 
-    The first process compiles ``triple``; the second loads it (no compile)
-    and compiles ``halve``, which calls nothing loaded, then calls both.
+    The first process compiles ``triple``; the second loads it (no compile),
+    calls it with an int (converted to its float parameter, with Numba's rules
+    of conversion) and compiles ``halve``.
     """
     (tmp_path / "twokernels.py").write_text(_TWO_KERNELS)
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
@@ -342,7 +343,7 @@ def test_a_kernel_loaded_from_the_cache_then_another_compiled(tmp_path: Path) ->
     head = "import sys; sys.path.insert(0, sys.argv[1]); import twokernels; "
     for script in (
         "print(twokernels.triple(2.0))",
-        "print(twokernels.triple(2.0), twokernels.halve(3.0), "
+        "print(twokernels.triple(2), twokernels.halve(3.0), "
         "len(twokernels.halve.signatures))",
     ):
         done = subprocess.run(
