@@ -37,7 +37,6 @@ from tests._cli_fuzz import (
     run_case,
     write_inputs,
 )
-from workbench.workspace import _block_runner
 
 EXAMPLES_PER_CLASS = 8
 #: Per ``workspace`` class: each case copies a small map (a few ms).
@@ -304,19 +303,6 @@ def test_cone_axis_of_huge_components_is_a_direction(tmp_path: Path) -> None:
     attrs = json.loads((tmp_path / "x.zarr" / "zarr.json").read_text())["attributes"]
     half = np.sqrt(0.5)
     assert attrs["orientation_set"]["axis"] == pytest.approx([half, half, 0.0])
-
-
-def test_unreachable_scheduler_exits_2_after_the_timeout(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    monkeypatch.setattr(_block_runner, "CONNECT_TIMEOUT", 1.0)
-    code, out, err = _run_in(
-        tmp_path, *SMALL_MAP[:-3], "--scheduler", "tcp://127.0.0.1:1", "--out",
-        "x.zarr", workspace=True,
-    )  # fmt: skip
-    assert (code, out) == (2, "") and "cannot reach the Dask scheduler" in err
-    assert "after 1 s" in err
-    assert not (tmp_path / "x.zarr").exists()
 
 
 def test_infeasible_placement_prints_its_json(tmp_path: Path) -> None:

@@ -28,6 +28,7 @@ import sys
 import threading
 import warnings
 from collections.abc import Iterator, Sequence
+from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
@@ -168,6 +169,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             os._exit(EXIT_INTERRUPTED)
         return EXIT_INTERRUPTED
     finally:
+        if command:
+            _quiet_after_the_command()
         if command and in_main_thread:
             signal.signal(signal.SIGINT, signal.SIG_IGN)
 
@@ -180,7 +183,7 @@ def _main(argv: Sequence[str] | None) -> int:
         return stop.code if isinstance(stop.code, int) else EXIT_BAD_INPUT
     message = getattr(args, "progress_message", f"{args.command}: working")
     with (
-        _log_to_stderr(_log_level(args)),
+        _log_to_stderr(_log_level(args)) as libraries,
         _quiet_numpy(),
         interrupts_wait_for_compiler(),
         Progress(message, enabled=_progress_wanted(args)) as progress,
@@ -189,6 +192,8 @@ def _main(argv: Sequence[str] | None) -> int:
         try:
             code = int(args.run(args) or EXIT_OK)
             sys.stdout.flush()  # a closed pipe shows here, not at exit
+            if code == EXIT_OK:
+                libraries.summarise()
             return code
         except BrokenPipeError:
             return _quiet_on_broken_pipe()
@@ -207,11 +212,11 @@ def _main(argv: Sequence[str] | None) -> int:
 
 def _too_large(err: Exception) -> InputError:
     """The input asked for more than this machine can compute or hold."""
-    kinds: dict[type[Exception], str] = {
-        MemoryError: "not enough memory",
-        RecursionError: "input nested too deeply",
-    }
-    what = kinds.get(type(err), "a number too large")
+    what = "a number too large"
+    if isinstance(err, MemoryError):  # NumPy's _ArrayMemoryError too
+        what = "not enough memory"
+    elif isinstance(err, RecursionError):
+        what = "input nested too deeply"
     return InputError(f"the request is too large ({what}: {err or type(err).__name__})")
 
 
@@ -255,30 +260,148 @@ def _log_level(args: argparse.Namespace) -> int:
 
 
 @contextlib.contextmanager
-def _log_to_stderr(level: int) -> Iterator[None]:
+def _log_to_stderr(level: int) -> Iterator[_LibraryMessages]:
     """Show the package's log records of ``level`` and above on stderr.
 
-    Python warnings (``warnings.warn``) are routed through logging as well, so
-    ``-q`` hides them too. Everything is restored on exit (the tests call
-    :func:`main` many times in one process).
+    Python warnings (``warnings.warn``) of the package are routed through
+    logging as well, so ``-q`` hides them too. The log records and warnings of
+    the libraries a command runs on (:data:`_LIBRARY_LOGGERS`: Dask, Zarr and
+    their event loops) are kept instead (shown as they come with ``-v``), for
+    one line at the end of a successful command
+    (:meth:`_LibraryMessages.summarise`); a failed command prints its error
+    line only. Everything is restored on exit (the tests call :func:`main`
+    many times in one process).
     """
     handler = _StderrHandler()
     handler.setFormatter(logging.Formatter("workbench: %(levelname)s: %(message)s"))
+    libraries = _LibraryMessages(level, handler)
     loggers = [logging.getLogger("workbench"), logging.getLogger("py.warnings")]
-    saved = [(logger.level, logger.propagate) for logger in loggers]
+    others = [logging.getLogger(name) for name in _LIBRARY_LOGGERS]
+    saved = [(lg.level, lg.propagate, lg.handlers[:]) for lg in (*loggers, *others)]
     for logger in loggers:
         logger.addHandler(handler)
         logger.setLevel(level)
         logger.propagate = False
-    logging.captureWarnings(True)
+    for logger in others:
+        logger.handlers[:] = [libraries]
+        logger.setLevel(min(level, logging.WARNING))
+        logger.propagate = False
+    shown = warnings.showwarning
+    warnings.showwarning = libraries.show_warning
     try:
-        yield
+        yield libraries
     finally:
-        logging.captureWarnings(False)
-        for logger, (old_level, propagate) in zip(loggers, saved, strict=True):
+        warnings.showwarning = shown
+        for logger, (old_level, propagate, handlers) in zip(
+            (*loggers, *others), saved, strict=True
+        ):
             logger.removeHandler(handler)
+            logger.handlers[:] = handlers
             logger.setLevel(old_level)
             logger.propagate = propagate
+
+
+#: Loggers of the libraries under the commands (Dask, Zarr, their codecs and
+#: event loops): their records are summarised, not printed one by one.
+_LIBRARY_LOGGERS = (
+    "asyncio",
+    "distributed",
+    "tornado",
+    "dask",
+    "zarr",
+    "numcodecs",
+    "fsspec",
+)
+#: The package's folder: a warning issued from a file in it is the package's own.
+_PACKAGE_FOLDER = str(Path(workbench.__file__).parent) + os.sep
+
+
+class _LibraryMessages(logging.Handler):
+    """Keeps the libraries' log records and warnings of one command.
+
+    Args:
+        level: The command's log level; at INFO or below (``-v``) every
+            message is also shown as it comes.
+        stderr: The handler that shows the package's records.
+    """
+
+    def __init__(self, level: int, stderr: logging.Handler) -> None:
+        super().__init__(logging.DEBUG)
+        self._level, self._stderr = level, stderr
+        self.count = 0
+        self.sources: dict[str, None] = {}  # in order of arrival
+        self.first = ""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        if record.levelno < logging.WARNING and self._level > record.levelno:
+            return
+        text = " ".join(record.getMessage().split())
+        self._keep(record.name.split(".")[0], text)
+        if self._level <= logging.INFO:
+            self._stderr.handle(record)
+
+    def show_warning(
+        self,
+        message: Warning | str,
+        category: type[Warning],
+        filename: str,
+        lineno: int,
+        file: Any = None,
+        line: str | None = None,
+    ) -> None:
+        """``warnings.showwarning``: the package's own warnings are logged."""
+        text = " ".join(f"{category.__name__}: {message}".split())
+        if filename.startswith(_PACKAGE_FOLDER):
+            logging.getLogger("py.warnings").warning("%s", text)
+            return
+        source = category.__module__.split(".")[0]
+        if source in ("builtins", "warnings"):
+            source = Path(filename).parent.name or "python"
+        self._keep(source, text)
+        if self._level <= logging.INFO:
+            logging.getLogger("py.warnings").warning(
+                "%s (%s:%d)", text, filename, lineno
+            )
+
+    def _keep(self, source: str, text: str) -> None:
+        self.count += 1
+        self.sources.setdefault(source)
+        self.first = self.first or text
+
+    def summarise(self) -> None:
+        """One line on stderr for the libraries' messages, if any were kept.
+
+        Not with ``-q`` (nor with ``-v``: they were shown as they came).
+        """
+        if self.count == 0 or self._level != logging.WARNING:
+            return
+        first = self.first if len(self.first) <= 160 else self.first[:157] + "..."
+        logging.getLogger("workbench").warning(
+            "%d message%s from %s (the first: %s); -v shows them",
+            self.count,
+            "" if self.count == 1 else "s",
+            ", ".join(self.sources),
+            first,
+        )
+
+
+def _quiet_after_the_command() -> None:
+    """After the command: what libraries print at the interpreter's shutdown goes.
+
+    Tasks of Zarr's and Dask's event loops destroyed while pending, a Dask
+    client's ``__del__`` timing out: the command's result and exit code are
+    decided, and its stderr is complete (an error is one line).
+    """
+    for name in _LIBRARY_LOGGERS:
+        logger = logging.getLogger(name)
+        logger.handlers[:] = [logging.NullHandler()]
+        logger.propagate = False
+    sys.unraisablehook = _ignore_unraisable
+    warnings.simplefilter("ignore")
+
+
+def _ignore_unraisable(unraisable: Any) -> None:
+    """``sys.unraisablehook`` after the command: nothing printed."""
 
 
 class _StderrHandler(logging.Handler):

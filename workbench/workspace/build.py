@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import logging
 import math
+import os
 import time
 import uuid
 from collections.abc import Callable
@@ -44,7 +45,7 @@ from workbench.collision import Scene
 from workbench.errors import InputError
 from workbench.ik import Family, get_family, get_solver
 from workbench.model.robot import Robot
-from workbench.workspace._block_runner import run_tasks
+from workbench.workspace._block_runner import check_scheduler, run_tasks
 from workbench.workspace._block_tasks import SAMPLES_PER_BLOCK, BlockJob, compute_block
 from workbench.workspace._partial import (
     check_same_build,
@@ -62,7 +63,9 @@ from workbench.workspace.redundant import (
     redundancy_values,
 )
 from workbench.workspace.robot_spec import get_robot_spec, get_scene_json
+from workbench.workspace.sampled import check_samplable
 from workbench.workspace.store import (
+    ARRAYS,
     DONE,
     create_store,
     get_block_count,
@@ -187,6 +190,8 @@ def build_map(
     begin = time.perf_counter()
     path = Path(path).absolute()
     threads = _check_arguments(workers, scheduler, samples, block_voxels)
+    if scheduler is not None:
+        scheduler = check_scheduler(scheduler)
     check_output(path, folder=True)
     family = get_family(robot)
     sampled = samples is not None or family is None
@@ -200,6 +205,8 @@ def build_map(
         raise InputError(
             "a seven-axis map checks no collisions: a scene needs a six-axis arm"
         )
+    if sampled:
+        check_samplable(robot)
     count = (samples or DEFAULT_SAMPLES) if sampled else 0
     spec = get_robot_spec(robot)
     attrs = map_attributes(
@@ -221,6 +228,8 @@ def build_map(
     else:
         names = [k for k in (*POSE_KEYS, *VOXEL_KEYS) if k != "collision_free" or scene]
         total = get_block_count(grid.voxel_count, block_voxels)
+    if not sampled:
+        _check_memory(names, block_voxels, grid.orientation_count, threads, scheduler)
     partial = get_partial_path(path)
     with locked(partial):
         check_output(path, folder=True)  # not made by another build meanwhile
@@ -262,8 +271,8 @@ def build_map(
                     workers=threads,
                     scheduler=scheduler,
                 )
-        except BaseException:
-            done = int(np.sum(read_array(open_group_checked(partial), DONE) == 1))
+        except KeyboardInterrupt:  # the one line of a Ctrl-C: how to resume
+            done = counter.done
             logger.warning(
                 "map build stopped with %d of %d blocks done; they are kept in %s "
                 "and the same command resumes the build",
@@ -326,6 +335,48 @@ def _check_arguments(
     if scheduler is not None and not isinstance(scheduler, str):
         raise InputError(f"scheduler must be an address string, got {scheduler!r}")
     return int(workers) if workers is not None else get_core_count()
+
+
+def _check_memory(
+    names: list[str],
+    block_voxels: int,
+    orientations: int,
+    threads: int,
+    scheduler: str | None,
+) -> None:
+    """Refuse blocks whose chunks alone exceed this machine's memory.
+
+    Each task holds one chunk of every array, ``block_voxels`` rows of
+    ``orientations`` poses (the last chunk padded to that length), besides
+    the kernel's own buffers; local tasks run ``threads`` at a time. On a
+    cluster one task's chunks are checked (its workers' memory is unknown
+    here, this machine's is taken as a guide).
+
+    Raises:
+        InputError: Stating the bytes needed and the memory there is.
+    """
+    per_voxel = sum(
+        np.dtype(ARRAYS[n].dtype).itemsize * (orientations if ARRAYS[n].per_pose else 1)
+        for n in names
+    )
+    tasks = 1 if scheduler is not None else threads
+    needed = per_voxel * block_voxels * tasks
+    memory = _get_memory_bytes()
+    if memory is not None and needed > memory:
+        raise InputError(
+            f"blocks of {block_voxels} voxels × {orientations} orientations need "
+            f"at least {needed / 2**30:.3g} GiB ({tasks} at a time), more than the "
+            f"{memory / 2**30:.3g} GiB of memory here; lower --block-voxels, "
+            "--orientations or --workers"
+        )
+
+
+def _get_memory_bytes() -> int | None:
+    """Physical memory of this machine [bytes], or None where unknown."""
+    try:
+        return int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, ValueError, OSError):
+        return None
 
 
 def _redundancy_attributes(

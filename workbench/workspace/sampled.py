@@ -38,6 +38,34 @@ def _check_count(value: int, name: str, *, positive: bool) -> int:
     return int(value)
 
 
+def check_samplable(robot: Robot) -> None:
+    """Raise unless a sampled map of ``robot`` can be built.
+
+    Its joints must each have one coordinate and finite limits (revolute or
+    prismatic, no continuous joint) and none may follow another (``<mimic>``):
+    the compiled chain kinematics take independent joints.
+
+    Raises:
+        InputError: Naming the robot and what it has.
+    """
+    lower, upper = robot.lower, robot.upper
+    if robot.nq != robot.nv or not (
+        np.isfinite(lower).all() and np.isfinite(upper).all()
+    ):
+        raise InputError(
+            f"{robot.name}: sampled maps need joints with finite limits and one "
+            "coordinate each (no continuous joints)"
+        )
+    if robot.mimic_joints:
+        followers = ", ".join(
+            f"{m.joint} follows {m.leader}" for m in robot.mimic_joints
+        )
+        raise InputError(
+            f"{robot.name}: sampled maps need independent joints, not mimic "
+            f"joints ({followers})"
+        )
+
+
 def sample_configurations(
     robot: Robot, block: int, count: int, seed: int
 ) -> FloatArray:
@@ -61,16 +89,9 @@ def sample_configurations(
     block = _check_count(block, "block", positive=False)
     count = _check_count(count, "samples_per_block", positive=True)
     seed = _check_count(seed, "seed", positive=False)
-    lower, upper = robot.lower, robot.upper
-    if robot.nq != robot.nv or not (
-        np.isfinite(lower).all() and np.isfinite(upper).all()
-    ):
-        raise InputError(
-            f"{robot.name}: sampled maps need joints with finite limits and one "
-            "coordinate each (no continuous joints)"
-        )
+    check_samplable(robot)
     rng = np.random.default_rng([seed, block])
-    return rng.uniform(lower, upper, size=(count, robot.nq))
+    return rng.uniform(robot.lower, robot.upper, size=(count, robot.nq))
 
 
 def sample_block(

@@ -1,0 +1,267 @@
+"""One line on stderr on every error path, and bounds on every number and name.
+
+Cases found by the robustness round over ``workspace map|place|view|report``,
+``export``, ``plan``, ``view --serve`` and the seven-axis options: a bad Dask
+scheduler address, a robot a sampled map cannot take, blocks larger than the
+machine's memory, libraries' warnings and log records (Zarr, Dask, asyncio),
+a browser tab that goes away, Ctrl-C, rates and counts below their minimum,
+empty names, temporary files of killed writers, a name too long for the file
+system, a symbolic-link loop. Each keeps the contract of ``tests/_cli_fuzz.py``
+(exit 0, 2 or 3, one line on stderr, no file changed by a failed run).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import socket
+import subprocess
+import sys
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from tests._cli_fuzz import (
+    SMALL_MAP,
+    contract_violations,
+    run_case,
+    write_inputs,
+)
+from workbench.cli import main
+from workbench.errors import InputError
+from workbench.workspace import _block_runner, build
+
+#: ``workspace map`` of the small map with the address that follows.
+_ON_SCHEDULER = [*SMALL_MAP[:-3], "--scheduler"]
+
+
+def _catalog_urdf(name: str = "puma560") -> str:
+    from workbench import load_robot
+
+    return Path(load_robot(name).urdf_path).read_text()
+
+
+def _run(tmp_path: Path, *argv: str) -> tuple[int, str, str]:
+    """Run a case in ``tmp_path`` (its inputs written) and check the contract."""
+    write_inputs(tmp_path, workspace=True)
+    outcome = run_case(list(argv), tmp_path)
+    assert contract_violations(outcome) == [], outcome
+    return outcome.code, outcome.stdout, outcome.stderr
+
+
+def _run_loud(
+    folder: Path, argv: list[str], monkeypatch: pytest.MonkeyPatch
+) -> tuple[int, str]:
+    """Run ``workbench *argv`` in ``folder`` without ``-q``: (exit code, stderr)."""
+    monkeypatch.setenv("WORKBENCH_PROGRESS", "0")
+    monkeypatch.chdir(folder)
+    err = io.StringIO()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        code = main(argv)
+    return code, err.getvalue()
+
+
+def _no_map_left(folder: Path, name: str = "x.zarr") -> bool:
+    return not (folder / name).exists() and not (folder / f"{name}.partial").exists()
+
+
+# --- the scheduler address: parsed and probed before the store ----------------
+@pytest.mark.parametrize(
+    ("address", "fragment"),
+    [
+        ("notanaddress", "is not tcp://HOST:PORT"),
+        ("", "is not tcp://HOST:PORT"),
+        ("http://127.0.0.1:1", "is not tcp://HOST:PORT"),
+        ("inproc://x", "is not tcp://HOST:PORT"),
+        ("tcp://127.0.0.1", "is not tcp://HOST:PORT"),
+        ("tcp://127.0.0.1:70000", "PORT 1..65535"),
+        ("tcp://127.0.0.1:1", "cannot reach the Dask scheduler at tcp://127.0.0.1:1"),
+    ],
+)
+def test_bad_scheduler_address_exits_2_before_the_store(
+    tmp_path: Path, address: str, fragment: str
+) -> None:
+    code, out, err = _run(tmp_path, *_ON_SCHEDULER, address, "--out", "x.zarr")
+    assert (code, out) == (2, "") and fragment in err, err
+    assert "Traceback" not in err and _no_map_left(tmp_path)
+
+
+@contextlib.contextmanager
+def _silent_listener() -> Iterator[int]:
+    """A TCP port that accepts connections and never answers; its number."""
+    server = socket.create_server(("127.0.0.1", 0))
+    accepted: list[socket.socket] = []
+    stop = threading.Event()
+
+    def accept() -> None:
+        server.settimeout(0.1)
+        while not stop.is_set():
+            with contextlib.suppress(TimeoutError):
+                accepted.append(server.accept()[0])
+
+    thread = threading.Thread(target=accept, daemon=True)
+    thread.start()
+    try:
+        yield server.getsockname()[1]
+    finally:
+        stop.set()
+        thread.join()
+        for connection in accepted:
+            connection.close()
+        server.close()
+
+
+def test_a_server_that_is_no_scheduler_exits_2_before_the_store(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(_block_runner, "PROBE_TIMEOUT", 0.3)
+    with _silent_listener() as port:
+        code, out, err = _run(
+            tmp_path, *_ON_SCHEDULER, f"127.0.0.1:{port}", "--out", "x.zarr"
+        )
+    assert (code, out) == (2, "") and "is no Dask scheduler" in err, err
+    assert _no_map_left(tmp_path)
+
+
+# --- what a build cannot do is found before its partial store ------------------
+def _puma_variant(tmp_path: Path, kind: str) -> Path:
+    text = _catalog_urdf()
+    joint = '<joint name="joint6" type="revolute">'
+    if kind == "continuous":
+        text = text.replace(joint, '<joint name="joint6" type="continuous">')
+    else:  # joint 6 follows joint 5
+        end = text.index("</joint>", text.index(joint))
+        text = text[:end] + '<mimic joint="joint5"/>' + text[end:]
+    path = tmp_path / f"{kind}.urdf"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(
+    ("kind", "fragment"),
+    [("continuous", "no continuous joints"), ("mimic", "joint6 follows joint5")],
+)
+def test_a_robot_no_sampled_map_takes_exits_2_before_the_store(
+    tmp_path: Path, kind: str, fragment: str
+) -> None:
+    urdf = _puma_variant(tmp_path, kind)
+    argv = [*SMALL_MAP, "x.zarr"]
+    argv[argv.index("puma560")] = str(urdf)
+    code, out, err = _run(tmp_path, *argv)
+    assert (code, out) == (2, "") and fragment in err, err
+    assert _no_map_left(tmp_path)
+
+
+def test_blocks_beyond_the_memory_exit_2_before_the_store(tmp_path: Path) -> None:
+    argv = [*SMALL_MAP, "x.zarr"]
+    argv[argv.index("--orientations") + 1] = "100000"
+    code, out, err = _run(tmp_path, *argv, "--block-voxels", str(1 << 20))
+    assert (code, out) == (2, "") and "GiB of memory here" in err, err
+    assert "lower --block-voxels" in err and _no_map_left(tmp_path)
+
+
+def test_a_failed_build_prints_its_error_line_only(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def failing(*args: object, **kwargs: object) -> None:
+        raise InputError("a block task failed")
+
+    write_inputs(tmp_path, workspace=True)
+    monkeypatch.setattr(build, "run_tasks", failing)
+    code, err = _run_loud(tmp_path, [*SMALL_MAP, "x.zarr"], monkeypatch)
+    assert code == 2 and err == "workbench: error: a block task failed\n", err
+
+
+def test_ctrl_c_prints_one_line_telling_how_to_resume(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def interrupted(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    write_inputs(tmp_path, workspace=True)
+    monkeypatch.setattr(build, "run_tasks", interrupted)
+    code, err = _run_loud(tmp_path, [*SMALL_MAP, "x.zarr"], monkeypatch)
+    assert code == 130 and err.count("\n") == 1, err
+    assert "the same command resumes the build" in err
+    assert (tmp_path / "x.zarr.partial").is_dir()
+
+
+# --- libraries' messages: kept, one line at most -------------------------------
+def test_zarr_warnings_of_an_edited_map_are_not_printed(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    write_inputs(tmp_path, workspace=True)
+    group = tmp_path / "map.zarr" / "zarr.json"
+    group.write_text(group.read_text().replace('"zarr_format": 3', '"zarr_format": 2'))
+    argv = ["workspace", "report", "map.zarr", "--out", "r.html"]
+    code, err = _run_loud(tmp_path, argv, monkeypatch)
+    assert code == 2 and err.count("\n") == 1, err
+    assert "damaged workspace map" in err and "ZarrUserWarning" not in err
+
+
+def test_library_warnings_of_a_command_that_succeeds_are_one_line(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import logging
+    import warnings
+
+    from workbench.cli import fk
+
+    def run(args: object) -> int:
+        for k in range(20):
+            warnings.warn(f"library warning {k}", UserWarning, stacklevel=1)
+            logging.getLogger("distributed.client").warning("client message %d", k)
+        return 0
+
+    monkeypatch.setattr(fk, "run", run)  # registered by the next main()
+    monkeypatch.setenv("WORKBENCH_PROGRESS", "0")
+    parser_run = ["fk", "--robot", "puma560", "--rad", *["0"] * 6]
+    assert main(parser_run) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert "40 messages from tests, distributed" in err and "-v shows them" in err
+    assert main(["-q", *parser_run]) == 0
+    assert capsys.readouterr().err == ""
+
+
+#: A command that leaves, for the interpreter's shutdown, an event-loop task
+#: destroyed while pending and an object whose ``__del__`` raises (what Zarr's
+#: and Dask's loops and clients leave after an error).
+_LEAVES_GARBAGE = """
+import asyncio, sys
+import workbench.cli as cli
+from workbench.cli import fk
+
+class Leaky:
+    def __del__(self):
+        raise RuntimeError("Event loop is closed")
+
+kept = []
+
+def run(args):
+    loop = asyncio.new_event_loop()
+    kept.append(loop.create_task(asyncio.sleep(3600)))
+    kept.append(Leaky())
+    print("done")
+    return 0
+
+fk.run = run
+cli.is_workbench_command = lambda: True
+sys.exit(cli.main(["fk", "--robot", "puma560", "--rad", *["0"] * 6]))
+"""
+
+
+@pytest.mark.subprocess
+def test_what_libraries_leave_for_the_shutdown_prints_nothing(tmp_path: Path) -> None:
+    done = subprocess.run(
+        [sys.executable, "-c", _LEAVES_GARBAGE],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        check=False,
+        env={**os.environ, "WORKBENCH_PROGRESS": "0"},
+    )
+    assert (done.returncode, done.stdout, done.stderr) == (0, "done\n", "")
