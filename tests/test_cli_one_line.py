@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import json
 import os
 import socket
 import subprocess
@@ -26,6 +27,8 @@ import pytest
 
 from tests._cli_fuzz import (
     SMALL_MAP,
+    URSCRIPT,
+    VIEW_SEVEN,
     contract_violations,
     run_case,
     write_inputs,
@@ -265,3 +268,88 @@ def test_what_libraries_leave_for_the_shutdown_prints_nothing(tmp_path: Path) ->
         env={**os.environ, "WORKBENCH_PROGRESS": "0"},
     )
     assert (done.returncode, done.stdout, done.stderr) == (0, "done\n", "")
+
+
+# --- the live server: a page that goes away while the scene is sent -----------
+def _open_and_drop(port: int) -> None:
+    """Open the scene's websocket like a page, then reset the connection."""
+    import base64
+    import struct
+
+    key = base64.b64encode(os.urandom(16)).decode()
+    with socket.create_connection(("127.0.0.1", port), timeout=5.0) as page:
+        page.sendall(
+            f"GET /ws HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n"
+            f"Origin: http://127.0.0.1:{port}\r\nUpgrade: websocket\r\n"
+            f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
+            "Sec-WebSocket-Version: 13\r\n\r\n".encode()
+        )
+        assert page.recv(12) == b"HTTP/1.1 101"  # switched; the scene follows
+        page.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+
+
+def test_a_page_closed_while_the_scene_is_sent_is_forgotten_quietly(
+    puma: object, caplog: pytest.LogCaptureFixture
+) -> None:
+    import gc
+    import time
+    import urllib.request
+
+    from workbench.viz import Viewer
+
+    viewer = Viewer(puma)  # type: ignore[arg-type]
+    url = viewer.start_server()
+    port = int(url.rstrip("/").rsplit(":", 1)[1])
+    try:
+        with caplog.at_level("WARNING"):
+            for _ in range(3):
+                _open_and_drop(port)
+            deadline = time.monotonic() + 5.0
+            while viewer.wait_for_browser(timeout=0.0) is False:
+                if time.monotonic() > deadline:  # (no page got the whole scene)
+                    break
+                time.sleep(0.05)
+            with urllib.request.urlopen(url, timeout=5.0) as response:
+                assert response.status == 200  # still serving
+    finally:
+        viewer.stop_server()
+    gc.collect()  # a write's task with an untaken failure would log now
+    assert [r.getMessage() for r in caplog.records] == []
+
+
+# --- bounds: minima as well as maxima, the same bound on every command --------
+@pytest.mark.parametrize(
+    ("argv", "fragment"),
+    [
+        ([*URSCRIPT, "--out", "o.script", "--servo-rate", "1e-9"], "below 1 Hz"),
+        ([*URSCRIPT, "--out", "o.script", "--servo-rate", "0.5"], "below 1 Hz"),
+        (
+            ["plan", "pick-place", "--robot", "iiwa14",
+             "--pick-xyz-quat-wxyz", "0.5", "0.1", "0.4", "0", "1", "0", "0",
+             "--place-xyz-quat-wxyz", "0.5", "-0.1", "0.4", "0", "1", "0", "0",
+             "--duration", "5", "--redundancy", "1e308"],
+            "at most 1000 rad",
+        ),
+        (["fk", "--robot", "ur5", "--frame", "", "--rad", *["0"] * 6], "not empty"),
+        ([*VIEW_SEVEN, "--redundancy-sweep", "3", "--branch", ""], "not empty"),
+        (["export", "--format", "ros2-bag", "--trajectory", "traj.csv", "--robot",
+          "ur5", "--out", "o.mcap", "--topic", " "], "not empty"),
+        (["urdf", "from-dh", "long.json", "--out", "o.urdf"], "at most 1000 m"),
+    ],
+)  # fmt: skip
+def test_values_beyond_their_bounds_exit_2(
+    tmp_path: Path, argv: list[str], fragment: str
+) -> None:
+    rows = [{"alpha": 1.5707963267948966, "a": 0.1, "d": 0.2}] * 6
+    long = {"name": "long", "joints": [{**rows[0], "a": 1e300}, *rows[1:]]}
+    (tmp_path / "long.json").write_text(json.dumps(long))
+    code, out, err = _run(tmp_path, *argv)
+    assert (code, out) == (2, "") and fragment in err, err
+    assert not (tmp_path / "o.script").exists()
+
+
+def test_servo_rate_down_to_the_trajectory_s_own_rate(tmp_path: Path) -> None:
+    code, _, err = _run(tmp_path, *URSCRIPT, "--out", "o.script", "--servo-rate", "1")
+    assert code == 0, err
+    script = (tmp_path / "o.script").read_text()
+    assert script.count("servoj(") == 2  # both samples of the 1 s trajectory

@@ -165,6 +165,13 @@ def finite_float(text: str) -> float:
     return value
 
 
+def name_text(text: str) -> str:
+    """Argparse type: a name (a frame, a branch label, a topic), not empty."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"must be a name, not empty: {text!r}")
+    return text
+
+
 def positive_float(text: str) -> float:
     """Argparse type: a finite float > 0."""
     value = finite_float(text)

@@ -24,7 +24,7 @@ import pinocchio as pin
 
 from workbench import ik
 from workbench.cli._common import q_from_degrees
-from workbench.cli._redundancy import get_redundant, refuse_redundancy
+from workbench.cli._redundancy import get_redundant, refuse_redundancy, to_radians
 from workbench.errors import InputError
 from workbench.model.robot import Robot
 from workbench.poses import parse_target
@@ -43,8 +43,9 @@ def get_configurations(
     ``pick`` and ``place`` values [rad]).
 
     Raises:
-        InputError: Contradictory options, a pose that is not rigid, or
-            redundancy options for an arm without the parameter.
+        InputError: Contradictory options, a pose that is not rigid,
+            redundancy options for an arm without the parameter, or a
+            ``--redundancy`` beyond its bound.
         InfeasibleError: A pose without an IK solution within the limits on
             the branch (exit 3).
     """
@@ -65,6 +66,7 @@ def get_configurations(
             )
     if args.redundancy is not None and args.criterion is not None:
         raise InputError("--criterion chooses a value: not with --redundancy")
+    given = None if args.redundancy is None else to_radians(args.redundancy, False)
     joints = (args.pick_deg is not None, args.place_deg is not None)
     if joints[0] != joints[1]:
         raise InputError(
@@ -90,7 +92,7 @@ def get_configurations(
     if solver is not None and args.redundancy is None:
         criterion = args.criterion or "limit_margin"
     first, second = ik.pick_place_configurations(
-        robot, pick, place, redundancy=args.redundancy, criterion=criterion
+        robot, pick, place, redundancy=given, criterion=criterion
     )
     branch = first.branch
     if second.branch != branch:

@@ -22,6 +22,7 @@ from workbench.cli._common import (
     bounded_float,
     get_input_paths,
     load_robot_from_args,
+    name_text,
     print_json,
 )
 from workbench.collision import PathClearance
@@ -96,8 +97,12 @@ def register(commands: argparse._SubParsersAction) -> None:
         "for --pick-place Angeles' cell (as plan), for --fishcut Kang's cell "
         "(as fishcut); a contact exits 3 and writes nothing",
     )
-    parser.add_argument("--topic", default=DEFAULT_TOPIC, help="bag topic")
-    parser.add_argument("--frame-id", default="base", help="bag header.frame_id")
+    parser.add_argument(
+        "--topic", type=name_text, default=DEFAULT_TOPIC, help="bag topic"
+    )
+    parser.add_argument(
+        "--frame-id", type=name_text, default="base", help="bag header.frame_id"
+    )
     add_json_flag(parser)
     parser.set_defaults(
         run=run, progress_message="export: planning and writing the trajectory…"

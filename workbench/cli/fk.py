@@ -13,6 +13,7 @@ from workbench.cli._common import (
     configuration_from_args,
     format_vector,
     load_robot_from_args,
+    name_text,
     print_json,
 )
 from workbench.poses import angeles7_from_se3, quat_wxyz_from_rotation
@@ -26,7 +27,9 @@ def register(commands: argparse._SubParsersAction) -> None:
         description="Pose of the tool frame in the base frame at one configuration.",
     )
     add_robot_argument(parser)
-    parser.add_argument("--frame", help="frame name (default: the robot's tool frame)")
+    parser.add_argument(
+        "--frame", type=name_text, help="frame name (default: the robot's tool frame)"
+    )
     add_angle_arguments(parser)
     add_json_flag(parser)
     parser.set_defaults(
@@ -38,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
     """Print the pose; returns the exit code."""
     robot = load_robot_from_args(args)
     q = configuration_from_args(robot, args, args.q)
-    frame = args.frame or robot.tool_frame
+    frame = robot.tool_frame if args.frame is None else args.frame
     pose = robot.fk(q, frame)
     result = {
         "robot": robot.name,

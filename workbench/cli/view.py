@@ -19,6 +19,7 @@ from workbench.cli._common import (
     finite_float,
     get_input_paths,
     load_robot_from_args,
+    name_text,
 )
 from workbench.cli._redundancy import add_redundancy_argument
 from workbench.errors import InfeasibleError, InputError
@@ -93,6 +94,7 @@ def register(commands: argparse._SubParsersAction) -> None:
     )
     parser.add_argument(
         "--branch",
+        type=name_text,
         metavar="LABEL",
         help="the branch --redundancy-sweep draws (default: the branch of Q)",
     )
@@ -211,7 +213,7 @@ def _show_sweep(
         show_redundancy_sweep,
     )
 
-    branch = args.branch or find_branch(robot, q)[1]
+    branch = find_branch(robot, q)[1] if args.branch is None else args.branch
     sweep = compute_redundancy_sweep(robot, robot.fk(q), args.redundancy_sweep, branch)
     show_redundancy_sweep(viewer, sweep, degrees=bool(args.deg))
 

@@ -36,6 +36,10 @@ UR_JOINTS = (
 DEFAULT_SERVO_RATE = 500.0
 #: Largest servo rate [Hz] accepted.
 MAX_SERVO_RATE = 10_000.0
+#: A servo rate is at least the trajectory's own sample rate or this, the
+#: slowest control cycle of a UR controller (CB3) [Hz], whichever is lower:
+#: fewer servo commands than samples would drop the trajectory's shape.
+MIN_SERVO_RATE = 125.0
 LOOKAHEAD_TIME = 0.1  # [s], URScript's range 0.03 .. 0.2
 GAIN = 300  # URScript's range 100 .. 2000
 MOVEJ_SPEED = 0.5  # [rad/s] to the first sample
@@ -80,6 +84,18 @@ def _pose(q: FloatArray) -> str:
     return "[" + ", ".join(f"{x:.9f}" for x in q) + "]"
 
 
+def _min_servo_rate(t: FloatArray) -> float:
+    """The least servo rate [Hz] for samples at times ``t`` (K,) [s].
+
+    The trajectory's own sample rate, (K − 1) / (t_last − t_first), or
+    :data:`MIN_SERVO_RATE`, whichever is lower.
+    """
+    duration = float(t[-1] - t[0]) if len(t) > 1 else 0.0
+    if duration <= 0.0:
+        return MIN_SERVO_RATE
+    return min((len(t) - 1) / duration, MIN_SERVO_RATE)
+
+
 def generate_urscript(
     samples: JointTrajectorySamples,
     joint_names: list[str],
@@ -92,17 +108,25 @@ def generate_urscript(
     Args:
         samples: Times (K,) [s], q and qd (K, 6) [rad, rad/s].
         joint_names: The robot's joint names (must be the UR joints).
-        servo_rate: Control rate [Hz], > 0.
+        servo_rate: Control rate [Hz], at least :func:`_min_servo_rate`
+            of the samples and at most :data:`MAX_SERVO_RATE`.
         robot_name: For the comment and the error message.
 
     Raises:
-        InputError: If the robot is not a UR arm or the rate is not > 0.
+        InputError: If the robot is not a UR arm or the rate is out of range.
     """
     check_ur_joints(list(joint_names), robot_name)
     if not (np.isfinite(servo_rate) and 0.0 < servo_rate <= MAX_SERVO_RATE):
         raise InputError(
             f"servo rate must be > 0 and at most {MAX_SERVO_RATE:g} Hz, got "
             f"{servo_rate}"
+        )
+    floor = _min_servo_rate(samples.t)
+    if servo_rate < floor:
+        raise InputError(
+            f"servo rate {servo_rate:g} Hz is below {floor:g} Hz, the lower of the "
+            f"trajectory's own sample rate and {MIN_SERVO_RATE:g} Hz (fewer servo "
+            "commands than samples would lose the trajectory)"
         )
     check_sample_count(
         int((samples.t[-1] - samples.t[0]) * servo_rate) + 1,

@@ -33,6 +33,11 @@ ROBOT_NAME_PATTERN = re.compile(r"(?!.*--)(?!.*-$)[^\x00-\x1f\x7f]+")
 
 FloatArray = npt.NDArray[np.float64]
 
+#: Largest |a| and |d| of a row [m]: a thousand times any industrial arm's
+#: links, and far below where the reach (a sum of lengths) and the IK's squares
+#: of lengths lose their digits or overflow.
+MAX_DH_LENGTH = 1000.0
+
 #: Joint speed limit used when a table row gives none [rad/s]. An assumption,
 #: stated in urdf/README.md; override it per row with ``"velocity"``.
 DEFAULT_VELOCITY_LIMIT = 1.0
@@ -101,7 +106,8 @@ class DHTable:
             source: Where it came from, for error messages.
 
         Raises:
-            DHTableError: If a key is missing, unknown or not a finite number.
+            DHTableError: If a key is missing, unknown or not a finite number,
+                or a length exceeds :data:`MAX_DH_LENGTH`.
         """
         if not isinstance(raw, dict):
             raise DHTableError(f"{source}: top level must be a JSON object")
@@ -158,6 +164,12 @@ class DHTable:
                 raise DHTableError(f"{where}: {key!r} must be finite, got {value!r}")
             values[key] = float(value)
         joint = DHJoint(**values)
+        for key in ("a", "d"):
+            if abs(values[key]) > MAX_DH_LENGTH:
+                raise DHTableError(
+                    f"{where}: {key!r} must be at most {MAX_DH_LENGTH:g} m in "
+                    f"magnitude, got {values[key]!r}"
+                )
         if joint.lower > joint.upper:
             raise DHTableError(
                 f"{where}: lower limit {joint.lower} > upper limit {joint.upper}"

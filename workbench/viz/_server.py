@@ -92,6 +92,12 @@ class _PageHandler(_LoopbackHandler):
         self.write(self._server.render())
 
 
+def _take_failure(sent: asyncio.Future[None]) -> None:
+    """Take a finished write's exception (a page that closed): nothing printed."""
+    if not sent.cancelled():
+        sent.exception()
+
+
 class _NoIcon(_LoopbackHandler):
     def get(self) -> None:
         self.set_status(204)
@@ -196,7 +202,8 @@ class LiveServer:
         """A page connected: send it the whole scene."""
         self._sockets.add(socket)
         for command in self._recorder.get_commands():
-            socket.write_message(command, binary=True)
+            if not self._send(socket, command):
+                return  # the page went away while the scene was being sent
         self._client.set()
 
     def on_close(self, socket: _SceneSocket) -> None:
@@ -214,10 +221,21 @@ class LiveServer:
 
     def _broadcast(self, command: bytes) -> None:
         for socket in list(self._sockets):
-            try:
-                socket.write_message(command, binary=True)
-            except tornado.websocket.WebSocketClosedError:
-                self._sockets.discard(socket)
+            self._send(socket, command)
+
+    def _send(self, socket: _SceneSocket, command: bytes) -> bool:
+        """Send one command; False (the page forgotten) if it went away.
+
+        A page may close while a write is under way: the write's failure is
+        taken here, quietly, not left for the event loop to print.
+        """
+        try:
+            sent = socket.write_message(command, binary=True)
+        except tornado.websocket.WebSocketClosedError:
+            self._sockets.discard(socket)
+            return False
+        sent.add_done_callback(_take_failure)
+        return True
 
     def wait_for_client(self, timeout: float | None = None) -> bool:
         """Block until a page has connected and received the scene.
