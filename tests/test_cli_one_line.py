@@ -353,3 +353,60 @@ def test_servo_rate_down_to_the_trajectory_s_own_rate(tmp_path: Path) -> None:
     assert code == 0, err
     script = (tmp_path / "o.script").read_text()
     assert script.count("servoj(") == 2  # both samples of the 1 s trajectory
+
+
+# --- temporary files of killed writers, nested ones too -------------------------
+@pytest.mark.subprocess
+def test_nested_temporary_files_of_a_killed_writer_go_with_the_next_write(
+    tmp_path: Path,
+) -> None:
+    from workbench.atomic_files import get_temporaries, write_text_atomic
+
+    target = tmp_path / "o.png"
+    code = (  # as plan --csv --plot: the plot's writer given the plot's temporary
+        "import os; from workbench.atomic_files import atomic_file, atomic_files\n"
+        f"with atomic_files({str(target)!r}) as (staged,):\n"
+        "    with atomic_file(staged) as inner:\n"
+        "        inner.write_text('half a PNG'); os.kill(os.getpid(), 9)\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=False)
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert len(left) == 2 and any(name.startswith("..o.") for name in left), left
+    assert len(get_temporaries(target)) == 2
+    write_text_atomic(target, "whole")
+    assert sorted(tmp_path.iterdir()) == [target]
+
+
+# --- names the file system refuses ------------------------------------------------
+_LONG = "a" * 300
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        [*SMALL_MAP, f"{_LONG}.zarr"],
+        ["workspace", "report", "map.zarr", "--out", f"{_LONG}.html"],
+        ["view", "--robot", "ur5", "--rad", *["0"] * 6, "--html", f"{_LONG}.html"],
+        ["urdf", "from-dh", "t.json", "--out", f"{_LONG}.urdf"],
+    ],
+    ids=lambda a: " ".join(a[:2]),
+)
+def test_an_output_name_too_long_exits_2(tmp_path: Path, argv: list[str]) -> None:
+    code, out, err = _run(tmp_path, *argv)
+    assert (code, out) == (2, "") and "its name is" in err and "at most" in err, err
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["workspace", "report", "loop.zarr", "--out", "r.html"],
+        ["workspace", "view", "loop.zarr", "--html", "v.html"],
+    ],
+    ids=lambda a: " ".join(a[:2]),
+)
+def test_a_map_path_that_is_a_symlink_loop_exits_2(
+    tmp_path: Path, argv: list[str]
+) -> None:
+    (tmp_path / "loop.zarr").symlink_to("loop.zarr")
+    code, out, err = _run(tmp_path, *argv)
+    assert (code, out) == (2, "") and "symbolic-link loop" in err, err

@@ -26,6 +26,9 @@ from workbench.errors import InputError
 
 #: Suffix of the temporary files (``.<name>.<random>`` + this + the suffix).
 TEMP_MARK = ".tmp"
+#: Bytes of a file name kept for what a write adds to it: the temporary file's
+#: ``.<pid>-<random>.tmp`` (twice when nested), a map's ``.partial`` and lock.
+TEMP_NAME_ROOM = 64
 
 
 def check_output(
@@ -42,10 +45,13 @@ def check_output(
     Raises:
         InputError: If the parent folder is missing or not writable, ``path`` is
             a folder (for a file), already exists (for a folder), or is one of
-            ``inputs`` or inside one of them (an input folder, e.g. a map).
+            ``inputs`` or inside one of them (an input folder, e.g. a map);
+            if its name is longer than the file system allows (less
+            :data:`TEMP_NAME_ROOM`), or a path is a symbolic-link loop.
     """
     path = Path(path)
     parent = path.parent
+    _check_name_length(path)
     if not parent.is_dir():
         raise InputError(f"cannot write {path}: folder {parent} does not exist")
     if not os.access(parent, os.W_OK | os.X_OK):
@@ -58,7 +64,7 @@ def check_output(
         if source is not None and is_same_file(path, source):
             raise InputError(f"cannot write {path}: it is also an input ({source})")
         if source is not None and Path(source).is_dir():
-            if Path(source).resolve() in path.resolve().parents:
+            if _resolve(source) in _resolve(path).parents:
                 raise InputError(
                     f"cannot write {path}: it is inside the input folder {source}"
                 )
@@ -87,12 +93,49 @@ def check_outputs(
 
 
 def is_same_file(a: str | Path, b: str | Path) -> bool:
-    """Whether two paths name one file (``samefile`` if both exist, else resolved)."""
+    """Whether two paths name one file (``samefile`` if both exist, else resolved).
+
+    Raises:
+        InputError: If a path cannot be resolved (a symbolic-link loop).
+    """
     a, b = Path(a), Path(b)
     try:
         return a.samefile(b)
     except OSError:  # one of them does not exist (yet)
-        return a.resolve() == b.resolve()
+        return _resolve(a) == _resolve(b)
+
+
+def _resolve(path: str | Path) -> Path:
+    """``path`` resolved (symbolic links followed), as far as it exists.
+
+    Raises:
+        InputError: On a symbolic-link loop or a name the system refuses.
+    """
+    try:
+        return Path(path).resolve()
+    except RuntimeError as err:  # Python 3.11: "Symlink loop from ..."
+        raise InputError(f"cannot use {path}: a symbolic-link loop") from err
+    except OSError as err:
+        raise InputError(f"cannot use {path}: {err.strerror or err}") from err
+
+
+def _check_name_length(path: Path) -> None:
+    """Refuse a name longer than the file system takes, less :data:`TEMP_NAME_ROOM`.
+
+    Raises:
+        InputError: Stating the name's length and the limit.
+    """
+    try:
+        limit = os.pathconf(path.parent if path.parent.is_dir() else ".", "PC_NAME_MAX")
+    except (OSError, ValueError, AttributeError):
+        limit = 255  # the common limit (ext4, XFS, APFS, NTFS)
+    size = len(os.fsencode(path.name))
+    if size > limit - TEMP_NAME_ROOM:
+        raise InputError(
+            f"cannot write {path.name[:40]}…: its name is {size} bytes, at most "
+            f"{limit - TEMP_NAME_ROOM} here (the file system takes {limit}, less "
+            f"{TEMP_NAME_ROOM} for the temporary file's name)"
+        )
 
 
 @contextlib.contextmanager
@@ -201,18 +244,26 @@ def move_folder_into_place(folder: str | Path, path: str | Path) -> None:
 
 
 def get_temporaries(path: str | Path) -> list[tuple[Path, int]]:
-    """The temporary files of ``path`` in its folder, with their writers' PIDs."""
+    """The temporary files of ``path`` in its folder, with their writers' PIDs.
+
+    Nested ones too: a writer given a temporary file as its target (``plan
+    --plot`` hands Matplotlib's writer the plot's temporary file) makes a
+    temporary file of that one, ``..<stem>.<pid>-<r>.tmp.<pid>-<s>.tmp<suffix>``;
+    its PID is the innermost writer's.
+    """
     path = Path(path)
+    level = re.escape(".") + r"(\d+)-[^.]+" + re.escape(TEMP_MARK)
     pattern = re.compile(
-        re.escape(f".{path.stem}.")
-        + r"(\d+)-[^.]+"
-        + re.escape(TEMP_MARK + path.suffix)
+        r"(\.+)" + re.escape(path.stem) + f"((?:{level})+)" + re.escape(path.suffix)
     )
     found = []
-    for entry in path.parent.glob(f".{glob.escape(path.stem)}.*{TEMP_MARK}*"):
+    for entry in path.parent.glob(f".*{glob.escape(path.stem)}.*{TEMP_MARK}*"):
         match = pattern.fullmatch(entry.name)
-        if match is not None:
-            found.append((entry, int(match.group(1))))
+        if match is None:
+            continue
+        pids = re.findall(level, match.group(2))
+        if len(pids) == len(match.group(1)):  # one leading dot per level
+            found.append((entry, int(pids[-1])))
     return found
 
 
