@@ -275,6 +275,7 @@ def test_a_failed_build_resumes_with_the_missing_blocks_only(
     path = tmp_path / "resumed.zarr"
     real = _block_tasks.evaluate_block
     monkeypatch.setattr(_block_tasks, "evaluate_block", _failing_after(real, 5))
+    caplog.set_level("INFO", logger="workbench.workspace.build")
     with pytest.raises(RuntimeError, match="injected"):
         build_map(puma, grid, path, workers=1, block_voxels=BLOCK_VOXELS)
     partial = get_partial_path(path)

@@ -271,12 +271,15 @@ def build_map(
                     workers=threads,
                     scheduler=scheduler,
                 )
-        except KeyboardInterrupt:  # the one line of a Ctrl-C: how to resume
-            done = counter.done
-            logger.warning(
+        except BaseException as err:
+            # A Ctrl-C's one line tells how to resume; after an error, whose
+            # line is the one on stderr, it is information (-v).
+            stopped = isinstance(err, KeyboardInterrupt)
+            logger.log(
+                logging.WARNING if stopped else logging.INFO,
                 "map build stopped with %d of %d blocks done; they are kept in %s "
                 "and the same command resumes the build",
-                done,
+                counter.done,
                 total,
                 partial,
             )
