@@ -108,7 +108,8 @@ def _check(attrs: Mapping[str, Any]) -> None:
     if not isinstance(digest, str) or not _SHA256.fullmatch(digest):
         raise _Damaged("urdf_sha256", f"must be 64 hex digits, got {digest!r}")
     family = _get(attrs, "family")
-    if family is not None and family not in FAMILIES:
+    known = FAMILIES.get(family) if isinstance(family, str) else None
+    if family is not None and known is None:
         names = ", ".join(FAMILIES)
         raise _Damaged("family", f"must be null or one of {names}, got {family!r}")
     _check_limits(attrs)
@@ -116,7 +117,7 @@ def _check(attrs: Mapping[str, Any]) -> None:
     _check_grid(attrs)
     _check_orientations(attrs)
     _integer(_get(attrs, "block_voxels"), "block_voxels")
-    seven_axis = family is not None and FAMILIES[family].redundant
+    seven_axis = known is not None and known.redundant
     _check_redundancy(attrs, seven_axis and not attrs["sampled"])
     scene = _get(attrs, "scene")
     if scene is not None and (attrs["sampled"] or seven_axis):
