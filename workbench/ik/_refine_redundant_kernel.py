@@ -73,6 +73,10 @@ FloatArray = npt.NDArray[np.float64]
 #: Step [rad] of the central differences of ψ(q): their truncation error,
 #: ~1e-12 relative, and rounding, ~1e-10, only slow Newton's last step.
 PARAMETER_STEP = 1e-6
+#: ψ depends on the first this many joints only (``_srs_kernel._arm_angle``
+#: reads θ1…θ4: the elbow and the wrist centre): ∂ψ/∂q5…q7 are 0, exactly,
+#: and are not differenced.
+ARM_ANGLE_JOINTS = 4
 #: Joints (0-based) whose DH angle is 0 or π where the idealised arm folds
 #: (the elbow θ4, the shoulder θ2, the wrist θ6), and the step [rad] a start on
 #: the fold is moved across it when Newton finds nothing from it (the model's
@@ -145,7 +149,8 @@ def _newton_srs(chain, geo, target, value: float, q, work) -> bool:
         if step == 0:  # ∇ψ of the start: ψ is smooth, the start near the end
             for k in range(7):
                 shifted[k] = q[k]
-            for k in range(7):
+                gradient[k] = 0.0  # (ψ reads ARM_ANGLE_JOINTS joints only)
+            for k in range(ARM_ANGLE_JOINTS):
                 shifted[k] = q[k] + PARAMETER_STEP
                 gradient[k] = (
                     remainder(_arm_angle_of(geo, shifted, theta) - psi) / PARAMETER_STEP
@@ -198,6 +203,8 @@ def _refine_row(chain, geo, srs: bool, target, value: float, q, work) -> bool:
             _damped_step(jac, 6, r, dq, no_pull, damping, normal, y, dq)
         else:
             for k in range(7):
+                jac[6, k] = 0.0  # (ψ reads ARM_ANGLE_JOINTS joints only)
+            for k in range(ARM_ANGLE_JOINTS):
                 for j in range(7):
                     shifted[j] = q[j]
                 shifted[k] = q[k] + PARAMETER_STEP
