@@ -127,49 +127,81 @@ def _products(chain: FloatArray, q: FloatArray, frames: FloatArray):
     """:func:`_forward` given the sines and cosines: ``frames[k, 0:2]`` = sin, cos q_k.
 
     (For callers that carry them from step to step instead of calling the
-    library per joint: Newton's small steps, ``_refine_kernel``.)
+    library per joint: Newton's small steps, ``_refine_kernel``.) The running
+    pose is held in scalars and each row stored once: LLVM cannot tell that
+    ``frames`` and ``chain`` do not overlap, and would otherwise reload the
+    placement after every store (most of the time of this loop).
     """
     n = chain.shape[0] - 1
+    r0 = r1 = r2 = r3 = r4 = r5 = r6 = r7 = r8 = p0 = p1 = p2 = 0.0
     for k in range(n + 1):
         c, f = chain[k], frames[k]
         s, co = f[0], f[1]  # (a revolute joint's)
+        c0, c1, c2, c3, c4, c5 = c[0], c[1], c[2], c[3], c[4], c[5]
+        c6, c7, c8, c9, c10, c11 = c[6], c[7], c[8], c[9], c[10], c[11]
         if k == 0:  # the placement itself
-            for i in range(12):
-                f[i] = c[i]
+            r0, r1, r2, r3, r4, r5, r6, r7, r8 = c0, c1, c2, c3, c4, c5, c6, c7, c8
+            p0, p1, p2 = c9, c10, c11
         else:  # parent pose times the placement
-            g = frames[k - 1]
-            for i in range(3):
-                g0, g1, g2 = g[3 * i], g[3 * i + 1], g[3 * i + 2]
-                for j in range(3):
-                    f[3 * i + j] = g0 * c[j] + g1 * c[3 + j] + g2 * c[6 + j]
-                f[9 + i] = g[9 + i] + g0 * c[9] + g1 * c[10] + g2 * c[11]
-        if k == n:
-            break
-        x, y, z = c[12], c[13], c[14]
-        if c[15] == PRISMATIC:  # translation q a along the joint axis
-            for i in range(3):
-                f[9 + i] += q[k] * (f[3 * i] * x + f[3 * i + 1] * y + f[3 * i + 2] * z)
-            continue
-        m = int(c[19])
-        if m >= 0:  # about coordinate axis m: a plane rotation of columns u, v
-            u, v = (m + 1) % 3, (m + 2) % 3
-            s *= c[12 + m]  # the axis sign
-            for i in range(3):
-                au, av = f[3 * i + u], f[3 * i + v]
-                f[3 * i + u] = au * co + av * s
-                f[3 * i + v] = av * co - au * s
-            continue
-        # Rodrigues: exp(a^ q) = cos I + sin a^ + (1 - cos) a a^T.
-        vers = 1.0 - co
-        e00, e11, e22 = co + vers * x * x, co + vers * y * y, co + vers * z * z
-        e01, e10 = vers * x * y - s * z, vers * x * y + s * z
-        e02, e20 = vers * x * z + s * y, vers * x * z - s * y
-        e12, e21 = vers * y * z - s * x, vers * y * z + s * x
-        for i in range(3):
-            a0, a1, a2 = f[3 * i], f[3 * i + 1], f[3 * i + 2]
-            f[3 * i] = a0 * e00 + a1 * e10 + a2 * e20
-            f[3 * i + 1] = a0 * e01 + a1 * e11 + a2 * e21
-            f[3 * i + 2] = a0 * e02 + a1 * e12 + a2 * e22
+            g0, g1, g2, g3, g4, g5 = r0, r1, r2, r3, r4, r5
+            g6, g7, g8 = r6, r7, r8
+            r0 = g0 * c0 + g1 * c3 + g2 * c6
+            r1 = g0 * c1 + g1 * c4 + g2 * c7
+            r2 = g0 * c2 + g1 * c5 + g2 * c8
+            p0 = p0 + g0 * c9 + g1 * c10 + g2 * c11
+            r3 = g3 * c0 + g4 * c3 + g5 * c6
+            r4 = g3 * c1 + g4 * c4 + g5 * c7
+            r5 = g3 * c2 + g4 * c5 + g5 * c8
+            p1 = p1 + g3 * c9 + g4 * c10 + g5 * c11
+            r6 = g6 * c0 + g7 * c3 + g8 * c6
+            r7 = g6 * c1 + g7 * c4 + g8 * c7
+            r8 = g6 * c2 + g7 * c5 + g8 * c8
+            p2 = p2 + g6 * c9 + g7 * c10 + g8 * c11
+        if k < n:
+            x, y, z = c[12], c[13], c[14]
+            m = int(c[19])
+            if c[15] == PRISMATIC:  # translation q a along the joint axis
+                p0 += q[k] * (r0 * x + r1 * y + r2 * z)
+                p1 += q[k] * (r3 * x + r4 * y + r5 * z)
+                p2 += q[k] * (r6 * x + r7 * y + r8 * z)
+            elif m == 0:  # about coordinate axis m: a plane rotation of two columns
+                s *= x  # the axis sign
+                r1, r2 = r1 * co + r2 * s, r2 * co - r1 * s
+                r4, r5 = r4 * co + r5 * s, r5 * co - r4 * s
+                r7, r8 = r7 * co + r8 * s, r8 * co - r7 * s
+            elif m == 1:
+                s *= y
+                r2, r0 = r2 * co + r0 * s, r0 * co - r2 * s
+                r5, r3 = r5 * co + r3 * s, r3 * co - r5 * s
+                r8, r6 = r8 * co + r6 * s, r6 * co - r8 * s
+            elif m == 2:
+                s *= z
+                r0, r1 = r0 * co + r1 * s, r1 * co - r0 * s
+                r3, r4 = r3 * co + r4 * s, r4 * co - r3 * s
+                r6, r7 = r6 * co + r7 * s, r7 * co - r6 * s
+            else:  # Rodrigues: exp(a^ q) = cos I + sin a^ + (1 - cos) a a^T.
+                vers = 1.0 - co
+                e00, e11, e22 = co + vers * x * x, co + vers * y * y, co + vers * z * z
+                e01, e10 = vers * x * y - s * z, vers * x * y + s * z
+                e02, e20 = vers * x * z + s * y, vers * x * z - s * y
+                e12, e21 = vers * y * z - s * x, vers * y * z + s * x
+                r0, r1, r2 = (
+                    r0 * e00 + r1 * e10 + r2 * e20,
+                    r0 * e01 + r1 * e11 + r2 * e21,
+                    r0 * e02 + r1 * e12 + r2 * e22,
+                )
+                r3, r4, r5 = (
+                    r3 * e00 + r4 * e10 + r5 * e20,
+                    r3 * e01 + r4 * e11 + r5 * e21,
+                    r3 * e02 + r4 * e12 + r5 * e22,
+                )
+                r6, r7, r8 = (
+                    r6 * e00 + r7 * e10 + r8 * e20,
+                    r6 * e01 + r7 * e11 + r8 * e21,
+                    r6 * e02 + r7 * e12 + r8 * e22,
+                )
+        f[0], f[1], f[2], f[3], f[4], f[5] = r0, r1, r2, r3, r4, r5
+        f[6], f[7], f[8], f[9], f[10], f[11] = r6, r7, r8, p0, p1, p2
 
 
 @helper()

@@ -87,6 +87,12 @@ REFINE_STEPS = 60
 #: Newton steps of the fast path of a regular branch (:func:`_newton`; it needs
 #: three from the closed form of a calibrated arm's idealised structure).
 FAST_STEPS = 6
+#: A Newton step of :func:`_newton` whose error [tolerances] is within this,
+#: after a step that cut the error by :data:`CHORD_RATIO` or more, reuses that
+#: step's factors of J: 1e3 tolerances (1e-9 m) is a step of ~1e-9 rad from a
+#: J of ~1e-5 rad before, whose change (~1e-5 relative) leaves ~1e-14 m.
+CHORD_GATE = 1e3
+CHORD_RATIO = 1e-3
 #: Steps shorter than this [rad] turn the sines and cosines of :func:`_newton`
 #: by their Taylor series (to d⁷; the first term left out, d⁸/40320, is 3e-23
 #: at 0.005) instead of calling the library per joint.
@@ -129,17 +135,21 @@ UNLISTED_SHIFT = 0.05
 MAX_SOLUTIONS = 16
 #: Valley search (:func:`_valley_search`): values of the fixed joint scanned
 #: over a turn, Gauss–Newton steps of the other five per value, and the
-#: steps of the root search between two scanned values.
+#: steps of the root search between two scanned values. (Fewer inner steps,
+#: 4 or 6, lose solutions that 8 find near the UR5's singularities.)
 VALLEY_SCAN = 36
 VALLEY_INNER_STEPS = 8
 VALLEY_ROOT_STEPS = 40
 #: Added to the diagonal of JᵀJ in the valley search, so that an exactly
 #: singular J still gives a solvable system [1/m² ~ 1/rad²].
 GRAM_SHIFT = 1e-24
-#: The least squares of the other five joints stop at a step this short [rad];
-#: the root search at a bracket this narrow [rad].
+#: The least squares of the other five joints stop at a step this short [rad].
 VALLEY_STEP_TOL = 1e-15
-VALLEY_ROOT_TOL = 1e-15
+#: The root search (regula falsi) and the golden section of the valley search
+#: stop at a step or bracket this short [rad]: the root or least |e| is then
+#: within Newton's reach (:func:`_refine_branch` takes it from there to the
+#: tolerances).
+VALLEY_ROOT_STEP = 1e-6
 _GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 #: Newton's residual [tolerances] below which a branch that does not converge
 #: is in a valley of solutions of the idealised arm (a singular wrist: the
@@ -428,12 +438,14 @@ def _valley_search(chain, target, start, work, sols, count: int) -> int:
             _inner(chain, target, x, j, work)
             gb = _normal_part(work, previous)
             for _ in range(VALLEY_ROOT_STEPS):
-                if ga == gb or abs(b - a) <= VALLEY_ROOT_TOL:
+                if ga == gb or abs(b - a) <= VALLEY_ROOT_STEP:
                     break
                 t = b - gb * (b - a) / (gb - ga)
                 x[j] = t
                 _inner(chain, target, x, j, work)
                 g = _normal_part(work, previous)
+                if abs(t - b) <= VALLEY_ROOT_STEP:  # near enough: Newton finishes
+                    break
                 if (g > 0.0) == (gb > 0.0):
                     ga *= 0.5
                 else:
@@ -453,6 +465,8 @@ def _valley_search(chain, target, start, work, sols, count: int) -> int:
         x[j] = d
         size_d = _inner(chain, target, x, j, work)
         for _ in range(VALLEY_ROOT_STEPS):
+            if b - a <= VALLEY_ROOT_STEP:
+                break
             if size_c < size_d:
                 b, d, size_d = d, c, size_c
                 c = b - _GOLDEN * (b - a)
@@ -528,24 +542,84 @@ def step_back(x: FloatArray, k: int, d: float, sines, cosines) -> None:
 
 
 @helper()
+def _factor(a: FloatArray, pivots: FloatArray) -> bool:
+    """LU with partial pivoting of the m × m ``a`` in place; False if singular.
+
+    ``a`` keeps U (its diagonal as the pivots' reciprocals) and below it the
+    multipliers of L, rows swapped as the pivots were; ``pivots`` (m,) the
+    row swapped in at each step (as floats), m its length. :func:`_back`
+    then solves with them, as often as needed: Newton's last step reuses the
+    factors of the step before (:func:`_newton`).
+    """
+    m = pivots.shape[0]
+    for k in range(m):
+        p, big = k, abs(a[k, k])
+        for i in range(k + 1, m):
+            v = abs(a[i, k])
+            larger = v > big  # False for NaN
+            p = i if larger else p
+            big = v if larger else big
+        if big == 0.0:
+            return False
+        pivots[k] = p
+        for j in range(m):  # (the multipliers of columns < k go with their row)
+            x = a[k, j]
+            a[k, j] = a[p, j]
+            a[p, j] = x
+        inverse = 1.0 / a[k, k]
+        a[k, k] = inverse
+        for i in range(k + 1, m):
+            f = a[i, k] * inverse
+            a[i, k] = f
+            for j in range(k + 1, m):
+                a[i, j] -= f * a[k, j]
+    return True
+
+
+@helper()
+def _back(a: FloatArray, pivots: FloatArray, b: FloatArray) -> None:
+    """Solve a x = b in place (x in ``b``, (m,)) with :func:`_factor`'s factors."""
+    m = pivots.shape[0]
+    for k in range(m):
+        p = int(pivots[k])
+        x = b[k]
+        b[k] = b[p]
+        b[p] = x
+    for k in range(m):
+        bk = b[k]
+        for i in range(k + 1, m):
+            b[i] -= a[i, k] * bk
+    for k in range(m - 1, -1, -1):
+        s = b[k]
+        for j in range(k + 1, m):
+            s -= a[k, j] * b[j]
+        b[k] = s * a[k, k]
+
+
+@helper()
 def _newton(chain: FloatArray, target: FloatArray, x: FloatArray, work) -> bool:
     """Newton steps J dq = e on ``x`` (6,) in place; whether it converged.
 
     The fast path of a regular branch: the LOCAL Jacobian of the model's chain
     (``_chain_kernel``), LU of the 6 × 6 system itself (no damping), the
-    first-order error of :func:`_fast_error`. Steps stop at :data:`POLISH`
-    times the tolerances, or where the residual stops decreasing (the FK's
-    rounding) within :data:`ACCEPT`; ``x`` is then the best iterate. Anything
-    else (no convergence in :data:`FAST_STEPS`, a singular J) returns False,
-    and the caller takes the complete search. ``work``: (30, 12) scratch.
+    first-order error of :func:`_fast_error`. A step whose error is within
+    :data:`CHORD_GATE` after a Newton step that cut it by :data:`CHORD_RATIO`
+    or more (the quadratic regime: the last step, from ~1e-11 m) solves with
+    the previous step's factors (its J is ~1e-5 rad away: the error still
+    drops to the FK's rounding). Steps stop at :data:`POLISH` times the
+    tolerances, or where the residual stops decreasing (the FK's rounding)
+    within :data:`ACCEPT`; ``x`` is then the best iterate. Anything else (no
+    convergence in :data:`FAST_STEPS`, a singular J) returns False, and the
+    caller takes the complete search. ``work``: (30, 12) scratch.
     """
     frames = work[0:7]
-    jac, lu = work[7:13, 0:6], work[13:19, 0:6]
+    lu = work[13:19, 0:6]
     e, previous = work[19, 0:6], work[20, 0:6]
-    sines, cosines = work[24, 0:6], work[25, 0:6]
+    sines, cosines, pivots = work[24, 0:6], work[25, 0:6], work[26, 0:6]
     for k in range(6):
         sines[k], cosines[k] = math.sin(x[k]), math.cos(x[k])
     last = math.inf
+    fresh = False  # whether lu holds the factors of the previous step's J
     for step in range(FAST_STEPS + 1):
         for k in range(6):
             frames[k, 0], frames[k, 1] = sines[k], cosines[k]
@@ -559,13 +633,15 @@ def _newton(chain: FloatArray, target: FloatArray, x: FloatArray, work) -> bool:
             return last <= ACCEPT
         if step == FAST_STEPS:
             return False
+        if fresh and size <= CHORD_GATE and size <= CHORD_RATIO * last:
+            fresh = False  # (once: a further step takes a new J)
+        else:
+            _jacobian(chain, frames, lu)
+            if not _factor(lu, pivots):
+                return False
+            fresh = True
         last = size
-        _jacobian(chain, frames, jac)
-        for i in range(6):
-            for k in range(6):
-                lu[i, k] = jac[i, k]
-        if not _solve(lu, e, 6):
-            return False
+        _back(lu, pivots, e)
         for k in range(6):
             previous[k] = x[k]
             step_back(x, k, e[k], sines, cosines)

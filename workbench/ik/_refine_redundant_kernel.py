@@ -44,6 +44,8 @@ from workbench.ik._chain_kernel import (
 from workbench.ik._kernel_common import remainder
 from workbench.ik._refine_kernel import (
     ACCEPT,
+    CHORD_GATE,
+    CHORD_RATIO,
     EVENT_SHIFT,
     FAST_STEPS,
     MERGED,
@@ -54,6 +56,8 @@ from workbench.ik._refine_kernel import (
     UNLISTED,
     UNLISTED_SHIFT,
     VANISHED,
+    _back,
+    _factor,
     _fast_error,
     keep_best,
     pose_error,
@@ -69,6 +73,10 @@ FloatArray = npt.NDArray[np.float64]
 #: Step [rad] of the central differences of ψ(q): their truncation error,
 #: ~1e-12 relative, and rounding, ~1e-10, only slow Newton's last step.
 PARAMETER_STEP = 1e-6
+#: ψ depends on the first this many joints only (``_srs_kernel._arm_angle``
+#: reads θ1…θ4: the elbow and the wrist centre): ∂ψ/∂q5…q7 are 0, exactly,
+#: and are not differenced.
+ARM_ANGLE_JOINTS = 4
 #: Joints (0-based) whose DH angle is 0 or π where the idealised arm folds
 #: (the elbow θ4, the shoulder θ2, the wrist θ6), and the step [rad] a start on
 #: the fold is moved across it when Newton finds nothing from it (the model's
@@ -103,14 +111,15 @@ def _newton_srs(chain, geo, target, value: float, q, work) -> bool:
     takes :func:`_refine_row`. ``work``: (:data:`WORK_ROWS`, 12) scratch.
     """
     frames = work[0:8]
-    jac, lu = work[8:15, 0:7], work[15:22, 0:7]
+    lu = work[15:22, 0:7]
     r, previous = work[22, 0:7], work[23, 0:7]
     theta, shifted = work[26, 0:7], work[27, 0:7]
-    gradient = work[24, 0:7]
+    gradient, pivots = work[24, 0:7], work[25, 0:7]
     sines, cosines = work[28, 0:7], work[29, 0:7]
     for k in range(7):
         sines[k], cosines[k] = math.sin(q[k]), math.cos(q[k])
     last = math.inf
+    fresh = False  # whether lu holds the factors of the previous step's A
     for step in range(FAST_STEPS + 1):
         for k in range(7):
             frames[k, 0], frames[k, 1] = sines[k], cosines[k]
@@ -127,24 +136,32 @@ def _newton_srs(chain, geo, target, value: float, q, work) -> bool:
             return last <= ACCEPT
         if step == FAST_STEPS:
             return False
+        if fresh and size <= CHORD_GATE and size <= CHORD_RATIO * last:
+            fresh = False  # the previous step's factors (``_refine_kernel._newton``)
+            last = size
+            _back(lu, pivots, r)
+            for k in range(7):
+                previous[k] = q[k]
+                step_back(q, k, r[k], sines, cosines)
+            continue
         last = size
-        _jacobian(chain, frames, jac)  # (rows 0-5; row 6 holds ∇ψ)
+        _jacobian(chain, frames, lu)  # (rows 0-5; row 6 holds ∇ψ)
         if step == 0:  # ∇ψ of the start: ψ is smooth, the start near the end
             for k in range(7):
                 shifted[k] = q[k]
-            for k in range(7):
+                gradient[k] = 0.0  # (ψ reads ARM_ANGLE_JOINTS joints only)
+            for k in range(ARM_ANGLE_JOINTS):
                 shifted[k] = q[k] + PARAMETER_STEP
                 gradient[k] = (
                     remainder(_arm_angle_of(geo, shifted, theta) - psi) / PARAMETER_STEP
                 )
                 shifted[k] = q[k]
         for k in range(7):
-            jac[6, k] = gradient[k]
-        for i in range(7):
-            for k in range(7):
-                lu[i, k] = jac[i, k]
-        if not _solve(lu, r, 7):
+            lu[6, k] = gradient[k]
+        if not _factor(lu, pivots):
             return False
+        fresh = True
+        _back(lu, pivots, r)
         for k in range(7):
             previous[k] = q[k]
             step_back(q, k, r[k], sines, cosines)
@@ -186,6 +203,8 @@ def _refine_row(chain, geo, srs: bool, target, value: float, q, work) -> bool:
             _damped_step(jac, 6, r, dq, no_pull, damping, normal, y, dq)
         else:
             for k in range(7):
+                jac[6, k] = 0.0  # (ψ reads ARM_ANGLE_JOINTS joints only)
+            for k in range(ARM_ANGLE_JOINTS):
                 for j in range(7):
                     shifted[j] = q[j]
                 shifted[k] = q[k] + PARAMETER_STEP

@@ -530,17 +530,21 @@ def _arm_angle(geo, theta: FloatArray) -> float:
     a0 = (e * a0[0], e * a0[1], e * a0[2])
     a2 = (e * a2[0], e * a2[1], e * a2[2])
     # R_u(ψ) = R03 D R03°ᵀ: sin ψ u = vee(R − Rᵀ) / 2, cos ψ = (tr R − 1) / 2
-    r = np.empty((3, 3))
-    for i in range(3):
-        for k in range(3):
-            r[i, k] = a0[i] * col0[k] + a1[i] * col1[k] + a2[i] * col2[k]
+    # (entries r_ik = a0_i col0_k + a1_i col1_k + a2_i col2_k as scalars: no array)
+    r00 = a0[0] * col0[0] + a1[0] * col1[0] + a2[0] * col2[0]
+    r01 = a0[0] * col0[1] + a1[0] * col1[1] + a2[0] * col2[1]
+    r02 = a0[0] * col0[2] + a1[0] * col1[2] + a2[0] * col2[2]
+    r10 = a0[1] * col0[0] + a1[1] * col1[0] + a2[1] * col2[0]
+    r11 = a0[1] * col0[1] + a1[1] * col1[1] + a2[1] * col2[1]
+    r12 = a0[1] * col0[2] + a1[1] * col1[2] + a2[1] * col2[2]
+    r20 = a0[2] * col0[0] + a1[2] * col1[0] + a2[2] * col2[0]
+    r21 = a0[2] * col0[1] + a1[2] * col1[1] + a2[2] * col2[1]
+    r22 = a0[2] * col0[2] + a1[2] * col1[2] + a2[2] * col2[2]
     length = math.sqrt(sw[0] * sw[0] + sw[1] * sw[1] + sw[2] * sw[2])
-    sin_psi = (
-        sw[0] * (r[2, 1] - r[1, 2])
-        + sw[1] * (r[0, 2] - r[2, 0])
-        + sw[2] * (r[1, 0] - r[0, 1])
-    ) / (2.0 * length)
-    cos_psi = 0.5 * (r[0, 0] + r[1, 1] + r[2, 2] - 1.0)
+    sin_psi = (sw[0] * (r21 - r12) + sw[1] * (r02 - r20) + sw[2] * (r10 - r01)) / (
+        2.0 * length
+    )
+    cos_psi = 0.5 * (r00 + r11 + r22 - 1.0)
     return math.atan2(sin_psi, cos_psi)
 
 

@@ -141,8 +141,8 @@ class Solver:
 
     __slots__ = (
         "__weakref__", "_arm_angle_geometry", "_indices", "_intervals",
-        "_kernel", "_name", "_refine", "_robot", "_slack", "_solve_pose", "_work",
-        "branches",
+        "_kernel", "_name", "_refine", "_refine_pose", "_robot", "_slack",
+        "_solve_pose", "_work", "branches",
         "family", "geometry", "nq", "parameter", "parameter_range",
     )  # fmt: skip
 
@@ -162,6 +162,8 @@ class Solver:
         self._kernel: types.ModuleType = kernel
         # the kernel's solve_pose; its compiled code itself after the first call
         self._solve_pose: Any = self._first_solve_pose
+        # the refinement's refine_pose (calibrated arms), likewise
+        self._refine_pose: Any = self._first_refine_pose
         self._robot = weakref.ref(robot)
         self._name = robot.name  # for the messages
         # the model's chain when it differs from the idealised structure
@@ -261,10 +263,12 @@ class Solver:
                 raise self._no_redundancy()
             q, flags = _empty((8, 6)), _empty(8, _UINT8)  # (positional: faster)
             events = 0
-            if self._refine is not None or self._solve_pose(
-                self.geometry, pose, prev, q, flags, True
-            ):  # not OK (rechecked, or raises), or refined on the model
-                q, flags, events = self.solve_arrays(pose, prev)
+            if self._solve_pose(self.geometry, pose, prev, q, flags, True):
+                q, flags, events = self.solve_arrays(pose, prev)  # (raises)
+            elif self._refine is not None:  # carried to the model's chain
+                events = self._refine_pose(self._refine, pose, q, flags)
+                if not flags.any():
+                    raise UnreachableError(0.0, (0.0, 0.0), "model")
         else:
             if redundancy is None:
                 if q_previous is None:
@@ -274,10 +278,15 @@ class Solver:
                 redundancy = check_redundancy(redundancy, self.parameter)
             q, flags = _empty((8, 7)), _empty(8, _UINT8)
             events = 0
-            if self._refine is not None or self._solve_pose(
-                self.geometry, pose, redundancy, prev, q, flags, True
-            ):
+            if self._solve_pose(self.geometry, pose, redundancy, prev, q, flags, True):
                 q, flags, events = self.solve_arrays(pose, prev, redundancy=redundancy)
+            elif self._refine is not None:
+                events = self._refine_pose(
+                    self._refine, self._arm_angle_geometry,
+                    self.family.parameter_periodic, pose, redundancy, q, flags,
+                )  # fmt: skip
+                if not flags.any():
+                    raise UnreachableError(0.0, (0.0, 0.0), "model")
         return _solutions(q, flags, self.branches, redundancy, events)
 
     def _first_solve_pose(self, *args: Any) -> int:
@@ -293,6 +302,17 @@ class Solver:
         status = int(self._kernel.solve_pose(*args))
         self._solve_pose = compiled_entry(self._kernel.solve_pose, args)
         return status
+
+    def _first_refine_pose(self, *args: Any) -> int:
+        """The refinement's ``refine_pose``, then its compiled code for later calls.
+
+        As :meth:`_first_solve_pose`: :meth:`solve` passes the one signature's
+        arguments (the packed chain, a float64 (4, 4) pose, fresh outputs).
+        """
+        kernel = refine_pose if self.parameter is None else refine_redundant.refine_pose
+        events = int(kernel(*args))
+        self._refine_pose = compiled_entry(kernel, args)
+        return events
 
     def solve_arrays(
         self,
