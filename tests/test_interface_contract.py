@@ -6,10 +6,11 @@ line of its ``python`` blocks imports from a package (``workbench`` or
 every ``<module>.<name>`` of a module imported there (``ik.analytic``), every
 ``robot.<name>`` and every dotted ``workbench.<...>`` name in the page resolves.
 Commands: each row of the command table starts with the command's usage, whose
-flags are exactly the parser's (``--package-dir`` and ``--xacro-arg`` come with
-``--robot``, as the page says; ``-h``/``--help`` is argparse's own); a flag with
-fixed choices lists exactly them (``--format ros2-bag|urscript|csv``); every flag
-named in a code span elsewhere (``fishcut --servo-rate``) exists. JSON: each
+flags are exactly the parser's (``--package-dir``, ``--xacro-arg`` and
+``--srdf`` come with ``--robot``, as the page says; ``-h``/``--help`` is
+argparse's own); a flag with fixed choices lists exactly them (``--format
+ros2-bag|urscript|csv``); every flag named in a code span elsewhere (``fishcut
+--servo-rate``) exists. JSON: each
 command's ``--json`` is run in-process on a small case and every key it prints is
 named in its row (a row may take in another's with "keys of `workbench COMMAND`";
 the keys of a dict written ``name: {kind: ...}`` or ``{label: ...}`` are data, not
@@ -40,9 +41,10 @@ LINES = TEXT.splitlines()
 
 #: argparse's own option: on every parser, never in the usage rows.
 HELP = frozenset({"-h", "--help"})
-#: "Every command that takes --robot also takes --package-dir DIR ... and --xacro-arg"
+#: "Every command that takes --robot also takes --package-dir DIR ..., --xacro-arg
+#: ... and --srdf FILE"
 #: (Command line).
-IMPLIED = {"--robot": ("--package-dir", "--xacro-arg")}
+IMPLIED = {"--robot": ("--package-dir", "--xacro-arg", "--srdf")}
 #: A flag as written in a usage: ``--pick-xyz-quat-wxyz``, ``-v``.
 FLAG = re.compile(r"(?<![\w-])(--?[a-zA-Z][\w-]*)")
 #: A flag and its choices as written in a usage: ``--measure reachability\|dexterity``.

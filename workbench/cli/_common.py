@@ -30,9 +30,10 @@ def add_robot_argument(
     *,
     help_text: str | None = None,
 ) -> None:
-    """``--robot NAME|PATH`` (unless defaulted), ``--package-dir``, ``--xacro-arg``.
+    """The robot's options: ``--robot``, ``--package-dir``, ``--xacro-arg``, ``--srdf``.
 
-    Load the robot they name with :func:`load_robot_from_args`.
+    ``--robot NAME|PATH`` is required unless defaulted. Load the robot they
+    name with :func:`load_robot_from_args`.
     """
     parser.add_argument(
         "--robot",
@@ -60,6 +61,14 @@ def add_robot_argument(
         type=xacro_argument,
         metavar="NAME:=VALUE",
         help="the value of a xacro file's <xacro:arg> (repeatable)",
+    )
+    parser.add_argument(
+        "--srdf",
+        type=Path,
+        metavar="FILE",
+        help="the robot's SRDF: its <disable_collisions> pairs are left out of the "
+        "self-collision check (default: ROBOT.srdf beside a --robot file, if any; "
+        "else the pairs the workbench computes)",
     )
 
 
@@ -113,6 +122,7 @@ def load_robot_from_args(
         tool_frame=tool_frame,
         package_dirs=getattr(args, "package_dir", ()),
         xacro_args=dict(getattr(args, "xacro_arg", ())) or None,
+        srdf=getattr(args, "srdf", None),
     )
     limits = {
         key: _per_joint(robot, getattr(args, key, None), option)
@@ -216,14 +226,14 @@ def bounded_int(minimum: int, maximum: int) -> Callable[[str], int]:
 def get_input_paths(args: argparse.Namespace, *extra: Path | None) -> list[Path]:
     """The files a command reads; its outputs must be none of them.
 
-    ``--robot`` when it is a URDF path, ``--scene``, ``--trajectory`` with its
-    record (``trajectory.csv_io.record_path``) and ``extra`` (None entries
-    and paths that are no file are left out).
+    ``--robot`` when it is a URDF path, ``--srdf``, ``--scene``,
+    ``--trajectory`` with its record (``trajectory.csv_io.record_path``) and
+    ``extra`` (None entries and paths that are no file are left out).
     """
     from workbench.trajectory.csv_io import record_path
 
     paths = [Path(args.robot)] if getattr(args, "robot", None) else []
-    for key in ("scene", "trajectory"):
+    for key in ("srdf", "scene", "trajectory"):
         if getattr(args, key, None) is not None:
             paths.append(getattr(args, key))
     if getattr(args, "trajectory", None) is not None:

@@ -55,11 +55,13 @@ class SelfCollisionFilter:
         robot: Robot name.
         links: Links with collision geometry, in model order.
         disabled: The excluded pairs, sorted.
+        srdf: The SRDF the pairs were read from, or None (computed).
     """
 
     robot: str
     links: tuple[str, ...]
     disabled: tuple[DisabledPair, ...]
+    srdf: str | None = None
 
     def is_disabled(self, link_a: str, link_b: str) -> bool:
         """Whether the pair (either order) is excluded."""
@@ -79,11 +81,16 @@ class SelfCollisionFilter:
 
     def to_srdf(self) -> str:
         """SRDF text with one ``<disable_collisions>`` line per excluded pair."""
+        how = (
+            "computed by workbench.collision: links on the same or consecutive "
+            "joints, and links in contact at the zero pose"
+            if self.srdf is None
+            else "read from the robot's SRDF (its pairs between links of the "
+            "model), and links on the same joint"
+        )
         lines = [
             '<?xml version="1.0"?>',
-            "<!-- Self-collision filter computed by workbench.collision: links on"
-            " the same or consecutive joints, and links in contact at the zero"
-            " pose. -->",
+            f"<!-- Self-collision filter {how}. -->",
             f"<robot name={quoteattr(self.robot)}>",
         ]
         lines += [
@@ -104,6 +111,11 @@ def compute_self_collision_filter(
     robot: Robot, geometry_model: pin.GeometryModel | None = None
 ) -> SelfCollisionFilter:
     """Compute the excluded link pairs from the robot's collision geometry.
+
+    A robot loaded with an SRDF (:attr:`~workbench.model.Robot.srdf_path`)
+    leaves out its ``<disable_collisions>`` pairs (between links of the
+    model; the others are ignored) and the ``Rigid`` ones, as MoveIt does;
+    nothing is computed from contacts then.
 
     Args:
         robot: The robot.
@@ -131,6 +143,13 @@ def compute_self_collision_filter(
                 reasons.setdefault(key, "Adjacent")
             else:
                 candidates.append((i, j, key))
+    if robot.srdf_path is not None:  # the SRDF's pairs, not the computed ones
+        present = set(links)
+        reasons = {key: r for key, r in reasons.items() if r == "Rigid"}
+        for link_a, link_b, reason in robot.disabled_collisions:
+            if link_a in present and link_b in present:
+                reasons.setdefault((link_a, link_b), reason)
+        candidates.clear()
     for i, j, _ in candidates:
         geometry.addCollisionPair(pin.CollisionPair(i, j))
     data = pin.GeometryData(geometry)
@@ -143,7 +162,8 @@ def compute_self_collision_filter(
             reasons.setdefault(key, "Default")
     disabled = tuple(DisabledPair(a, b, r) for (a, b), r in sorted(reasons.items()))
     unique_links = tuple(dict.fromkeys(links))
-    return SelfCollisionFilter(robot.name, unique_links, disabled)
+    srdf = None if robot.srdf_path is None else str(robot.srdf_path)
+    return SelfCollisionFilter(robot.name, unique_links, disabled, srdf)
 
 
 __all__ = [

@@ -19,6 +19,7 @@ from workbench.model.packages import (
     split_package_dir,
 )
 from workbench.model.robot import Robot
+from workbench.model.srdf_files import find_srdf, read_disabled_collisions
 from workbench.model.urdf_joints import (
     MimicJoint,
     apply_mimic_joints,
@@ -38,6 +39,7 @@ def load_robot(
     tool_frame: str | None = None,
     package_dirs: Sequence[str | Path] = (),
     xacro_args: Mapping[str, str] | None = None,
+    srdf: str | Path | None = None,
 ) -> Robot:
     r"""Load a robot by catalog name or from a URDF or xacro file.
 
@@ -61,6 +63,11 @@ def load_robot(
             for ``package://PKG/...`` and ``$(find PKG)`` before the folders
             of ``ROS_PACKAGE_PATH`` and the file's own folders.
         xacro_args: Values of a xacro file's ``<xacro:arg>``\ s.
+        srdf: An SRDF whose ``<disable_collisions>`` pairs the self-collision
+            check leaves out (instead of the pairs it computes,
+            :mod:`workbench.collision.self_filter`). Default: the SRDF beside
+            a URDF or xacro file given by path (``arm.srdf`` beside
+            ``arm.urdf``), if there is one; none for a catalog name.
 
     Returns:
         The robot, base fixed (no free flyer).
@@ -71,7 +78,7 @@ def load_robot(
         URDFLoadError: If the URDF is unreadable or malformed, has a joint
             with a zero axis or inverted limits, or a mimic joint Pinocchio
             cannot represent (the message names the joints and values); if
-            xacro refuses the file; if a mesh is not found
+            xacro refuses the file; if the SRDF cannot be read; if a mesh is not found
             (:class:`~workbench.model.packages.MeshNotFoundError`: the
             message names the URI, where it looked and ``--package-dir``);
             if ``xacro_args`` are given for a file that is no xacro.
@@ -109,6 +116,7 @@ def load_robot(
     model = apply_mimic_joints(model, mimics, path)
     if tool_frame is None:
         tool_frame = model.frames[len(model.frames) - 1].name
+    srdf_path = _srdf_path(srdf, None if entry is not None else path)
     return Robot(
         key,
         model,
@@ -118,7 +126,22 @@ def load_robot(
         dh_table=dh_table,
         description=resolve_mesh_uris(text, lookup),
         xacro_args=tuple((xacro_args or {}).items()),
+        srdf_path=srdf_path,
+        disabled_collisions=(
+            () if srdf_path is None else read_disabled_collisions(srdf_path)
+        ),
     )
+
+
+def _srdf_path(srdf: str | Path | None, description: Path | None) -> Path | None:
+    """The SRDF given (absolute), else the one beside ``description``."""
+    if srdf is not None:
+        path = Path(srdf).expanduser()
+        if not path.is_file():
+            raise URDFLoadError(f"SRDF file not found: {path}")
+        return path.resolve()
+    found = None if description is None else find_srdf(description)
+    return None if found is None else found.resolve()
 
 
 def _absolute(package_dirs: Sequence[str | Path]) -> tuple[str, ...]:

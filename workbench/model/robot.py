@@ -94,6 +94,9 @@ class Robot:
             Every speed check and duration reads this attribute.
         acceleration_limit: Acceleration limits, shape (nv,) [rad/s²], > 0;
             inf where not given (a URDF has none).
+        srdf_path: The SRDF whose ``<disable_collisions>`` the self-collision
+            check honours (:mod:`workbench.model.srdf_files`), else None.
+        disabled_collisions: Its entries, ``(link_a, link_b, reason)``.
     """
 
     def __init__(
@@ -108,6 +111,8 @@ class Robot:
         dh_table: DHTable | None = None,
         description: str | None = None,
         xacro_args: Sequence[tuple[str, str]] = (),
+        srdf_path: Path | None = None,
+        disabled_collisions: Sequence[tuple[str, str, str]] = (),
     ):
         self._revision: int
         self.name = name
@@ -119,6 +124,8 @@ class Robot:
         self._package_dirs = tuple(package_dirs)
         self._description = description
         self._xacro_args = tuple(sorted((str(k), str(v)) for k, v in xacro_args))
+        self.srdf_path = srdf_path
+        self.disabled_collisions = tuple(disabled_collisions)
         self.tool_frame = tool_frame
         self.tool_frame_id = self.get_frame_id(tool_frame)
         self.lower = _read_only(model.lowerPositionLimit)
@@ -171,6 +178,8 @@ class Robot:
             package_dirs=self._package_dirs,
             description=self._description,
             xacro_args=self._xacro_args,
+            srdf_path=self.srdf_path,
+            disabled_collisions=self.disabled_collisions,
             acceleration_limit=(
                 self.acceleration_limit
                 if acceleration_limit is None

@@ -37,6 +37,7 @@ class RobotSpec:
         urdf_sha256: SHA-256 (hex) of the URDF file's bytes.
         lower, upper: Position limits, nq values each [rad, m for prismatic].
         xacro_args: The arguments of a xacro description (:attr:`Robot.xacro_args`).
+        srdf: The SRDF the robot was loaded with (:attr:`Robot.srdf_path`), or None.
     """
 
     name: str
@@ -46,6 +47,7 @@ class RobotSpec:
     lower: tuple[float, ...]
     upper: tuple[float, ...]
     xacro_args: tuple[tuple[str, str], ...] = ()
+    srdf: str | None = None
 
 
 def compute_file_sha256(path: str | Path) -> str:
@@ -75,6 +77,7 @@ def get_robot_spec(robot: Robot) -> RobotSpec:
         lower=tuple(float(x) for x in robot.lower),
         upper=tuple(float(x) for x in robot.upper),
         xacro_args=robot.xacro_args,
+        srdf=None if robot.srdf_path is None else str(robot.srdf_path),
     )
 
 
@@ -97,6 +100,7 @@ def load_spec_robot(spec: RobotSpec) -> Robot:
             tool_frame=spec.tool_frame,
             package_dirs=spec.package_dirs,
             xacro_args=dict(spec.xacro_args) or None,
+            srdf=spec.srdf,
         )
         _check_same_robot(robot, spec)
         robots[spec] = robot
