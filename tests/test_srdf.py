@@ -8,6 +8,7 @@ SRDF's pairs and the links on one joint, and nothing else.
 
 from __future__ import annotations
 
+import hashlib
 import re
 from pathlib import Path
 
@@ -18,7 +19,8 @@ from workbench import load_robot
 from workbench.collision import CollisionChecker, compute_self_collision_filter
 from workbench.errors import URDFLoadError
 from workbench.model.srdf_files import find_srdf, read_disabled_collisions
-from workbench.workspace import get_robot_spec, load_spec_robot
+from workbench.workspace import get_robot_spec, load_spec_robot, make_pose_grid
+from workbench.workspace._partial import map_attributes
 
 PANDA = Path(__file__).parent / "data" / "motionbenchmaker" / "panda"
 URDF, SRDF = PANDA / "panda.urdf", PANDA / "panda.srdf"
@@ -109,3 +111,14 @@ def test_the_command_line_takes_an_srdf(tmp_path, capsys) -> None:
         capsys, "urdf", "srdf", "--robot", "panda", "--srdf", str(SRDF)
     )
     assert code == 0 and "read from the robot's SRDF" in out
+
+
+def test_a_map_records_the_srdf() -> None:
+    """A workspace map names the SRDF its collision counts were made with."""
+    for robot, digest in (
+        (load_robot(URDF), hashlib.sha256(SRDF.read_bytes()).hexdigest()),
+        (load_robot("panda"), None),
+    ):
+        grid = make_pose_grid(robot, resolution=0.5, orientations=1)
+        attrs = map_attributes(robot, get_robot_spec(robot), grid, None, None, 64, 1)
+        assert attrs["srdf_sha256"] == digest

@@ -32,7 +32,7 @@ from workbench.singularities.conditions import ELBOW_TOL, SHOULDER_TOL, WRIST_TO
 from workbench.workspace._block_tasks import SAMPLE_SEED, SAMPLES_PER_BLOCK
 from workbench.workspace.grid import PoseGrid
 from workbench.workspace.manifest import write_manifest
-from workbench.workspace.robot_spec import RobotSpec
+from workbench.workspace.robot_spec import RobotSpec, compute_file_sha256
 from workbench.workspace.store import (
     DONE,
     FORMAT,
@@ -231,6 +231,9 @@ def map_attributes(
             "format_version": FORMAT_VERSION,
             "robot": robot.name,
             "urdf_sha256": spec.urdf_sha256,
+            "srdf_sha256": None
+            if spec.srdf is None
+            else compute_file_sha256(spec.srdf),
             "tool_frame": robot.tool_frame,
             "family": family,
             "joint_limits": {"lower": spec.lower, "upper": spec.upper},

@@ -107,6 +107,9 @@ def _check(attrs: Mapping[str, Any]) -> None:
     digest = _get(attrs, "urdf_sha256")
     if not isinstance(digest, str) or not _SHA256.fullmatch(digest):
         raise _Damaged("urdf_sha256", f"must be 64 hex digits, got {digest!r}")
+    srdf = attrs.get("srdf_sha256")  # (maps written before SRDFs have none)
+    if srdf is not None and not (isinstance(srdf, str) and _SHA256.fullmatch(srdf)):
+        raise _Damaged("srdf_sha256", f"must be null or 64 hex digits, got {srdf!r}")
     family = _get(attrs, "family")
     known = FAMILIES.get(family) if isinstance(family, str) else None
     if family is not None and known is None:
