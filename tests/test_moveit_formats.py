@@ -173,10 +173,19 @@ def test_moveit_scene_variants_read(tmp_path: Path) -> None:
     [
         ({"type": "cone", "dimensions": [0.1, 0.1]}, "type 'cone' is not read"),
         ({"type": 4, "dimensions": [0.1, 0.1]}, "type 4 is not read"),
-        ({"type": "box", "dimensions": [0.1, 0.2]}, "dimensions: must be 3 numbers"),
-        ({"type": "box", "dimensions": [0.1, -0.2, 1]}, "must be positive"),
-        ({"type": "box", "dimensions": [0.1, ".nan", 1]}, "must be 3 numbers"),
-        ({"type": "cylinder", "dimensions": [0.1, float("inf")]}, "must be finite"),
+        (
+            {"type": "box", "dimensions": [0.1, 0.2]},
+            "dimensions must be a list of 3 numbers",
+        ),
+        ({"type": "box", "dimensions": [0.1, -0.2, 1]}, "dimensions must be > 0"),
+        (
+            {"type": "box", "dimensions": [0.1, ".nan", 1]},
+            "must be a list of 3 numbers",
+        ),
+        (
+            {"type": "cylinder", "dimensions": [0.1, float("inf")]},
+            "dimensions must be finite",
+        ),
     ],
 )
 def test_bad_moveit_primitives_are_refused(tmp_path, change, message) -> None:

@@ -26,7 +26,6 @@ naming them (:class:`~workbench.errors.SceneFileError`).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -35,17 +34,22 @@ import numpy as np
 import pinocchio as pin
 import yaml
 
+from workbench.collision._scene_values import (
+    FloatArray,
+    floats,
+    mesh_arrays,
+    numbers,
+    rotation_from_quat_xyzw,
+)
 from workbench.collision.scene import Obstacle, Scene
 from workbench.errors import SceneFileError
 
 #: MoveIt's ``shape_msgs/SolidPrimitive`` types this reader takes, by code.
 PRIMITIVES = {1: "box", 2: "sphere", 3: "cylinder"}
+#: How many ``dimensions`` each primitive has.
+DIMENSIONS = {"box": 3, "sphere": 1, "cylinder": 2}
 #: Largest planning-scene file read [bytes].
 MAX_SCENE_BYTES = 64 * 2**20
-#: Tolerance on the norm of an orientation quaternion (as the JSON scenes').
-QUATERNION_NORM_TOL = 1e-6
-#: The colour of obstacles read from MoveIt (MoveIt keeps colours apart).
-COLOR = (0.55, 0.45, 0.35, 0.9)
 
 
 def read_yaml_file(path: str | Path, what: str) -> Any:
@@ -187,7 +191,7 @@ def _object(
         at = f"{where}: primitive {k}"
         shape, size = _primitive(primitive, at)
         placement = base * _pose(pose, f"{at}: pose")
-        out.append(Obstacle(names[k], shape, size, placement, allow, color=COLOR))
+        out.append(Obstacle(names[k], shape, size, placement, allow))
     for k, (mesh, pose) in enumerate(zip(meshes, mesh_poses, strict=True)):
         at = f"{where}: mesh {k}"
         vertices, triangles = _mesh(mesh, at)
@@ -199,31 +203,11 @@ def _object(
                 (1.0, 1.0, 1.0),
                 placement,
                 allow,
-                color=COLOR,
                 vertices=vertices,
                 triangles=triangles,
             )
         )
     return out
-
-
-def _finite(
-    values: Any, count: int, where: str, *, positive: bool = False
-) -> list[float]:
-    if (
-        not isinstance(values, list)
-        or len(values) != count
-        or not all(
-            isinstance(v, int | float) and not isinstance(v, bool) for v in values
-        )
-    ):
-        raise SceneFileError(f"{where}: must be {count} numbers, got {values!r}")
-    numbers = [float(v) for v in values]
-    if not all(math.isfinite(v) for v in numbers):
-        raise SceneFileError(f"{where}: must be finite, got {values!r}")
-    if positive and not all(v > 0 for v in numbers):
-        raise SceneFileError(f"{where}: must be positive, got {values!r}")
-    return numbers
 
 
 def _primitive(primitive: Any, where: str) -> tuple[str, tuple[float, ...]]:
@@ -235,19 +219,24 @@ def _primitive(primitive: Any, where: str) -> tuple[str, tuple[float, ...]]:
         raise SceneFileError(
             f"{where}: type {kind!r} is not read (box, sphere or cylinder)"
         )
-    dims = primitive.get("dimensions")
-    if shape == "box":
-        return shape, tuple(_finite(dims, 3, f"{where}: dimensions", positive=True))
-    if shape == "sphere":
-        return shape, tuple(_finite(dims, 1, f"{where}: dimensions", positive=True))
-    height, radius = _finite(dims, 2, f"{where}: dimensions", positive=True)
-    return shape, (radius, height)
+    dims = floats(
+        numbers(
+            primitive.get("dimensions"),
+            DIMENSIONS[shape],
+            f"{where}: dimensions",
+            positive=True,
+        )
+    )
+    if shape == "cylinder":  # MoveIt's (height, radius): the workbench's (r, length)
+        return shape, (dims[1], dims[0])
+    return shape, dims
 
 
-def _vector(value: Any, keys: str, where: str) -> list[float]:
+def _vector(value: Any, keys: str, where: str) -> FloatArray:
+    """A list, or a mapping of ``keys`` (``x`` ``y`` ``z`` ``w``; ``w`` required)."""
     if isinstance(value, Mapping):
         value = [value.get(k, 0.0 if k != "w" else None) for k in keys]
-    return _finite(value, len(keys), where)
+    return numbers(value, len(keys), where)
 
 
 def _pose(raw: Any, where: str) -> pin.SE3:
@@ -259,14 +248,10 @@ def _pose(raw: Any, where: str) -> pin.SE3:
     quat = _vector(
         raw.get("orientation", [0.0, 0.0, 0.0, 1.0]), "xyzw", f"{where}: orientation"
     )
-    norm = math.sqrt(sum(v * v for v in quat))
-    if not math.isclose(norm, 1.0, abs_tol=QUATERNION_NORM_TOL):
-        raise SceneFileError(f"{where}: orientation must have norm 1, got {norm:.6g}")
-    x, y, z, w = (v / norm for v in quat)
-    return pin.SE3(pin.Quaternion(w, x, y, z).toRotationMatrix(), np.array(position))
+    return pin.SE3(rotation_from_quat_xyzw(quat, f"{where}: orientation"), position)
 
 
-def _mesh(raw: Any, where: str) -> tuple[np.ndarray, np.ndarray]:
+def _mesh(raw: Any, where: str) -> tuple[FloatArray, np.ndarray]:
     vertices = raw.get("vertices") if isinstance(raw, Mapping) else None
     triangles = raw.get("triangles") if isinstance(raw, Mapping) else None
     if (
@@ -275,20 +260,9 @@ def _mesh(raw: Any, where: str) -> tuple[np.ndarray, np.ndarray]:
         or not triangles
     ):
         raise SceneFileError(f"{where}: needs lists of vertices and triangles")
-    v = np.array([_vector(p, "xyz", f"{where}: vertex") for p in vertices])
-    t = []
-    for item in triangles:
-        indices = item.get("vertex_indices") if isinstance(item, Mapping) else item
-        if not (
-            isinstance(indices, list)
-            and len(indices) == 3
-            and all(type(i) is int and 0 <= i < len(v) for i in indices)
-        ):
-            raise SceneFileError(
-                f"{where}: a triangle must be 3 vertex indices < {len(v)}, got {item!r}"
-            )
-        t.append(indices)
-    v.setflags(write=False)
-    faces = np.array(t, dtype=np.int64)
-    faces.setflags(write=False)
-    return v, faces
+    points = [_vector(p, "xyz", f"{where}: vertex") for p in vertices]
+    indices = [
+        item.get("vertex_indices") if isinstance(item, Mapping) else item
+        for item in triangles
+    ]
+    return mesh_arrays(points, indices, where)

@@ -33,27 +33,27 @@ into the same :class:`~workbench.collision.Scene`.
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-import numpy.typing as npt
 import pinocchio as pin
 
 from workbench.atomic_files import write_text_atomic
+from workbench.collision._scene_values import (
+    QUATERNION_NORM_TOL,
+    floats,
+    mesh_arrays,
+    numbers,
+    rotation_from_quat_xyzw,
+)
 from workbench.collision.moveit_scene import parse_moveit_scene, read_yaml_file
 from workbench.collision.scene import SHAPES, Obstacle, Scene
 from workbench.errors import InputError, SceneFileError
 from workbench.validation import read_json_file
 
-FloatArray = npt.NDArray[np.float64]
-
 _COMMON_KEYS = ("name", "shape", "position", "quat_xyzw", "rpy", "allow", "color")
 #: Suffixes of MoveIt planning-scene files (YAML).
 YAML_SUFFIXES = (".yaml", ".yml")
-#: Tolerance on the norm of a scene quaternion.
-QUATERNION_NORM_TOL = 1e-6
 
 
 def write_scene(scene: Scene, path: str | Path) -> Path:
@@ -131,26 +131,6 @@ def _check_keys(raw: dict, valid: tuple[str, ...], where: str) -> None:
         )
 
 
-def _numbers(
-    value: Any, size: int, where: str, *, positive: bool = False
-) -> FloatArray:
-    ok = isinstance(value, list) and len(value) == size
-    if not ok or any(
-        isinstance(v, bool) or not isinstance(v, int | float) for v in value
-    ):
-        raise SceneFileError(f"{where} must be a list of {size} numbers, got {value!r}")
-    arr = np.array(value, dtype=np.float64)
-    if not np.all(np.isfinite(arr)):
-        raise SceneFileError(f"{where} must be finite, got {value!r}")
-    if positive and np.any(arr <= 0.0):
-        raise SceneFileError(f"{where} must be > 0, got {value!r}")
-    return arr
-
-
-def _floats(values: FloatArray) -> tuple[float, ...]:
-    return tuple(float(v) for v in values)
-
-
 def _parse_object(raw: Any, where: str, folder: Path) -> Obstacle:
     if not isinstance(raw, dict):
         raise SceneFileError(f"{where} must be a JSON object")
@@ -171,7 +151,7 @@ def _parse_object(raw: Any, where: str, folder: Path) -> Obstacle:
     allow = raw.get("allow", [])
     if not isinstance(allow, list) or not all(isinstance(a, str) for a in allow):
         raise SceneFileError(f"{where}: 'allow' must be a list of link names")
-    color = _floats(_numbers(raw.get("color", [0.55, 0.45, 0.35, 0.9]), 4, where))
+    color = floats(numbers(raw.get("color", [0.55, 0.45, 0.35, 0.9]), 4, where))
     if not all(0.0 <= c <= 1.0 for c in color):
         raise SceneFileError(f"{where}: 'color' entries must be in [0, 1]")
     return Obstacle(
@@ -189,18 +169,16 @@ def _parse_size(
     raw: dict, shape: str, where: str, folder: Path
 ) -> tuple[tuple[float, ...], dict[str, Any]]:
     if shape == "box":
-        return _floats(_numbers(raw["size"], 3, f"{where}: size", positive=True)), {}
+        return floats(numbers(raw["size"], 3, f"{where}: size", positive=True)), {}
     if shape == "sphere":
-        return _floats(
-            _numbers([raw["radius"]], 1, f"{where}: radius", positive=True)
+        return floats(
+            numbers([raw["radius"]], 1, f"{where}: radius", positive=True)
         ), {}
     if shape == "cylinder":
         values = [raw["radius"], raw["length"]]
-        return _floats(
-            _numbers(values, 2, f"{where}: radius, length", positive=True)
-        ), {}
-    scale = _floats(
-        _numbers(raw.get("scale", [1, 1, 1]), 3, f"{where}: scale", positive=True)
+        return floats(numbers(values, 2, f"{where}: radius, length", positive=True)), {}
+    scale = floats(
+        numbers(raw.get("scale", [1, 1, 1]), 3, f"{where}: scale", positive=True)
     )
     if ("file" in raw) == ("vertices" in raw or "triangles" in raw):
         raise SceneFileError(
@@ -225,33 +203,20 @@ def _parse_inline_mesh(raw: dict, where: str) -> dict[str, Any]:
         or not triangles
     ):
         raise SceneFileError(f"{where}: 'vertices' and 'triangles' must be lists")
-    v = np.array([_numbers(p, 3, f"{where}: vertex") for p in vertices])
-    tri = []
-    for item in triangles:
-        ok = isinstance(item, list) and len(item) == 3
-        if not ok or not all(type(i) is int and 0 <= i < len(v) for i in item):
-            raise SceneFileError(
-                f"{where}: a triangle must be 3 vertex indices < {len(v)}, got {item!r}"
-            )
-        tri.append(item)
-    v.setflags(write=False)
-    t = np.array(tri, dtype=np.int64)
-    t.setflags(write=False)
+    points = [numbers(p, 3, f"{where}: vertex") for p in vertices]
+    v, t = mesh_arrays(points, triangles, where)
     return {"vertices": v, "triangles": t}
 
 
 def _parse_pose(raw: dict, where: str) -> pin.SE3:
-    position = _numbers(raw.get("position", [0, 0, 0]), 3, f"{where}: position")
+    position = numbers(raw.get("position", [0, 0, 0]), 3, f"{where}: position")
     if "quat_xyzw" in raw and "rpy" in raw:
         raise SceneFileError(f"{where}: give 'quat_xyzw' or 'rpy', not both")
     if "rpy" in raw:
-        rotation = pin.rpy.rpyToMatrix(_numbers(raw["rpy"], 3, f"{where}: rpy"))
+        rotation = pin.rpy.rpyToMatrix(numbers(raw["rpy"], 3, f"{where}: rpy"))
     else:
-        quat = _numbers(raw.get("quat_xyzw", [0, 0, 0, 1]), 4, f"{where}: quat_xyzw")
-        norm = float(np.linalg.norm(quat))
-        if not math.isclose(norm, 1.0, abs_tol=QUATERNION_NORM_TOL):
-            raise SceneFileError(f"{where}: quat_xyzw must have norm 1, got {norm:.6g}")
-        rotation = pin.Quaternion(*np.roll(quat / norm, 1)).toRotationMatrix()
+        quat = numbers(raw.get("quat_xyzw", [0, 0, 0, 1]), 4, f"{where}: quat_xyzw")
+        rotation = rotation_from_quat_xyzw(quat, f"{where}: quat_xyzw")
     return pin.SE3(rotation, position)
 
 
