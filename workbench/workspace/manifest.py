@@ -84,12 +84,6 @@ def _single_chunk_digest(array: zarr.Array) -> str | None:
     return None if data is None else _hex(chunk_digest(data))
 
 
-def _array(group: zarr.Group, name: str) -> zarr.Array:
-    array = group[name]
-    assert isinstance(array, zarr.Array)
-    return array
-
-
 def write_manifest(
     group: zarr.Group,
     names: Sequence[str],
@@ -104,7 +98,8 @@ def write_manifest(
         attributes: Group attributes to set with the manifest (in the same
             write of the group's ``zarr.json``).
     """
-    readers = [ChunkReader(_array(group, name)) for name in names]
+    arrays = {name: array for name, array in group.arrays() if name != CHECKSUMS}
+    readers = [ChunkReader(arrays[name]) for name in names]
     count = max((reader.count for reader in readers), default=0)
     table = np.zeros((count, len(names), 2), dtype=np.uint64)
     for column, reader in enumerate(readers):
@@ -114,7 +109,7 @@ def write_manifest(
                 table[index, column] = chunk_digest(data), len(data)
     if CHECKSUMS in group:
         del group[CHECKSUMS]
-    group.create_array(
+    arrays[CHECKSUMS] = group.create_array(
         CHECKSUMS,
         shape=table.shape,
         chunks=table.shape,
@@ -126,9 +121,9 @@ def write_manifest(
             f"the manifest's arrays): its {ALGORITHM} digest and its size [bytes]; "
             "0 and 0 where not stored"
         },
-    )[...] = table
+    )
+    arrays[CHECKSUMS][...] = table
     attrs = dict(group.attrs.asdict()) | dict(attributes or {})
-    arrays = dict(group.arrays())
     manifest: dict[str, Any] = {
         "algorithm": ALGORITHM,
         "arrays": list(names),

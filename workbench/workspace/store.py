@@ -324,25 +324,33 @@ def get_array(group: zarr.Group, name: str) -> zarr.Array:
     return array
 
 
-def read_array(
-    group: zarr.Group, name: str, array: zarr.Array | None = None
-) -> npt.NDArray[Any]:
+def read_array(group: zarr.Group, name: str) -> npt.NDArray[Any]:
     """The whole array ``name`` of a map's group, as NumPy.
-
-    Args:
-        group: The map's group.
-        name: The array.
-        array: The array, if opened already.
 
     Raises:
         InputError: If there is no such array, or its chunks cannot be read
             (truncated, corrupt).
     """
-    array = get_array(group, name) if array is None else array
+    array = get_array(group, name)
     try:
         return np.asarray(array[...])
     except READ_ERRORS as err:
         raise damaged_array(group, name, err) from err
+
+
+def read_done_flags(group: zarr.Group, array: zarr.Array) -> npt.NDArray[np.uint8]:
+    """The ``done`` flags (n_blocks,) of a map, ``array`` its ``done`` array.
+
+    One file per block, read here rather than through Zarr's event loop.
+
+    Raises:
+        InputError: If a flag's file cannot be read.
+    """
+    try:
+        flags: npt.NDArray[np.uint8] = ChunkReader(array).read_all()
+    except READ_ERRORS as err:
+        raise damaged_array(group, DONE, err) from err
+    return flags
 
 
 def get_attributes(group: zarr.Group) -> dict[str, Any]:
@@ -566,7 +574,7 @@ class WorkspaceMap:
         if name in GRID_ARRAYS:
             return self._manifest.read_single(name)
         if name == DONE:
-            return read_array(self._group, name, self._manifest.arrays[DONE])
+            return read_done_flags(self._group, self._manifest.arrays[DONE])
         raise InputError(
             f"the map {self.path} has no array {name!r}; it has {', '.join(self.names)}"
         )
@@ -595,10 +603,7 @@ def open_map(path: str | Path) -> WorkspaceMap:
     path = Path(path)
     group, arrays = open_arrays_checked(path, mode="r")
     attrs = get_attributes(group)
-    try:  # one file per block: read here, not through Zarr's event loop
-        done = ChunkReader(arrays[DONE]).read_all()
-    except READ_ERRORS as err:
-        raise damaged_array(group, DONE, err) from err
+    done = read_done_flags(group, arrays[DONE])
     finished = not path.name.endswith(PARTIAL_SUFFIX) and MANIFEST in attrs
     if not finished or not np.all(done == 1):
         if finished:

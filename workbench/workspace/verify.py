@@ -26,6 +26,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -47,6 +48,7 @@ from workbench.workspace.store import (
     get_attributes,
     open_arrays_checked,
     read_array,
+    read_done_flags,
 )
 
 #: ``progress(done, total)``: chunks checked so far and in all.
@@ -113,7 +115,7 @@ def verify_map(
     attrs = get_attributes(group)
     version = int(attrs["format_version"])
     names = get_array_names(arrays)
-    done = read_array(group, DONE, arrays[DONE])
+    done = read_done_flags(group, arrays[DONE])
     if not np.all(done == 1):
         raise InputError(
             f"{path} is no finished map ({int(np.sum(done == 1))} of {done.size} "
@@ -141,7 +143,7 @@ def verify_map(
             counted["values"] += values.size
             if progress is not None:
                 progress(counted["chunks"], total)
-    read = manifest.read_single if manifest is not None else _plain(group)
+    read = manifest.read_single if manifest is not None else partial(read_array, group)
     _check_grid(path, attrs, read)
     upgraded = False
     if upgrade and manifest is None:
@@ -171,10 +173,6 @@ def _size(file: Path) -> int | None:
         return file.stat().st_size
     except FileNotFoundError:
         return None
-
-
-def _plain(group: zarr.Group) -> Callable[[str], npt.NDArray[Any]]:
-    return lambda name: read_array(group, name)
 
 
 def _decoded(
