@@ -264,6 +264,12 @@ class Manifest:
         """The digest recorded for chunk ``index`` of data array ``name``."""
         return int(self._table[index, self.names.index(name), 0])
 
+    def stored_size(self, name: str, index: int) -> int | None:
+        """The size [bytes] recorded for that chunk's file; None: not stored."""
+        if self.expected(name, index) == NOT_STORED:
+            return None
+        return int(self._table[index, self.names.index(name), 1])
+
     def read_single(self, name: str) -> npt.NDArray[Any]:
         """The whole of ``positions``, ``orientations`` or ``checksums``, checked."""
         return self._checked(name, self._readers[name], 0, self._single.get(name))

@@ -131,7 +131,7 @@ def verify_map(
         for index in range(reader.count):
             if manifest is not None:
                 values = manifest.read_chunk(name, index)
-                size = _size(reader.path(index))
+                size = manifest.stored_size(name, index)  # its file's, on open
             else:
                 data = reader.read_bytes(index)
                 values = _decoded(path, reader, name, index, data)
@@ -165,14 +165,6 @@ def verify_map(
 
 def _damaged(path: Path, what: str) -> InputError:
     return InputError(f"{path} is a damaged workspace map ({what})")
-
-
-def _size(file: Path) -> int | None:
-    """Bytes of ``file``; None if it does not exist."""
-    try:
-        return file.stat().st_size
-    except FileNotFoundError:
-        return None
 
 
 def _decoded(
