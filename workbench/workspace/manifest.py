@@ -52,6 +52,11 @@ SINGLE_CHUNK_ARRAYS = ("positions", "orientations", CHECKSUMS)
 DECODE_ERRORS = (RuntimeError, ValueError, TypeError, OverflowError, MemoryError)
 
 
+def damaged(path: Path, what: str) -> InputError:
+    """The one-line error for damage ``what`` of the map at ``path``."""
+    return InputError(f"{path} is a damaged workspace map ({what})")
+
+
 def _canonical(value: Any) -> bytes:
     """``value`` as JSON with sorted keys and no spaces (NaN written as NaN)."""
     return json.dumps(value, sort_keys=True, separators=(",", ":")).encode()
@@ -226,7 +231,7 @@ class Manifest:
 
     def damaged(self, what: str) -> InputError:
         """The one-line error for damage ``what`` of this map."""
-        return InputError(f"{self.path} is a damaged workspace map ({what})")
+        return damaged(self.path, what)
 
     def _check_attributes(self, attrs: Mapping[str, Any], recorded: Any) -> None:
         if not isinstance(recorded, Mapping):

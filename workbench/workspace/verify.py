@@ -37,7 +37,12 @@ import zarr
 from workbench.errors import InputError
 from workbench.workspace._chunk_files import ChunkReader
 from workbench.workspace.grid import grid_positions
-from workbench.workspace.manifest import DECODE_ERRORS, Manifest, write_manifest
+from workbench.workspace.manifest import (
+    DECODE_ERRORS,
+    Manifest,
+    damaged,
+    write_manifest,
+)
 from workbench.workspace.orientations import cone_orientations, uniform_orientations
 from workbench.workspace.store import (
     ARRAYS,
@@ -163,10 +168,6 @@ def verify_map(
     )
 
 
-def _damaged(path: Path, what: str) -> InputError:
-    return InputError(f"{path} is a damaged workspace map ({what})")
-
-
 def _decoded(
     path: Path, reader: ChunkReader, name: str, index: int, data: bytes | None
 ) -> npt.NDArray[Any]:
@@ -174,7 +175,7 @@ def _decoded(
         return reader.decode(data, index)
     except DECODE_ERRORS as err:
         message = " ".join(str(err).split()) or type(err).__name__
-        raise _damaged(path, f"array {name!r}, chunk {index}: {message}") from None
+        raise damaged(path, f"array {name!r}, chunk {index}: {message}") from None
 
 
 def _check_range(
@@ -197,7 +198,7 @@ def _check_range(
     smallest, largest = finite.min(), finite.max()
     if smallest < low or largest > high:
         bad = smallest if smallest < low else largest
-        raise _damaged(
+        raise damaged(
             path,
             f"array {name!r}, chunk {index}: value {bad} outside [{low:g}, {high:g}]",
         )
@@ -215,12 +216,12 @@ def _check_grid(
     if tuple(int(n) for n in high - low + 1) != shape or not np.array_equal(
         low * resolution, np.asarray(grid["origin"], dtype=np.float64)
     ):
-        raise _damaged(
+        raise damaged(
             path, "attribute grid: origin and shape are not those of its bounds"
         )
     positions = grid_positions(grid["origin"], resolution, shape)
     if not np.array_equal(read("positions"), positions):
-        raise _damaged(path, "array 'positions' is not the grid of its attributes")
+        raise damaged(path, "array 'positions' is not the grid of its attributes")
     described = attrs["orientation_set"]
     count = int(described["count"])
     if described["construction"] == "super-fibonacci":
@@ -230,13 +231,13 @@ def _check_grid(
             described["axis"], described["half_angle"], count
         )
     if not np.array_equal(read("orientations"), quat):
-        raise _damaged(
+        raise damaged(
             path, "array 'orientations' is not the set of its orientation_set"
         )
     for key, value in derived.items():
         stored = described.get(key)
         if stored != value:  # floats too: the same computation, bitwise
-            raise _damaged(
+            raise damaged(
                 path,
                 f"attribute orientation_set.{key} is {stored!r}, re-derived {value!r}",
             )
