@@ -1,8 +1,11 @@
-"""Motion around obstacles: requests and scenes in the ecosystem's formats.
+"""Motion around obstacles: requests, time scaling and verification of paths.
 
 :mod:`.requests` reads MoveIt motion requests (start and joint goal) as
 configurations of a robot; MoveIt planning scenes are read by
-:func:`workbench.collision.read_scene`.
+:func:`workbench.collision.read_scene`. :mod:`.timing` turns a planner's
+joint-space polyline into a C² trajectory within the joint limits
+(:func:`time_scale`), and :mod:`.verify` checks a trajectory on the exact
+meshes, proven between its samples (:func:`verify_trajectory`).
 """
 
 from __future__ import annotations
@@ -13,7 +16,23 @@ from workbench._lazy import attach
 
 if TYPE_CHECKING:
     from workbench.motion.requests import MotionRequest, read_request
+    from workbench.motion.timing import (
+        WORST_RATIO,
+        WaypointTrajectory,
+        time_optimal_duration,
+        time_scale,
+    )
+    from workbench.motion.verify import DEFAULT_MAX_STEP, verify_trajectory
 
-__all__ = ["MotionRequest", "read_request"]
+__all__ = [
+    "DEFAULT_MAX_STEP",
+    "WORST_RATIO",
+    "MotionRequest",
+    "WaypointTrajectory",
+    "read_request",
+    "time_optimal_duration",
+    "time_scale",
+    "verify_trajectory",
+]
 
 __getattr__, __dir__ = attach(__name__, __file__, __all__)

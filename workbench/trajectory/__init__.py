@@ -47,11 +47,16 @@ if TYPE_CHECKING:
         compute_normal_spline,
         get_normal_spline,
     )
-    from workbench.trajectory.pick_and_place import JointTrajectory, pick_and_place
+    from workbench.trajectory.pick_and_place import (
+        JointTrajectory,
+        pick_and_place,
+        sample_uniform,
+    )
     from workbench.trajectory.segments import SegmentedTrajectory, pick_via_place
     from workbench.trajectory.time_optimal import (
         TimeOptimalComparison,
         compare_time_optimal,
+        compute_bang_coast_bang_duration,
         compute_time_optimal_duration,
         compute_toppra_duration,
     )
@@ -74,6 +79,7 @@ __all__ = [
     "check_limits",
     "check_sample_count",
     "compare_time_optimal",
+    "compute_bang_coast_bang_duration",
     "compute_cartesian_trajectory",
     "compute_literal_spline",
     "compute_normal_spline",
@@ -88,6 +94,7 @@ __all__ = [
     "pick_via_place",
     "raise_for_violations",
     "read_trajectory_csv",
+    "sample_uniform",
     "write_trajectory_csv",
 ]
 

@@ -55,7 +55,10 @@ COLLISION_RATE_HZ = 100.0
 
 
 class _Sampleable(Protocol):
-    """A trajectory sampled by time: JointTrajectory, SegmentedTrajectory."""
+    """A trajectory sampled by time over [0, duration] (JointTrajectory, ...)."""
+
+    @property
+    def duration(self) -> float: ...  # pragma: no cover
 
     def sample(
         self, t: npt.ArrayLike
@@ -145,7 +148,7 @@ class JointTrajectory:
         Raises:
             InputError: If ``rate_hz`` is not finite and > 0.
         """
-        return _sample_uniform(self, self.duration, rate_hz)
+        return sample_uniform(self, rate_hz)
 
     def get_extrema(self, order: int) -> JointExtrema:
         """Exact per-joint extremes of q (0), q̇ (1) or q̈ (2) over [0, T].
@@ -237,12 +240,17 @@ def _scale(
     return np.moveaxis(q, 0, -1), np.moveaxis(qd, 0, -1), np.moveaxis(qdd, 0, -1)
 
 
-def _sample_uniform(
-    trajectory: _Sampleable,
-    duration: float,
-    rate_hz: float,
-) -> JointTrajectorySamples:
-    """Samples from 0 to ``duration`` at ``rate_hz``, both ends included."""
+def sample_uniform(trajectory: _Sampleable, rate_hz: float) -> JointTrajectorySamples:
+    """Samples of ``trajectory`` at ``rate_hz`` from 0 to its duration, ends included.
+
+    The last step is shorter when ``duration · rate_hz`` is not an integer.
+    What the trajectory CSV writer and the exports take, from any trajectory
+    with ``duration`` [s] and ``sample(t) -> (q, qd, qdd)``.
+
+    Raises:
+        InputError: If ``rate_hz`` is not finite and > 0.
+    """
+    duration = trajectory.duration
     try:
         rate = float(rate_hz)
     except (TypeError, ValueError):

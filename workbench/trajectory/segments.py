@@ -25,9 +25,9 @@ from workbench.trajectory.limits import (
 from workbench.trajectory.normal_spline import DEFAULT_N_POINTS
 from workbench.trajectory.pick_and_place import (
     JointTrajectory,
-    _sample_uniform,
     check_duration,
     pick_and_place,
+    sample_uniform,
 )
 from workbench.validation import as_finite_array
 
@@ -78,7 +78,7 @@ class SegmentedTrajectory:
 
     def sample_uniform(self, rate_hz: float) -> JointTrajectorySamples:
         """Samples at ``rate_hz`` from 0 to ``duration``, both ends included."""
-        return _sample_uniform(self, self.duration, rate_hz)
+        return sample_uniform(self, rate_hz)
 
     def get_extrema(self, order: int) -> JointExtrema:
         """Exact per-joint extremes of q (0), q̇ (1), q̈ (2) over the whole chain."""

@@ -81,11 +81,32 @@ def compute_time_optimal_duration(
     a = float(np.min(_rate_limit(robot, 2)[moving] / dq[moving]))
     if math.isinf(v):
         raise InputError(f"robot {robot.name} has no speed limit on the moving joints")
-    if math.isinf(a):
-        return 1.0 / v
-    if v * v <= a:
-        return 1.0 / v + v / a
-    return 2.0 / math.sqrt(a)
+    return float(compute_bang_coast_bang_duration(v, a))
+
+
+def compute_bang_coast_bang_duration(
+    speed_bound: npt.ArrayLike, acceleration_bound: npt.ArrayLike
+) -> FloatArray:
+    r"""Shortest rest-to-rest time over a unit path, :math:`u: 0 \to 1`.
+
+    With :math:`|\dot u| \le V` and :math:`|\ddot u| \le A` the fastest motion
+    is bang-coast-bang (module docstring): :math:`1/V + V/A` when it reaches
+    V (:math:`V^2 \le A`), else :math:`2/\sqrt{A}`; :math:`1/V` for
+    :math:`A = \infty`. Element-wise over arrays.
+
+    Args:
+        speed_bound: V [1/s], > 0 and finite, scalar or array.
+        acceleration_bound: A [1/s²], > 0 (inf: no bound), broadcast with V.
+
+    Returns:
+        T* [s], of the broadcast shape.
+    """
+    v = np.asarray(speed_bound, dtype=np.float64)
+    a = np.asarray(acceleration_bound, dtype=np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cruise = 1.0 / v + v / a
+        triangle = 2.0 / np.sqrt(a)
+    return np.asarray(np.where(v * v <= a, cruise, triangle), dtype=np.float64)
 
 
 def compute_toppra_duration(
