@@ -293,7 +293,7 @@ def _build_profile(
     coasts = speed * speed <= share
     peak = np.where(coasts, speed, np.sqrt(share))
     t_accel = peak / share
-    t_coast = np.maximum(durations - 2.0 * t_accel, 0.0)
+    t_coast = np.where(coasts, np.maximum(durations - 2.0 * t_accel, 0.0), 0.0)
     ramp = JERK_FRACTION * t_accel
     jerk = accel / ramp
     hold = t_accel - 2.0 * ramp
