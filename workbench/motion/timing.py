@@ -360,10 +360,9 @@ def _check_waypoints(robot: Robot, waypoints: npt.ArrayLike) -> FloatArray:
             "configuration is no motion)"
         )
     lower, upper = np.asarray(robot.lower), np.asarray(robot.upper)
-    with np.errstate(invalid="ignore"):
-        outside = (points < lower - LIMIT_RTOL * np.abs(lower)) | (
-            points > upper + LIMIT_RTOL * np.abs(upper)
-        )
+    outside = (points < lower - LIMIT_RTOL * np.abs(lower)) | (
+        points > upper + LIMIT_RTOL * np.abs(upper)
+    )
     if outside.any():
         k, i = (int(x[0]) for x in np.nonzero(outside))
         raise InputError(

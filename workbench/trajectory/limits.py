@@ -169,8 +169,10 @@ def check_limits(trajectory: _HasExtrema) -> list[LimitViolation]:
     of the limit.
 
     Args:
-        trajectory: A :class:`~workbench.trajectory.JointTrajectory` or
-            :class:`~workbench.trajectory.SegmentedTrajectory`.
+        trajectory: Any trajectory with ``robot`` and exact
+            ``get_extrema(order)``: a :class:`~workbench.trajectory.JointTrajectory`,
+            :class:`~workbench.trajectory.SegmentedTrajectory` or
+            :class:`~workbench.motion.WaypointTrajectory`.
 
     Returns:
         The violations, by kind (position, velocity, acceleration) then joint;
