@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 from workbench._lazy import attach
 
 if TYPE_CHECKING:
+    from workbench.motion._polyline import REPEAT_TOL
     from workbench.motion.requests import MotionRequest, read_request
     from workbench.motion.timing import (
         WORST_RATIO,
@@ -26,6 +27,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "DEFAULT_MAX_STEP",
+    "REPEAT_TOL",
     "WORST_RATIO",
     "MotionRequest",
     "WaypointTrajectory",

@@ -49,13 +49,13 @@ import numpy.typing as npt
 
 from workbench.errors import InputError
 from workbench.model.robot import Robot
+from workbench.motion._polyline import compute_path_bounds
 from workbench.trajectory import (
     JointExtrema,
     JointTrajectorySamples,
     compute_bang_coast_bang_duration,
     sample_uniform,
 )
-from workbench.trajectory.limits import LIMIT_RTOL
 from workbench.validation import as_finite_array
 
 FloatArray = npt.NDArray[np.float64]
@@ -67,8 +67,6 @@ JERK_FRACTION = 1.0 / 6.0
 ACCELERATION_SHARE = 1.0 - JERK_FRACTION
 #: Largest ratio of a segment's duration to the time-optimal one, :math:`1/\sqrt c`.
 WORST_RATIO = 1.0 / math.sqrt(ACCELERATION_SHARE)
-#: Consecutive waypoints closer than this in every joint [rad] are one waypoint.
-REPEAT_TOL = 1e-12
 #: Phases of constant jerk per segment.
 PHASES = 7
 
@@ -226,8 +224,9 @@ def time_scale(
             speed and acceleration limits of every joint that moves
             (:meth:`~workbench.model.Robot.with_limits`).
         waypoints: Shape (K, nq) [rad], K >= 2, within the position limits,
-            no two consecutive ones equal (closer than :data:`REPEAT_TOL` in
-            every joint): a planner's path after shortcutting.
+            no two consecutive ones equal (closer than
+            :data:`~workbench.motion.REPEAT_TOL` in every joint): a planner's
+            path after shortcutting.
         velocity_scale: Fraction of every speed limit used, in (0, 1].
         acceleration_scale: Fraction of every acceleration limit, in (0, 1].
 
@@ -242,7 +241,7 @@ def time_scale(
             (0, 1], a moving joint has no speed or acceleration limit, or
             the robot has nq != nv.
     """
-    points, speed, accel = _path_bounds(
+    points, speed, accel = compute_path_bounds(
         robot, waypoints, velocity_scale, acceleration_scale
     )
     durations = compute_bang_coast_bang_duration(speed, ACCELERATION_SHARE * accel)
@@ -281,7 +280,9 @@ def time_optimal_duration(
     Raises:
         DimensionError, NonFiniteError, InputError: As :func:`time_scale`.
     """
-    _, speed, accel = _path_bounds(robot, waypoints, velocity_scale, acceleration_scale)
+    _, speed, accel = compute_path_bounds(
+        robot, waypoints, velocity_scale, acceleration_scale
+    )
     return float(np.sum(compute_bang_coast_bang_duration(speed, accel)))
 
 
@@ -323,89 +324,3 @@ def _build_profile(
     for array in (start, state, segment):
         array.setflags(write=False)
     return _Profile(start, state, segment, t_accel, t_coast, peak, accel)
-
-
-def _check_scale(value: float, name: str) -> float:
-    try:
-        scale = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a number in (0, 1], got {value!r}") from None
-    if isinstance(value, bool) or not (0.0 < scale <= 1.0):
-        raise InputError(f"{name} must be a number in (0, 1], got {value!r}")
-    return scale
-
-
-def _check_waypoints(robot: Robot, waypoints: npt.ArrayLike) -> FloatArray:
-    """The waypoints as a new (K, nq) array, checked (see :func:`time_scale`)."""
-    if robot.nq != robot.nv:
-        raise InputError(
-            f"robot {robot.name} has nq = {robot.nq} != nv = {robot.nv} (continuous "
-            "or multi-coordinate joints); the time scaling needs one coordinate "
-            "per joint"
-        )
-    try:
-        points = np.array(waypoints, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise InputError(
-            f"waypoints must be numbers of shape (K, {robot.nq}), got {waypoints!r}"
-        ) from None
-    if points.ndim != 2 or points.shape[1] != robot.nq:
-        raise InputError(
-            f"waypoints must have shape (K, {robot.nq}), got shape {points.shape}"
-        )
-    points = as_finite_array(points, points.shape, "waypoints")
-    if points.shape[0] < 2:
-        raise InputError(
-            f"at least two waypoints are needed, got {points.shape[0]} (one "
-            "configuration is no motion)"
-        )
-    lower, upper = np.asarray(robot.lower), np.asarray(robot.upper)
-    outside = (points < lower - LIMIT_RTOL * np.abs(lower)) | (
-        points > upper + LIMIT_RTOL * np.abs(upper)
-    )
-    if outside.any():
-        k, i = (int(x[0]) for x in np.nonzero(outside))
-        raise InputError(
-            f"waypoint {k}: joint {robot.joint_names[i]} at {points[k, i]:.6g} rad "
-            f"is outside its limits [{lower[i]:.6g}, {upper[i]:.6g}] rad"
-        )
-    step = np.max(np.abs(np.diff(points, axis=0)), axis=1)
-    repeated = np.flatnonzero(step <= REPEAT_TOL)
-    if repeated.size:
-        k = int(repeated[0])
-        raise InputError(
-            f"waypoints {k} and {k + 1} are the same configuration (within "
-            f"{REPEAT_TOL:g} rad in every joint): remove repeated waypoints"
-        )
-    return points
-
-
-def _path_bounds(
-    robot: Robot,
-    waypoints: npt.ArrayLike,
-    velocity_scale: float,
-    acceleration_scale: float,
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    r"""Checked waypoints (K, nq) and each segment's :math:`V_s, A_s` (K - 1,)."""
-    points = _check_waypoints(robot, waypoints)
-    v_scale = _check_scale(velocity_scale, "velocity_scale")
-    a_scale = _check_scale(acceleration_scale, "acceleration_scale")
-    limits = (
-        np.asarray(robot.velocity_limit) * v_scale,
-        np.asarray(robot.acceleration_limit) * a_scale,
-    )
-    distance = np.abs(np.diff(points, axis=0))
-    moving = np.any(distance > 0.0, axis=0)
-    for kind, limit in zip(("velocity", "acceleration"), limits, strict=True):
-        unknown = moving & ~np.isfinite(limit)
-        if unknown.any():
-            names = [robot.joint_names[i] for i in np.flatnonzero(unknown)]
-            raise InputError(
-                f"robot {robot.name} gives no {kind} limit for {', '.join(names)}: "
-                "the time scaling needs the speed and acceleration limits of every "
-                "joint that moves (Robot.with_limits, --velocity-limit, "
-                "--acceleration-limit)"
-            )
-    with np.errstate(divide="ignore"):
-        speed, accel = (np.min(limit / distance, axis=1) for limit in limits)
-    return points, speed, accel
