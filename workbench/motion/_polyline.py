@@ -36,8 +36,7 @@ def check_waypoints(robot: Robot, waypoints: npt.ArrayLike) -> FloatArray:
     """The waypoints as a new (K, nq) array, checked.
 
     Raises:
-        DimensionError, NonFiniteError, InputError: As
-            :func:`~workbench.motion.time_scale`.
+        NonFiniteError, InputError: As :func:`~workbench.motion.time_scale`.
     """
     if robot.nq != robot.nv:
         raise InputError(

@@ -234,12 +234,11 @@ def time_scale(
         The trajectory, through waypoint k at ``times[k]``.
 
     Raises:
-        DimensionError: If the waypoints do not have nq columns.
         NonFiniteError: If a waypoint holds NaN or infinity.
-        InputError: If there are fewer than two waypoints, two consecutive
-            ones are equal, one leaves the position limits, a scale is not in
-            (0, 1], a moving joint has no speed or acceleration limit, or
-            the robot has nq != nv.
+        InputError: If the waypoints are not numbers of shape (K, nq), there
+            are fewer than two, two consecutive ones are equal, one leaves
+            the position limits, a scale is not in (0, 1], a moving joint has
+            no speed or acceleration limit, or the robot has nq != nv.
     """
     points, speed, accel = compute_path_bounds(
         robot, waypoints, velocity_scale, acceleration_scale
@@ -278,7 +277,7 @@ def time_optimal_duration(
         :data:`WORST_RATIO`.
 
     Raises:
-        DimensionError, NonFiniteError, InputError: As :func:`time_scale`.
+        NonFiniteError, InputError: As :func:`time_scale`.
     """
     _, speed, accel = compute_path_bounds(
         robot, waypoints, velocity_scale, acceleration_scale
