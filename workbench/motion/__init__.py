@@ -1,5 +1,10 @@
-"""Motion around obstacles: requests, time scaling and verification of paths.
+"""Motion around obstacles: plan, time-scale and verify collision-free motions.
 
+:func:`plan` is the one door (:mod:`.plan`): RRT-Connect on a conservative
+sphere model of the robot (:mod:`.spheres`, :func:`spherize`), checked in
+compiled code against the scene with certified segments (:mod:`.checker`,
+:class:`SphereChecker`), shortened, time-scaled and verified on the exact
+meshes.
 :mod:`.requests` reads MoveIt motion requests (start and joint goal) as
 configurations of a robot; MoveIt planning scenes are read by
 :func:`workbench.collision.read_scene`. :mod:`.timing` turns a planner's
@@ -16,7 +21,10 @@ from workbench._lazy import attach
 
 if TYPE_CHECKING:
     from workbench.motion._polyline import REPEAT_TOL
+    from workbench.motion.checker import SphereChecker
+    from workbench.motion.planner import MotionPlan, goal_configurations, plan
     from workbench.motion.requests import MotionRequest, read_request
+    from workbench.motion.spheres import LinkSpheres, SphereModel, spherize
     from workbench.motion.timing import (
         WORST_RATIO,
         WaypointTrajectory,
@@ -29,9 +37,16 @@ __all__ = [
     "DEFAULT_MAX_STEP",
     "REPEAT_TOL",
     "WORST_RATIO",
+    "LinkSpheres",
+    "MotionPlan",
     "MotionRequest",
+    "SphereChecker",
+    "SphereModel",
     "WaypointTrajectory",
+    "goal_configurations",
+    "plan",
     "read_request",
+    "spherize",
     "time_optimal_duration",
     "time_scale",
     "verify_trajectory",

@@ -1,0 +1,381 @@
+"""The planner: sphere model, compiled clearances, certified segments, plan()."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import workbench as wb
+from workbench.collision import CollisionChecker
+from workbench.collision.scene import Obstacle, Scene
+from workbench.errors import InputError
+from workbench.motion import SphereChecker, goal_configurations, plan, spherize
+from workbench.motion.spheres import mesh_triangles
+from workbench.paper_data import ANGELES_PICK_Q_DEG, ANGELES_PLACE_Q_DEG
+
+#: Sphere containment and kernel-vs-numpy agreement [m] (exact arithmetic).
+EXACT_TOL = 1e-9
+#: FK residual of a pose goal [m, rad].
+FK_TOL = 1e-9
+
+PICK, PLACE = np.radians(ANGELES_PICK_Q_DEG), np.radians(ANGELES_PLACE_Q_DEG)
+
+
+@pytest.fixture(scope="module")
+def puma() -> wb.Robot:
+    return wb.load_robot("puma560").with_limits(acceleration_limit=np.full(6, 4.0))
+
+
+@pytest.fixture(scope="module")
+def puma_spheres(puma: wb.Robot):
+    return spherize(puma)
+
+
+@pytest.fixture(scope="module")
+def ur5_spheres():
+    return spherize(wb.load_robot("ur5"))
+
+
+@pytest.fixture(scope="module")
+def ur5_unchecked(ur5_spheres):
+    """The UR5 link pairs the spheres cannot separate in random poses.
+
+    Its upper arm passes 14 mm from its base in every pose, its wrist links
+    a few millimetres from each other: closer than the spheres' excess. The
+    planner leaves such pairs to the exact check (``MotionPlan.unchecked``).
+    """
+    robot = ur5_spheres.robot
+    checker = SphereChecker(ur5_spheres)
+    rng = np.random.default_rng(7)
+    found: set[tuple[str, str]] = set()
+    for _ in range(200):
+        values = checker.clearances(
+            robot.lower + rng.random(6) * (robot.upper - robot.lower)
+        )
+        found |= {
+            checker.pairs[k - len(checker.links)] for k in np.flatnonzero(values < 0)
+        }
+    return tuple(sorted(found))
+
+
+def _wall(robot: wb.Robot) -> Scene:
+    """A 10 cm box on the straight joint path from the pick to the place."""
+    middle = robot.fk(0.5 * (PICK + PLACE)).translation
+    box = Obstacle("wall", "box", (0.1, 0.1, 0.1), pin.SE3(np.eye(3), middle))
+    return Scene("wall", (box,))
+
+
+def _mixed_scene() -> Scene:
+    rotation = pin.utils.rpyToMatrix(0.3, -0.2, 0.7)
+    return Scene(
+        "mixed",
+        (
+            Obstacle(
+                "box",
+                "box",
+                (0.3, 0.2, 0.1),
+                pin.SE3(rotation, np.array([0.5, 0.2, 0.3])),
+            ),
+            Obstacle(
+                "cyl",
+                "cylinder",
+                (0.05, 0.4),
+                pin.SE3(rotation.T, np.array([-0.3, 0.4, 0.5])),
+            ),
+            Obstacle(
+                "ball",
+                "sphere",
+                (0.08,),
+                pin.SE3(np.eye(3), np.array([0.1, -0.5, 0.6])),
+            ),
+        ),
+    )
+
+
+def _vertices_in_joint_frame(
+    robot: wb.Robot, geometry: pin.GeometryObject
+) -> np.ndarray:
+    shape = geometry.geometry
+    kind = type(shape).__name__
+    if kind.startswith("BVHModel"):
+        local = np.array(shape.vertices()).reshape(-1, 3)
+    elif kind == "Box":
+        half = np.array(shape.halfSide)
+        local = (
+            np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+            * half
+        )
+    elif kind == "Cylinder":
+        angle = np.linspace(0, 2 * math.pi, 64, endpoint=False)
+        ring = np.column_stack([np.cos(angle), np.sin(angle)]) * shape.radius
+        local = np.concatenate(
+            [
+                np.column_stack([ring, np.full(64, z)])
+                for z in (-shape.halfLength, shape.halfLength)
+            ]
+        )
+    else:
+        local = np.zeros((1, 3))
+    return local @ geometry.placement.rotation.T + geometry.placement.translation
+
+
+@pytest.mark.parametrize("name", ["puma560", "ur5", "mbm-panda"])
+def test_every_vertex_is_inside_a_sphere_of_its_link(name, request) -> None:
+    source = (
+        str(request.path.parent / "data/motionbenchmaker/panda/panda.urdf")
+        if name == "mbm-panda"
+        else name
+    )
+    robot = wb.load_robot(source)
+    model = spherize(robot)
+    by_link = {link.link: link for link in model.links}
+    for geometry in robot.collision_model.geometryObjects:
+        link = by_link[robot.model.frames[geometry.parentFrame].name]
+        assert link.joint == geometry.parentJoint
+        points = _vertices_in_joint_frame(robot, geometry)
+        gap = np.linalg.norm(points[:, None] - link.centers[None], axis=2) - link.radii
+        assert np.all(gap.min(axis=1) <= EXACT_TOL), geometry.name
+        assert link.excess >= 0.0
+
+
+def test_every_point_of_every_triangle_is_inside(ur5_spheres) -> None:
+    """Points inside the triangles, not only the vertices, are covered."""
+    robot = ur5_spheres.robot
+    rng = np.random.default_rng(0)
+    for geometry in robot.collision_model.geometryObjects:
+        shape = geometry.geometry
+        if not type(shape).__name__.startswith("BVHModel"):
+            continue
+        link = next(x for x in ur5_spheres.links if x.joint == geometry.parentJoint)
+        vertices = np.array(shape.vertices()).reshape(-1, 3)
+        tris = mesh_triangles(shape)
+        u = rng.random((len(tris), 2))
+        u[u.sum(axis=1) > 1] = 1 - u[u.sum(axis=1) > 1]
+        a, b, c = (vertices[tris[:, k]] for k in range(3))
+        points = a + u[:, :1] * (b - a) + u[:, 1:] * (c - a)
+        points = points @ geometry.placement.rotation.T + geometry.placement.translation
+        gap = np.linalg.norm(points[:, None] - link.centers[None], axis=2) - link.radii
+        assert np.all(gap.min(axis=1) <= EXACT_TOL), geometry.name
+
+
+def test_spherize_refuses_a_bad_tolerance(puma) -> None:
+    for bad in (0, -1.0, math.nan, math.inf, "1"):
+        with pytest.raises(InputError, match="tolerance"):
+            spherize(puma, tolerance=bad)  # type: ignore[arg-type]
+
+
+def _numpy_clearances(checker: SphereChecker, q: np.ndarray) -> np.ndarray:
+    """Every sphere against every obstacle and pair, in numpy (exact formulas)."""
+    model = checker.spheres
+    robot = model.robot
+    data = robot.model.createData()
+    pin.forwardKinematics(robot.model, data, q)
+    world = [
+        x.centers @ data.oMi[x.joint].rotation.T + data.oMi[x.joint].translation
+        for x in model.links
+    ]
+    out = []
+    for li, link in enumerate(model.links):
+        best = math.inf
+        if link.joint != 0:
+            for o in checker.scene.obstacles:
+                local = (world[li] - o.placement.translation) @ o.placement.rotation
+                if o.shape == "box":
+                    e = np.abs(local) - 0.5 * np.array(o.size)
+                    d = np.linalg.norm(np.maximum(e, 0), axis=1) + np.minimum(
+                        e.max(axis=1), 0
+                    )
+                elif o.shape == "cylinder":
+                    e = np.column_stack(
+                        [
+                            np.hypot(local[:, 0], local[:, 1]) - o.size[0],
+                            np.abs(local[:, 2]) - 0.5 * o.size[1],
+                        ]
+                    )
+                    d = np.linalg.norm(np.maximum(e, 0), axis=1) + np.minimum(
+                        e.max(axis=1), 0
+                    )
+                else:
+                    d = np.linalg.norm(local, axis=1) - o.size[0]
+                best = min(best, float(np.min(d - link.radii)))
+        out.append(best)
+    names = [x.link for x in model.links]
+    for a, b in checker.pairs:
+        i, j = names.index(a), names.index(b)
+        gap = np.linalg.norm(world[i][:, None] - world[j][None], axis=2)
+        out.append(
+            float(np.min(gap - model.links[i].radii[:, None] - model.links[j].radii))
+        )
+    return np.array(out)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.floats(-1.0, 1.0), min_size=6, max_size=6))
+def test_compiled_clearances_equal_numpy(ur5_spheres, fractions) -> None:
+    robot = ur5_spheres.robot
+    q = 0.5 * (robot.lower + robot.upper) + 0.5 * np.array(fractions) * (
+        robot.upper - robot.lower
+    )
+    checker = SphereChecker(ur5_spheres, _mixed_scene())
+    expected = _numpy_clearances(checker, q)
+    got = checker.clearances(q)
+    if np.all(expected > 0):
+        np.testing.assert_allclose(got, expected, atol=EXACT_TOL, rtol=0)
+        assert checker.is_free(q)
+    else:
+        assert not checker.is_free(q)
+        assert got.min() < 0
+
+
+def test_sphere_contacts_include_every_exact_contact(
+    ur5_spheres, ur5_unchecked
+) -> None:
+    """Conservative: a configuration free on the spheres is free on the meshes."""
+    robot = ur5_spheres.robot
+    scene = _mixed_scene()
+    spheres = SphereChecker(ur5_spheres, scene, unchecked=ur5_unchecked)
+    exact = CollisionChecker(robot, scene, self_collision=False)
+    rng = np.random.default_rng(1)
+    free = 0
+    for _ in range(300):
+        q = robot.lower + rng.random(6) * (robot.upper - robot.lower)
+        if spheres.is_free(q):
+            free += 1
+            assert exact.compute_distances(q).min() > 0
+    assert free > 30
+
+
+def test_a_segment_through_a_thin_wall_is_refused(puma, puma_spheres) -> None:
+    """No tunnelling: a 1 mm wall between two free ends is found."""
+    q0, q1 = np.zeros(6), np.array([1.2, 0.0, 0.0, 0.0, 0.0, 0.0])
+    # A 1 mm sheet across the arc that the wrist sweeps, at its middle.
+    middle = puma.fk(0.5 * q1, "wrist_center").translation
+    normal = np.cross([0.0, 0.0, 1.0], middle)
+    normal /= np.linalg.norm(normal)
+    rotation = pin.Quaternion.FromTwoVectors(np.array([1.0, 0, 0]), normal).matrix()
+    wall = Obstacle("sheet", "box", (0.001, 0.15, 0.15), pin.SE3(rotation, middle))
+    checker = SphereChecker(puma_spheres, Scene("sheet", (wall,)))
+    assert checker.is_free(q0) and checker.is_free(q1)
+    assert not checker.is_segment_free(q0, q1)
+    assert SphereChecker(puma_spheres).is_segment_free(q0, q1)
+
+
+def test_a_certified_segment_is_free_at_every_sample(
+    ur5_spheres, ur5_unchecked
+) -> None:
+    robot = ur5_spheres.robot
+    checker = SphereChecker(ur5_spheres, _mixed_scene(), unchecked=ur5_unchecked)
+    rng = np.random.default_rng(2)
+    certified = 0
+    for _ in range(200):
+        qa = robot.lower + rng.random(6) * (robot.upper - robot.lower)
+        qb = qa + rng.normal(0, 0.3, 6)
+        qb = np.clip(qb, robot.lower, robot.upper)
+        if checker.is_segment_free(qa, qb):
+            certified += 1
+            for s in np.linspace(0, 1, 101):
+                assert checker.clearances(qa + s * (qb - qa)).min() >= 0
+    assert certified > 10
+
+
+def test_plan_goes_around_a_wall_and_the_meshes_agree(puma, puma_spheres) -> None:
+    scene = _wall(puma)
+    exact = CollisionChecker(puma, scene)
+    straight = [exact.compute_distances(q).min() for q in np.linspace(PICK, PLACE, 100)]
+    assert min(straight) < 0  # the direct motion collides
+    result = plan(puma, scene, PICK, PLACE, seed=0, spheres=puma_spheres)
+    assert result.solved and result.reason is None
+    assert result.clearance is not None and result.clearance.collision_free
+    assert result.clearance.lower_bound > 0 and result.min_clearance > 0
+    np.testing.assert_array_equal(result.waypoints[0], PICK)
+    np.testing.assert_array_equal(result.waypoints[-1], PLACE)
+    trajectory = result.trajectory
+    assert trajectory is not None
+    q, qd, qdd = trajectory.sample(np.array([0.0, trajectory.duration]))
+    np.testing.assert_allclose(q, [PICK, PLACE], atol=1e-12)
+    assert np.all(qd == 0) and np.all(qdd == 0)
+    assert np.all(result.waypoints >= puma.lower) and np.all(
+        result.waypoints <= puma.upper
+    )
+    checker = SphereChecker(puma_spheres, scene)
+    for a, b in zip(result.waypoints[:-1], result.waypoints[1:], strict=True):
+        assert checker.is_segment_free(a, b)
+    assert result.path_length > 0 and result.planning_time > 0
+
+
+def test_plan_is_deterministic_per_seed(puma, puma_spheres) -> None:
+    scene = _wall(puma)
+    first = plan(puma, scene, PICK, PLACE, seed=3, spheres=puma_spheres)
+    again = plan(puma, scene, PICK, PLACE, seed=3, spheres=puma_spheres)
+    np.testing.assert_array_equal(first.waypoints, again.waypoints)
+    assert first.iterations == again.iterations
+
+
+def test_plan_to_a_tool_pose(puma, puma_spheres) -> None:
+    target = puma.fk(PLACE)
+    result = plan(puma, _wall(puma), PICK, target, seed=0, spheres=puma_spheres)
+    assert result.solved
+    reached = puma.fk(result.waypoints[-1])
+    assert np.linalg.norm(pin.log6(target.actInv(reached)).vector) <= FK_TOL
+    goals = goal_configurations(puma, target)
+    assert len(goals) >= 2
+    for q in goals:
+        assert np.linalg.norm(pin.log6(target.actInv(puma.fk(q))).vector) <= FK_TOL
+
+
+def test_plan_says_why_it_failed(puma, puma_spheres) -> None:
+    scene = _wall(puma)
+    wall = scene.obstacles[0]
+    inside = Scene(
+        "on the start",
+        (
+            Obstacle(
+                "block",
+                "box",
+                (0.2, 0.2, 0.2),
+                pin.SE3(np.eye(3), puma.fk(PICK).translation),
+            ),
+        ),
+    )
+    assert (
+        plan(puma, inside, PICK, PLACE, spheres=puma_spheres).reason
+        == "start in collision"
+    )
+    blocked = Scene(
+        "on the goal",
+        (
+            wall,
+            Obstacle(
+                "block",
+                "box",
+                (0.2, 0.2, 0.2),
+                pin.SE3(np.eye(3), puma.fk(PLACE).translation),
+            ),
+        ),
+    )
+    result = plan(puma, blocked, PICK, PLACE, spheres=puma_spheres)
+    assert result.reason == "goal in collision" and not result.solved
+    assert result.trajectory is None and result.waypoints.shape == (0, 6)
+    far = pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.0]))
+    assert (
+        plan(puma, scene, PICK, far, spheres=puma_spheres).reason == "goal unreachable"
+    )
+
+
+def test_plan_refuses_bad_arguments(puma, puma_spheres) -> None:
+    scene = _wall(puma)
+    with pytest.raises(InputError, match="planner"):
+        plan(puma, scene, PICK, PLACE, planner="prm")
+    with pytest.raises(InputError, match="time_limit"):
+        plan(puma, scene, PICK, PLACE, time_limit=0)
+    with pytest.raises(InputError, match="iteration_limit"):
+        plan(puma, scene, PICK, PLACE, iteration_limit=0)
+    with pytest.raises(InputError, match="goal"):
+        plan(puma, scene, PICK, np.zeros(5), spheres=puma_spheres)
+    with pytest.raises(InputError, match="acceleration"):
+        plan(wb.load_robot("puma560"), scene, PICK, PLACE)

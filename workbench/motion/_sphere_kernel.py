@@ -1,0 +1,752 @@
+r"""Compiled clearance of a sphere model, certified motions and RRT-Connect.
+
+The robot and the scene come packed in arrays by
+:class:`workbench.motion.checker.SphereChecker` (its docstring names them);
+this module only computes.
+
+**Clearance.** At a configuration every link gets a lower bound of its
+distance to the scene (every obstacle it is not allowed to touch) and every
+checked link pair one of its distance: first from the link's bounding sphere,
+then, where that bound is below what the caller needs, from the link's own
+spheres (each inside the bounding sphere, so never nearer). Signed distances
+of a sphere centre to boxes, cylinders and spheres are exact; to a mesh it is
+the unsigned distance to its triangles.
+
+**Certified motions.** Along the straight joint segment from
+:math:`q_a` to :math:`q_b` a point of link :math:`l` moves by at most
+:math:`D_l = \sum_i L_{l,i} |\Delta q_i|` (lever arms, as in
+:mod:`workbench.collision.checker`), and a pair's distance changes by at most
+:math:`D_a + D_b`. With clearances :math:`c_0, c_1` at the two ends of a
+sub-interval of length :math:`w` (as a fraction of the segment), every point
+of it is free when :math:`c_0 + c_1 \ge D w`; otherwise the interval is
+bisected. A segment is accepted only when every sub-interval is so proven,
+and refused as soon as a clearance is negative or an interval's motion bound
+falls below :data:`RESOLUTION` unproven: no contact of the spheres is missed,
+however thin the obstacle.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+
+from workbench._compiled import entry_point, helper
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+BoolArray = npt.NDArray[np.bool_]
+
+#: An interval whose motion bound is below this [m] and is still unproven
+#: counts as a contact.
+RESOLUTION = 1e-4
+#: Most clearance evaluations of one segment before it is refused.
+MAX_EVALUATIONS = 512
+#: Obstacle kinds.
+BOX, CYLINDER, SPHERE, MESH = 0, 1, 2, 3
+
+
+@helper(forceinline=True)
+def _frames(
+    q: FloatArray,
+    jparent: IntArray,
+    jrot: FloatArray,
+    jpos: FloatArray,
+    jaxis: FloatArray,
+    jq: IntArray,
+    orot: FloatArray,
+    opos: FloatArray,
+) -> None:
+    """Joint frames (J, 3, 3), (J, 3) in the base frame at q (revolute joints)."""
+    orot[0] = np.eye(3)
+    opos[0] = 0.0
+    r = np.empty((3, 3))
+    placed = np.empty((3, 3))
+    for j in range(1, len(jparent)):
+        p = jparent[j]
+        angle = q[jq[j]]
+        c, s = math.cos(angle), math.sin(angle)
+        x, y, z = jaxis[j, 0], jaxis[j, 1], jaxis[j, 2]
+        t = 1.0 - c
+        r[0, 0], r[0, 1], r[0, 2] = c + x * x * t, x * y * t - z * s, x * z * t + y * s
+        r[1, 0], r[1, 1], r[1, 2] = y * x * t + z * s, c + y * y * t, y * z * t - x * s
+        r[2, 0], r[2, 1], r[2, 2] = z * x * t - y * s, z * y * t + x * s, c + z * z * t
+        for a in range(3):
+            for b in range(3):
+                placed[a, b] = (
+                    orot[p, a, 0] * jrot[j, 0, b]
+                    + orot[p, a, 1] * jrot[j, 1, b]
+                    + orot[p, a, 2] * jrot[j, 2, b]
+                )
+        for a in range(3):
+            for b in range(3):
+                orot[j, a, b] = (
+                    placed[a, 0] * r[0, b]
+                    + placed[a, 1] * r[1, b]
+                    + placed[a, 2] * r[2, b]
+                )
+        _place(orot[p], opos[p], jpos[j], opos[j])
+
+
+@helper(forceinline=True)
+def _place(
+    rot: FloatArray, pos: FloatArray, local: FloatArray, out: FloatArray
+) -> None:
+    """Set out = rot @ local + pos, for (3, 3), (3,), (3,) and (3,) arrays."""
+    for i in range(3):
+        out[i] = (
+            rot[i, 0] * local[0] + rot[i, 1] * local[1] + rot[i, 2] * local[2] + pos[i]
+        )
+
+
+@helper(forceinline=True)
+def _gap(a: FloatArray, b: FloatArray) -> float:
+    """Distance [m] between two points (3,)."""
+    x, y, z = a[0] - b[0], a[1] - b[1], a[2] - b[2]
+    return math.sqrt(x * x + y * y + z * z)
+
+
+@helper(forceinline=True)
+def _point_triangle(
+    p: FloatArray, a: FloatArray, b: FloatArray, c: FloatArray
+) -> float:
+    """Distance [m] from point p to triangle abc (Ericson, 5.1.5)."""
+    ab, ac, ap = b - a, c - a, p - a
+    d1, d2 = ab @ ap, ac @ ap
+    if d1 <= 0.0 and d2 <= 0.0:
+        return math.sqrt(ap @ ap)
+    bp = p - b
+    d3, d4 = ab @ bp, ac @ bp
+    if d3 >= 0.0 and d4 <= d3:
+        return math.sqrt(bp @ bp)
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+        v = d1 / (d1 - d3)
+        e = ap - v * ab
+        return math.sqrt(e @ e)
+    cp = p - c
+    d5, d6 = ab @ cp, ac @ cp
+    if d6 >= 0.0 and d5 <= d6:
+        return math.sqrt(cp @ cp)
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+        w = d2 / (d2 - d6)
+        e = ap - w * ac
+        return math.sqrt(e @ e)
+    va = d3 * d6 - d5 * d4
+    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
+        w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        e = p - (b + w * (c - b))
+        return math.sqrt(e @ e)
+    denom = 1.0 / (va + vb + vc)
+    v, w = vb * denom, vc * denom
+    e = ap - ab * v - ac * w
+    return math.sqrt(e @ e)
+
+
+@helper(forceinline=True)
+def _distance(
+    p: FloatArray,
+    o: int,
+    okind: IntArray,
+    orot: FloatArray,
+    opos: FloatArray,
+    osize: FloatArray,
+    ofirst: IntArray,
+    tris: FloatArray,
+    best: float,
+) -> float:
+    """Signed distance [m] from point p to obstacle o (meshes: unsigned).
+
+    For a mesh, returns early with a value >= ``best`` when its bounding
+    sphere is farther than ``best``.
+    """
+    dx, dy, dz = p[0] - opos[o, 0], p[1] - opos[o, 1], p[2] - opos[o, 2]
+    r = orot[o]
+    lx = r[0, 0] * dx + r[1, 0] * dy + r[2, 0] * dz
+    ly = r[0, 1] * dx + r[1, 1] * dy + r[2, 1] * dz
+    lz = r[0, 2] * dx + r[1, 2] * dy + r[2, 2] * dz
+    kind = okind[o]
+    if kind == BOX:
+        ox = abs(lx) - osize[o, 0]
+        oy = abs(ly) - osize[o, 1]
+        oz = abs(lz) - osize[o, 2]
+        outside = math.sqrt(max(ox, 0.0) ** 2 + max(oy, 0.0) ** 2 + max(oz, 0.0) ** 2)
+        return outside + min(max(ox, max(oy, oz)), 0.0)
+    if kind == CYLINDER:
+        radial = math.sqrt(lx * lx + ly * ly) - osize[o, 0]
+        axial = abs(lz) - osize[o, 1]
+        outside = math.sqrt(max(radial, 0.0) ** 2 + max(axial, 0.0) ** 2)
+        return outside + min(max(radial, axial), 0.0)
+    if kind == SPHERE:
+        return math.sqrt(dx * dx + dy * dy + dz * dz) - osize[o, 0]
+    bound = math.sqrt(dx * dx + dy * dy + dz * dz) - osize[o, 0]
+    if bound >= best:
+        return bound
+    local = np.empty(3)
+    local[0], local[1], local[2] = lx, ly, lz
+    out = math.inf
+    for t in range(ofirst[o], ofirst[o + 1]):
+        out = min(out, _point_triangle(local, tris[t, 0], tris[t, 1], tris[t, 2]))
+    return out
+
+
+@helper()
+def _clearances(
+    q: FloatArray,
+    need: FloatArray,
+    robot_int: IntArray,
+    robot_float: FloatArray,
+    sizes: IntArray,
+    scene_int: IntArray,
+    scene_float: FloatArray,
+    tris: FloatArray,
+    stop: bool,
+    out: FloatArray,
+) -> bool:
+    """Clearance bounds (L + P,) [m] into ``out``; False if there is a contact.
+
+    Entries whose bound sphere already shows ``need`` or more are not refined.
+    With ``stop``, returns at the first contact (later entries unset).
+    """
+    free = True
+    (n_joints, n_links, n_spheres, n_pairs, n_obstacles) = (
+        sizes[0],
+        sizes[1],
+        sizes[2],
+        sizes[3],
+        sizes[4],
+    )
+    jparent = robot_int[0:n_joints]
+    jq = robot_int[n_joints : 2 * n_joints]
+    ljoint = robot_int[2 * n_joints : 2 * n_joints + n_links]
+    lfirst = robot_int[2 * n_joints + n_links : 2 * n_joints + 2 * n_links + 1]
+    base = 2 * n_joints + 2 * n_links + 1
+    pa = robot_int[base : base + n_pairs]
+    pb = robot_int[base + n_pairs : base + 2 * n_pairs]
+    lscene = robot_int[base + 2 * n_pairs : base + 2 * n_pairs + n_links]
+    allowed = robot_int[base + 2 * n_pairs + n_links :].reshape(n_links, -1)
+    f = 0
+    jrot = robot_float[f : f + 9 * n_joints].reshape(n_joints, 3, 3)
+    f += 9 * n_joints
+    jpos = robot_float[f : f + 3 * n_joints].reshape(n_joints, 3)
+    f += 3 * n_joints
+    jaxis = robot_float[f : f + 3 * n_joints].reshape(n_joints, 3)
+    f += 3 * n_joints
+    lcenter = robot_float[f : f + 3 * n_links].reshape(n_links, 3)
+    f += 3 * n_links
+    lradius = robot_float[f : f + n_links]
+    f += n_links
+    scenter = robot_float[f : f + 3 * n_spheres].reshape(n_spheres, 3)
+    f += 3 * n_spheres
+    sradius = robot_float[f : f + n_spheres]
+    okind = scene_int[0:n_obstacles]
+    ofirst = scene_int[n_obstacles : 2 * n_obstacles + 1]
+    orot = scene_float[0 : 9 * n_obstacles].reshape(n_obstacles, 3, 3)
+    opos = scene_float[9 * n_obstacles : 12 * n_obstacles].reshape(n_obstacles, 3)
+    osize = scene_float[12 * n_obstacles : 15 * n_obstacles].reshape(n_obstacles, 3)
+    frame_rot = np.empty((n_joints, 3, 3))
+    frame_pos = np.empty((n_joints, 3))
+    _frames(q, jparent, jrot, jpos, jaxis, jq, frame_rot, frame_pos)
+    bound = np.empty((n_links, 3))
+    for li in range(n_links):
+        j = ljoint[li]
+        _place(frame_rot[j], frame_pos[j], lcenter[li], bound[li])
+    world = np.empty((n_spheres, 3))
+    placed = np.zeros(n_links, dtype=np.bool_)
+    for li in range(n_links):
+        best = math.inf
+        if lscene[li]:
+            for o in range(n_obstacles):
+                if allowed[li, o]:
+                    continue
+                d = (
+                    _distance(
+                        bound[li], o, okind, orot, opos, osize, ofirst, tris, math.inf
+                    )
+                    - lradius[li]
+                )
+                if d < need[li]:
+                    if not placed[li]:
+                        j = ljoint[li]
+                        for s in range(lfirst[li], lfirst[li + 1]):
+                            _place(frame_rot[j], frame_pos[j], scenter[s], world[s])
+                        placed[li] = True
+                    d = math.inf
+                    for s in range(lfirst[li], lfirst[li + 1]):
+                        ds = (
+                            _distance(
+                                world[s],
+                                o,
+                                okind,
+                                orot,
+                                opos,
+                                osize,
+                                ofirst,
+                                tris,
+                                d + sradius[s],
+                            )
+                            - sradius[s]
+                        )
+                        d = min(d, ds)
+                        if d < 0.0 and stop:
+                            out[li] = d
+                            return False
+                best = min(best, d)
+        out[li] = best
+        free = free and best >= 0.0
+    for k in range(n_pairs):
+        a, b = pa[k], pb[k]
+        d = _gap(bound[a], bound[b]) - lradius[a] - lradius[b]
+        if d < need[n_links + k]:
+            for li in (a, b):
+                if not placed[li]:
+                    j = ljoint[li]
+                    for s in range(lfirst[li], lfirst[li + 1]):
+                        _place(frame_rot[j], frame_pos[j], scenter[s], world[s])
+                    placed[li] = True
+            d = math.inf
+            for s in range(lfirst[a], lfirst[a + 1]):
+                for t in range(lfirst[b], lfirst[b + 1]):
+                    d = min(d, _gap(world[s], world[t]) - sradius[s] - sradius[t])
+            if d < 0.0 and stop:
+                out[n_links + k] = d
+                return False
+        out[n_links + k] = d
+        free = free and d >= 0.0
+    return free
+
+
+@helper()
+def _motion_free(
+    qa: FloatArray,
+    qb: FloatArray,
+    levers: FloatArray,
+    robot_int: IntArray,
+    robot_float: FloatArray,
+    sizes: IntArray,
+    scene_int: IntArray,
+    scene_float: FloatArray,
+    tris: FloatArray,
+    store: FloatArray,
+    check_start: bool,
+) -> bool:
+    """Whether the straight segment qa -> qb is proven free (module docstring)."""
+    n_links, n_pairs = sizes[1], sizes[3]
+    n_entries = n_links + n_pairs
+    dq = np.abs(qb - qa)
+    motion = levers @ dq  # (L + P,) bound of each entry over the whole segment
+    need = motion.copy()
+    q = np.empty(len(qa))
+    if check_start:
+        if not _clearances(
+            qa,
+            need,
+            robot_int,
+            robot_float,
+            sizes,
+            scene_int,
+            scene_float,
+            tris,
+            True,
+            store[0],
+        ):
+            return False
+    if not _clearances(
+        qb,
+        need,
+        robot_int,
+        robot_float,
+        sizes,
+        scene_int,
+        scene_float,
+        tris,
+        True,
+        store[1],
+    ):
+        return False
+    if not check_start:
+        if not _clearances(
+            qa,
+            need,
+            robot_int,
+            robot_float,
+            sizes,
+            scene_int,
+            scene_float,
+            tris,
+            True,
+            store[0],
+        ):
+            return False
+    count = 2
+    stack_t = np.empty((64, 2))
+    stack_i = np.empty((64, 2), dtype=np.int64)
+    stack_t[0, 0], stack_t[0, 1] = 0.0, 1.0
+    stack_i[0, 0], stack_i[0, 1] = 0, 1
+    top = 1
+    while top > 0:
+        top -= 1
+        t0, t1 = stack_t[top, 0], stack_t[top, 1]
+        i0, i1 = stack_i[top, 0], stack_i[top, 1]
+        w = t1 - t0
+        proven = True
+        largest = 0.0
+        for k in range(n_entries):
+            if store[i0, k] + store[i1, k] < motion[k] * w:
+                proven = False
+                largest = max(largest, motion[k] * w)
+        if proven:
+            continue
+        if largest < RESOLUTION or count >= len(store) or top + 2 > len(stack_t):
+            return False
+        tm = 0.5 * (t0 + t1)
+        for i in range(len(qa)):
+            q[i] = qa[i] + tm * (qb[i] - qa[i])
+        for k in range(n_entries):
+            need[k] = 0.5 * motion[k] * w
+        if not _clearances(
+            q,
+            need,
+            robot_int,
+            robot_float,
+            sizes,
+            scene_int,
+            scene_float,
+            tris,
+            True,
+            store[count],
+        ):
+            return False
+        stack_t[top, 0], stack_t[top, 1] = t0, tm
+        stack_i[top, 0], stack_i[top, 1] = i0, count
+        stack_t[top + 1, 0], stack_t[top + 1, 1] = tm, t1
+        stack_i[top + 1, 0], stack_i[top + 1, 1] = count, i1
+        top += 2
+        count += 1
+    return True
+
+
+@entry_point(
+    outputs=("out",),
+    contiguous=("robot_int", "robot_float", "scene_int", "scene_float", "tris"),
+)
+def clearances(
+    q: FloatArray,
+    robot_int: IntArray,
+    robot_float: FloatArray,
+    sizes: IntArray,
+    scene_int: IntArray,
+    scene_float: FloatArray,
+    tris: FloatArray,
+    stop: bool,
+    out: FloatArray,
+) -> bool:
+    """Sphere clearances (L + P,) [m] at q, every entry refined; False on contact.
+
+    With ``stop``, returns at the first contact (later entries unset).
+    """
+    need = np.full(len(out), np.inf)
+    return _clearances(
+        q, need, robot_int, robot_float, sizes, scene_int, scene_float, tris, stop, out
+    )
+
+
+@entry_point(
+    outputs=("store",),
+    contiguous=(
+        "levers",
+        "robot_int",
+        "robot_float",
+        "scene_int",
+        "scene_float",
+        "tris",
+    ),
+)
+def motion_free(
+    qa: FloatArray,
+    qb: FloatArray,
+    levers: FloatArray,
+    robot_int: IntArray,
+    robot_float: FloatArray,
+    sizes: IntArray,
+    scene_int: IntArray,
+    scene_float: FloatArray,
+    tris: FloatArray,
+    store: FloatArray,
+) -> bool:
+    """Whether the segment qa -> qb is proven free, both ends included."""
+    return _motion_free(
+        qa,
+        qb,
+        levers,
+        robot_int,
+        robot_float,
+        sizes,
+        scene_int,
+        scene_float,
+        tris,
+        store,
+        True,
+    )
+
+
+@helper(forceinline=True)
+def _nearest(nodes: FloatArray, count: int, q: FloatArray) -> int:
+    best, index = math.inf, 0
+    for i in range(count):
+        d = 0.0
+        for k in range(len(q)):
+            e = nodes[i, k] - q[k]
+            d += e * e
+        if d < best:
+            best, index = d, i
+    return index
+
+
+@entry_point(
+    outputs=("nodes", "parents", "counts", "state", "store"),
+    contiguous=(
+        "levers",
+        "robot_int",
+        "robot_float",
+        "scene_int",
+        "scene_float",
+        "tris",
+    ),
+)
+def grow_trees(
+    nodes: FloatArray,
+    parents: IntArray,
+    counts: IntArray,
+    state: IntArray,
+    uniforms: FloatArray,
+    lower: FloatArray,
+    upper: FloatArray,
+    step: float,
+    levers: FloatArray,
+    robot_int: IntArray,
+    robot_float: FloatArray,
+    sizes: IntArray,
+    scene_int: IntArray,
+    scene_float: FloatArray,
+    tris: FloatArray,
+    store: FloatArray,
+) -> None:
+    """RRT-Connect iterations, one per row of ``uniforms`` (R, nq) in [0, 1).
+
+    Args:
+        nodes: (2, N, nq) configurations of the two trees (0: start, 1: goal).
+        parents: (2, N) parent index, -1 for a root.
+        counts: (2,) nodes in each tree.
+        state: (4,) in/out: [connected (0/1), node of tree 0, node of tree 1,
+            iterations done]; the trees alternate by iteration parity.
+        uniforms: (R, nq) random numbers in [0, 1), one sample per row.
+        lower: (nq,) lower joint limits [rad].
+        upper: (nq,) upper joint limits [rad].
+        step: Longest extension [rad], Euclidean in joint space.
+        levers: (L + P, nq) lever arms [m/rad] of the clearance entries.
+        robot_int: Packed robot integers (``PackedArrays``).
+        robot_float: Packed robot floats.
+        sizes: Counts: joints, links, spheres, pairs, obstacles, nv.
+        scene_int: Packed obstacle kinds and triangle offsets.
+        scene_float: Packed obstacle poses and sizes.
+        tris: (T, 3, 3) mesh triangles [m], obstacle frames.
+        store: (E, L + P) scratch rows for the clearances of one segment.
+    """
+    n = nodes.shape[2]
+    capacity = nodes.shape[1]
+    q_new = np.empty(n)
+    for row in range(len(uniforms)):
+        if state[0] == 1:
+            return
+        a = state[3] % 2
+        b = 1 - a
+        state[3] += 1
+        if counts[0] + 1 >= capacity or counts[1] + 1 >= capacity:
+            return
+        target = lower + uniforms[row] * (upper - lower)
+        near = _nearest(nodes[a], counts[a], target)
+        delta = target - nodes[a, near]
+        length = math.sqrt(delta @ delta)
+        scale = min(1.0, step / length) if length > 0.0 else 0.0
+        q_new[:] = nodes[a, near] + scale * delta
+        if not _motion_free(
+            nodes[a, near],
+            q_new,
+            levers,
+            robot_int,
+            robot_float,
+            sizes,
+            scene_int,
+            scene_float,
+            tris,
+            store,
+            False,
+        ):
+            continue
+        new = counts[a]
+        nodes[a, new] = q_new
+        parents[a, new] = near
+        counts[a] += 1
+        # Connect tree b to q_new.
+        tip = _nearest(nodes[b], counts[b], q_new)
+        while counts[b] + 1 < capacity:
+            delta = q_new - nodes[b, tip]
+            length = math.sqrt(delta @ delta)
+            reached = length <= step
+            scale = 1.0 if reached else step / length
+            q = nodes[b, tip] + scale * delta
+            if not _motion_free(
+                nodes[b, tip],
+                q,
+                levers,
+                robot_int,
+                robot_float,
+                sizes,
+                scene_int,
+                scene_float,
+                tris,
+                store,
+                False,
+            ):
+                break
+            k = counts[b]
+            nodes[b, k] = q
+            parents[b, k] = tip
+            counts[b] += 1
+            tip = k
+            if reached:
+                state[0] = 1
+                state[1 + a] = new
+                state[1 + b] = tip
+                return
+
+
+@entry_point(
+    outputs=("path", "length", "store"),
+    contiguous=(
+        "levers",
+        "robot_int",
+        "robot_float",
+        "scene_int",
+        "scene_float",
+        "tris",
+    ),
+)
+def shortcut(
+    path: FloatArray,
+    length: IntArray,
+    uniforms: FloatArray,
+    levers: FloatArray,
+    robot_int: IntArray,
+    robot_float: FloatArray,
+    sizes: IntArray,
+    scene_int: IntArray,
+    scene_float: FloatArray,
+    tris: FloatArray,
+    store: FloatArray,
+) -> None:
+    """Shorten a free polyline in place: greedy reduction, then random shortcuts.
+
+    Args:
+        path: (M, nq) buffer whose first ``length[0]`` rows are the path.
+        length: (1,) in/out number of waypoints.
+        uniforms: (R, 2) in [0, 1): one random shortcut per row, between two
+            points on two segments (OMPL's ``shortcutPath``).
+        levers: (L + P, nq) lever arms [m/rad] of the clearance entries.
+        robot_int: Packed robot integers (``PackedArrays``).
+        robot_float: Packed robot floats.
+        sizes: Counts: joints, links, spheres, pairs, obstacles, nv.
+        scene_int: Packed obstacle kinds and triangle offsets.
+        scene_float: Packed obstacle poses and sizes.
+        tris: (T, 3, 3) mesh triangles [m], obstacle frames.
+        store: (E, L + P) scratch rows for the clearances of one segment.
+    """
+    n = path.shape[1]
+    # Greedy: from each kept waypoint jump to the farthest one it sees.
+    k = length[0]
+    out = 0
+    i = 0
+    while i < k - 1:
+        j = k - 1
+        while j > i + 1:
+            if _motion_free(
+                path[i],
+                path[j],
+                levers,
+                robot_int,
+                robot_float,
+                sizes,
+                scene_int,
+                scene_float,
+                tris,
+                store,
+                False,
+            ):
+                break
+            j -= 1
+        path[out] = path[i]
+        out += 1
+        i = j
+    path[out] = path[k - 1]
+    length[0] = out + 1
+    qa, qb = np.empty(n), np.empty(n)
+    for row in range(len(uniforms)):
+        k = length[0]
+        if k < 3:
+            return
+        x = uniforms[row, 0] * (k - 1)
+        y = uniforms[row, 1] * (k - 1)
+        if x > y:
+            x, y = y, x
+        sa, sb = int(x), int(y)
+        if sa == k - 1:
+            sa = k - 2
+        if sb == k - 1:
+            sb = k - 2
+        if sb <= sa:
+            continue
+        ta, tb = x - sa, y - sb
+        qa[:] = path[sa] + ta * (path[sa + 1] - path[sa])
+        qb[:] = path[sb] + tb * (path[sb + 1] - path[sb])
+        old = 0.0
+        e = qa - path[sa + 1]
+        old += math.sqrt(e @ e)
+        for m in range(sa + 1, sb):
+            e = path[m + 1] - path[m]
+            old += math.sqrt(e @ e)
+        e = qb - path[sb]
+        old += math.sqrt(e @ e)
+        e = qb - qa
+        if math.sqrt(e @ e) >= old - 1e-9:
+            continue
+        if not _motion_free(
+            qa,
+            qb,
+            levers,
+            robot_int,
+            robot_float,
+            sizes,
+            scene_int,
+            scene_float,
+            tris,
+            store,
+            False,
+        ):
+            continue
+        # path[..sa], qa, qb, path[sb+1..]
+        tail = k - (sb + 1)
+        new_length = sa + 1 + 2 + tail
+        if new_length > len(path):
+            continue
+        if sa + 3 <= sb + 1:
+            for m in range(tail):
+                path[sa + 3 + m] = path[sb + 1 + m]
+        else:
+            for m in range(tail - 1, -1, -1):
+                path[sa + 3 + m] = path[sb + 1 + m]
+        path[sa + 1] = qa
+        path[sa + 2] = qb
+        length[0] = new_length

@@ -1,0 +1,303 @@
+"""The planner's collision checker: a robot's spheres against a scene, compiled.
+
+:class:`SphereChecker` packs a :class:`~workbench.motion.spheres.SphereModel`,
+the robot's joints, the checked link pairs (the SRDF's or the project's
+self-collision filter, as :class:`~workbench.collision.CollisionChecker`
+uses them) and a scene's obstacles into flat arrays for the kernels of
+:mod:`workbench.motion._sphere_kernel`, which document the clearance bounds
+and the certified segments. Links on the fixed base are checked against the
+moving links, not against the scene (as the exact checker does); an
+obstacle's ``allow`` list is honoured.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+
+from workbench.collision.scene import Scene
+from workbench.collision.self_filter import compute_self_collision_filter
+from workbench.errors import InputError
+from workbench.motion import _sphere_kernel as kernel
+from workbench.motion.spheres import SphereModel, mesh_triangles
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+
+class PackedArrays(NamedTuple):
+    """The arrays the kernels take after their own arguments (module docstring)."""
+
+    levers: FloatArray
+    robot_int: IntArray
+    robot_float: FloatArray
+    sizes: IntArray
+    scene_int: IntArray
+    scene_float: FloatArray
+    tris: FloatArray
+
+
+_KINDS = {"box": kernel.BOX, "cylinder": kernel.CYLINDER, "sphere": kernel.SPHERE}
+
+
+class SphereChecker:
+    """Clearance and certified segments of a sphere model in a scene.
+
+    Args:
+        spheres: The robot's sphere model (:func:`~workbench.motion.spherize`).
+        scene: Static obstacles in the base frame; default none.
+        unchecked: Entries left out: ``(link, obstacle)`` or ``(link,
+            link)`` names (:func:`~workbench.motion.plan` leaves out those
+            the spheres cannot separate where the exact meshes are apart,
+            and has the exact check judge them).
+
+    Attributes:
+        spheres, scene, unchecked: As given.
+        links: Link names, in the order of the clearance entries.
+        pairs: Checked link pairs ``(link_a, link_b)``, after the links.
+
+    Raises:
+        InputError: If the robot has a joint other than a revolute one with
+            one coordinate, or an obstacle's ``allow`` names no link.
+    """
+
+    def __init__(
+        self,
+        spheres: SphereModel,
+        scene: Scene | None = None,
+        *,
+        unchecked: tuple[tuple[str, str], ...] = (),
+    ) -> None:
+        self.spheres = spheres
+        self.scene = scene or Scene("empty")
+        self.unchecked = tuple(unchecked)
+        robot = spheres.robot
+        model = robot.model
+        self.links = tuple(link.link for link in spheres.links)
+        self._robot_int, self._robot_float, self._levers, sizes = _pack_robot(
+            spheres, self.scene, self.unchecked
+        )
+        self._scene_int, self._scene_float, self._tris = _pack_scene(self.scene)
+        self._sizes = np.array(sizes, dtype=np.int64)
+        self.pairs = _pairs(spheres, self.unchecked)
+        self._store = np.zeros((kernel.MAX_EVALUATIONS, len(self._levers)))
+        self.nq = model.nq
+
+    @property
+    def arrays(self) -> PackedArrays:
+        """The packed arrays the kernels take after their own arguments."""
+        return PackedArrays(
+            self._levers,
+            self._robot_int,
+            self._robot_float,
+            self._sizes,
+            self._scene_int,
+            self._scene_float,
+            self._tris,
+        )
+
+    def clearances(self, q: npt.ArrayLike) -> FloatArray:
+        """Clearance of every link to the scene and of every pair [m] at ``q``.
+
+        Returns:
+            (L + P,): links (:attr:`links`) then pairs (:attr:`pairs`); a
+            negative entry is a contact; inf for a link that no obstacle
+            concerns.
+        """
+        q = self.spheres.robot.check_configuration(q)
+        out = np.full(len(self._levers), np.inf)
+        kernel.clearances(q, *self.arrays[1:], False, out)
+        return out
+
+    def is_free(self, q: npt.ArrayLike) -> bool:
+        """Whether no sphere touches an obstacle or a checked link at ``q``."""
+        q = self.spheres.robot.check_configuration(q)
+        out = np.empty(len(self._levers))
+        return bool(kernel.clearances(q, *self.arrays[1:], True, out))
+
+    def is_segment_free(self, qa: npt.ArrayLike, qb: npt.ArrayLike) -> bool:
+        """Whether the straight joint segment is proven free, ends included."""
+        robot = self.spheres.robot
+        a, b = robot.check_configuration(qa), robot.check_configuration(qb)
+        return bool(kernel.motion_free(a, b, *self.arrays, self._store))
+
+
+def _pairs(
+    spheres: SphereModel, unchecked: tuple[tuple[str, str], ...]
+) -> tuple[tuple[str, str], ...]:
+    robot = spheres.robot
+    checked = compute_self_collision_filter(robot)
+    names = [link.link for link in spheres.links]
+    return tuple(
+        (a, b)
+        for i, a in enumerate(names)
+        for b in names[i + 1 :]
+        if not checked.is_disabled(a, b)
+        and (a, b) not in unchecked
+        and (b, a) not in unchecked
+        and not (
+            spheres.links[i].joint == 0 and spheres.links[names.index(b)].joint == 0
+        )
+    )
+
+
+def _pack_robot(
+    spheres: SphereModel, scene: Scene, unchecked: tuple[tuple[str, str], ...]
+) -> tuple[IntArray, FloatArray, FloatArray, list[int]]:
+    robot = spheres.robot
+    model = robot.model
+    if model.nq != model.nv:
+        raise InputError(
+            "motion planning needs revolute joints with one coordinate each; "
+            f"{robot.name!r} has nq = {model.nq}, nv = {model.nv}"
+        )
+    axes = np.zeros((model.njoints, 3))
+    for j in range(1, model.njoints):
+        name = model.joints[j].shortname()
+        if name in ("JointModelRX", "JointModelRY", "JointModelRZ"):
+            axes[j, "XYZ".index(name[-1])] = 1.0
+        elif name == "JointModelRevoluteUnaligned":
+            axes[j] = np.asarray(model.joints[j].extract().axis)
+        else:
+            raise InputError(
+                f"motion planning needs revolute joints; joint "
+                f"{model.names[j]!r} is a {name}"
+            )
+    links = spheres.links
+    names = [link.link for link in links]
+    all_links = {f.name for f in model.frames}
+    allowed = np.zeros((len(links), max(1, len(scene.obstacles))), dtype=np.int64)
+    for o, obstacle in enumerate(scene.obstacles):
+        unknown = sorted(set(obstacle.allow) - all_links)
+        if unknown:
+            raise InputError(
+                f"obstacle {obstacle.name!r}: 'allow' names unknown link(s) "
+                f"{', '.join(unknown)}"
+            )
+        for name in obstacle.allow:
+            if name in names:
+                allowed[names.index(name), o] = 1
+        for li, name in enumerate(names):
+            if (name, obstacle.name) in unchecked:
+                allowed[li, o] = 1
+    pairs = _pairs(spheres, unchecked)
+    pa = np.array([names.index(a) for a, _ in pairs], dtype=np.int64)
+    pb = np.array([names.index(b) for _, b in pairs], dtype=np.int64)
+    first = np.cumsum([0] + [len(link.radii) for link in links]).astype(np.int64)
+    bound_center, bound_radius = [], []
+    for link in links:
+        lo = (link.centers - link.radii[:, None]).min(axis=0)
+        hi = (link.centers + link.radii[:, None]).max(axis=0)
+        center = 0.5 * (lo + hi)
+        bound_center.append(center)
+        bound_radius.append(
+            float(np.max(np.linalg.norm(link.centers - center, axis=1) + link.radii))
+        )
+    parents = np.array(model.parents, dtype=np.int64)
+    parents[0] = -1
+    jq = np.array([max(model.joints[j].idx_q, 0) for j in range(model.njoints)])
+    robot_int = np.concatenate(
+        [
+            parents,
+            jq,
+            np.array([link.joint for link in links], dtype=np.int64),
+            first,
+            pa,
+            pb,
+            np.array([link.joint != 0 for link in links], dtype=np.int64),
+            allowed.ravel(),
+        ]
+    ).astype(np.int64)
+    rotations = np.array([p.rotation for p in model.jointPlacements])
+    positions = np.array([p.translation for p in model.jointPlacements])
+    robot_float = np.concatenate(
+        [
+            rotations.ravel(),
+            positions.ravel(),
+            axes.ravel(),
+            np.array(bound_center).ravel(),
+            np.array(bound_radius),
+            np.concatenate([link.centers for link in links]).ravel(),
+            np.concatenate([link.radii for link in links]),
+        ]
+    )
+    # Lever arm of link l about joint i [m/rad]: the chain offsets from joint
+    # i to the link's joint plus the farthest sphere centre from that joint.
+    offsets = np.linalg.norm(positions, axis=1)
+    link_levers = np.zeros((len(links), model.nv))
+    for li, link in enumerate(links):
+        reach = float(
+            max(
+                np.max(np.linalg.norm(link.centers, axis=1)),
+                np.linalg.norm(bound_center[li]),
+            )
+        )
+        joint, chain = link.joint, 0.0
+        while joint > 0:
+            link_levers[li, model.joints[joint].idx_v] = chain + reach
+            chain += offsets[joint]
+            joint = int(model.parents[joint])
+    pair_levers = link_levers[pa] + link_levers[pb]
+    levers = np.concatenate([link_levers, pair_levers.reshape(-1, model.nv)])
+    sizes = [
+        model.njoints,
+        len(links),
+        int(first[-1]),
+        len(pairs),
+        len(scene.obstacles),
+        model.nv,
+    ]
+    return robot_int, robot_float, np.ascontiguousarray(levers), sizes
+
+
+def _pack_scene(scene: Scene) -> tuple[IntArray, FloatArray, FloatArray]:
+    kinds, rotations, positions, sizes, first, tris = [], [], [], [], [0], []
+    for obstacle in scene.obstacles:
+        placement: pin.SE3 = obstacle.placement
+        rotations.append(placement.rotation)
+        positions.append(placement.translation)
+        if obstacle.shape == "box":
+            size = 0.5 * np.array(obstacle.size)
+        elif obstacle.shape == "cylinder":
+            size = np.array([obstacle.size[0], 0.5 * obstacle.size[1], 0.0])
+        elif obstacle.shape == "sphere":
+            size = np.array([obstacle.size[0], 0.0, 0.0])
+        else:
+            geometry = obstacle.build_geometry()
+            vertices = np.array(geometry.vertices(), dtype=np.float64).reshape(-1, 3)
+            triangles = mesh_triangles(geometry)
+            corners = vertices[triangles]
+            # Triangles in the obstacle frame; the kernel expresses p there.
+            center = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
+            radius = float(np.max(np.linalg.norm(vertices - center, axis=1)))
+            positions[-1] = placement.translation + placement.rotation @ center
+            tris.append(corners - center)
+            size = np.array([radius, 0.0, 0.0])
+        kinds.append(_KINDS.get(obstacle.shape, kernel.MESH))
+        sizes.append(size)
+        first.append(first[-1] + (len(tris[-1]) if obstacle.shape == "mesh" else 0))
+    n = len(kinds)
+    scene_int = np.concatenate(
+        [np.array(kinds, dtype=np.int64), np.array(first, dtype=np.int64)]
+    )
+    scene_float = (
+        np.concatenate(
+            [
+                np.array(rotations).reshape(-1),
+                np.array(positions).reshape(-1),
+                np.array(sizes).reshape(-1),
+            ]
+        )
+        if n
+        else np.zeros(0)
+    )
+    soup: FloatArray = (
+        np.concatenate(tris).astype(np.float64) if tris else np.zeros((0, 3, 3))
+    )
+    return scene_int, scene_float, np.ascontiguousarray(soup)
+
+
+__all__ = ["PackedArrays", "SphereChecker"]

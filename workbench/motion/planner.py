@@ -1,0 +1,433 @@
+"""Collision-free motions: RRT-Connect on the sphere model, then a C² trajectory.
+
+:func:`plan` is the one door. It
+
+1. checks the start and the goal on the exact meshes (coal, the project's
+   :class:`~workbench.collision.CollisionChecker`) and on the spheres;
+2. grows two trees (Kuffner & LaValle's RRT-Connect, compiled): from the
+   start, and from every goal configuration (a tool-pose goal becomes every
+   closed-form branch within the limits; for seven-axis arms, those of
+   :data:`REDUNDANCY_SAMPLES` values of the redundancy parameter spread over
+   its feasible range; numerical IK where there is no closed form), every
+   edge certified free by :mod:`workbench.motion._sphere_kernel`;
+3. shortens the path (greedy reduction, then :data:`SHORTCUTS` random
+   shortcuts between points of two segments, each certified);
+4. time-scales it (:func:`~workbench.motion.time_scale`: on the polyline, so
+   no corner is cut) and checks the whole motion on the exact meshes
+   (:func:`~workbench.motion.verify_trajectory`, 0.25° joint steps).
+
+Random numbers come from ``numpy.random.default_rng(seed)``, so a seed gives
+the same path on every run and machine (with the same iteration count: the
+time limit is checked between batches of :data:`BATCH` iterations).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+
+from workbench.collision.checker import CollisionChecker
+from workbench.collision.clearance_report import PathClearance
+from workbench.collision.scene import Scene
+from workbench.errors import InputError, UnreachableError, UnsupportedRobotError
+from workbench.model.per_robot import per_robot
+from workbench.model.robot import Robot
+from workbench.motion import _sphere_kernel as kernel
+from workbench.motion.checker import PackedArrays, SphereChecker
+from workbench.motion.spheres import SphereModel, spherize
+from workbench.motion.timing import WaypointTrajectory, time_scale
+from workbench.motion.verify import verify_trajectory
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Longest tree edge [rad], Euclidean in joint space.
+STEP = 1.0
+#: Iterations between two looks at the clock.
+BATCH = 64
+#: Random shortcuts tried after the greedy reduction.
+SHORTCUTS = 64
+#: Values of the redundancy parameter tried for a seven-axis pose goal.
+REDUNDANCY_SAMPLES = 16
+#: Nodes each tree can hold.
+CAPACITY = 50_000
+#: Planners :func:`plan` offers.
+PLANNERS = ("rrtconnect",)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class MotionPlan:
+    """Outcome of :func:`plan`; an unsolved request is not an exception.
+
+    Attributes:
+        solved: A collision-free motion was found.
+        reason: None when solved, else ``"start in collision"``, ``"goal in
+            collision"``, ``"goal unreachable"``, ``"time limit"`` or
+            ``"iteration limit"``.
+        waypoints: (K, nq) [rad]: the shortened path (start ... goal); (0, nq)
+            when unsolved.
+        trajectory: The time-scaled motion, None when unsolved.
+        goal: The goal configuration reached (nq,) [rad], or None.
+        planning_time: Start to a shortened free path [s] (wall clock).
+        smoothing_time: Time scaling [s].
+        verification_time: The exact-mesh check of the trajectory [s].
+        min_clearance: Smallest exact distance along the trajectory [m]
+            (NaN when unsolved).
+        clearance: The exact-mesh report, None when unsolved.
+        iterations: RRT-Connect iterations.
+        detail: One line on what blocked an unsolved request ("" if solved).
+        unchecked: Entries ``(link, obstacle or link)`` the sphere model
+            could not separate at the start or a goal although the exact
+            meshes are apart there: left out of the planning, judged by the
+            exact check of the trajectory only.
+    """
+
+    solved: bool
+    reason: str | None
+    waypoints: FloatArray
+    trajectory: WaypointTrajectory | None
+    goal: FloatArray | None
+    planning_time: float
+    smoothing_time: float
+    verification_time: float
+    min_clearance: float
+    clearance: PathClearance | None = field(repr=False)
+    iterations: int
+    detail: str = ""
+    unchecked: tuple[tuple[str, str], ...] = ()
+
+    @property
+    def path_length(self) -> float:
+        """Sum of the waypoints' joint-space segment lengths [rad]."""
+        return float(np.sum(np.linalg.norm(np.diff(self.waypoints, axis=0), axis=1)))
+
+
+@per_robot
+def get_spheres(robot: Robot) -> SphereModel:
+    """The robot's default sphere model, built once per robot object."""
+    return spherize(robot)
+
+
+def goal_configurations(
+    robot: Robot, target: pin.SE3 | npt.ArrayLike, *, seed: int = 0
+) -> FloatArray:
+    """Configurations (M, nq) [rad] within the limits that put the tool at a pose.
+
+    Args:
+        robot: The robot.
+        target: Tool pose in the base frame, ``pin.SE3`` or (4, 4) [m].
+        seed: Seed of the numerical IK (arms without a closed form).
+
+    Returns:
+        Every closed-form branch within the limits (seven-axis arms: for
+        :data:`REDUNDANCY_SAMPLES` values of the parameter over its feasible
+        range); without a closed form, the distinct solutions of up to four
+        numerical solves from random starts.
+
+    Raises:
+        UnreachableError: If no configuration within the limits reaches it.
+    """
+    from workbench import ik
+
+    try:
+        solver = ik.get_solver(robot)
+    except UnsupportedRobotError:
+        solver = None
+    found: list[FloatArray] = []
+    if solver is None:
+        rng = np.random.default_rng(seed)
+        for _ in range(4):
+            result = ik.numeric(robot, target, rng=rng)
+            if result.success and not any(
+                np.allclose(result.q, q, atol=1e-6) for q in found
+            ):
+                found.append(np.array(result.q))
+    elif solver.parameter is None:
+        found = [np.array(s.q) for s in solver.solve(target) if s.within_limits]
+    else:
+        union = solver.feasible(target).union
+        total = sum(hi - lo for lo, hi in union)
+        values = (
+            [
+                lo
+                + (hi - lo)
+                * (k + 0.5)
+                / max(1, round(REDUNDANCY_SAMPLES * (hi - lo) / total))
+                for lo, hi in union
+                for k in range(max(1, round(REDUNDANCY_SAMPLES * (hi - lo) / total)))
+            ]
+            if total > 0
+            else [lo for lo, _ in union]
+        )
+        for value in values:
+            try:
+                found += [
+                    np.array(s.q)
+                    for s in solver.solve(target, redundancy=value)
+                    if s.within_limits
+                ]
+            except UnreachableError:
+                continue
+    if not found:
+        raise UnreachableError(0.0, (0.0, 0.0), "limits")
+    return np.array(found)
+
+
+def plan(
+    robot: Robot,
+    scene: Scene | None,
+    start: npt.ArrayLike,
+    goal: npt.ArrayLike | pin.SE3,
+    *,
+    seed: int = 0,
+    time_limit: float = 1.0,
+    iteration_limit: int = 100_000,
+    planner: str = "rrtconnect",
+    spheres: SphereModel | None = None,
+    velocity_scale: float = 1.0,
+    acceleration_scale: float = 1.0,
+) -> MotionPlan:
+    """A collision-free, time-scaled motion from ``start`` to ``goal``.
+
+    Args:
+        robot: The robot, with speed and acceleration limits for the time
+            scaling (:meth:`~workbench.model.Robot.with_limits`).
+        scene: Obstacles in the base frame, or None.
+        start: Start configuration (nq,) [rad].
+        goal: A configuration (nq,), several (M, nq) (any one will do) [rad],
+            or a tool pose (``pin.SE3`` or a (4, 4) matrix [m]).
+        seed: Seed of the planner's random numbers.
+        time_limit: Planning budget [s] (wall clock), > 0.
+        iteration_limit: RRT-Connect iterations at most, >= 1.
+        planner: ``"rrtconnect"``.
+        spheres: The sphere model; default :func:`get_spheres`.
+        velocity_scale: Fraction of the speed limits the trajectory uses,
+            in (0, 1].
+        acceleration_scale: Fraction of the acceleration limits, in (0, 1].
+
+    Returns:
+        The plan; ``solved`` False with a ``reason`` when no motion was found.
+
+    Raises:
+        InputError: Bad arguments (shapes, limits, an unknown planner, a
+            robot without acceleration limits).
+    """
+    t0 = time.perf_counter()
+    if planner not in PLANNERS:
+        raise InputError(f"unknown planner {planner!r}; one of {', '.join(PLANNERS)}")
+    if not (isinstance(time_limit, int | float) and 0 < time_limit < math.inf):
+        raise InputError(
+            f"time_limit must be a positive number of seconds, got {time_limit!r}"
+        )
+    if (
+        isinstance(iteration_limit, bool)
+        or not isinstance(iteration_limit, int)
+        or iteration_limit < 1
+    ):
+        raise InputError(
+            f"iteration_limit must be a positive integer, got {iteration_limit!r}"
+        )
+    unknown = [
+        name
+        for name, a in zip(robot.joint_names, robot.acceleration_limit, strict=True)
+        if not math.isfinite(a)
+    ]
+    if unknown:
+        raise InputError(
+            f"the time scaling needs acceleration limits; {robot.name!r} has none "
+            f"for {', '.join(unknown)} (give them with Robot.with_limits)"
+        )
+    q_start = robot.check_configuration(start)
+    exact = CollisionChecker(robot, scene)
+    model = spheres or get_spheres(robot)
+    empty = np.zeros((0, robot.nq))
+
+    def failed(reason: str, detail: str, iterations: int = 0) -> MotionPlan:
+        return MotionPlan(
+            False,
+            reason,
+            empty,
+            None,
+            None,
+            time.perf_counter() - t0,
+            0.0,
+            0.0,
+            math.nan,
+            None,
+            iterations,
+            detail,
+        )
+
+    if isinstance(goal, pin.SE3) or np.shape(goal) == (4, 4):
+        try:
+            goals = goal_configurations(robot, goal, seed=seed)
+        except UnreachableError as err:
+            return failed("goal unreachable", str(err))
+    else:
+        raw = np.asarray(goal, dtype=np.float64)
+        goals = np.atleast_2d(raw)
+        if raw.ndim not in (1, 2) or goals.shape[1] != robot.nq or len(goals) == 0:
+            raise InputError(
+                f"goal must be a configuration ({robot.nq},), several (M, {robot.nq}) "
+                f"or a tool pose, got shape {raw.shape}"
+            )
+        goals = np.array([robot.check_configuration(q) for q in goals])
+    start_distance = exact.compute_distances(q_start)
+    if start_distance.size and start_distance.min() <= 0.0:
+        k = int(np.argmin(start_distance))
+        a, b = exact.body_pairs[k]
+        return failed("start in collision", f"{a} touches {b} at the start")
+    free_goals = []
+    for q in goals:
+        d = exact.compute_distances(q)
+        if not d.size or d.min() > 0.0:
+            free_goals.append(q)
+    if not free_goals:
+        d = exact.compute_distances(goals[0])
+        a, b = exact.body_pairs[int(np.argmin(d))]
+        return failed("goal in collision", f"{a} touches {b} at the goal")
+    goals = np.array(free_goals)
+    checker = _relaxed_checker(model, scene, np.concatenate([[q_start], goals]))
+    search = _search(
+        checker, robot, q_start, goals, seed, t0, time_limit, iteration_limit
+    )
+    if len(search) == 3:
+        reason, detail, iterations = search
+        return replace(failed(reason, detail, iterations), unchecked=checker.unchecked)
+    path, iterations = search
+    t_planned = time.perf_counter()
+    trajectory = time_scale(
+        robot,
+        path,
+        velocity_scale=velocity_scale,
+        acceleration_scale=acceleration_scale,
+    )
+    t_scaled = time.perf_counter()
+    report = verify_trajectory(exact, trajectory)
+    t_verified = time.perf_counter()
+    path.setflags(write=False)
+    goal_reached = np.array(path[-1])
+    goal_reached.setflags(write=False)
+    return MotionPlan(
+        report.collision_free,
+        None if report.collision_free else "contact on the exact meshes",
+        path,
+        trajectory,
+        goal_reached,
+        t_planned - t0,
+        t_scaled - t_planned,
+        t_verified - t_scaled,
+        float(report.min_clearance),
+        report,
+        iterations,
+        "" if report.collision_free else "the sphere model missed a contact",
+        checker.unchecked,
+    )
+
+
+def _relaxed_checker(
+    model: SphereModel, scene: Scene | None, ends: FloatArray
+) -> SphereChecker:
+    """The checker without the entries that touch at an end (exact-free there)."""
+    checker = SphereChecker(model, scene)
+    unchecked: set[tuple[str, str]] = set()
+    n_links = len(checker.links)
+    for q in ends:
+        values = checker.clearances(q)
+        for k in np.flatnonzero(values < 0):
+            if k >= n_links:
+                unchecked.add(checker.pairs[k - n_links])
+    for obstacle in checker.scene.obstacles:
+        one = SphereChecker(model, Scene(obstacle.name, (obstacle,)))
+        for q in ends:
+            values = one.clearances(q)[:n_links]
+            unchecked |= {
+                (one.links[k], obstacle.name) for k in np.flatnonzero(values < 0)
+            }
+    if not unchecked:
+        return checker
+    return SphereChecker(model, scene, unchecked=tuple(sorted(unchecked)))
+
+
+def _search(
+    checker: SphereChecker,
+    robot: Robot,
+    q_start: FloatArray,
+    goals: FloatArray,
+    seed: int,
+    t0: float,
+    time_limit: float,
+    iteration_limit: int,
+) -> tuple[FloatArray, int] | tuple[str, str, int]:
+    """RRT-Connect and shortcutting; the path or (reason, detail, iterations)."""
+    n = robot.nq
+    arrays = checker.arrays
+    store = np.zeros((kernel.MAX_EVALUATIONS, len(arrays[0])))
+    rng = np.random.default_rng(seed)
+    for q in goals:  # a straight segment first
+        if kernel.motion_free(q_start, q, *arrays, store):
+            return _shorten(np.array([q_start, q]), rng, arrays, store), 0
+    capacity = min(CAPACITY, iteration_limit * 8 + len(goals) + 1)
+    nodes = np.zeros((2, capacity, n))
+    parents = np.full((2, capacity), -1, dtype=np.int64)
+    nodes[0, 0] = q_start
+    nodes[1, : len(goals)] = goals
+    counts = np.array([1, len(goals)], dtype=np.int64)
+    state = np.zeros(4, dtype=np.int64)
+    lower, upper = np.array(robot.lower), np.array(robot.upper)
+    while True:
+        done = int(state[3])
+        batch = min(BATCH, iteration_limit - done)
+        if batch <= 0:
+            return "iteration limit", f"no path in {done} iterations", done
+        uniforms = rng.random((batch, n))
+        kernel.grow_trees(
+            nodes, parents, counts, state, uniforms, lower, upper, STEP, *arrays, store
+        )
+        if state[0] == 1:
+            break
+        if counts.max() + 1 >= capacity:
+            return "iteration limit", f"the trees hold {capacity} nodes", int(state[3])
+        if time.perf_counter() - t0 > time_limit:
+            return "time limit", f"no path in {time_limit:g} s", int(state[3])
+    half = [_branch(nodes[k], parents[k], int(state[1 + k])) for k in (0, 1)]
+    path = np.concatenate([half[0][::-1], half[1][1:]])
+    return _shorten(path, rng, arrays, store), int(state[3])
+
+
+def _branch(nodes: FloatArray, parents: npt.NDArray[np.int64], tip: int) -> FloatArray:
+    out = []
+    while tip >= 0:
+        out.append(nodes[tip])
+        tip = int(parents[tip])
+    return np.array(out)
+
+
+def _shorten(
+    path: FloatArray,
+    rng: np.random.Generator,
+    arrays: PackedArrays,
+    store: FloatArray,
+) -> FloatArray:
+    buffer = np.zeros((len(path) + 2 * SHORTCUTS + 2, path.shape[1]))
+    buffer[: len(path)] = path
+    length = np.array([len(path)], dtype=np.int64)
+    kernel.shortcut(buffer, length, rng.random((SHORTCUTS, 2)), *arrays, store)
+    out = buffer[: int(length[0])]
+    keep = np.concatenate(
+        [[True], np.any(np.abs(np.diff(out, axis=0)) > 1e-12, axis=1)]
+    )
+    return np.array(out[keep])
+
+
+__all__ = [
+    "PLANNERS",
+    "MotionPlan",
+    "get_spheres",
+    "goal_configurations",
+    "plan",
+]

@@ -1,0 +1,448 @@
+r"""Spheres around a robot's links: the conservative model the planner checks.
+
+:func:`spherize` covers each link's collision geometry (the URDF's
+``<collision>`` elements, meshes or primitives) with a few spheres, fixed in
+the frame of the link's joint:
+
+* **Meshes.** Every triangle is sampled on a barycentric grid whose edges are
+  at most :data:`SAMPLE_SPACING` long, so that every point of the surface lies
+  within :math:`\delta = \ell/\sqrt3` of a sample (:math:`\ell` the longest
+  grid edge of its triangle: the farthest point of a triangle from its three
+  corners is its circumcentre or, for an obtuse one, the middle of its long
+  edge, both within :math:`\ell/\sqrt3`). The samples and the vertices are
+  grouped by k-means, and each group gets the smallest of two spheres (about
+  its centroid and about the centre of its bounding box) that holds all its
+  points, grown by its :math:`\delta`. So **every vertex is inside, and so
+  is every point of every triangle**.
+* **Boxes** are cut into sub-boxes no longer than :math:`\sqrt2` times their
+  shortest edge, each covered by its circumscribed sphere; **cylinders and
+  capsules** into slabs along the axis, each covered by the sphere through its
+  rims; **spheres** stay themselves. These cover the solid exactly.
+
+A union of spheres that covers a closed surface keeps an obstacle out of the
+link along any continuous motion that starts outside (the obstacle would have
+to cross the surface first); the planner's motions all start from the start
+and goal configurations, which are checked on the exact meshes.
+
+The spheres reach beyond the geometry: the **excess** of a link is the
+largest distance from a point of its spheres' surfaces (:data:`EXCESS_SAMPLES`
+Fibonacci points each) outside the geometry's convex hull to the nearest
+surface sample, an upper bound of how far, at those points, the spheres
+reach beyond the geometry. The number of spheres of a mesh grows (up to
+:data:`MAX_SPHERES`) until its excess is at most ``tolerance``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+
+from workbench.collision.self_filter import get_link_name
+from workbench.errors import InputError
+from workbench.model.robot import Robot
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+#: Default excess [m] the spheres of a mesh may have beyond it.
+DEFAULT_TOLERANCE = 0.02
+#: Longest edge [m] of the sampling grid on a mesh's triangles.
+SAMPLE_SPACING = 0.006
+#: Largest number of spheres of one mesh.
+MAX_SPHERES = 16
+#: Spacing [m] of the grid of points inside a mesh that k-means groups.
+GRID_SPACING = 0.01
+#: Seed of the k-means grouping (the spheres are the same on every run).
+KMEANS_SEED = 0
+#: Points sampled on each sphere to measure the excess.
+EXCESS_SAMPLES = 96
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class LinkSpheres:
+    """The spheres of one link, in the frame of the joint that carries it.
+
+    Attributes:
+        link: Link name.
+        joint: Pinocchio joint index (0: the fixed base).
+        centers: (S, 3) [m], joint frame.
+        radii: (S,) [m].
+        excess: How far the spheres reach beyond the link's geometry [m]
+            (module docstring).
+    """
+
+    link: str
+    joint: int
+    centers: FloatArray
+    radii: FloatArray
+    excess: float
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class SphereModel:
+    """The spheres of every link with collision geometry.
+
+    Attributes:
+        robot: The robot.
+        links: One entry per link, in the order of the robot's collision model.
+        tolerance: The excess asked of meshes [m].
+    """
+
+    robot: Robot
+    links: tuple[LinkSpheres, ...]
+    tolerance: float
+
+    @property
+    def n_spheres(self) -> int:
+        """Number of spheres over all links."""
+        return sum(len(link.radii) for link in self.links)
+
+    def placed(self, q: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Centres (S, 3) [m] in the base frame and radii (S,) at ``q``."""
+        model = self.robot.model
+        data = model.createData()
+        pin.forwardKinematics(model, data, self.robot.check_configuration(q))
+        centers = [
+            link.centers @ data.oMi[link.joint].rotation.T
+            + data.oMi[link.joint].translation
+            for link in self.links
+        ]
+        return np.concatenate(centers), np.concatenate([x.radii for x in self.links])
+
+
+def spherize(robot: Robot, *, tolerance: float = DEFAULT_TOLERANCE) -> SphereModel:
+    """Cover every link's collision geometry with spheres (module docstring).
+
+    Args:
+        robot: The robot; its collision model is read.
+        tolerance: Largest excess [m] of a mesh's spheres, > 0.
+
+    Returns:
+        The sphere model.
+
+    Raises:
+        InputError: If ``tolerance`` is not a positive number, or the robot
+            has no collision geometry or a geometry of a kind that cannot be
+            covered (only meshes, boxes, cylinders, capsules and spheres can).
+    """
+    if not (isinstance(tolerance, int | float) and 0 < tolerance < math.inf):
+        raise InputError(
+            f"tolerance must be a positive number of metres, got {tolerance!r}"
+        )
+    objects = list(robot.collision_model.geometryObjects)
+    if not objects:
+        raise InputError(f"robot {robot.name!r} has no collision geometry")
+    grouped: dict[str, list[tuple[FloatArray, FloatArray, float]]] = {}
+    joints: dict[str, int] = {}
+    for geometry in objects:
+        link = get_link_name(robot.model, geometry)
+        joints[link] = int(geometry.parentJoint)
+        grouped.setdefault(link, []).append(_cover(geometry, float(tolerance)))
+    links = []
+    for link, parts in grouped.items():
+        links.append(
+            LinkSpheres(
+                link,
+                joints[link],
+                _read_only(np.concatenate([c for c, _, _ in parts])),
+                _read_only(np.concatenate([r for _, r, _ in parts])),
+                max(e for _, _, e in parts),
+            )
+        )
+    return SphereModel(robot, tuple(links), float(tolerance))
+
+
+def _read_only(values: FloatArray) -> FloatArray:
+    out = np.array(values, dtype=np.float64)
+    out.setflags(write=False)
+    return out
+
+
+def _cover(
+    geometry: pin.GeometryObject, tolerance: float
+) -> tuple[FloatArray, FloatArray, float]:
+    """Spheres (centres in the joint frame, radii) and excess of one geometry."""
+    shape = geometry.geometry
+    kind = type(shape).__name__
+    if kind.startswith("BVHModel") or kind == "Convex":
+        vertices = np.array(shape.vertices(), dtype=np.float64).reshape(-1, 3)
+        triangles = mesh_triangles(shape)
+        centers, radii, samples = _cover_mesh(vertices, triangles, tolerance)
+    elif kind == "Box":
+        half = np.array(shape.halfSide, dtype=np.float64)
+        centers, radii = _cover_box(half)
+        samples = _box_samples(half)
+    elif kind in ("Cylinder", "Capsule"):
+        radius, half_length = float(shape.radius), float(shape.halfLength)
+        centers, radii = _cover_cylinder(
+            radius, half_length, tolerance, kind == "Capsule"
+        )
+        samples = _cylinder_samples(radius, half_length, kind == "Capsule")
+    elif kind == "Sphere":
+        centers, radii = np.zeros((1, 3)), np.array([float(shape.radius)])
+        samples = _fibonacci(max(EXCESS_SAMPLES, 64)) * float(shape.radius)
+    else:
+        raise InputError(
+            f"collision geometry {geometry.name!r}: a {kind} cannot be covered by "
+            "spheres (meshes, boxes, cylinders, capsules and spheres can)"
+        )
+    excess = _excess(centers, radii, samples)
+    placement = geometry.placement
+    return (
+        centers @ placement.rotation.T + placement.translation,
+        radii,
+        excess,
+    )
+
+
+def mesh_triangles(shape: object) -> IntArray:
+    """Vertex indices (T, 3) of a coal mesh's triangles."""
+    count = int(shape.num_tris)  # type: ignore[attr-defined]
+    out = np.empty((count, 3), dtype=np.int64)
+    for i in range(count):
+        tri = shape.tri_indices(i)  # type: ignore[attr-defined]
+        out[i] = (tri[0], tri[1], tri[2])
+    return out
+
+
+def _surface_samples(
+    vertices: FloatArray, triangles: IntArray, spacing: float
+) -> tuple[FloatArray, FloatArray]:
+    """Grid points on every triangle and each point's coverage radius δ [m]."""
+    points, deltas = [vertices], [np.zeros(len(vertices))]
+    for a, b, c in vertices[triangles]:
+        longest = max(
+            np.linalg.norm(b - a), np.linalg.norm(c - b), np.linalg.norm(a - c)
+        )
+        n = max(1, math.ceil(longest / spacing))
+        i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
+        keep = i + j <= n
+        u, v = i[keep] / n, j[keep] / n
+        points.append(a + np.outer(u, b - a) + np.outer(v, c - a))
+        deltas.append(np.full(len(u), longest / n / math.sqrt(3.0)))
+    return np.concatenate(points), np.concatenate(deltas)
+
+
+def _cover_mesh(
+    vertices: FloatArray, triangles: IntArray, tolerance: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Spheres about k volume clusters, each holding its Voronoi cell's samples.
+
+    The points of a :data:`GRID_SPACING` grid inside the mesh (generalised
+    winding number > 1/2, robust to small holes; the surface samples for a
+    mesh that encloses none) are grouped by k-means; the sphere of a group is
+    centred at its centroid and holds every surface sample nearer to that
+    centroid than to any other, grown by the sample's δ. k grows until the
+    excess is at most ``tolerance`` or k = :data:`MAX_SPHERES`.
+    """
+    from scipy.cluster.vq import kmeans2
+    from scipy.spatial import cKDTree
+
+    if len(vertices) == 0 or len(triangles) == 0:
+        raise InputError("a collision mesh has no triangles")
+    points, deltas = _surface_samples(vertices, triangles, SAMPLE_SPACING)
+    tree = cKDTree(points)
+    outside = _OutsideHull(points, tree)
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    axes = [np.arange(lo[i], hi[i] + GRID_SPACING, GRID_SPACING) for i in range(3)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    volume = grid[_winding_number(grid, vertices[triangles]) > 0.5]
+    if len(volume) < MAX_SPHERES:
+        volume = points
+    k, best = 1, None
+    while True:
+        if k == 1:
+            centroids = volume.mean(axis=0, keepdims=True)
+        else:
+            centroids, _ = kmeans2(volume, k, seed=KMEANS_SEED, minit="++")
+        depth, _ = tree.query(centroids)
+        # Each sample goes to the sphere it makes reach least beyond the
+        # surface: |p - c| - depth(c), depth the centre's distance to it.
+        owner = np.empty(len(points), dtype=np.int64)
+        for k0 in range(0, len(points), 4096):
+            block = points[k0 : k0 + 4096]
+            cost = np.linalg.norm(block[:, None] - centroids[None], axis=2) - depth
+            owner[k0 : k0 + 4096] = np.argmin(cost, axis=1)
+        radii = np.zeros(len(centroids))
+        np.maximum.at(
+            radii, owner, np.linalg.norm(points - centroids[owner], axis=1) + deltas
+        )
+        used = np.unique(owner)
+        centers, radii = centroids[used], radii[used]
+        excess = max(
+            outside.excess(c, float(r)) for c, r in zip(centers, radii, strict=True)
+        )
+        if best is None or excess < best[2]:
+            best = (centers, radii, excess)
+        if excess <= tolerance or k >= MAX_SPHERES:
+            break
+        k = min(MAX_SPHERES, k + max(1, k // 3))
+    return best[0], best[1], points
+
+
+def _winding_number(points: FloatArray, corners: FloatArray) -> FloatArray:
+    """Generalised winding number (P,) of a triangle soup (T, 3, 3) at points."""
+    out = np.zeros(len(points))
+    for k in range(0, len(points), 256):
+        a, b, c = (
+            corners[None, :, i, :] - points[k : k + 256, None, :] for i in range(3)
+        )
+        la, lb, lc = (np.linalg.norm(x, axis=2) for x in (a, b, c))
+        det = np.einsum("ptj,ptj->pt", a, np.cross(b, c))
+        dots = (
+            la * lb * lc
+            + np.einsum("ptj,ptj->pt", a, b) * lc
+            + np.einsum("ptj,ptj->pt", b, c) * la
+            + np.einsum("ptj,ptj->pt", c, a) * lb
+        )
+        out[k : k + 256] = np.abs(np.sum(np.arctan2(det, dots), axis=1)) / (2 * math.pi)
+    return out
+
+
+def _group_sphere(
+    points: FloatArray, deltas: FloatArray, group: IntArray
+) -> tuple[FloatArray, float]:
+    """The smaller of the spheres about the centroid and the box centre."""
+    members, delta = points[group], deltas[group]
+    best_center, best_radius = members[0], math.inf
+    for center in (members.mean(axis=0), 0.5 * (members.min(0) + members.max(0))):
+        radius = float(np.max(np.linalg.norm(members - center, axis=1) + delta))
+        if radius < best_radius:
+            best_center, best_radius = center, radius
+    return best_center, best_radius
+
+
+class _OutsideHull:
+    """Excess of one sphere over a geometry given by its surface samples."""
+
+    def __init__(self, samples: FloatArray, tree: object) -> None:
+        from scipy.spatial import ConvexHull, QhullError
+
+        self.tree = tree
+        self.directions = _fibonacci(EXCESS_SAMPLES)
+        try:
+            self.planes: FloatArray | None = ConvexHull(samples).equations
+        except QhullError:  # flat geometry: every sphere point counts
+            self.planes = None
+
+    def excess(self, center: FloatArray, radius: float) -> float:
+        surface = center + radius * self.directions
+        if self.planes is not None:
+            distance = surface @ self.planes[:, :3].T + self.planes[:, 3]
+            surface = surface[np.max(distance, axis=1) > 0]
+        if len(surface) == 0:
+            return 0.0
+        gap, _ = self.tree.query(surface)  # type: ignore[attr-defined]
+        return float(np.max(gap))
+
+
+def _cover_box(half: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Sub-boxes no longer than sqrt(2) x the shortest edge, circumscribed."""
+    shortest = max(float(half.min()), 1e-6)
+    counts = np.maximum(1, np.ceil(half / (math.sqrt(2.0) * shortest)).astype(int))
+    sub = half / counts
+    axes = [(-half[i] + sub[i] * (2 * np.arange(counts[i]) + 1)) for i in range(3)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    return grid, np.full(len(grid), float(np.linalg.norm(sub)))
+
+
+def _cover_cylinder(
+    radius: float, half_length: float, tolerance: float, capsule: bool
+) -> tuple[FloatArray, FloatArray]:
+    """Axis slabs; the sphere through a slab's rims covers it."""
+    # A slab of height h needs sqrt(r^2 + h^2/4) - r <= tolerance.
+    slab = 2.0 * math.sqrt(max((radius + tolerance) ** 2 - radius**2, 1e-12))
+    count = max(1, math.ceil(2.0 * half_length / slab))
+    height = 2.0 * half_length / count
+    z = -half_length + height * (np.arange(count) + 0.5)
+    centers = np.column_stack([np.zeros(count), np.zeros(count), z])
+    radii = np.full(count, math.hypot(radius, height / 2.0))
+    if capsule:
+        ends = np.array([[0.0, 0.0, -half_length], [0.0, 0.0, half_length]])
+        centers = np.concatenate([centers, ends])
+        radii = np.concatenate([radii, [radius, radius]])
+    return centers, radii
+
+
+def _box_samples(half: FloatArray) -> FloatArray:
+    step = SAMPLE_SPACING
+    faces = []
+    for axis in range(3):
+        others = [i for i in range(3) if i != axis]
+        a = np.linspace(
+            -half[others[0]],
+            half[others[0]],
+            max(2, math.ceil(2 * half[others[0]] / step) + 1),
+        )
+        b = np.linspace(
+            -half[others[1]],
+            half[others[1]],
+            max(2, math.ceil(2 * half[others[1]] / step) + 1),
+        )
+        u, v = np.meshgrid(a, b, indexing="ij")
+        for sign in (-1.0, 1.0):
+            face = np.empty((u.size, 3))
+            face[:, axis] = sign * half[axis]
+            face[:, others[0]], face[:, others[1]] = u.ravel(), v.ravel()
+            faces.append(face)
+    return np.concatenate(faces)
+
+
+def _cylinder_samples(radius: float, half_length: float, capsule: bool) -> FloatArray:
+    step = SAMPLE_SPACING
+    angles = np.linspace(
+        0.0, 2 * math.pi, max(8, math.ceil(2 * math.pi * radius / step)), endpoint=False
+    )
+    z = np.linspace(
+        -half_length, half_length, max(2, math.ceil(2 * half_length / step) + 1)
+    )
+    a, h = np.meshgrid(angles, z, indexing="ij")
+    side = np.column_stack(
+        [radius * np.cos(a).ravel(), radius * np.sin(a).ravel(), h.ravel()]
+    )
+    if capsule:
+        cap = _fibonacci(max(64, math.ceil(4 * math.pi * radius**2 / step**2))) * radius
+        ends = [
+            cap[cap[:, 2] >= 0] + [0, 0, half_length],
+            cap[cap[:, 2] <= 0] - [0, 0, half_length],
+        ]
+    else:
+        rings = np.linspace(0.0, radius, max(2, math.ceil(radius / step) + 1))
+        r, t = np.meshgrid(rings, angles, indexing="ij")
+        disk = np.column_stack([(r * np.cos(t)).ravel(), (r * np.sin(t)).ravel()])
+        ends = [
+            np.column_stack([disk, np.full(len(disk), s * half_length)])
+            for s in (-1, 1)
+        ]
+    return np.concatenate([side, *ends])
+
+
+def _fibonacci(count: int) -> FloatArray:
+    """``count`` nearly uniform unit vectors (Fibonacci sphere)."""
+    i = np.arange(count) + 0.5
+    z = 1.0 - 2.0 * i / count
+    phi = math.pi * (3.0 - math.sqrt(5.0)) * i
+    r = np.sqrt(1.0 - z * z)
+    return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
+
+
+def _excess(centers: FloatArray, radii: FloatArray, samples: FloatArray) -> float:
+    """Upper bound [m] of how far the spheres reach beyond the samples' hull."""
+    from scipy.spatial import cKDTree
+
+    outside = _OutsideHull(samples, cKDTree(samples))
+    return max(outside.excess(c, float(r)) for c, r in zip(centers, radii, strict=True))
+
+
+__all__ = [
+    "DEFAULT_TOLERANCE",
+    "MAX_SPHERES",
+    "SAMPLE_SPACING",
+    "LinkSpheres",
+    "SphereModel",
+    "spherize",
+]
