@@ -207,7 +207,8 @@ def _clearances(
 ) -> bool:
     """Clearance bounds (L + P,) [m] into ``out``; False if there is a contact.
 
-    Entries whose bound sphere already shows ``need`` or more are not refined.
+    Entries whose bound sphere already shows ``need`` or more are not refined;
+    entries whose ``need`` is -inf are skipped (set to inf: proven elsewhere).
     With ``stop``, returns at the first contact (later entries unset).
     """
     free = True
@@ -257,7 +258,7 @@ def _clearances(
     placed = np.zeros(n_links, dtype=np.bool_)
     for li in range(n_links):
         best = math.inf
-        if lscene[li]:
+        if lscene[li] and need[li] > -math.inf:
             for o in range(n_obstacles):
                 if allowed[li, o]:
                     continue
@@ -297,6 +298,9 @@ def _clearances(
         out[li] = best
         free = free and best >= 0.0
     for k in range(n_pairs):
+        if need[n_links + k] == -math.inf:
+            out[n_links + k] = math.inf
+            continue
         a, b = pa[k], pb[k]
         d = _gap(bound[a], bound[b]) - lradius[a] - lradius[b]
         if d < need[n_links + k]:
@@ -405,7 +409,10 @@ def _motion_free(
         for i in range(len(qa)):
             q[i] = qa[i] + tm * (qb[i] - qa[i])
         for k in range(n_entries):
-            need[k] = 0.5 * motion[k] * w
+            if store[i0, k] + store[i1, k] < motion[k] * w:
+                need[k] = 0.5 * motion[k] * w
+            else:  # proven on the whole interval, so on both halves
+                need[k] = -math.inf
         if not _clearances(
             q,
             need,
@@ -443,11 +450,12 @@ def clearances(
     stop: bool,
     out: FloatArray,
 ) -> bool:
-    """Sphere clearances (L + P,) [m] at q, every entry refined; False on contact.
+    """Sphere clearances (L + P,) [m] at q; False on contact.
 
-    With ``stop``, returns at the first contact (later entries unset).
+    Every entry refined; with ``stop``, only entries whose bounding sphere
+    touches, returning at the first contact (later entries unset).
     """
-    need = np.full(len(out), np.inf)
+    need = np.full(len(out), 0.0 if stop else np.inf)
     return _clearances(
         q, need, robot_int, robot_float, sizes, scene_int, scene_float, tris, stop, out
     )

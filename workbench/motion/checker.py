@@ -21,6 +21,7 @@ import pinocchio as pin
 from workbench.collision.scene import Scene
 from workbench.collision.self_filter import compute_self_collision_filter
 from workbench.errors import InputError
+from workbench.model.per_robot import per_robot
 from workbench.motion import _sphere_kernel as kernel
 from workbench.motion.spheres import SphereModel, mesh_triangles
 
@@ -39,6 +40,9 @@ class PackedArrays(NamedTuple):
     scene_float: FloatArray
     tris: FloatArray
 
+
+#: The robot's self-collision filter, computed once per robot object.
+_filter = per_robot(compute_self_collision_filter)
 
 _KINDS = {"box": kernel.BOX, "cylinder": kernel.CYLINDER, "sphere": kernel.SPHERE}
 
@@ -129,7 +133,7 @@ def _pairs(
     spheres: SphereModel, unchecked: tuple[tuple[str, str], ...]
 ) -> tuple[tuple[str, str], ...]:
     robot = spheres.robot
-    checked = compute_self_collision_filter(robot)
+    checked = _filter(robot)
     names = [link.link for link in spheres.links]
     return tuple(
         (a, b)

@@ -72,12 +72,17 @@ class MotionPlan:
             when unsolved.
         trajectory: The time-scaled motion, None when unsolved.
         goal: The goal configuration reached (nq,) [rad], or None.
-        planning_time: Start to a shortened free path [s] (wall clock).
+        setup_time: Checks of the start and goals on the exact meshes and
+            the packing of the spheres and the scene [s] (wall clock).
+        planning_time: From there to a shortened free path [s] (RRT-Connect
+            and shortcutting; the time limit applies to it).
         smoothing_time: Time scaling [s].
-        verification_time: The exact-mesh check of the trajectory [s].
+        verification_time: The exact-mesh check of the trajectory [s] (0
+            without ``verify``).
         min_clearance: Smallest exact distance along the trajectory [m]
-            (NaN when unsolved).
-        clearance: The exact-mesh report, None when unsolved.
+            (NaN when unsolved or not verified).
+        clearance: The exact-mesh report, None when unsolved or not
+            verified.
         iterations: RRT-Connect iterations.
         detail: One line on what blocked an unsolved request ("" if solved).
         unchecked: Entries ``(link, obstacle or link)`` the sphere model
@@ -91,6 +96,7 @@ class MotionPlan:
     waypoints: FloatArray
     trajectory: WaypointTrajectory | None
     goal: FloatArray | None
+    setup_time: float
     planning_time: float
     smoothing_time: float
     verification_time: float
@@ -190,6 +196,7 @@ def plan(
     spheres: SphereModel | None = None,
     velocity_scale: float = 1.0,
     acceleration_scale: float = 1.0,
+    verify: bool = True,
 ) -> MotionPlan:
     """A collision-free, time-scaled motion from ``start`` to ``goal``.
 
@@ -208,6 +215,9 @@ def plan(
         velocity_scale: Fraction of the speed limits the trajectory uses,
             in (0, 1].
         acceleration_scale: Fraction of the acceleration limits, in (0, 1].
+        verify: Check the trajectory on the exact meshes
+            (:func:`~workbench.motion.verify_trajectory`); a motion that
+            fails it is not ``solved``.
 
     Returns:
         The plan; ``solved`` False with a ``reason`` when no motion was found.
@@ -246,14 +256,18 @@ def plan(
     model = spheres or get_spheres(robot)
     empty = np.zeros((0, robot.nq))
 
+    t_search = math.inf
+
     def failed(reason: str, detail: str, iterations: int = 0) -> MotionPlan:
+        now = time.perf_counter()
         return MotionPlan(
             False,
             reason,
             empty,
             None,
             None,
-            time.perf_counter() - t0,
+            min(now, t_search) - t0,
+            max(0.0, now - t_search),
             0.0,
             0.0,
             math.nan,
@@ -292,8 +306,9 @@ def plan(
         return failed("goal in collision", f"{a} touches {b} at the goal")
     goals = np.array(free_goals)
     checker = _relaxed_checker(model, scene, np.concatenate([[q_start], goals]))
+    t_search = time.perf_counter()
     search = _search(
-        checker, robot, q_start, goals, seed, t0, time_limit, iteration_limit
+        checker, robot, q_start, goals, seed, t_search, time_limit, iteration_limit
     )
     if len(search) == 3:
         reason, detail, iterations = search
@@ -307,26 +322,35 @@ def plan(
         acceleration_scale=acceleration_scale,
     )
     t_scaled = time.perf_counter()
-    report = verify_trajectory(exact, trajectory)
+    report = verify_trajectory(exact, trajectory) if verify else None
     t_verified = time.perf_counter()
+    free = report is None or report.collision_free
     path.setflags(write=False)
     goal_reached = np.array(path[-1])
     goal_reached.setflags(write=False)
     return MotionPlan(
-        report.collision_free,
-        None if report.collision_free else "contact on the exact meshes",
+        free,
+        None if free else "contact on the exact meshes",
         path,
         trajectory,
         goal_reached,
-        t_planned - t0,
+        t_search - t0,
+        t_planned - t_search,
         t_scaled - t_planned,
         t_verified - t_scaled,
-        float(report.min_clearance),
+        math.nan if report is None else float(report.min_clearance),
         report,
         iterations,
-        "" if report.collision_free else "the sphere model missed a contact",
+        "" if free else _contact_detail(report),
         checker.unchecked,
     )
+
+
+def _contact_detail(report: PathClearance | None) -> str:
+    if report is None or not report.contacts:
+        return "the exact check could not prove the motion free"
+    first = report.contacts[0]
+    return f"{first.body_a} touches {first.body_b} at t = {first.t_start:.3f} s"
 
 
 def _relaxed_checker(
