@@ -70,6 +70,7 @@ _COMMANDS = (
     "fishcut",
     "export",
     "workspace",
+    "motion",
 )
 #: Options of the top-level parser that take no value (before the command).
 _TOP_FLAGS = frozenset({"-v", "-vv", "-vvv", "--verbose", "-q", "--quiet"})

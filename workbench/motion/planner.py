@@ -249,7 +249,8 @@ def plan(
     if unknown:
         raise InputError(
             f"the time scaling needs acceleration limits; {robot.name!r} has none "
-            f"for {', '.join(unknown)} (give them with Robot.with_limits)"
+            f"for {', '.join(unknown)} (--acceleration-limit at the command line, "
+            "Robot.with_limits in Python)"
         )
     q_start = robot.check_configuration(start)
     exact = CollisionChecker(robot, scene)
