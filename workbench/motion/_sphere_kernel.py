@@ -203,9 +203,15 @@ def _clearances(
     scene_float: FloatArray,
     tris: FloatArray,
     stop: bool,
+    skip: IntArray,
+    bounds: FloatArray,
     out: FloatArray,
 ) -> bool:
     """Clearance bounds (L + P,) [m] into ``out``; False if there is a contact.
+
+    Link–obstacle pairs with ``skip[l, o]`` set are left out (proven free
+    elsewhere); ``bounds[l, o]`` receives the bounding sphere's clearance of
+    every pair computed.
 
     Entries whose bound sphere already shows ``need`` or more are not refined;
     entries whose ``need`` is -inf are skipped (set to inf: proven elsewhere).
@@ -260,7 +266,7 @@ def _clearances(
         best = math.inf
         if lscene[li] and need[li] > -math.inf:
             for o in range(n_obstacles):
-                if allowed[li, o]:
+                if allowed[li, o] or skip[li, o]:
                     continue
                 d = (
                     _distance(
@@ -268,6 +274,7 @@ def _clearances(
                     )
                     - lradius[li]
                 )
+                bounds[li, o] = d
                 if d < need[li]:
                     if not placed[li]:
                         j = ljoint[li]
@@ -311,7 +318,13 @@ def _clearances(
                         _place(frame_rot[j], frame_pos[j], scenter[s], world[s])
                     placed[li] = True
             d = math.inf
+            limit = need[n_links + k]
             for s in range(lfirst[a], lfirst[a + 1]):
+                # A sphere of a far from b's bounding sphere is far from b.
+                coarse = _gap(world[s], bound[b]) - sradius[s] - lradius[b]
+                if coarse >= limit:
+                    d = min(d, coarse)
+                    continue
                 for t in range(lfirst[b], lfirst[b + 1]):
                     d = min(d, _gap(world[s], world[t]) - sradius[s] - sradius[t])
             if d < 0.0 and stop:
@@ -334,29 +347,41 @@ def _motion_free(
     scene_float: FloatArray,
     tris: FloatArray,
     store: FloatArray,
-    check_start: bool,
 ) -> bool:
-    """Whether the straight segment qa -> qb is proven free (module docstring)."""
+    """Whether the straight segment qa -> qb is proven free (module docstring).
+
+    The link–obstacle pairs whose bounding-sphere clearance at ``qa`` exceeds
+    the link's motion bound over the whole segment are proven free at once
+    and left out of every later evaluation.
+    """
     n_links, n_pairs = sizes[1], sizes[3]
+    n_obstacles = max(1, sizes[4])
     n_entries = n_links + n_pairs
     dq = np.abs(qb - qa)
     motion = levers @ dq  # (L + P,) bound of each entry over the whole segment
     need = motion.copy()
     q = np.empty(len(qa))
-    if check_start:
-        if not _clearances(
-            qa,
-            need,
-            robot_int,
-            robot_float,
-            sizes,
-            scene_int,
-            scene_float,
-            tris,
-            True,
-            store[0],
-        ):
-            return False
+    skip = np.zeros((n_links, n_obstacles), dtype=np.int64)
+    bounds = np.full((n_links, n_obstacles), -math.inf)
+    if not _clearances(
+        qa,
+        need,
+        robot_int,
+        robot_float,
+        sizes,
+        scene_int,
+        scene_float,
+        tris,
+        True,
+        skip,
+        bounds,
+        store[0],
+    ):
+        return False
+    for li in range(n_links):
+        for o in range(n_obstacles):
+            if bounds[li, o] >= motion[li]:
+                skip[li, o] = 1
     if not _clearances(
         qb,
         need,
@@ -367,23 +392,11 @@ def _motion_free(
         scene_float,
         tris,
         True,
+        skip,
+        bounds,
         store[1],
     ):
         return False
-    if not check_start:
-        if not _clearances(
-            qa,
-            need,
-            robot_int,
-            robot_float,
-            sizes,
-            scene_int,
-            scene_float,
-            tris,
-            True,
-            store[0],
-        ):
-            return False
     count = 2
     stack_t = np.empty((64, 2))
     stack_i = np.empty((64, 2), dtype=np.int64)
@@ -423,6 +436,8 @@ def _motion_free(
             scene_float,
             tris,
             True,
+            skip,
+            bounds,
             store[count],
         ):
             return False
@@ -456,8 +471,22 @@ def clearances(
     touches, returning at the first contact (later entries unset).
     """
     need = np.full(len(out), 0.0 if stop else np.inf)
+    n_obstacles = max(1, sizes[4])
+    skip = np.zeros((sizes[1], n_obstacles), dtype=np.int64)
+    bounds = np.empty((sizes[1], n_obstacles))
     return _clearances(
-        q, need, robot_int, robot_float, sizes, scene_int, scene_float, tris, stop, out
+        q,
+        need,
+        robot_int,
+        robot_float,
+        sizes,
+        scene_int,
+        scene_float,
+        tris,
+        stop,
+        skip,
+        bounds,
+        out,
     )
 
 
@@ -496,7 +525,6 @@ def motion_free(
         scene_float,
         tris,
         store,
-        True,
     )
 
 
@@ -591,7 +619,6 @@ def grow_trees(
             scene_float,
             tris,
             store,
-            False,
         ):
             continue
         new = counts[a]
@@ -617,7 +644,6 @@ def grow_trees(
                 scene_float,
                 tris,
                 store,
-                False,
             ):
                 break
             k = counts[b]
@@ -691,7 +717,6 @@ def shortcut(
                 scene_float,
                 tris,
                 store,
-                False,
             ):
                 break
             j -= 1
@@ -741,7 +766,6 @@ def shortcut(
             scene_float,
             tris,
             store,
-            False,
         ):
             continue
         # path[..sa], qa, qb, path[sb+1..]

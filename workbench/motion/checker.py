@@ -228,22 +228,28 @@ def _pack_robot(
             np.concatenate([link.radii for link in links]),
         ]
     )
-    # Lever arm of link l about joint i [m/rad]: the chain offsets from joint
-    # i to the link's joint plus the farthest sphere centre from that joint.
+    # Lever arm of link l about joint i [m/rad]: a bound on the distance of
+    # its sphere centres (and bounding centre) from the axis of joint i, in
+    # any configuration: from its own joint's axis exactly; from an ancestor's,
+    # the distance of the next joint's origin from that axis plus the chain
+    # of offsets below (d(x, axis) <= d(o, axis) + |x - o|).
     offsets = np.linalg.norm(positions, axis=1)
     link_levers = np.zeros((len(links), model.nv))
     for li, link in enumerate(links):
-        reach = float(
-            max(
-                np.max(np.linalg.norm(link.centers, axis=1)),
-                np.linalg.norm(bound_center[li]),
-            )
+        if link.joint == 0:
+            continue
+        points = np.vstack([link.centers, bound_center[li]])
+        joint = link.joint
+        link_levers[li, model.joints[joint].idx_v] = np.max(
+            np.linalg.norm(np.cross(points, axes[joint]), axis=1)
         )
-        joint, chain = link.joint, 0.0
+        chain = float(np.max(np.linalg.norm(points, axis=1)))
+        child, joint = joint, int(model.parents[joint])
         while joint > 0:
-            link_levers[li, model.joints[joint].idx_v] = chain + reach
-            chain += offsets[joint]
-            joint = int(model.parents[joint])
+            off_axis = float(np.linalg.norm(np.cross(positions[child], axes[joint])))
+            link_levers[li, model.joints[joint].idx_v] = off_axis + chain
+            chain += offsets[child]
+            child, joint = joint, int(model.parents[joint])
     pair_levers = link_levers[pa] + link_levers[pb]
     levers = np.concatenate([link_levers, pair_levers.reshape(-1, model.nv)])
     sizes = [
