@@ -34,7 +34,7 @@ import pinocchio as pin
 from workbench.collision.checker import CollisionChecker
 from workbench.collision.clearance_report import PathClearance
 from workbench.collision.scene import Scene
-from workbench.errors import InputError, UnreachableError, UnsupportedRobotError
+from workbench.errors import InputError, UnreachableError
 from workbench.model.per_robot import per_robot
 from workbench.model.robot import Robot
 from workbench.motion import _sphere_kernel as kernel
@@ -139,10 +139,7 @@ def goal_configurations(
     """
     from workbench import ik
 
-    try:
-        solver = ik.get_solver(robot)
-    except UnsupportedRobotError:
-        solver = None
+    solver = ik.get_solver(robot) if ik.get_family(robot) is not None else None
     found: list[FloatArray] = []
     if solver is None:
         rng = np.random.default_rng(seed)
