@@ -65,6 +65,7 @@ def test_plans_around_a_wall_and_writes_csv_and_page(capsys, tmp_path: Path) -> 
     assert "<html" in page.lower() and "wall" in page
 
 
+@pytest.mark.slow  # the Panda's spheres take seconds to build
 def test_a_motion_request_and_a_moveit_scene(capsys) -> None:
     code, out, err = run(
         capsys,

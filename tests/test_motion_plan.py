@@ -124,15 +124,18 @@ def _vertices_in_joint_frame(
     return local @ geometry.placement.rotation.T + geometry.placement.translation
 
 
-@pytest.mark.parametrize("name", ["puma560", "ur5", "mbm-panda"])
-def test_every_vertex_is_inside_a_sphere_of_its_link(name, request) -> None:
-    source = (
-        str(request.path.parent / "data/motionbenchmaker/panda/panda.urdf")
-        if name == "mbm-panda"
-        else name
-    )
-    robot = wb.load_robot(source)
-    model = spherize(robot)
+@pytest.fixture(scope="module")
+def mbm_panda_spheres(request):
+    urdf = request.path.parent / "data" / "motionbenchmaker" / "panda" / "panda.urdf"
+    return spherize(wb.load_robot(str(urdf)))
+
+
+@pytest.mark.parametrize(
+    "fixture", ["puma_spheres", "ur5_spheres", "mbm_panda_spheres"]
+)
+def test_every_vertex_is_inside_a_sphere_of_its_link(fixture, request) -> None:
+    model = request.getfixturevalue(fixture)
+    robot = model.robot
     by_link = {link.link: link for link in model.links}
     for geometry in robot.collision_model.geometryObjects:
         link = by_link[robot.model.frames[geometry.parentFrame].name]
