@@ -1,0 +1,809 @@
+"""MotionBenchMaker: the workbench's planner, VAMP and OMPL side by side.
+
+Run: ``python -m benchmarks.bench_motion [--robots panda,ur5]
+[--scenarios table_pick,...] [--limit N] [--planners vamp,ompl,workbench]
+[--time-limit 1.0] [--sdist PATH] [--cache DIR] [--json OUT]``.
+
+The problems are MotionBenchMaker's (Chamzas et al., *MotionBenchMaker: A Tool
+to Generate and Benchmark Motion Planning Datasets*, RA-L 2022) as the
+``vamp-planner`` 0.6.4 sdist ships them: ``resources/{panda,ur5}/
+problems.tar.bz2``, 7 scenarios x 100 problems per robot, each a MoveIt
+planning scene (boxes and cylinders) and a MoveIt motion request (start joint
+state, joint goal), with the robots' URDFs, SRDFs and meshes beside them. The
+sdist comes from the package index only: ``--sdist PATH``, else the copy in
+``--cache`` (default ``~/.cache/workbench-bench``), else PyPI's simple index
+(``https://pypi.org/simple/vamp-planner/``), checked against its SHA-256.
+
+Per robot, scenario and problem, in one run:
+
+* **valid**: start and goal free of collision on the exact meshes
+  (:class:`workbench.collision.CollisionChecker`, coal, the robot's SRDF).
+  Invalid problems are left out of every planner's statistics and listed in
+  the JSON with their closest pair; VAMP's own verdict (its spheres) is
+  counted beside it.
+* **vamp**: ``vamp.<robot>.rrtc`` with the settings of VAMP's
+  ``scripts/evaluate_mbm.py`` (``configure_robot_and_planner_with_kwargs``:
+  RRT-Connect range 1.0 (panda) / 1.5 (ur5), 10⁶ iterations, the Halton
+  sampler reset per problem, the default simplification), planning and
+  simplification times as VAMP measures them.
+* **ompl**: OMPL's RRTConnect (same range) with VAMP's checker behind Python
+  callbacks: a state validity callback (``vamp.<robot>.validate``) and a
+  motion validator that checks a segment in pieces of at most
+  ``rake / resolution`` = 8 / 32 rad (each ``validate_motion`` call samples
+  its piece at ``rake`` = 8 points on x86-64), so motions are checked at
+  VAMP's own planner resolution, 32 samples per unit of joint-space length.
+  Planning time (OMPL's), then OMPL's ``PathSimplifier``
+  (``simplifySolution``) time. Time limit ``--time-limit`` per problem [s].
+* **workbench**: ``workbench.motion.plan(robot, scene, start, goal, seed=s,
+  time_limit=...)`` from the joint goal, and again from the goal
+  configuration's tool pose (``robot.fk(goal)``, a ``pin.SE3``). Each
+  trajectory is then checked on the exact meshes with
+  ``workbench.collision.check_path`` at joint steps <= 0.25°, its time
+  reported apart. The column is skipped (with a line on stderr) where
+  ``workbench.motion.plan`` is missing.
+
+Path length: the sum of the joint-space Euclidean lengths of the simplified
+path's segments [rad]; its ratio to VAMP's is taken per problem solved by
+both, then the median. Times are wall-clock as each planner reports them
+(VAMP: its own nanoseconds; OMPL: its plan and simplification clocks; the
+workbench: ``planning_time`` and ``smoothing_time``); a reference loop
+``sum(range(1000))`` [µs] is printed per robot. Nothing is asserted.
+
+VAMP is an sdist whose build downloads its CMake dependencies, so it is not
+in the ``bench`` extra: ``pip install vamp-planner==0.6.4`` with internet, or
+offline from its dependencies given as local sources
+(``CPM_<name>_SOURCE``; ``docs/motion-benchmark.md`` says how).
+OMPL is: ``pip install ompl==2.0.1``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import math
+import re
+import sys
+import tarfile
+import time
+import timeit
+import urllib.request
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from workbench import Robot, load_robot
+from workbench.collision import CollisionChecker, Scene, check_path, read_scene
+from workbench.motion import read_request
+
+SDIST_NAME = "vamp_planner-0.6.4.tar.gz"
+SDIST_SHA256 = "d3150c6b67ff941af9ad56480b31d3fb73b12211ea21dc684f7737b059f6daba"
+INDEX_URL = "https://pypi.org/simple/vamp-planner/"
+ROBOTS = ("panda", "ur5")
+SCENARIOS = (
+    "table_pick",
+    "table_under_pick",
+    "box",
+    "bookshelf_small",
+    "bookshelf_tall",
+    "bookshelf_thin",
+    "cage",
+)
+PLANNERS = ("vamp", "ompl", "workbench")
+#: Largest joint step [rad] between the samples of a trajectory checked exactly.
+VERIFY_STEP = math.radians(0.25)
+#: Points per call of VAMP's ``validate_motion`` on x86-64 (its rake: one
+#: ``__m256`` of 8 floats; 4 on ARM NEON, where the pieces check more coarsely).
+VAMP_RAKE = 8
+
+
+# --- the problems ---------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class Problem:
+    """One MotionBenchMaker problem: a MoveIt scene and request."""
+
+    robot: str
+    scenario: str
+    index: int
+    scene: Path
+    request: Path
+
+
+def get_sdist(cache: Path, sdist: Path | None = None) -> Path:
+    """The ``vamp-planner`` sdist: given, cached, or from PyPI's simple index.
+
+    Raises:
+        SystemExit: If the file's SHA-256 is not the release's.
+    """
+    if sdist is not None:
+        _check_sha256(sdist)
+        return sdist
+    path = cache / SDIST_NAME
+    if path.is_file():
+        _check_sha256(path)
+        return path
+    request = urllib.request.Request(
+        INDEX_URL, headers={"Accept": "application/vnd.pypi.simple.v1+json"}
+    )
+    with urllib.request.urlopen(request, timeout=60) as response:
+        index = json.load(response)
+    (entry,) = [f for f in index["files"] if f["filename"] == SDIST_NAME]
+    if entry["hashes"].get("sha256") != SDIST_SHA256:
+        raise SystemExit(f"{INDEX_URL}: {SDIST_NAME} has an unexpected SHA-256")
+    print(f"downloading {entry['url']}", file=sys.stderr)
+    cache.mkdir(parents=True, exist_ok=True)
+    partial = path.with_suffix(".part")
+    with urllib.request.urlopen(entry["url"], timeout=300) as response:
+        partial.write_bytes(response.read())
+    _check_sha256(partial)
+    partial.replace(path)
+    return path
+
+
+def _check_sha256(path: Path) -> None:
+    digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    if digest != SDIST_SHA256:
+        raise SystemExit(f"{path}: SHA-256 {digest}, expected {SDIST_SHA256}")
+
+
+def extract_resources(sdist: Path, cache: Path) -> Path:
+    """``resources/`` of the sdist under ``cache``, with the problems unpacked.
+
+    Returns:
+        The folder holding ``panda/`` and ``ur5/`` (URDF, SRDF, meshes and a
+        ``problems/`` folder of ``<scenario>_<robot>/{scene,request}NNNN.yaml``).
+    """
+    root = cache / sdist.name.removesuffix(".tar.gz")
+    resources = root / "resources"
+    done = root / ".extracted"
+    if not done.is_file():
+        prefix = f"{root.name}/resources/"
+        with tarfile.open(sdist) as archive:
+            members = [
+                m
+                for m in archive.getmembers()
+                if m.name.startswith(prefix) and m.name.split("/")[2] in ROBOTS
+            ]
+            archive.extractall(cache, members=members, filter="data")
+        for robot in ROBOTS:
+            with tarfile.open(resources / robot / "problems.tar.bz2") as problems:
+                problems.extractall(resources / robot, filter="data")
+        done.write_text(SDIST_SHA256)
+    return resources
+
+
+def find_problems(
+    folder: Path,
+    robot: str,
+    scenarios: Sequence[str] = SCENARIOS,
+    limit: int | None = None,
+) -> list[Problem]:
+    """The problems of ``robot`` in ``folder``, by scenario then index.
+
+    Reads MotionBenchMaker's layout (``<scenario>_<robot>/sceneNNNN.yaml``
+    with ``requestNNNN.yaml``) and a flat one
+    (``<scenario>_sceneNNNN.yaml`` with ``<scenario>_requestNNNN.yaml``, as in
+    ``tests/data/motionbenchmaker/<robot>/``).
+
+    Args:
+        folder: The folder to search.
+        robot: ``"panda"`` or ``"ur5"``.
+        scenarios: Scenario names to keep, in this order.
+        limit: At most this many problems per scenario (the first indices).
+    """
+    found: dict[str, list[Problem]] = {s: [] for s in scenarios}
+    pattern = re.compile(r"^(?:(?P<flat>.+)_)?scene(?P<index>\d+)\.yaml$")
+    for scene in sorted(folder.rglob("*scene*.yaml")):
+        match = pattern.match(scene.name)
+        if match is None:
+            continue
+        scenario = match["flat"] or scene.parent.name.removesuffix(f"_{robot}")
+        if match["flat"] is None and not scene.parent.name.endswith(f"_{robot}"):
+            continue
+        request = scene.with_name(scene.name.replace("scene", "request"))
+        if scenario in found and request.is_file():
+            index = int(match["index"])
+            found[scenario].append(Problem(robot, scenario, index, scene, request))
+    out = []
+    for scenario in scenarios:
+        problems = sorted(found[scenario], key=lambda p: p.index)
+        out.extend(problems[:limit])
+    return out
+
+
+# --- validity on the exact meshes ----------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class Validity:
+    """Start and goal checked on the exact meshes.
+
+    Attributes:
+        valid: Both free (every pair's distance > 0).
+        where: ``"start"``, ``"goal"`` or ``"start and goal"`` when invalid,
+            else ``""``.
+        body_a, body_b, distance: The closest pair at the worst end and its
+            signed distance [m] (negative: penetration depth).
+    """
+
+    valid: bool
+    where: str
+    body_a: str
+    body_b: str
+    distance: float
+
+
+def check_validity(
+    checker: CollisionChecker, start: np.ndarray, goal: np.ndarray
+) -> Validity:
+    """Whether ``start`` and ``goal`` (nq,) [rad] are free in ``checker``'s scene."""
+    ends = {"start": start, "goal": goal}
+    worst = ("", "", math.inf)
+    hit = []
+    for name, q in ends.items():
+        distances = np.asarray(checker.compute_distances(q))
+        k = int(np.argmin(distances))
+        if distances[k] <= 0.0:
+            hit.append(name)
+        if distances[k] < worst[2]:
+            pair = checker.pairs[k]
+            worst = (pair.body_a, pair.body_b, float(distances[k]))
+    return Validity(not hit, " and ".join(hit), *worst)
+
+
+def load_mbm_robot(resources: Path, name: str) -> Robot:
+    """MotionBenchMaker's ``name`` robot (its URDF, meshes and SRDF)."""
+    return load_robot(resources / name / f"{name}.urdf")
+
+
+# --- the peers ------------------------------------------------------------
+
+
+@dataclass(slots=True)
+class Run:
+    """One planner on one problem (times [s], length [rad])."""
+
+    solved: bool
+    planning_time: float = math.nan
+    simplification_time: float = math.nan
+    length: float = math.nan
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def total_time(self) -> float:
+        return self.planning_time + self.simplification_time
+
+
+def path_length(path: np.ndarray) -> float:
+    """Sum of the joint-space Euclidean lengths of a (K, n) path's segments."""
+    return float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1)))
+
+
+def vamp_environment(vamp: Any, scene: Scene, scenario: str) -> Any:
+    """VAMP's environment of a scene, as ``vamp.problem_dict_to_vamp`` builds it.
+
+    Boxes are cuboids; cylinders are capsules, except in ``box`` where VAMP
+    replaces them by their bounding cuboids (its own note: the scenario needs
+    a top-down grasp of the cylinder).
+    """
+    from vamp.transformations import euler_from_matrix
+
+    env = vamp.Environment()
+    for obstacle in scene.obstacles:
+        pose = obstacle.placement.homogeneous
+        position = pose[:3, 3].tolist()
+        euler = list(euler_from_matrix(pose))
+        size = list(obstacle.size)
+        if obstacle.shape == "box":
+            env.add_cuboid(vamp.Cuboid(position, euler, [s / 2 for s in size]))
+        elif obstacle.shape == "cylinder" and scenario == "box":
+            radius, length = size
+            env.add_cuboid(vamp.Cuboid(position, euler, [radius, radius, length / 2]))
+        elif obstacle.shape == "cylinder":
+            radius, length = size
+            env.add_capsule(vamp.Cylinder(position, euler, radius, length))
+        elif obstacle.shape == "sphere":
+            env.add_sphere(vamp.Sphere(position, size[0]))
+        else:
+            raise ValueError(f"VAMP has no {obstacle.shape} ({obstacle.name})")
+    return env
+
+
+class VampPeer:
+    """VAMP's RRT-Connect and simplification, as ``evaluate_mbm.py`` runs them."""
+
+    def __init__(self, robot: str) -> None:
+        import vamp
+
+        self.vamp = vamp
+        (self.module, self.planner, self.plan_settings, self.simplify_settings) = (
+            vamp.configure_robot_and_planner_with_kwargs(robot, "rrtc")
+        )
+        self.sampler = self.module.halton()
+        self.joint_names = list(self.module.joint_names())
+
+    def environment(self, scene: Scene, scenario: str) -> Any:
+        return vamp_environment(self.vamp, scene, scenario)
+
+    def valid(self, q: Sequence[float], env: Any) -> bool:
+        return bool(self.module.validate(list(q), env))
+
+    def run(self, start: Sequence[float], goal: Sequence[float], env: Any) -> Run:
+        self.sampler.reset()
+        result = self.planner(
+            list(start), [list(goal)], env, self.plan_settings, self.sampler
+        )
+        if not result.solved:
+            return Run(False, planning_time=1e-9 * result.nanoseconds)
+        simple = self.module.simplify(
+            result.path, env, self.simplify_settings, self.sampler
+        )
+        return Run(
+            True,
+            1e-9 * result.nanoseconds,
+            1e-9 * simple.nanoseconds,
+            path_length(np.asarray(simple.path.numpy(), dtype=float)),
+            {"iterations": int(result.iterations)},
+        )
+
+
+class OmplPeer:
+    """OMPL's RRTConnect with VAMP's checker behind Python callbacks."""
+
+    def __init__(self, vamp: VampPeer, time_limit: float) -> None:
+        from ompl import base as ob
+        from ompl import geometric as og
+        from ompl import util as ou
+
+        ou.setLogLevel(ou.LogLevel.LOG_WARN)
+        self.ob, self.og, self.vamp, self.time_limit = ob, og, vamp, time_limit
+        n = len(vamp.joint_names)
+        self.space = ob.RealVectorStateSpace(n)
+        bounds = ob.RealVectorBounds(n)
+        lower, upper = vamp.module.lower_bounds(), vamp.module.upper_bounds()
+        for i in range(n):  # VAMP's joint space, in VAMP's joint order
+            bounds.setLow(i, float(lower[i]))
+            bounds.setHigh(i, float(upper[i]))
+        self.space.setBounds(bounds)
+        self.n = n
+        #: Longest piece [rad] one ``validate_motion`` call checks (module doc).
+        self.piece = VAMP_RAKE / float(vamp.module.resolution())
+        self.range = float(vamp.plan_settings.range)
+
+    def run(self, start: Sequence[float], goal: Sequence[float], env: Any) -> Run:
+        ob, og, module, n = self.ob, self.og, self.vamp.module, self.n
+        setup = og.SimpleSetup(self.space)
+        info = setup.getSpaceInformation()
+
+        def state_valid(state: Any) -> bool:
+            return bool(module.validate([state[i] for i in range(n)], env))
+
+        piece = self.piece
+
+        class Motion(ob.MotionValidator):
+            def checkMotion(self, a: Any, b: Any) -> bool:
+                qa = np.array([a[i] for i in range(n)])
+                qb = np.array([b[i] for i in range(n)])
+                pieces = max(1, math.ceil(float(np.linalg.norm(qb - qa)) / piece))
+                points = qa + np.linspace(0.0, 1.0, pieces + 1)[:, None] * (qb - qa)
+                return all(
+                    module.validate_motion(
+                        points[k].tolist(), points[k + 1].tolist(), env, False
+                    )
+                    for k in range(pieces)
+                )
+
+        setup.setStateValidityChecker(state_valid)
+        validator = Motion(info)
+        info.setMotionValidator(validator)
+        planner = og.RRTConnect(info)
+        planner.setRange(self.range)
+        setup.setPlanner(planner)
+        states = []
+        for q in (start, goal):
+            state = self.space.allocState()
+            for i, value in enumerate(q):
+                state[i] = float(value)
+            states.append(state)
+        setup.setStartAndGoalStates(states[0], states[1])
+        setup.setup()
+        solved = bool(setup.solve(self.time_limit)) and setup.haveExactSolutionPath()
+        planning = setup.getLastPlanComputationTime()
+        if not solved:
+            return Run(False, planning_time=planning)
+        setup.simplifySolution()
+        path = setup.getSolutionPath()
+        q = np.array(
+            [
+                [path.getState(k)[i] for i in range(n)]
+                for k in range(path.getStateCount())
+            ]
+        )
+        return Run(True, planning, setup.getLastSimplificationTime(), path_length(q))
+
+
+class WorkbenchPeer:
+    """``workbench.motion.plan`` from a joint goal or a tool pose, checked exactly."""
+
+    def __init__(self, plan: Callable[..., Any], time_limit: float) -> None:
+        self.plan, self.time_limit = plan, time_limit
+
+    def run(
+        self,
+        robot: Robot,
+        scene: Scene,
+        checker: CollisionChecker,
+        start: np.ndarray,
+        goal: Any,
+        seed: int,
+    ) -> Run:
+        result = self.plan(
+            robot, scene, start, goal, seed=seed, time_limit=self.time_limit
+        )
+        extra: dict[str, Any] = {"iterations": int(result.iterations)}
+        if not result.solved:
+            return Run(False, float(result.planning_time), extra=extra)
+        waypoints = np.asarray(result.waypoints, dtype=float)
+        extra.update(verify_trajectory(checker, result.trajectory))
+        extra["min_clearance"] = float(result.min_clearance)
+        return Run(
+            True,
+            float(result.planning_time),
+            float(result.smoothing_time),
+            path_length(waypoints),
+            extra,
+        )
+
+
+def verify_trajectory(checker: CollisionChecker, trajectory: Any) -> dict[str, Any]:
+    """Exact-mesh check of a trajectory at joint steps <= :data:`VERIFY_STEP`.
+
+    Returns:
+        ``contacts`` (count), ``verify_time`` [s], ``samples``,
+        ``verify_min_clearance`` [m] and ``verify_lower_bound`` [m].
+    """
+    begin = time.perf_counter()
+    duration = float(trajectory.duration)
+    count = 256
+    while True:
+        t = np.linspace(0.0, duration, count)
+        q = np.asarray(trajectory.sample(t)[0], dtype=float)
+        step = float(np.max(np.abs(np.diff(q, axis=0)), initial=0.0))
+        if step <= VERIFY_STEP:
+            break
+        count = math.ceil(count * step / VERIFY_STEP * 1.05) + 1
+    report = check_path(checker, t, q)
+    return {
+        "contacts": len(report.contacts),
+        "verify_time": time.perf_counter() - begin,
+        "samples": int(t.size),
+        "verify_min_clearance": float(report.min_clearance),
+        "verify_lower_bound": float(report.lower_bound),
+    }
+
+
+def get_workbench_plan() -> Callable[..., Any] | None:
+    """``workbench.motion.plan``, or None where this version has none."""
+    try:
+        from workbench.motion import plan
+    except (ImportError, AttributeError):
+        return None
+    return plan
+
+
+# --- the run --------------------------------------------------------------
+
+
+def run_robot(
+    name: str,
+    resources: Path,
+    args: argparse.Namespace,
+    progress: Callable[[int, int], None] | None = None,
+) -> dict[str, Any]:
+    """Every problem of robot ``name``: validity, then each planner.
+
+    Returns:
+        ``robot``, ``reference_us`` (before and after) and ``problems``: one
+        record per problem (``scenario``, ``index``, ``valid`` (a
+        :class:`Validity` as a dict), ``vamp_valid``, and one :class:`Run` as
+        a dict per planner on valid problems).
+    """
+    robot = load_mbm_robot(resources, name)
+    problems = find_problems(
+        resources / name / "problems", name, args.scenarios, args.limit
+    )
+    planners = args.planners
+    vamp = VampPeer(name) if {"vamp", "ompl"} & set(planners) else None
+    order = (
+        None if vamp is None else [robot.joint_names.index(j) for j in vamp.joint_names]
+    )
+    ompl = OmplPeer(vamp, args.time_limit) if vamp and "ompl" in planners else None
+    plan = get_workbench_plan() if "workbench" in planners else None
+    if "workbench" in planners and plan is None:
+        print("workbench.motion.plan is missing: no workbench column", file=sys.stderr)
+    ours = None if plan is None else WorkbenchPeer(plan, args.time_limit)
+    reference = [_reference_us()]
+    records = []
+    for done, problem in enumerate(problems):
+        scene = read_scene(problem.scene)
+        start, goal = read_request(problem.request, robot)
+        checker = CollisionChecker(robot, scene)
+        validity = check_validity(checker, start, goal)
+        record: dict[str, Any] = {
+            "scenario": problem.scenario,
+            "index": problem.index,
+            "valid": asdict(validity),
+        }
+        env = None
+        if vamp is not None and order is not None:
+            env = vamp.environment(scene, problem.scenario)
+            qs, qg = start[order].tolist(), goal[order].tolist()
+            record["vamp_valid"] = vamp.valid(qs, env) and vamp.valid(qg, env)
+        if validity.valid:
+            if vamp is not None and "vamp" in planners:
+                record["vamp"] = asdict(vamp.run(qs, qg, env))
+            if ompl is not None:
+                record["ompl"] = asdict(ompl.run(qs, qg, env))
+            if ours is not None:
+                seed = problem.index
+                record["workbench"] = asdict(
+                    ours.run(robot, scene, checker, start, goal, seed)
+                )
+                record["workbench_pose"] = asdict(
+                    ours.run(robot, scene, checker, start, robot.fk(goal), seed)
+                )
+        records.append(record)
+        if progress is not None:
+            progress(done + 1, len(problems))
+    reference.append(_reference_us())
+    return {"robot": name, "reference_us": reference, "problems": records}
+
+
+def _reference_us() -> float:
+    """The reference loop ``sum(range(1000))``, best of 5 [µs]."""
+    return 1e6 * min(timeit.repeat("sum(range(1000))", number=1000, repeat=5)) / 1000
+
+
+# --- statistics and tables ------------------------------------------------
+
+#: Planner keys of a record, and their names in the tables.
+COLUMNS = {
+    "vamp": "VAMP",
+    "ompl": "OMPL (Python callback)",
+    "workbench": "workbench",
+    "workbench_pose": "workbench, pose goal",
+}
+
+
+def summarise(records: list[dict[str, Any]], key: str) -> dict[str, Any] | None:
+    """Solved count and time/length statistics of planner ``key`` [s, rad].
+
+    Times are over the solved problems; ``length_ratio`` is the median over
+    the problems both ``key`` and VAMP solved of the length ratio.
+    """
+    runs = [(r, r[key]) for r in records if key in r]
+    if not runs:
+        return None
+    solved = [(r, run) for r, run in runs if run["solved"]]
+    plan = [run["planning_time"] for _, run in solved]
+    simplify = [run["simplification_time"] for _, run in solved]
+    total = [p + s for p, s in zip(plan, simplify, strict=True)]
+    ratios = [
+        run["length"] / r["vamp"]["length"]
+        for r, run in solved
+        if "vamp" in r and r["vamp"]["solved"] and r["vamp"]["length"] > 0
+    ]
+    out: dict[str, Any] = {
+        "tried": len(runs),
+        "solved": len(solved),
+        "plan_median": _quantile(plan, 0.5),
+        "plan_p95": _quantile(plan, 0.95),
+        "plan_max": max(plan, default=math.nan),
+        "simplify_median": _quantile(simplify, 0.5),
+        "total_median": _quantile(total, 0.5),
+        "length_ratio": _quantile(ratios, 0.5),
+    }
+    checked = [run["extra"] for _, run in solved if "contacts" in run["extra"]]
+    if checked:
+        out["verified"] = len(checked)
+        out["with_contacts"] = sum(1 for c in checked if c["contacts"])
+        out["contacts"] = sum(c["contacts"] for c in checked)
+        out["verify_median"] = _quantile([c["verify_time"] for c in checked], 0.5)
+        out["verify_max"] = max(c["verify_time"] for c in checked)
+    return out
+
+
+def _quantile(values: Sequence[float], q: float) -> float:
+    if not values:
+        return math.nan
+    return float(np.quantile(np.asarray(values, dtype=float), q))
+
+
+def format_time(seconds: float) -> str:
+    """``48 µs``, ``1.3 ms``, ``0.52 s``; ``–`` for NaN."""
+    if math.isnan(seconds):
+        return "–"
+    if seconds < 1e-3:
+        return f"{1e6 * seconds:.0f} µs"
+    if seconds < 1.0:
+        return f"{1e3 * seconds:.3g} ms"
+    return f"{seconds:.3g} s"
+
+
+def _ratio(a: float, b: float) -> str:
+    return "–" if math.isnan(a) or math.isnan(b) or b == 0 else f"{a / b:.2f}"
+
+
+def scenario_groups(records: list[dict[str, Any]]) -> Iterator[tuple[str, list]]:
+    """``(scenario, records)`` per scenario in order, then ``("all", records)``."""
+    names = list(dict.fromkeys(r["scenario"] for r in records))
+    for name in names:
+        yield name, [r for r in records if r["scenario"] == name]
+    yield "all", records
+
+
+def format_tables(result: dict[str, Any], time_limit: float) -> str:
+    """The markdown tables of one robot's run."""
+    name, records = result["robot"], result["problems"]
+    before, after = result["reference_us"]
+    lines = [
+        f"### {name}",
+        "",
+        f"Reference loop `sum(range(1000))`: {before:.1f} µs before, "
+        f"{after:.1f} µs after. Times over the solved problems; time limit "
+        f"{time_limit:g} s per problem (OMPL, workbench).",
+        "",
+        "| scenario | valid (exact) | valid (VAMP) | planner | solved | plan median "
+        "| plan p95 | plan max | simplify median | total median | length / VAMP |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    ratios = [
+        "| scenario | workbench / VAMP | OMPL / workbench | OMPL / VAMP |",
+        "| --- | --- | --- | --- |",
+    ]
+    verify = [
+        "| scenario | goal | checked | with contacts | contacts | check median "
+        "| check max |",
+        "| --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for scenario, group in scenario_groups(records):
+        valid = sum(r["valid"]["valid"] for r in group)
+        vamp_valid = sum(bool(r.get("vamp_valid")) for r in group)
+        vamp_text = str(vamp_valid) if any("vamp_valid" in r for r in group) else "–"
+        stats = {key: summarise(group, key) for key in COLUMNS}
+        first = True
+        for key, label in COLUMNS.items():
+            s = stats[key]
+            if s is None:
+                continue
+            head = (
+                f"| {scenario} | {valid}/{len(group)} | {vamp_text}/{len(group)}"
+                if first
+                else "| | |"
+            )
+            first = False
+            lines.append(
+                f"{head} | {label} | {s['solved']}/{s['tried']} "
+                f"| {format_time(s['plan_median'])} | {format_time(s['plan_p95'])} "
+                f"| {format_time(s['plan_max'])} "
+                f"| {format_time(s['simplify_median'])} "
+                f"| {format_time(s['total_median'])} "
+                f"| {'–' if key == 'vamp' else _fmt(s['length_ratio'])} |"
+            )
+            if "verified" in s:
+                verify.append(
+                    f"| {scenario} | {'pose' if key == 'workbench_pose' else 'joint'} "
+                    f"| {s['verified']} | {s['with_contacts']} | {s['contacts']} "
+                    f"| {format_time(s['verify_median'])} "
+                    f"| {format_time(s['verify_max'])} |"
+                )
+        if first:
+            lines.append(f"| {scenario} | {valid}/{len(group)} | {vamp_text} | – |")
+        median = {
+            k: math.nan if s is None else s["plan_median"] for k, s in stats.items()
+        }
+        ratios.append(
+            f"| {scenario} | {_ratio(median['workbench'], median['vamp'])} "
+            f"| {_ratio(median['ompl'], median['workbench'])} "
+            f"| {_ratio(median['ompl'], median['vamp'])} |"
+        )
+    lines += ["", "Ratios of the median planning times:", "", *ratios]
+    if len(verify) > 2:
+        lines += [
+            "",
+            "Exact-mesh check of the workbench's trajectories (coal, joint steps "
+            "<= 0.25°):",
+            "",
+            *verify,
+        ]
+    invalid = [r for r in records if not r["valid"]["valid"]]
+    if invalid:
+        lines += [
+            "",
+            "Invalid on the exact meshes (left out of every planner's statistics):",
+            "",
+            "| scenario | problem | in collision | closest pair | distance |",
+            "| --- | --- | --- | --- | --- |",
+        ]
+        for r in invalid:
+            v = r["valid"]
+            lines.append(
+                f"| {r['scenario']} | {r['index']} | {v['where']} "
+                f"| {v['body_a']} – {v['body_b']} | {1e3 * v['distance']:.2f} mm |"
+            )
+    return "\n".join(lines)
+
+
+def _fmt(value: float) -> str:
+    return "–" if math.isnan(value) else f"{value:.2f}"
+
+
+def _parse_list(text: str, allowed: Sequence[str], what: str) -> list[str]:
+    items = [s.strip() for s in text.split(",") if s.strip()]
+    unknown = [s for s in items if s not in allowed]
+    if unknown or not items:
+        raise argparse.ArgumentTypeError(
+            f"unknown {what} {', '.join(unknown) or '(none)'}; "
+            f"choose from {', '.join(allowed)}"
+        )
+    return items
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument(
+        "--robots",
+        type=lambda s: _parse_list(s, ROBOTS, "robot"),
+        default=list(ROBOTS),
+    )
+    parser.add_argument(
+        "--scenarios",
+        type=lambda s: _parse_list(s, SCENARIOS, "scenario"),
+        default=list(SCENARIOS),
+    )
+    parser.add_argument(
+        "--planners",
+        type=lambda s: _parse_list(s, PLANNERS, "planner"),
+        default=list(PLANNERS),
+    )
+    parser.add_argument("--limit", type=int, default=None, help="problems per scenario")
+    parser.add_argument("--time-limit", type=float, default=1.0, help="[s]")
+    parser.add_argument("--sdist", type=Path, default=None)
+    parser.add_argument(
+        "--cache", type=Path, default=Path.home() / ".cache" / "workbench-bench"
+    )
+    parser.add_argument("--json", type=Path, default=None, help="write the records")
+    args = parser.parse_args(argv)
+    from workbench.progress import Progress
+
+    resources = extract_resources(get_sdist(args.cache, args.sdist), args.cache)
+    results = []
+    for name in args.robots:
+        with Progress(f"MotionBenchMaker {name}", delay=0.0) as progress:
+            results.append(run_robot(name, resources, args, progress.count))
+    print(
+        f"## MotionBenchMaker ({', '.join(args.robots)}), planners "
+        f"{', '.join(args.planners)}"
+    )
+    for result in results:
+        print()
+        print(format_tables(result, args.time_limit))
+    if args.json is not None:
+        summary = {
+            r["robot"]: {
+                scenario: {k: summarise(group, k) for k in COLUMNS}
+                for scenario, group in scenario_groups(r["problems"])
+            }
+            for r in results
+        }
+        document = {"arguments": vars(args), "summary": summary, "robots": results}
+        args.json.write_text(json.dumps(document, indent=1, default=str) + "\n")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,243 @@
+"""benchmarks/bench_motion.py on the MotionBenchMaker problems in tests/data.
+
+The problem reader (both layouts), the validity check on the exact meshes
+(MotionBenchMaker's Panda, provenance in ``tests/data/motionbenchmaker``), the
+exact check of a trajectory, the statistics and the tables; VAMP and OMPL on
+one problem where they are installed.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from benchmarks.bench_motion import (
+    VERIFY_STEP,
+    Problem,
+    check_validity,
+    find_problems,
+    format_tables,
+    get_sdist,
+    path_length,
+    summarise,
+    verify_trajectory,
+)
+from workbench import load_robot
+from workbench.collision import CollisionChecker, Obstacle, Scene, read_scene
+from workbench.motion import read_request
+
+DATA = Path(__file__).parent / "data" / "motionbenchmaker"
+MBM_PANDA = DATA / "panda" / "panda.urdf"
+#: Exact arithmetic of a few sums [rad].
+ATOL_EXACT = 1e-12
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return load_robot(MBM_PANDA)
+
+
+def _read(problem: Problem, robot):
+    scene = read_scene(problem.scene)
+    start, goal = read_request(problem.request, robot)
+    return scene, start, goal
+
+
+def test_the_flat_layout_of_tests_data_reads_by_scenario_order() -> None:
+    panda = find_problems(DATA / "panda", "panda")
+    assert [(p.scenario, p.index) for p in panda] == [
+        ("table_pick", 1),
+        ("bookshelf_thin", 1),
+        ("cage", 1),
+    ]
+    assert all(p.request.name == f"{p.scenario}_request0001.yaml" for p in panda)
+    ur5 = find_problems(DATA / "ur5", "ur5", scenarios=["bookshelf_tall", "box"])
+    assert [p.scenario for p in ur5] == ["bookshelf_tall", "box"]
+    assert find_problems(DATA / "ur5", "ur5", scenarios=["cage"]) == []
+
+
+def test_motionbenchmakers_layout_reads_with_a_limit(tmp_path: Path) -> None:
+    for scenario in ("cage", "table_pick"):
+        folder = tmp_path / f"{scenario}_panda"
+        folder.mkdir()
+        for index in (2, 1, 10):
+            for kind in ("scene", "request"):
+                source = DATA / "panda" / f"{scenario}_{kind}0001.yaml"
+                shutil.copy(source, folder / f"{kind}{index:04d}.yaml")
+    (tmp_path / "cage_ur5").mkdir()  # another robot's folder: not read
+    for kind in ("scene", "request"):
+        source = DATA / "ur5" / f"box_{kind}0001.yaml"
+        shutil.copy(source, tmp_path / "cage_ur5" / f"{kind}0001.yaml")
+    (tmp_path / "cage_panda" / "request0010.yaml").unlink()  # no request: skipped
+    problems = find_problems(tmp_path, "panda", scenarios=["table_pick", "cage"])
+    assert [(p.scenario, p.index) for p in problems] == [
+        ("table_pick", 1),
+        ("table_pick", 2),
+        ("table_pick", 10),
+        ("cage", 1),
+        ("cage", 2),
+    ]
+    limited = find_problems(tmp_path, "panda", limit=1)
+    assert [(p.scenario, p.index) for p in limited] == [
+        ("table_pick", 1),
+        ("cage", 1),
+    ]
+
+
+@pytest.mark.parametrize("scenario", ["table_pick", "bookshelf_thin", "cage"])
+def test_the_panda_problems_of_tests_data_are_valid_on_the_exact_meshes(
+    panda, scenario: str
+) -> None:
+    (problem,) = find_problems(DATA / "panda", "panda", scenarios=[scenario])
+    scene, start, goal = _read(problem, panda)
+    checker = CollisionChecker(panda, scene)
+    validity = check_validity(checker, start, goal)
+    assert validity.valid and validity.where == ""
+    smallest = min(
+        float(np.min(checker.compute_distances(start))),
+        float(np.min(checker.compute_distances(goal))),
+    )
+    assert validity.distance == smallest > 0.0
+    assert (validity.body_a, validity.body_b) in checker.body_pairs
+
+
+def test_a_start_inside_a_box_is_invalid_with_its_closest_pair(panda) -> None:
+    (problem,) = find_problems(DATA / "panda", "panda", scenarios=["table_pick"])
+    scene, start, goal = _read(problem, panda)
+    hand = panda.fk(start, "panda_hand")
+    block = Obstacle("block", "box", (0.05, 0.05, 0.05), pin.SE3(hand))
+    checker = CollisionChecker(panda, Scene("blocked", (*scene.obstacles, block)))
+    validity = check_validity(checker, start, goal)
+    assert not validity.valid
+    assert validity.where == "start"
+    assert validity.body_b == "block" and validity.body_a.startswith("panda_")
+    assert validity.distance < 0.0
+    both = check_validity(checker, start, start)
+    assert both.where == "start and goal"
+
+
+class _Line:
+    """A straight joint-space trajectory over ``duration`` [s] (the test's own)."""
+
+    def __init__(self, a: np.ndarray, b: np.ndarray, duration: float) -> None:
+        self.a, self.b, self.duration = a, b, duration
+
+    def sample(self, t: np.ndarray):
+        s = (np.asarray(t) / self.duration)[:, None]
+        q = self.a + s * (self.b - self.a)
+        return q, np.zeros_like(q), np.zeros_like(q)
+
+
+def test_a_trajectory_is_checked_at_quarter_degree_steps(panda) -> None:
+    (problem,) = find_problems(DATA / "panda", "panda", scenarios=["table_pick"])
+    start = _read(problem, panda)[1]
+    turn = np.zeros(panda.nq)
+    turn[0] = np.deg2rad(40.0)  # the first joint only: within its limits
+    free = CollisionChecker(panda, Scene("empty"))
+    line = _Line(start, start + turn, 2.0)
+    report = verify_trajectory(free, line)
+    q = line.sample(np.linspace(0.0, 2.0, report["samples"]))[0]
+    assert np.max(np.abs(np.diff(q, axis=0))) <= VERIFY_STEP
+    assert report["samples"] >= 40.0 / 0.25
+    assert report["contacts"] == 0 and report["verify_lower_bound"] > 0.0
+    hand = panda.fk(start + turn / 2, "panda_hand")
+    block = Obstacle("block", "box", (0.05, 0.05, 0.05), pin.SE3(hand))
+    blocked = verify_trajectory(CollisionChecker(panda, Scene("b", (block,))), line)
+    assert blocked["contacts"] >= 1 and blocked["verify_min_clearance"] < 0.0
+
+
+def test_path_length_sums_euclidean_segments() -> None:
+    path = np.array([[0.0, 0.0], [3.0, 4.0], [3.0, 5.0]])
+    assert math.isclose(path_length(path), 6.0, abs_tol=ATOL_EXACT)
+
+
+def _run(solved: bool, plan: float, simplify: float, length: float, **extra):
+    return {
+        "solved": solved,
+        "planning_time": plan,
+        "simplification_time": simplify,
+        "length": length,
+        "extra": extra,
+    }
+
+
+def _records() -> list[dict]:
+    valid = {"valid": True, "where": "", "body_a": "a", "body_b": "b", "distance": 0.1}
+    out = []
+    for k in range(4):
+        out.append(
+            {
+                "scenario": "cage" if k < 2 else "box",
+                "index": k + 1,
+                "valid": valid,
+                "vamp_valid": True,
+                "vamp": _run(True, 1e-4 * (k + 1), 1e-4, 2.0),
+                "ompl": _run(k != 3, 1e-2 * (k + 1), 1e-3, 3.0),
+            }
+        )
+    out.append(
+        {
+            "scenario": "box",
+            "index": 9,
+            "valid": {**valid, "valid": False, "where": "goal", "distance": -0.002},
+            "vamp_valid": False,
+        }
+    )
+    return out
+
+
+def test_the_statistics_count_solved_problems_and_ratios() -> None:
+    records = _records()
+    vamp, ompl = summarise(records, "vamp"), summarise(records, "ompl")
+    assert vamp is not None and ompl is not None
+    assert (vamp["tried"], vamp["solved"]) == (4, 4)  # the invalid one: not tried
+    assert (ompl["tried"], ompl["solved"]) == (4, 3)
+    assert math.isclose(vamp["plan_median"], 2.5e-4, rel_tol=1e-12)
+    assert math.isclose(ompl["plan_max"], 3e-2, rel_tol=1e-12)
+    assert math.isclose(ompl["total_median"], 2.1e-2, rel_tol=1e-12)
+    assert math.isclose(ompl["length_ratio"], 1.5, rel_tol=1e-12)
+    assert summarise(records, "workbench") is None
+
+
+def test_the_tables_list_the_counts_and_the_invalid_problem() -> None:
+    text = format_tables(
+        {"robot": "panda", "reference_us": [20.0, 21.0], "problems": _records()}, 1.0
+    )
+    assert "| cage | 2/2 | 2/2 | VAMP | 2/2 |" in text
+    assert "| box | 2/3 | 2/3 | VAMP | 2/2 |" in text
+    assert "| all | 4/5 | 4/5 | VAMP | 4/4 |" in text
+    assert "| | | OMPL (Python callback) | 1/2 |" in text
+    assert "| box | 9 | goal | a – b | -2.00 mm |" in text
+    assert "20.0 µs before" in text
+
+
+def test_an_sdist_with_another_hash_is_refused(tmp_path: Path) -> None:
+    fake = tmp_path / "vamp_planner-0.6.4.tar.gz"
+    fake.write_bytes(b"not the release")
+    with pytest.raises(SystemExit, match="SHA-256"):
+        get_sdist(tmp_path, fake)
+    with pytest.raises(SystemExit, match="SHA-256"):
+        get_sdist(tmp_path)  # the cached copy is checked too
+
+
+def test_vamp_and_ompl_solve_a_table_pick_problem(panda) -> None:
+    pytest.importorskip("vamp")
+    pytest.importorskip("ompl")
+    from benchmarks.bench_motion import OmplPeer, VampPeer
+
+    (problem,) = find_problems(DATA / "panda", "panda", scenarios=["table_pick"])
+    scene, start, goal = _read(problem, panda)
+    vamp = VampPeer("panda")
+    order = [panda.joint_names.index(j) for j in vamp.joint_names]
+    qs, qg = start[order].tolist(), goal[order].tolist()
+    env = vamp.environment(scene, problem.scenario)
+    assert vamp.valid(qs, env) and vamp.valid(qg, env)
+    for run in (vamp.run(qs, qg, env), OmplPeer(vamp, 1.0).run(qs, qg, env)):
+        assert run.solved
+        assert run.length >= float(np.linalg.norm(np.subtract(qg, qs))) - 1e-5
+        assert run.planning_time > 0.0 and run.simplification_time >= 0.0
