@@ -8,6 +8,8 @@ one problem where they are installed.
 
 from __future__ import annotations
 
+import argparse
+import importlib.util
 import math
 import shutil
 from pathlib import Path
@@ -23,7 +25,9 @@ from benchmarks.bench_motion import (
     find_problems,
     format_tables,
     get_sdist,
+    get_workbench_plan,
     path_length,
+    run_robot,
     summarise,
     verify_trajectory,
 )
@@ -241,3 +245,35 @@ def test_vamp_and_ompl_solve_a_table_pick_problem(panda) -> None:
         assert run.solved
         assert run.length >= float(np.linalg.norm(np.subtract(qg, qs))) - 1e-5
         assert run.planning_time > 0.0 and run.simplification_time >= 0.0
+
+
+def test_a_robot_runs_from_a_resources_folder(tmp_path: Path) -> None:
+    """MotionBenchMaker's layout, the planners that are installed, the tables."""
+    resources = tmp_path / "resources"
+    shutil.copytree(
+        DATA / "panda", resources / "panda", ignore=shutil.ignore_patterns("*.yaml")
+    )
+    for scenario in ("table_pick", "cage"):
+        folder = resources / "panda" / "problems" / f"{scenario}_panda"
+        folder.mkdir(parents=True)
+        for kind in ("scene", "request"):
+            source = DATA / "panda" / f"{scenario}_{kind}0001.yaml"
+            shutil.copy(source, folder / f"{kind}0001.yaml")
+    planners = [p for p in ("vamp", "ompl") if importlib.util.find_spec("vamp")]
+    args = argparse.Namespace(
+        scenarios=["table_pick", "cage"],
+        limit=None,
+        planners=[*planners, "workbench"],
+        time_limit=1.0,
+    )
+    result = run_robot("panda", resources, args)
+    assert [(r["scenario"], r["valid"]["valid"]) for r in result["problems"]] == [
+        ("table_pick", True),
+        ("cage", True),
+    ]
+    for record in result["problems"]:
+        for key in planners:
+            assert record[key]["solved"]
+        assert ("workbench" in record) == (get_workbench_plan() is not None)
+    text = format_tables(result, 1.0)
+    assert "| all | 2/2 |" in text
