@@ -415,7 +415,8 @@ class OmplPeer:
         solved = bool(setup.solve(self.time_limit)) and setup.haveExactSolutionPath()
         planning = setup.getLastPlanComputationTime()
         if not solved:
-            return Run(False, planning_time=planning)
+            status = str(setup.getLastPlannerStatus())
+            return Run(False, planning_time=planning, extra={"status": status})
         setup.simplifySolution()
         path = setup.getSolutionPath()
         q = np.array(
@@ -736,7 +737,55 @@ def format_tables(result: dict[str, Any], time_limit: float) -> str:
                 f"| {r['scenario']} | {r['index']} | {v['where']} "
                 f"| {v['body_a']} – {v['body_b']} | {1e3 * v['distance']:.2f} mm |"
             )
+    lines += _disagreements(records)
     return "\n".join(lines)
+
+
+def _disagreements(records: list[dict[str, Any]]) -> list[str]:
+    """Problems valid on the exact meshes that VAMP's spheres call invalid, and
+    the valid problems a planner left unsolved, with why."""
+    lines = []
+    spheres = [
+        r for r in records if r["valid"]["valid"] and r.get("vamp_valid") is False
+    ]
+    if spheres:
+        lines += [
+            "",
+            "Valid on the exact meshes, invalid for VAMP's spheres (`validate` of the "
+            "start or the goal):",
+            "",
+            "| scenario | problem | exact clearance | closest pair | VAMP solved |",
+            "| --- | --- | --- | --- | --- |",
+        ]
+        for r in spheres:
+            v = r["valid"]
+            solved = r["vamp"]["solved"] if "vamp" in r else "–"
+            lines.append(
+                f"| {r['scenario']} | {r['index']} | {1e3 * v['distance']:.2f} mm "
+                f"| {v['body_a']} – {v['body_b']} | {solved} |"
+            )
+    unsolved = []
+    for r in records:
+        for key, label in COLUMNS.items():
+            run = r.get(key)
+            if run is None or run["solved"]:
+                continue
+            if key in ("vamp", "ompl") and r.get("vamp_valid") is False:
+                why = "start or goal invalid for VAMP's spheres"
+            else:
+                why = str(run["extra"].get("status", "no path"))
+                why += f" after {format_time(run['planning_time'])}"
+            unsolved.append(f"| {label} | {r['scenario']} | {r['index']} | {why} |")
+    if unsolved:
+        lines += [
+            "",
+            "Valid problems left unsolved:",
+            "",
+            "| planner | scenario | problem | why |",
+            "| --- | --- | --- | --- |",
+            *unsolved,
+        ]
+    return lines
 
 
 def _fmt(value: float) -> str:

@@ -277,3 +277,18 @@ def test_a_robot_runs_from_a_resources_folder(tmp_path: Path) -> None:
         assert ("workbench" in record) == (get_workbench_plan() is not None)
     text = format_tables(result, 1.0)
     assert "| all | 2/2 |" in text
+
+
+def test_the_tables_say_why_a_valid_problem_is_unsolved() -> None:
+    records = _records()
+    records[0]["vamp_valid"] = False  # VAMP's spheres disagree with the meshes
+    records[0]["ompl"] = _run(False, 1e-6, math.nan, math.nan)
+    text = format_tables(
+        {"robot": "ur5", "reference_us": [20.0, 21.0], "problems": records}, 1.0
+    )
+    assert "| cage | 1 | 100.00 mm | a – b | True |" in text
+    assert (
+        "| OMPL (Python callback) | cage | 1 | start or goal invalid for VAMP's "
+        "spheres |" in text
+    )
+    assert "| OMPL (Python callback) | box | 4 | no path after 40 ms |" in text
