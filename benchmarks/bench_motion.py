@@ -38,9 +38,10 @@ Per robot, scenario and problem, in one run:
   time_limit=...)`` from the joint goal, and again from the goal
   configuration's tool pose (``robot.fk(goal)``, a ``pin.SE3``). Each
   trajectory is then checked on the exact meshes with
-  ``workbench.collision.check_path`` at joint steps <= 0.25°, its time
-  reported apart. The column is skipped (with a line on stderr) where
-  ``workbench.motion.plan`` is missing.
+  ``workbench.motion.verify_trajectory`` (``check_path`` at joint steps
+  <= 0.25°, proven between the samples), its time reported apart. The
+  column is skipped (with a line on stderr) where ``workbench.motion.plan``
+  is missing. The robots' acceleration limits: :data:`ACCELERATION_LIMITS`.
 
 Path length: the sum of the joint-space Euclidean lengths of the simplified
 path's segments [rad]; its ratio to VAMP's is taken per problem solved by
@@ -76,8 +77,8 @@ from typing import Any
 import numpy as np
 
 from workbench import Robot, load_robot
-from workbench.collision import CollisionChecker, Scene, check_path, read_scene
-from workbench.motion import read_request
+from workbench.collision import CollisionChecker, Scene, read_scene
+from workbench.motion import read_request, verify_trajectory
 
 SDIST_NAME = "vamp_planner-0.6.4.tar.gz"
 SDIST_SHA256 = "d3150c6b67ff941af9ad56480b31d3fb73b12211ea21dc684f7737b059f6daba"
@@ -93,8 +94,13 @@ SCENARIOS = (
     "cage",
 )
 PLANNERS = ("vamp", "ompl", "workbench")
-#: Largest joint step [rad] between the samples of a trajectory checked exactly.
-VERIFY_STEP = math.radians(0.25)
+#: Acceleration limits [rad/s²] of the robots (their URDFs have none; the
+#: trajectories need them): the Franka datasheet's for the Panda, a round value
+#: for the UR5.
+ACCELERATION_LIMITS = {
+    "panda": (15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0),
+    "ur5": (8.0,) * 6,
+}
 #: Points per call of VAMP's ``validate_motion`` on x86-64 (its rake: one
 #: ``__m256`` of 8 floats; 4 on ARM NEON, where the pieces check more coarsely).
 VAMP_RAKE = 8
@@ -257,8 +263,13 @@ def check_validity(
 
 
 def load_mbm_robot(resources: Path, name: str) -> Robot:
-    """MotionBenchMaker's ``name`` robot (its URDF, meshes and SRDF)."""
-    return load_robot(resources / name / f"{name}.urdf")
+    """MotionBenchMaker's ``name`` robot (its URDF, meshes and SRDF).
+
+    Its speed limits are the URDF's, its acceleration limits
+    :data:`ACCELERATION_LIMITS`.
+    """
+    robot = load_robot(resources / name / f"{name}.urdf")
+    return robot.with_limits(acceleration_limit=ACCELERATION_LIMITS[name])
 
 
 # --- the peers ------------------------------------------------------------
@@ -450,7 +461,7 @@ class WorkbenchPeer:
         if not result.solved:
             return Run(False, float(result.planning_time), extra=extra)
         waypoints = np.asarray(result.waypoints, dtype=float)
-        extra.update(verify_trajectory(checker, result.trajectory))
+        extra.update(check_trajectory(checker, result.trajectory))
         extra["min_clearance"] = float(result.min_clearance)
         return Run(
             True,
@@ -461,30 +472,28 @@ class WorkbenchPeer:
         )
 
 
-def verify_trajectory(checker: CollisionChecker, trajectory: Any) -> dict[str, Any]:
-    """Exact-mesh check of a trajectory at joint steps <= :data:`VERIFY_STEP`.
+def check_trajectory(checker: CollisionChecker, trajectory: Any) -> dict[str, Any]:
+    """``workbench.motion.verify_trajectory`` at its 0.25° steps, timed.
+
+    Args:
+        checker: The robot, the problem's scene and the pairs (exact meshes).
+        trajectory: A trajectory with ``robot``, ``duration`` [s],
+            ``sample(t)`` and ``get_extrema(order)``.
 
     Returns:
         ``contacts`` (count), ``verify_time`` [s], ``samples``,
-        ``verify_min_clearance`` [m] and ``verify_lower_bound`` [m].
+        ``verify_min_clearance`` [m], ``verify_lower_bound`` [m] (proven over
+        the whole motion) and ``duration`` [s].
     """
     begin = time.perf_counter()
-    duration = float(trajectory.duration)
-    count = 256
-    while True:
-        t = np.linspace(0.0, duration, count)
-        q = np.asarray(trajectory.sample(t)[0], dtype=float)
-        step = float(np.max(np.abs(np.diff(q, axis=0)), initial=0.0))
-        if step <= VERIFY_STEP:
-            break
-        count = math.ceil(count * step / VERIFY_STEP * 1.05) + 1
-    report = check_path(checker, t, q)
+    report = verify_trajectory(checker, trajectory)
     return {
         "contacts": len(report.contacts),
         "verify_time": time.perf_counter() - begin,
-        "samples": int(t.size),
+        "samples": int(report.samples),
         "verify_min_clearance": float(report.min_clearance),
         "verify_lower_bound": float(report.lower_bound),
+        "duration": float(trajectory.duration),
     }
 
 

@@ -19,8 +19,9 @@ import pinocchio as pin
 import pytest
 
 from benchmarks.bench_motion import (
-    VERIFY_STEP,
+    ACCELERATION_LIMITS,
     Problem,
+    check_trajectory,
     check_validity,
     find_problems,
     format_tables,
@@ -29,11 +30,10 @@ from benchmarks.bench_motion import (
     path_length,
     run_robot,
     summarise,
-    verify_trajectory,
 )
 from workbench import load_robot
 from workbench.collision import CollisionChecker, Obstacle, Scene, read_scene
-from workbench.motion import read_request
+from workbench.motion import read_request, time_scale
 
 DATA = Path(__file__).parent / "data" / "motionbenchmaker"
 MBM_PANDA = DATA / "panda" / "panda.urdf"
@@ -43,7 +43,9 @@ ATOL_EXACT = 1e-12
 
 @pytest.fixture(scope="module")
 def panda():
-    return load_robot(MBM_PANDA)
+    return load_robot(MBM_PANDA).with_limits(
+        acceleration_limit=ACCELERATION_LIMITS["panda"]
+    )
 
 
 def _read(problem: Problem, robot):
@@ -125,33 +127,22 @@ def test_a_start_inside_a_box_is_invalid_with_its_closest_pair(panda) -> None:
     assert both.where == "start and goal"
 
 
-class _Line:
-    """A straight joint-space trajectory over ``duration`` [s] (the test's own)."""
-
-    def __init__(self, a: np.ndarray, b: np.ndarray, duration: float) -> None:
-        self.a, self.b, self.duration = a, b, duration
-
-    def sample(self, t: np.ndarray):
-        s = (np.asarray(t) / self.duration)[:, None]
-        q = self.a + s * (self.b - self.a)
-        return q, np.zeros_like(q), np.zeros_like(q)
-
-
 def test_a_trajectory_is_checked_at_quarter_degree_steps(panda) -> None:
     (problem,) = find_problems(DATA / "panda", "panda", scenarios=["table_pick"])
     start = _read(problem, panda)[1]
     turn = np.zeros(panda.nq)
     turn[0] = np.deg2rad(40.0)  # the first joint only: within its limits
+    trajectory = time_scale(panda, [start, start + turn])
     free = CollisionChecker(panda, Scene("empty"))
-    line = _Line(start, start + turn, 2.0)
-    report = verify_trajectory(free, line)
-    q = line.sample(np.linspace(0.0, 2.0, report["samples"]))[0]
-    assert np.max(np.abs(np.diff(q, axis=0))) <= VERIFY_STEP
+    report = check_trajectory(free, trajectory)
     assert report["samples"] >= 40.0 / 0.25
     assert report["contacts"] == 0 and report["verify_lower_bound"] > 0.0
+    assert report["duration"] == trajectory.duration and report["verify_time"] > 0.0
     hand = panda.fk(start + turn / 2, "panda_hand")
     block = Obstacle("block", "box", (0.05, 0.05, 0.05), pin.SE3(hand))
-    blocked = verify_trajectory(CollisionChecker(panda, Scene("b", (block,))), line)
+    blocked = check_trajectory(
+        CollisionChecker(panda, Scene("b", (block,))), trajectory
+    )
     assert blocked["contacts"] >= 1 and blocked["verify_min_clearance"] < 0.0
 
 
