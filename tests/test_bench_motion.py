@@ -21,6 +21,7 @@ import pytest
 from benchmarks.bench_motion import (
     ACCELERATION_LIMITS,
     Problem,
+    check_polyline,
     check_trajectory,
     check_validity,
     find_problems,
@@ -256,6 +257,7 @@ def test_a_robot_runs_from_a_resources_folder(tmp_path: Path) -> None:
         limit=None,
         planners=[*planners, "workbench"],
         time_limit=1.0,
+        verify=["workbench", "vamp"],
     )
     result = run_robot("panda", resources, args)
     assert [(r["scenario"], r["valid"]["valid"]) for r in result["problems"]] == [
@@ -265,6 +267,9 @@ def test_a_robot_runs_from_a_resources_folder(tmp_path: Path) -> None:
     for record in result["problems"]:
         for key in planners:
             assert record[key]["solved"]
+        if planners:  # VAMP's path, checked on the exact meshes
+            assert record["vamp"]["extra"]["samples"] >= 2
+            assert "verify_lower_bound" in record["vamp"]["extra"]
         assert ("workbench" in record) == (get_workbench_plan() is not None)
     text = format_tables(result, 1.0)
     assert "| all | 2/2 |" in text
@@ -283,3 +288,18 @@ def test_the_tables_say_why_a_valid_problem_is_unsolved() -> None:
         "spheres |" in text
     )
     assert "| OMPL (Python callback) | box | 4 | no path after 40 ms |" in text
+
+
+def test_a_polyline_is_checked_at_quarter_degree_steps(panda) -> None:
+    (problem,) = find_problems(DATA / "panda", "panda", scenarios=["table_pick"])
+    start = _read(problem, panda)[1]
+    turn = np.zeros(panda.nq)
+    turn[0] = np.deg2rad(20.0)
+    path = np.array([start, start + turn, start + 2 * turn])
+    free = check_polyline(CollisionChecker(panda, Scene("empty")), path)
+    assert free["samples"] == 2 * 80 + 1  # 20° in steps of 0.25°
+    assert free["contacts"] == 0 and free["verify_lower_bound"] > 0.0
+    hand = panda.fk(start + 1.5 * turn, "panda_hand")
+    block = Obstacle("block", "box", (0.05, 0.05, 0.05), pin.SE3(hand))
+    blocked = check_polyline(CollisionChecker(panda, Scene("b", (block,))), path)
+    assert blocked["contacts"] >= 1 and blocked["verify_min_clearance"] < 0.0
