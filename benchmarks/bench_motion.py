@@ -493,7 +493,7 @@ def check_trajectory(checker: CollisionChecker, trajectory: Any) -> dict[str, An
     Returns:
         ``contacts`` (count), ``verify_time`` [s], ``samples``,
         ``verify_min_clearance`` [m], ``verify_lower_bound`` [m] (proven over
-        the whole motion) and ``duration`` [s].
+        the whole motion), ``contact_pairs`` (``"a – b"``) and ``duration`` [s].
     """
     begin = time.perf_counter()
     report = verify_trajectory(checker, trajectory)
@@ -503,6 +503,7 @@ def check_trajectory(checker: CollisionChecker, trajectory: Any) -> dict[str, An
         "samples": int(report.samples),
         "verify_min_clearance": float(report.min_clearance),
         "verify_lower_bound": float(report.lower_bound),
+        "contact_pairs": sorted({f"{c.body_a} – {c.body_b}" for c in report.contacts}),
         "duration": float(trajectory.duration),
     }
 
@@ -517,7 +518,8 @@ def check_polyline(checker: CollisionChecker, path: np.ndarray) -> dict[str, Any
 
     Returns:
         ``contacts``, ``verify_time`` [s], ``samples``,
-        ``verify_min_clearance`` [m] and ``verify_lower_bound`` [m].
+        ``verify_min_clearance`` [m], ``verify_lower_bound`` [m] and
+        ``contact_pairs`` (``"a – b"``).
     """
     begin = time.perf_counter()
     pieces = [path[:1]]
@@ -532,6 +534,7 @@ def check_polyline(checker: CollisionChecker, path: np.ndarray) -> dict[str, Any
         "samples": int(report.samples),
         "verify_min_clearance": float(report.min_clearance),
         "verify_lower_bound": float(report.lower_bound),
+        "contact_pairs": sorted({f"{c.body_a} – {c.body_b}" for c in report.contacts}),
     }
 
 

@@ -145,6 +145,8 @@ def test_a_trajectory_is_checked_at_quarter_degree_steps(panda) -> None:
         CollisionChecker(panda, Scene("b", (block,))), trajectory
     )
     assert blocked["contacts"] >= 1 and blocked["verify_min_clearance"] < 0.0
+    assert all(p.endswith(" – block") for p in blocked["contact_pairs"])
+    assert any(p.endswith(" – block") for p in blocked["contact_pairs"])
 
 
 def test_path_length_sums_euclidean_segments() -> None:
@@ -303,3 +305,4 @@ def test_a_polyline_is_checked_at_quarter_degree_steps(panda) -> None:
     block = Obstacle("block", "box", (0.05, 0.05, 0.05), pin.SE3(hand))
     blocked = check_polyline(CollisionChecker(panda, Scene("b", (block,))), path)
     assert blocked["contacts"] >= 1 and blocked["verify_min_clearance"] < 0.0
+    assert all(p.endswith(" – block") for p in blocked["contact_pairs"])
