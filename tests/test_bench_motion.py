@@ -1,4 +1,4 @@
-"""benchmarks/bench_motion.py on the MotionBenchMaker problems in tests/data.
+"""benchmarks/bench_motion.py (and its _motionbenchmaker, _motion_peers) on tests/data.
 
 The problem reader (both layouts), the validity check on the exact meshes
 (MotionBenchMaker's Panda, provenance in ``tests/data/motionbenchmaker``), the
@@ -19,21 +19,21 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from benchmarks.bench_motion import (
-    ACCELERATION_LIMITS,
-    Problem,
+from benchmarks._motion_peers import (
     WorkbenchPeer,
     check_polyline,
     check_trajectory,
-    check_validity,
-    find_problems,
-    format_tables,
-    get_sdist,
     get_workbench_plan,
     path_length,
-    run_robot,
-    summarise,
 )
+from benchmarks._motionbenchmaker import (
+    ACCELERATION_LIMITS,
+    Problem,
+    check_validity,
+    find_problems,
+    get_sdist,
+)
+from benchmarks.bench_motion import format_tables, run_robot, summarise
 from workbench import load_robot
 from workbench.collision import CollisionChecker, Obstacle, Scene, read_scene
 from workbench.motion import read_request, time_scale, verify_trajectory
@@ -227,7 +227,7 @@ def test_an_sdist_with_another_hash_is_refused(tmp_path: Path) -> None:
 def test_vamp_and_ompl_solve_a_table_pick_problem(panda) -> None:
     pytest.importorskip("vamp")
     pytest.importorskip("ompl")
-    from benchmarks.bench_motion import OmplPeer, VampPeer
+    from benchmarks._motion_peers import OmplPeer, VampPeer
 
     (problem,) = find_problems(DATA / "panda", "panda", scenarios=["table_pick"])
     scene, start, goal = _read(problem, panda)
