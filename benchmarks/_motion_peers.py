@@ -209,9 +209,18 @@ class WorkbenchPeer:
         seed: int,
     ) -> Run:
         result = self.plan(
-            robot, scene, start, goal, seed=seed, time_limit=self.time_limit
+            robot,
+            scene,
+            start,
+            goal,
+            seed=seed,
+            time_limit=self.time_limit,
+            verify=self.verify,
         )
-        extra: dict[str, Any] = {"iterations": int(result.iterations)}
+        extra: dict[str, Any] = {
+            "iterations": int(result.iterations),
+            "setup_time": float(getattr(result, "setup_time", 0.0)),
+        }
         if not result.solved:
             extra["status"] = getattr(result, "reason", None) or "no path"
             extra["detail"] = getattr(result, "detail", "")

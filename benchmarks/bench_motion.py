@@ -220,6 +220,9 @@ def summarise(records: list[dict[str, Any]], key: str) -> dict[str, Any] | None:
         "plan_p95": _quantile(plan, 0.95),
         "plan_max": max(plan, default=math.nan),
         "simplify_median": _quantile(simplify, 0.5),
+        "setup_median": _quantile(
+            [run["extra"].get("setup_time", math.nan) for _, run in solved], 0.5
+        ),
         "total_median": _quantile(total, 0.5),
         "length_ratio": _quantile(ratios, 0.5),
     }
@@ -274,8 +277,9 @@ def format_tables(result: dict[str, Any], time_limit: float) -> str:
         f"{time_limit:g} s per problem (OMPL, workbench).",
         "",
         "| scenario | valid (exact) | valid (VAMP) | planner | solved | plan median "
-        "| plan p95 | plan max | simplify median | total median | length / VAMP |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        "| plan p95 | plan max | simplify median | total median | length / VAMP "
+        "| setup median |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     ratios = [
         "| scenario | workbench / VAMP | OMPL / workbench | OMPL / VAMP |",
@@ -308,7 +312,8 @@ def format_tables(result: dict[str, Any], time_limit: float) -> str:
                 f"| {format_time(s['plan_max'])} "
                 f"| {format_time(s['simplify_median'])} "
                 f"| {format_time(s['total_median'])} "
-                f"| {'–' if key == 'vamp' else _fmt(s['length_ratio'])} |"
+                f"| {'–' if key == 'vamp' else _fmt(s['length_ratio'])} "
+                f"| {format_time(s['setup_median'])} |"
             )
             if "verified" in s:
                 verify.append(

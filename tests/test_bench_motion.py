@@ -338,15 +338,15 @@ def test_the_workbench_column_reads_a_plan_and_its_exact_check(panda) -> None:
     report = verify_trajectory(checker, trajectory)
     calls = []
 
-    def plan(robot, scene_, q0, goal, *, seed, time_limit):
-        calls.append((seed, time_limit, goal))
+    def plan(robot, scene_, q0, goal, *, seed, time_limit, verify):
+        calls.append((seed, time_limit, verify))
         own = report if len(calls) == 1 else None  # then: checked by the bench
         return _Plan(True, None, waypoints, trajectory, 1e-3, 2e-4, 0.5, 0.01, own, 7)
 
     peer = WorkbenchPeer(plan, 0.5)
     first = peer.run(panda, scene, checker, start, start + turn, seed=3)
     second = peer.run(panda, scene, checker, start, start + turn, seed=3)
-    assert calls[0][:2] == (3, 0.5)
+    assert calls[0] == (3, 0.5, True)
     assert first.solved and first.total_time == 1e-3 + 2e-4
     assert math.isclose(first.length, np.deg2rad(10.0), rel_tol=1e-12)
     assert first.extra["verify_time"] == 0.5  # the plan's own check, not redone
@@ -355,7 +355,7 @@ def test_the_workbench_column_reads_a_plan_and_its_exact_check(panda) -> None:
         assert run.extra["contacts"] == 0
         assert run.extra["samples"] == report.samples
 
-    def refused(robot, scene_, q0, goal, *, seed, time_limit):
+    def refused(robot, scene_, q0, goal, *, seed, time_limit, verify):
         return _Plan(False, "time limit", np.zeros((0, 7)), None, 0.5, 0.0, 0.0,
                      math.nan, None, 99, "no connection")  # fmt: skip
 
