@@ -42,25 +42,24 @@ def ur5_spheres():
 
 
 @pytest.fixture(scope="module")
-def ur5_unchecked(ur5_spheres):
-    """The UR5 link pairs the spheres cannot separate in random poses.
+def ur5_allowance(ur5_spheres):
+    """An allowance (L + P,) [m] that lets the UR5's inseparable pairs overlap.
 
     Its upper arm passes 14 mm from its base in every pose, its wrist links
     a few millimetres from each other: closer than the spheres' excess. The
-    planner leaves such pairs to the exact check (``MotionPlan.unchecked``).
+    planner allows such pairs their overlap at the ends
+    (``MotionPlan.allowances``); here they may overlap by a metre.
     """
     robot = ur5_spheres.robot
     checker = SphereChecker(ur5_spheres)
     rng = np.random.default_rng(7)
-    found: set[tuple[str, str]] = set()
+    allowance = np.zeros(len(checker.links) + len(checker.pairs))
     for _ in range(200):
         values = checker.clearances(
             robot.lower + rng.random(6) * (robot.upper - robot.lower)
         )
-        found |= {
-            checker.pairs[k - len(checker.links)] for k in np.flatnonzero(values < 0)
-        }
-    return tuple(sorted(found))
+        allowance[len(checker.links) :][values[len(checker.links) :] < 0] = 1.0
+    return allowance
 
 
 def _wall(robot: wb.Robot) -> Scene:
@@ -236,12 +235,12 @@ def test_compiled_clearances_equal_numpy(ur5_spheres, fractions) -> None:
 
 
 def test_sphere_contacts_include_every_exact_contact(
-    ur5_spheres, ur5_unchecked
+    ur5_spheres, ur5_allowance
 ) -> None:
     """Conservative: a configuration free on the spheres is free on the meshes."""
     robot = ur5_spheres.robot
     scene = _mixed_scene()
-    spheres = SphereChecker(ur5_spheres, scene, unchecked=ur5_unchecked)
+    spheres = SphereChecker(ur5_spheres, scene, allowance=ur5_allowance)
     exact = CollisionChecker(robot, scene, self_collision=False)
     rng = np.random.default_rng(1)
     free = 0
@@ -269,10 +268,10 @@ def test_a_segment_through_a_thin_wall_is_refused(puma, puma_spheres) -> None:
 
 
 def test_a_certified_segment_is_free_at_every_sample(
-    ur5_spheres, ur5_unchecked
+    ur5_spheres, ur5_allowance
 ) -> None:
     robot = ur5_spheres.robot
-    checker = SphereChecker(ur5_spheres, _mixed_scene(), unchecked=ur5_unchecked)
+    checker = SphereChecker(ur5_spheres, _mixed_scene(), allowance=ur5_allowance)
     rng = np.random.default_rng(2)
     certified = 0
     for _ in range(200):
@@ -382,3 +381,34 @@ def test_plan_refuses_bad_arguments(puma, puma_spheres) -> None:
         plan(puma, scene, PICK, np.zeros(5), spheres=puma_spheres)
     with pytest.raises(InputError, match="acceleration"):
         plan(wb.load_robot("puma560"), scene, PICK, PLACE)
+
+
+def test_an_allowance_lets_an_entry_overlap_that_much_and_no_more(
+    puma, puma_spheres
+) -> None:
+    q = np.zeros(6)
+    plain = SphereChecker(puma_spheres)
+    centres, radii = puma_spheres.placed(q)
+    link3 = plain.links.index("link3")
+    first = sum(len(x.radii) for x in puma_spheres.links[:link3])
+    # A 2 cm ball whose surface enters link3's first sphere by 5 mm.
+    outward = centres[first] / np.linalg.norm(centres[first])
+    centre = centres[first] + outward * (radii[first] + 0.02 - 0.005)
+    ball = Scene(
+        "ball", (Obstacle("ball", "sphere", (0.02,), pin.SE3(np.eye(3), centre)),)
+    )
+    entries = len(plain.links) + len(plain.pairs)
+    allowance = np.zeros(entries)
+    overlap = SphereChecker(puma_spheres, ball).clearances(q)[link3]
+    assert overlap == pytest.approx(-0.005, abs=EXACT_TOL) or overlap < -0.005
+    allowance[link3] = -overlap + 0.001
+    assert SphereChecker(puma_spheres, ball, allowance=allowance).is_free(q)
+    allowance[link3] = -overlap - 0.001
+    assert not SphereChecker(puma_spheres, ball, allowance=allowance).is_free(q)
+    for bad in (
+        np.zeros(entries + 1),
+        np.full(entries, -1.0),
+        np.full(entries, np.nan),
+    ):
+        with pytest.raises(InputError, match="allowance"):
+            SphereChecker(puma_spheres, ball, allowance=bad)

@@ -310,7 +310,7 @@ def _result_keys(
         if math.isnan(result.min_clearance)
         else result.min_clearance,
         "iterations": result.iterations,
-        "unchecked": [list(pair) for pair in result.unchecked],
+        "allowances": [list(entry) for entry in result.allowances],
         "seed": args.seed,
         "csv": str(args.csv) if written and args.csv is not None else None,
         "html": str(args.html) if written and args.html is not None else None,

@@ -12,6 +12,10 @@ spheres (each inside the bounding sphere, so never nearer). Signed distances
 of a sphere centre to boxes, cylinders and spheres are exact; to a mesh it is
 the unsigned distance to its triangles.
 
+**Allowances.** Each entry may carry an allowance [m] added to its
+clearance: the spheres may overlap by that much (where they overlap at the
+start or goal while the exact meshes are apart) and no more.
+
 **Certified motions.** Along the straight joint segment from
 :math:`q_a` to :math:`q_b` a point of link :math:`l` moves by at most
 :math:`D_l = \sum_i L_{l,i} |\Delta q_i|` (lever arms, as in
@@ -248,6 +252,8 @@ def _clearances(
     scenter = robot_float[f : f + 3 * n_spheres].reshape(n_spheres, 3)
     f += 3 * n_spheres
     sradius = robot_float[f : f + n_spheres]
+    f += n_spheres
+    allow = robot_float[f : f + n_links + n_pairs]
     okind = scene_int[0:n_obstacles]
     ofirst = scene_int[n_obstacles : 2 * n_obstacles + 1]
     orot = scene_float[0 : 9 * n_obstacles].reshape(n_obstacles, 3, 3)
@@ -273,6 +279,7 @@ def _clearances(
                         bound[li], o, okind, orot, opos, osize, ofirst, tris, math.inf
                     )
                     - lradius[li]
+                    + allow[li]
                 )
                 bounds[li, o] = d
                 if d < need[li]:
@@ -293,9 +300,10 @@ def _clearances(
                                 osize,
                                 ofirst,
                                 tris,
-                                d + sradius[s],
+                                d + sradius[s] - allow[li],
                             )
                             - sradius[s]
+                            + allow[li]
                         )
                         d = min(d, ds)
                         if d < 0.0 and stop:
@@ -309,7 +317,8 @@ def _clearances(
             out[n_links + k] = math.inf
             continue
         a, b = pa[k], pb[k]
-        d = _gap(bound[a], bound[b]) - lradius[a] - lradius[b]
+        slack = allow[n_links + k]
+        d = _gap(bound[a], bound[b]) - lradius[a] - lradius[b] + slack
         if d < need[n_links + k]:
             for li in (a, b):
                 if not placed[li]:
@@ -321,12 +330,13 @@ def _clearances(
             limit = need[n_links + k]
             for s in range(lfirst[a], lfirst[a + 1]):
                 # A sphere of a far from b's bounding sphere is far from b.
-                coarse = _gap(world[s], bound[b]) - sradius[s] - lradius[b]
+                coarse = _gap(world[s], bound[b]) - sradius[s] - lradius[b] + slack
                 if coarse >= limit:
                     d = min(d, coarse)
                     continue
                 for t in range(lfirst[b], lfirst[b + 1]):
-                    d = min(d, _gap(world[s], world[t]) - sradius[s] - sradius[t])
+                    gap = _gap(world[s], world[t]) - sradius[s] - sradius[t]
+                    d = min(d, gap + slack)
             if d < 0.0 and stop:
                 out[n_links + k] = d
                 return False

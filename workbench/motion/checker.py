@@ -53,19 +53,21 @@ class SphereChecker:
     Args:
         spheres: The robot's sphere model (:func:`~workbench.motion.spherize`).
         scene: Static obstacles in the base frame; default none.
-        unchecked: Entries left out: ``(link, obstacle)`` or ``(link,
-            link)`` names (:func:`~workbench.motion.plan` leaves out those
-            the spheres cannot separate where the exact meshes are apart,
-            and has the exact check judge them).
+        allowance: Per clearance entry (L + P,) [m], >= 0: how far the
+            spheres of that entry may overlap (:func:`~workbench.motion.plan`
+            allows the overlap they have at the start or a goal where the
+            exact meshes are apart, and no more); default none.
 
     Attributes:
-        spheres, scene, unchecked: As given.
+        spheres, scene: As given.
+        allowance: (L + P,) [m], read-only.
         links: Link names, in the order of the clearance entries.
         pairs: Checked link pairs ``(link_a, link_b)``, after the links.
 
     Raises:
         InputError: If the robot has a joint other than a revolute one with
-            one coordinate, or an obstacle's ``allow`` names no link.
+            one coordinate, an obstacle's ``allow`` names no link, or the
+            allowance is not (L + P,) finite values >= 0.
     """
 
     def __init__(
@@ -73,20 +75,34 @@ class SphereChecker:
         spheres: SphereModel,
         scene: Scene | None = None,
         *,
-        unchecked: tuple[tuple[str, str], ...] = (),
+        allowance: npt.ArrayLike | None = None,
     ) -> None:
         self.spheres = spheres
         self.scene = scene or Scene("empty")
-        self.unchecked = tuple(unchecked)
         robot = spheres.robot
         model = robot.model
         self.links = tuple(link.link for link in spheres.links)
+        self.pairs = _pairs(spheres)
+        n_entries = len(self.links) + len(self.pairs)
+        if allowance is None:
+            allowance = np.zeros(n_entries)
+        allowed = np.array(allowance, dtype=np.float64)
+        if (
+            allowed.shape != (n_entries,)
+            or not np.all(np.isfinite(allowed))
+            or np.any(allowed < 0)
+        ):
+            raise InputError(
+                f"allowance must be {n_entries} finite values >= 0 [m] (links, then "
+                f"pairs), got shape {allowed.shape}"
+            )
+        allowed.setflags(write=False)
+        self.allowance = allowed
         self._robot_int, self._robot_float, self._levers, sizes = _pack_robot(
-            spheres, self.scene, self.unchecked
+            spheres, self.scene, allowed
         )
         self._scene_int, self._scene_float, self._tris = _pack_scene(self.scene)
         self._sizes = np.array(sizes, dtype=np.int64)
-        self.pairs = _pairs(spheres, self.unchecked)
         self._store = np.zeros((kernel.MAX_EVALUATIONS, len(self._levers)))
         self.nq = model.nq
 
@@ -129,9 +145,7 @@ class SphereChecker:
         return bool(kernel.motion_free(a, b, *self.arrays, self._store))
 
 
-def _pairs(
-    spheres: SphereModel, unchecked: tuple[tuple[str, str], ...]
-) -> tuple[tuple[str, str], ...]:
+def _pairs(spheres: SphereModel) -> tuple[tuple[str, str], ...]:
     robot = spheres.robot
     checked = _filter(robot)
     names = [link.link for link in spheres.links]
@@ -140,8 +154,6 @@ def _pairs(
         for i, a in enumerate(names)
         for b in names[i + 1 :]
         if not checked.is_disabled(a, b)
-        and (a, b) not in unchecked
-        and (b, a) not in unchecked
         and not (
             spheres.links[i].joint == 0 and spheres.links[names.index(b)].joint == 0
         )
@@ -149,7 +161,7 @@ def _pairs(
 
 
 def _pack_robot(
-    spheres: SphereModel, scene: Scene, unchecked: tuple[tuple[str, str], ...]
+    spheres: SphereModel, scene: Scene, allowance: FloatArray
 ) -> tuple[IntArray, FloatArray, FloatArray, list[int]]:
     robot = spheres.robot
     model = robot.model
@@ -184,10 +196,7 @@ def _pack_robot(
         for name in obstacle.allow:
             if name in names:
                 allowed[names.index(name), o] = 1
-        for li, name in enumerate(names):
-            if (name, obstacle.name) in unchecked:
-                allowed[li, o] = 1
-    pairs = _pairs(spheres, unchecked)
+    pairs = _pairs(spheres)
     pa = np.array([names.index(a) for a, _ in pairs], dtype=np.int64)
     pb = np.array([names.index(b) for _, b in pairs], dtype=np.int64)
     first = np.cumsum([0] + [len(link.radii) for link in links]).astype(np.int64)
@@ -226,6 +235,7 @@ def _pack_robot(
             np.array(bound_radius),
             np.concatenate([link.centers for link in links]).ravel(),
             np.concatenate([link.radii for link in links]),
+            allowance,
         ]
     )
     # Lever arm of link l about joint i [m/rad]: a bound on the distance of

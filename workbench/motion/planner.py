@@ -55,6 +55,8 @@ SHORTCUTS = 64
 REDUNDANCY_SAMPLES = 16
 #: Nodes each tree can hold.
 CAPACITY = 50_000
+#: Allowed overlap [m] beyond what the spheres of an entry have at an end.
+ALLOWANCE_MARGIN = 1e-3
 #: Planners :func:`plan` offers.
 PLANNERS = ("rrtconnect",)
 
@@ -85,10 +87,11 @@ class MotionPlan:
             verified.
         iterations: RRT-Connect iterations.
         detail: One line on what blocked an unsolved request ("" if solved).
-        unchecked: Entries ``(link, obstacle or link)`` the sphere model
-            could not separate at the start or a goal although the exact
-            meshes are apart there: left out of the planning, judged by the
-            exact check of the trajectory only.
+        allowances: ``(link, "scene" or link, metres)`` for each entry
+            whose spheres overlap at the start or a goal although the exact
+            meshes are apart there: they may overlap that much (plus
+            :data:`ALLOWANCE_MARGIN`) along the motion and no more; the exact
+            check of the trajectory judges the rest.
     """
 
     solved: bool
@@ -104,7 +107,7 @@ class MotionPlan:
     clearance: PathClearance | None = field(repr=False)
     iterations: int
     detail: str = ""
-    unchecked: tuple[tuple[str, str], ...] = ()
+    allowances: tuple[tuple[str, str, float], ...] = ()
 
     @property
     def path_length(self) -> float:
@@ -303,14 +306,16 @@ def plan(
         a, b = exact.body_pairs[int(np.argmin(d))]
         return failed("goal in collision", f"{a} touches {b} at the goal")
     goals = np.array(free_goals)
-    checker = _relaxed_checker(model, scene, np.concatenate([[q_start], goals]))
+    checker, allowances = _allowing_checker(
+        model, scene, np.concatenate([[q_start], goals])
+    )
     t_search = time.perf_counter()
     search = _search(
         checker, robot, q_start, goals, seed, t_search, time_limit, iteration_limit
     )
     if len(search) == 3:
         reason, detail, iterations = search
-        return replace(failed(reason, detail, iterations), unchecked=checker.unchecked)
+        return replace(failed(reason, detail, iterations), allowances=allowances)
     path, iterations = search
     t_planned = time.perf_counter()
     trajectory = time_scale(
@@ -340,7 +345,7 @@ def plan(
         report,
         iterations,
         "" if free else _contact_detail(report),
-        checker.unchecked,
+        allowances,
     )
 
 
@@ -351,28 +356,24 @@ def _contact_detail(report: PathClearance | None) -> str:
     return f"{first.body_a} touches {first.body_b} at t = {first.t_start:.3f} s"
 
 
-def _relaxed_checker(
+def _allowing_checker(
     model: SphereModel, scene: Scene | None, ends: FloatArray
-) -> SphereChecker:
-    """The checker without the entries that touch at an end (exact-free there)."""
+) -> tuple[SphereChecker, tuple[tuple[str, str, float], ...]]:
+    """The checker that allows each entry the overlap it has at an end.
+
+    The ends are free on the exact meshes (checked before), so an overlap of
+    their spheres is the spheres' excess, not a contact.
+    """
     checker = SphereChecker(model, scene)
-    unchecked: set[tuple[str, str]] = set()
-    n_links = len(checker.links)
-    for q in ends:
-        values = checker.clearances(q)
-        for k in np.flatnonzero(values < 0):
-            if k >= n_links:
-                unchecked.add(checker.pairs[k - n_links])
-    for obstacle in checker.scene.obstacles:
-        one = SphereChecker(model, Scene(obstacle.name, (obstacle,)))
-        for q in ends:
-            values = one.clearances(q)[:n_links]
-            unchecked |= {
-                (one.links[k], obstacle.name) for k in np.flatnonzero(values < 0)
-            }
-    if not unchecked:
-        return checker
-    return SphereChecker(model, scene, unchecked=tuple(sorted(unchecked)))
+    lowest = np.min([checker.clearances(q) for q in ends], axis=0)
+    overlap = np.where(lowest < 0.0, ALLOWANCE_MARGIN - lowest, 0.0)
+    if not overlap.any():
+        return checker, ()
+    names = [(link, "scene") for link in checker.links] + list(checker.pairs)
+    allowances = tuple(
+        (a, b, float(overlap[k])) for k, (a, b) in enumerate(names) if overlap[k] > 0
+    )
+    return SphereChecker(model, scene, allowance=overlap), allowances
 
 
 def _search(
