@@ -260,7 +260,17 @@ def _pack_robot(
             link_levers[li, model.joints[joint].idx_v] = off_axis + chain
             chain += offsets[child]
             child, joint = joint, int(model.parents[joint])
-    pair_levers = link_levers[pa] + link_levers[pb]
+    # A pair's distance changes only through the joints that move one link
+    # relative to the other: those on one side of their common ancestor (a
+    # joint both hang on moves them together).
+    carried = np.zeros((len(links), model.nv), dtype=bool)
+    for li, link in enumerate(links):
+        joint = link.joint
+        while joint > 0:
+            carried[li, model.joints[joint].idx_v] = True
+            joint = int(model.parents[joint])
+    apart = carried[pa] ^ carried[pb]
+    pair_levers = np.where(apart, link_levers[pa] + link_levers[pb], 0.0)
     levers = np.concatenate([link_levers, pair_levers.reshape(-1, model.nv)])
     sizes = [
         model.njoints,
