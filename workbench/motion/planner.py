@@ -2,8 +2,10 @@
 
 :func:`plan` is the one door. It
 
-1. checks the start and the goal on the exact meshes (coal, the project's
-   :class:`~workbench.collision.CollisionChecker`) and on the spheres;
+1. checks the start and the goals on the exact meshes (coal, the project's
+   :class:`~workbench.collision.CollisionChecker`); where their spheres
+   overlap there, the overlap becomes that entry's allowance along the
+   motion (:data:`ALLOWANCE_MARGIN` more, no deeper);
 2. grows two trees (Kuffner & LaValle's RRT-Connect, compiled): from the
    start, and from every goal configuration (a tool-pose goal becomes every
    closed-form branch within the limits; for seven-axis arms, those of
