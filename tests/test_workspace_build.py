@@ -343,7 +343,12 @@ def _wait_for_blocks(partial: Path, count: int, process: subprocess.Popen) -> in
     deadline = time.monotonic() + 120.0
     while time.monotonic() < deadline:
         flags = partial / "done" / "c"
-        done = len(list(flags.iterdir())) if flags.is_dir() else 0
+        # A chunk being written is a ``*.partial`` sibling until it is renamed.
+        done = (
+            sum(not f.name.endswith(".partial") for f in flags.iterdir())
+            if flags.is_dir()
+            else 0
+        )
         if done >= count:
             return done
         if process.poll() is not None:
