@@ -122,7 +122,7 @@ def test_no_motion_is_exit_3_with_the_reason(capsys, tmp_path: Path) -> None:
         (("--start-deg", "1", "2", "--goal-deg", *PLACE), "--start-deg takes 6"),
         (
             ("--start-deg", *PICK, "--goal-pose", "0", "0", "0", "0", "0", "0", "0"),
-            "quaternion",
+            "--goal-pose: quat_wxyz must have unit norm",
         ),
     ],
 )

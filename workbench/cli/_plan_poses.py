@@ -86,8 +86,8 @@ def get_configurations(
                 "place": float(solver.parameter_of(robot.check_configuration(q_place))),
             }
         return q_pick, q_place, {"branch": None, "redundancy": redundancy}
-    pick = _target(args.pick_xyz_quat_wxyz, "--pick-xyz-quat-wxyz")
-    place = _target(args.place_xyz_quat_wxyz, "--place-xyz-quat-wxyz")
+    pick = parse_pose_option(args.pick_xyz_quat_wxyz, "--pick-xyz-quat-wxyz")
+    place = parse_pose_option(args.place_xyz_quat_wxyz, "--place-xyz-quat-wxyz")
     criterion = None
     if solver is not None and args.redundancy is None:
         criterion = args.criterion or "limit_margin"
@@ -109,7 +109,7 @@ def get_configurations(
     return first.q, second.q, {"branch": branch, "redundancy": redundancy}
 
 
-def _target(values: list[float], option: str) -> pin.SE3:
+def parse_pose_option(values: list[float], option: str) -> pin.SE3:
     """The pose of ``x y z qw qx qy qz`` (metres, unit quaternion scalar first).
 
     Raises:

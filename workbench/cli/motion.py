@@ -30,7 +30,9 @@ from workbench.cli._common import (
     get_input_paths,
     load_robot_from_args,
     print_json,
+    q_from_degrees,
 )
+from workbench.cli._plan_poses import parse_pose_option
 from workbench.errors import InputError
 from workbench.model.robot import Robot
 
@@ -155,7 +157,7 @@ def run_plan(args: argparse.Namespace) -> int:
     check_outputs(outputs, get_input_paths(args, args.request))
     robot = load_robot_from_args(args)
     scene = read_scene(args.scene) if args.scene is not None else None
-    start, goal = _start_and_goal(args, robot, read_request)
+    start, goal = _start_and_goal(args, robot, scene, read_request)
     if start is None:
         raise InputError("give the start: --request, --start-deg or --start-pose")
     if goal is None:
@@ -194,7 +196,7 @@ def run_plan(args: argparse.Namespace) -> int:
 
 
 def _start_and_goal(
-    args: argparse.Namespace, robot: Robot, read_request: Any
+    args: argparse.Namespace, robot: Robot, scene: Any, read_request: Any
 ) -> tuple[np.ndarray | None, np.ndarray | pin.SE3 | None]:
     start: np.ndarray | None = None
     goal: np.ndarray | pin.SE3 | None = None
@@ -203,11 +205,13 @@ def _start_and_goal(
     if args.start_deg is not None:
         start = _joint_angles(robot, args.start_deg, "--start-deg")
     elif args.start_pose is not None:
-        start = _start_from_pose(robot, args, _pose(args.start_pose))
+        start = _start_from_pose(
+            robot, args, scene, parse_pose_option(args.start_pose, "--start-pose")
+        )
     if args.goal_deg is not None:
         goal = _joint_angles(robot, args.goal_deg, "--goal-deg")
     elif args.goal_pose is not None:
-        goal = _pose(args.goal_pose)
+        goal = parse_pose_option(args.goal_pose, "--goal-pose")
     return start, goal
 
 
@@ -217,22 +221,13 @@ def _joint_angles(robot: Robot, values: list[float], option: str) -> np.ndarray:
             f"{option} takes {robot.n_joints} values "
             f"({', '.join(robot.joint_names)}), got {len(values)}"
         )
-    return robot.as_configuration(np.radians(values))
-
-
-def _pose(values: list[float]) -> pin.SE3:
-    x, y, z, qw, qx, qy, qz = values
-    norm = math.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
-    if not 1e-6 < norm:
-        raise InputError("a pose's quaternion must not be zero")
-    quaternion = pin.Quaternion(qw / norm, qx / norm, qy / norm, qz / norm)
-    return pin.SE3(quaternion.toRotationMatrix(), np.array([x, y, z]))
+    return q_from_degrees(robot, values)
 
 
 def _start_from_pose(
-    robot: Robot, args: argparse.Namespace, pose: pin.SE3
+    robot: Robot, args: argparse.Namespace, scene: Any, pose: pin.SE3
 ) -> np.ndarray:
-    from workbench.collision import CollisionChecker, read_scene
+    from workbench.collision import CollisionChecker
     from workbench.errors import UnreachableError
     from workbench.motion import goal_configurations
 
@@ -240,7 +235,7 @@ def _start_from_pose(
         candidates = goal_configurations(robot, pose, seed=args.seed)
     except UnreachableError as err:
         raise InputError(f"--start-pose is out of reach: {err}") from None
-    checker = CollisionChecker(robot, read_scene(args.scene) if args.scene else None)
+    checker = CollisionChecker(robot, scene)
     for q in candidates:
         distances = checker.compute_distances(q)
         if not distances.size or distances.min() > 0:
