@@ -47,6 +47,8 @@ BoolArray = npt.NDArray[np.bool_]
 RESOLUTION = 1e-4
 #: Most clearance evaluations of one segment before it is refused.
 MAX_EVALUATIONS = 512
+#: The packed arrays every entry point takes, C-contiguous (reshaped inside).
+_PACKED = ("levers", "robot_int", "robot_float", "scene_int", "scene_float", "tris")
 #: Obstacle kinds.
 BOX, CYLINDER, SPHERE, MESH = 0, 1, 2, 3
 
@@ -462,7 +464,7 @@ def _motion_free(
 
 @entry_point(
     outputs=("out",),
-    contiguous=("robot_int", "robot_float", "scene_int", "scene_float", "tris"),
+    contiguous=_PACKED[1:],
 )
 def clearances(
     q: FloatArray,
@@ -502,14 +504,7 @@ def clearances(
 
 @entry_point(
     outputs=("store",),
-    contiguous=(
-        "levers",
-        "robot_int",
-        "robot_float",
-        "scene_int",
-        "scene_float",
-        "tris",
-    ),
+    contiguous=_PACKED,
 )
 def motion_free(
     qa: FloatArray,
@@ -553,14 +548,7 @@ def _nearest(nodes: FloatArray, count: int, q: FloatArray) -> int:
 
 @entry_point(
     outputs=("nodes", "parents", "counts", "state", "store"),
-    contiguous=(
-        "levers",
-        "robot_int",
-        "robot_float",
-        "scene_int",
-        "scene_float",
-        "tris",
-    ),
+    contiguous=_PACKED,
 )
 def grow_trees(
     nodes: FloatArray,
@@ -670,14 +658,7 @@ def grow_trees(
 
 @entry_point(
     outputs=("path", "length", "store"),
-    contiguous=(
-        "levers",
-        "robot_int",
-        "robot_float",
-        "scene_int",
-        "scene_float",
-        "tris",
-    ),
+    contiguous=_PACKED,
 )
 def shortcut(
     path: FloatArray,

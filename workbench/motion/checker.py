@@ -79,8 +79,6 @@ class SphereChecker:
     ) -> None:
         self.spheres = spheres
         self.scene = scene or Scene("empty")
-        robot = spheres.robot
-        model = robot.model
         self.links = tuple(link.link for link in spheres.links)
         self.pairs = _pairs(spheres)
         n_entries = len(self.links) + len(self.pairs)
@@ -104,7 +102,6 @@ class SphereChecker:
         self._scene_int, self._scene_float, self._tris = _pack_scene(self.scene)
         self._sizes = np.array(sizes, dtype=np.int64)
         self._store = np.zeros((kernel.MAX_EVALUATIONS, len(self._levers)))
-        self.nq = model.nq
 
     @property
     def arrays(self) -> PackedArrays:

@@ -346,16 +346,11 @@ def plan(
         math.nan if report is None else float(report.min_clearance),
         report,
         iterations,
-        "" if free else _contact_detail(report),
+        ""
+        if report is None or free
+        else report.describe_first_contact() or "the motion is not proven free",
         allowances,
     )
-
-
-def _contact_detail(report: PathClearance | None) -> str:
-    if report is None or not report.contacts:
-        return "the exact check could not prove the motion free"
-    first = report.contacts[0]
-    return f"{first.body_a} touches {first.body_b} at t = {first.t_start:.3f} s"
 
 
 def _allowing_checker(
