@@ -33,9 +33,10 @@ from tests._cli_fuzz import (
     run_case,
     write_inputs,
 )
+from workbench import _dask
 from workbench.cli import main
 from workbench.errors import InputError
-from workbench.workspace import _block_runner, build
+from workbench.workspace import build
 
 #: ``workspace map`` of the small map with the address that follows.
 _ON_SCHEDULER = [*SMALL_MAP[:-3], "--scheduler"]
@@ -120,7 +121,7 @@ def _silent_listener() -> Iterator[int]:
 def test_a_server_that_is_no_scheduler_exits_2_before_the_store(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr(_block_runner, "PROBE_TIMEOUT", 0.3)
+    monkeypatch.setattr(_dask, "PROBE_TIMEOUT", 0.3)
     with _silent_listener() as port:
         code, out, err = _run(
             tmp_path, *_ON_SCHEDULER, f"127.0.0.1:{port}", "--out", "x.zarr"

@@ -25,6 +25,7 @@ LAYERS: dict[str, int] = {
     "_compiled": 0,
     "_lazy": 0,
     "_dispatchers": 0,
+    "_dask": 0,
     "progress": 0,
     "model": 1,
     "poses": 2,

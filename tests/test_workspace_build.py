@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import fcntl
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -23,12 +22,12 @@ import numpy as np
 import pytest
 import zarr
 
+from tests._dask_cluster import start_cluster
 from tests.conftest import run_cli
-from workbench import Robot, load_robot
+from workbench import Robot, _dask, load_robot
 from workbench.collision import Obstacle, Scene
 from workbench.errors import InputError
 from workbench.workspace import (
-    _block_runner,
     _block_tasks,
     _sampled_fold,
     make_pose_grid,
@@ -42,13 +41,6 @@ from workbench.workspace.robot_spec import (
 )
 from workbench.workspace.store import get_partial_path, open_map
 
-DASK = [str(Path(sys.executable).parent / "dask")]
-LOCAL = ["--host", "127.0.0.1", "--no-dashboard"]
-SCHEDULER = [*DASK, "scheduler", *LOCAL, "--port", "0"]
-WORKER = [*DASK, "worker", *LOCAL, "--nthreads", "1", "--no-nanny"]
-#: Seconds to wait for the cluster's processes to start, and to stop.
-CLUSTER_START = 60.0
-STOP_GRACE = 3.0
 #: A coarse exact grid: dozens of blocks, a fraction of a second.
 RESOLUTION = 0.2  # [m]
 ORIENTATIONS = 24
@@ -105,67 +97,11 @@ def reference(
     return path
 
 
-def _stop(processes: list[subprocess.Popen]) -> None:
-    """SIGTERM to each process group, SIGKILL to those still there after a while."""
-    for process in processes:
-        if process.poll() is None:
-            os.killpg(process.pid, signal.SIGTERM)
-    deadline = time.monotonic() + STOP_GRACE
-    for process in processes:
-        try:
-            process.wait(timeout=max(deadline - time.monotonic(), 0.01))
-        except subprocess.TimeoutExpired:
-            os.killpg(process.pid, signal.SIGKILL)
-            process.wait()
-
-
 @pytest.fixture(scope="module")
 def cluster(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     """Address of a local Dask cluster: a scheduler and two one-thread workers."""
-    folder = tmp_path_factory.mktemp("cluster")
-    scheduler_file = folder / "scheduler.json"
-    common = {"cwd": folder, "start_new_session": True, "stderr": subprocess.DEVNULL}
-    processes = [
-        subprocess.Popen(
-            [
-                *DASK,
-                "scheduler",
-                "--port",
-                "0",
-                "--scheduler-file",
-                str(scheduler_file),
-            ],
-            stdout=subprocess.DEVNULL,
-            **common,
-        )
-    ]
-    try:
-        for _ in range(2):
-            processes.append(
-                subprocess.Popen(
-                    [*WORKER, "--scheduler-file", str(scheduler_file)],
-                    stdout=subprocess.DEVNULL,
-                    **common,
-                )
-            )
-        address = _wait_for_workers(scheduler_file, 2)
+    with start_cluster(tmp_path_factory.mktemp("cluster"), workers=2) as address:
         yield address
-    finally:
-        _stop(processes)
-
-
-def _wait_for_workers(scheduler_file: Path, count: int) -> str:
-    from distributed import Client
-
-    deadline = time.monotonic() + CLUSTER_START
-    while not scheduler_file.exists():
-        if time.monotonic() > deadline:
-            raise TimeoutError("the Dask scheduler did not start")
-        time.sleep(0.05)
-    address = json.loads(scheduler_file.read_text())["address"]
-    with Client(address, timeout=CLUSTER_START) as client:
-        client.wait_for_workers(count, timeout=CLUSTER_START)
-    return address
 
 
 @pytest.mark.slow
@@ -404,7 +340,7 @@ def test_refusals(puma, grid, reference, tmp_path, monkeypatch) -> None:
     scene = Scene("box", (Obstacle("b", "box", (0.1, 0.1, 0.1), _pose()),))
     with pytest.raises(InputError, match="a sampled map checks no collisions"):
         build_map(puma, grid, tmp_path / "m.zarr", samples=10, scene=scene)
-    monkeypatch.setattr(_block_runner, "CONNECT_TIMEOUT", 0.5)
+    monkeypatch.setattr(_dask, "CONNECT_TIMEOUT", 0.5)
     with pytest.raises(InputError, match="cannot reach the Dask scheduler"):
         build_map(puma, grid, tmp_path / "m.zarr", scheduler="tcp://127.0.0.1:9")
 

@@ -40,12 +40,13 @@ from typing import Any
 
 import numpy as np
 
+from workbench._dask import check_scheduler
 from workbench.atomic_files import check_output
 from workbench.collision import Scene
 from workbench.errors import InputError
 from workbench.ik import Family, get_family, get_solver
 from workbench.model.robot import Robot
-from workbench.workspace._block_runner import check_scheduler, run_tasks
+from workbench.workspace._block_runner import run_tasks
 from workbench.workspace._block_tasks import SAMPLES_PER_BLOCK, BlockJob, compute_block
 from workbench.workspace._partial import (
     check_same_build,
