@@ -57,6 +57,21 @@ def read_request(path: str | Path, robot: Robot) -> MotionRequest:
         raw = read_yaml_file(path, "motion request")
     except SceneFileError as err:
         raise InputError(str(err)) from None
+    return parse_request(raw, robot, source=path)
+
+
+def parse_request(raw: Any, robot: Robot, *, source: str | Path) -> MotionRequest:
+    """:func:`read_request` of a request already read from its YAML.
+
+    Args:
+        raw: The request as YAML loads it (a mapping).
+        robot: The robot whose joints the request's are matched to.
+        source: Where the request came from, for the messages.
+
+    Raises:
+        InputError: As :func:`read_request`.
+    """
+    path = source
     if not isinstance(raw, Mapping):
         raise InputError(f"{path}: not a MoveIt motion request (no mapping)")
     state = raw.get("start_state")
@@ -99,7 +114,7 @@ def read_request(path: str | Path, robot: Robot) -> MotionRequest:
 
 
 def _configuration(
-    robot: Robot, values: Mapping[str, Any], path: Path, where: str
+    robot: Robot, values: Mapping[str, Any], path: str | Path, where: str
 ) -> FloatArray:
     """``q`` of ``robot`` from joint values by name (others ignored)."""
     out = np.empty(robot.n_joints)
