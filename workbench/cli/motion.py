@@ -1,5 +1,8 @@
 """``workbench motion plan``: a collision-free, time-scaled motion in a scene.
 
+(``workbench motion bench``, a MotionBenchMaker set planned, is in
+:mod:`workbench.cli._motion_bench`.)
+
 Runs :func:`workbench.motion.plan` (RRT-Connect on the robot's spheres,
 shortcuts, time scaling, the exact-mesh check) from a MoveIt motion request
 or from start and goal given as joint angles or a tool pose, and writes the
@@ -32,6 +35,7 @@ from workbench.cli._common import (
     print_json,
     q_from_degrees,
 )
+from workbench.cli._motion_bench import register as register_bench
 from workbench.cli._plan_poses import parse_pose_option
 from workbench.errors import InputError
 from workbench.model.robot import Robot
@@ -43,7 +47,7 @@ MAX_TIME_LIMIT = 3600.0
 
 
 def register(commands: argparse._SubParsersAction) -> None:
-    """Add the ``motion`` command group and ``motion plan``."""
+    """Add the ``motion`` command group, ``motion plan`` and ``motion bench``."""
     parser = commands.add_parser(
         "motion",
         help="collision-free motions around the obstacles of a scene",
@@ -144,6 +148,7 @@ def register(commands: argparse._SubParsersAction) -> None:
     )
     add_json_flag(plan)
     plan.set_defaults(run=run_plan, progress_message="motion plan: planning…")
+    register_bench(subcommands)
 
 
 def run_plan(args: argparse.Namespace) -> int:

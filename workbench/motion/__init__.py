@@ -5,8 +5,11 @@ sphere model of the robot (:mod:`.spheres`, :func:`spherize`), checked in
 compiled code against the scene with certified segments (:mod:`.checker`,
 :class:`SphereChecker`), shortened, time-scaled and verified on the exact
 meshes.
-:mod:`.requests` reads MoveIt motion requests (start and joint goal) as
-configurations of a robot; MoveIt planning scenes are read by
+:mod:`.problems` finds MotionBenchMaker problem sets and judges their
+validity, :mod:`.problem_runs` plans and summarises them (:func:`run_problems`,
+:func:`summarise`), and :mod:`.batch` plans many requests here or on a Dask
+cluster (:func:`plan_many`). :mod:`.requests` reads MoveIt motion requests
+(start and joint goal) as configurations of a robot; MoveIt planning scenes are read by
 :func:`workbench.collision.read_scene`. :mod:`.timing` turns a planner's
 joint-space polyline into a C² trajectory within the joint limits
 (:func:`time_scale`), and :mod:`.verify` checks a trajectory on the exact
@@ -21,9 +24,23 @@ from workbench._lazy import attach
 
 if TYPE_CHECKING:
     from workbench.motion._polyline import REPEAT_TOL
+    from workbench.motion.batch import plan_many
     from workbench.motion.checker import SphereChecker
     from workbench.motion.planner import MotionPlan, goal_configurations, plan
-    from workbench.motion.requests import MotionRequest, read_request
+    from workbench.motion.problem_runs import (
+        ProblemResult,
+        ScenarioSummary,
+        run_problem,
+        run_problems,
+        summarise,
+    )
+    from workbench.motion.problems import (
+        Problem,
+        Validity,
+        check_validity,
+        find_problems,
+    )
+    from workbench.motion.requests import MotionRequest, parse_request, read_request
     from workbench.motion.spheres import LinkSpheres, SphereModel, spherize
     from workbench.motion.timing import (
         WORST_RATIO,
@@ -40,13 +57,24 @@ __all__ = [
     "LinkSpheres",
     "MotionPlan",
     "MotionRequest",
+    "Problem",
+    "ProblemResult",
+    "ScenarioSummary",
     "SphereChecker",
     "SphereModel",
+    "Validity",
     "WaypointTrajectory",
+    "check_validity",
+    "find_problems",
     "goal_configurations",
+    "parse_request",
     "plan",
+    "plan_many",
     "read_request",
+    "run_problem",
+    "run_problems",
     "spherize",
+    "summarise",
     "time_optimal_duration",
     "time_scale",
     "verify_trajectory",
