@@ -2,43 +2,29 @@
 
 The sdist (from ``--sdist``, a cache, or PyPI's simple index, checked against
 its SHA-256), its ``resources/`` unpacked (the robots' URDFs, SRDFs, meshes
-and ``problems.tar.bz2``), the problems found in MotionBenchMaker's layout or
-the flat one of ``tests/data/motionbenchmaker``, the robots loaded with
-acceleration limits, and each problem's validity on the exact meshes. Used by
-:mod:`benchmarks.bench_motion`.
+and ``problems.tar.bz2``) and the robots loaded with acceleration limits. The
+problems are found and judged valid by the package
+(:func:`workbench.motion.find_problems`, :func:`workbench.motion.check_validity`).
+Used by :mod:`benchmarks.bench_motion`.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
-import math
-import re
 import sys
 import tarfile
 import urllib.request
-from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
 from workbench import Robot, load_robot
-from workbench.collision import CollisionChecker
+from workbench.motion.problems import SCENARIOS
 
 SDIST_NAME = "vamp_planner-0.6.4.tar.gz"
 SDIST_SHA256 = "d3150c6b67ff941af9ad56480b31d3fb73b12211ea21dc684f7737b059f6daba"
 INDEX_URL = "https://pypi.org/simple/vamp-planner/"
 ROBOTS = ("panda", "ur5")
-SCENARIOS = (
-    "table_pick",
-    "table_under_pick",
-    "box",
-    "bookshelf_small",
-    "bookshelf_tall",
-    "bookshelf_thin",
-    "cage",
-)
+__all__ = ["ROBOTS", "SCENARIOS", "extract_resources", "get_sdist", "load_mbm_robot"]
 #: Acceleration limits [rad/s²] of the robots (their URDFs have none; the
 #: trajectories need them): the Franka datasheet's for the Panda, a round value
 #: for the UR5.
@@ -47,18 +33,7 @@ ACCELERATION_LIMITS = {
     "ur5": (8.0,) * 6,
 }
 
-# --- the problems ---------------------------------------------------------
-
-
-@dataclass(frozen=True, slots=True)
-class Problem:
-    """One MotionBenchMaker problem: a MoveIt scene and request."""
-
-    robot: str
-    scenario: str
-    index: int
-    scene: Path
-    request: Path
+# --- the sdist -------------------------------------------------------------
 
 
 def get_sdist(cache: Path, sdist: Path | None = None) -> Path:
@@ -122,85 +97,6 @@ def extract_resources(sdist: Path, cache: Path) -> Path:
                 problems.extractall(resources / robot, filter="data")
         done.write_text(SDIST_SHA256)
     return resources
-
-
-def find_problems(
-    folder: Path,
-    robot: str,
-    scenarios: Sequence[str] = SCENARIOS,
-    limit: int | None = None,
-) -> list[Problem]:
-    """The problems of ``robot`` in ``folder``, by scenario then index.
-
-    Reads MotionBenchMaker's layout (``<scenario>_<robot>/sceneNNNN.yaml``
-    with ``requestNNNN.yaml``) and a flat one
-    (``<scenario>_sceneNNNN.yaml`` with ``<scenario>_requestNNNN.yaml``, as in
-    ``tests/data/motionbenchmaker/<robot>/``).
-
-    Args:
-        folder: The folder to search.
-        robot: ``"panda"`` or ``"ur5"``.
-        scenarios: Scenario names to keep, in this order.
-        limit: At most this many problems per scenario (the first indices).
-    """
-    found: dict[str, list[Problem]] = {s: [] for s in scenarios}
-    pattern = re.compile(r"^(?:(?P<flat>.+)_)?scene(?P<index>\d+)\.yaml$")
-    for scene in sorted(folder.rglob("*scene*.yaml")):
-        match = pattern.match(scene.name)
-        if match is None:
-            continue
-        scenario = match["flat"] or scene.parent.name.removesuffix(f"_{robot}")
-        if match["flat"] is None and not scene.parent.name.endswith(f"_{robot}"):
-            continue
-        request = scene.with_name(scene.name.replace("scene", "request"))
-        if scenario in found and request.is_file():
-            index = int(match["index"])
-            found[scenario].append(Problem(robot, scenario, index, scene, request))
-    out = []
-    for scenario in scenarios:
-        problems = sorted(found[scenario], key=lambda p: p.index)
-        out.extend(problems[:limit])
-    return out
-
-
-# --- validity on the exact meshes ----------------------------------------
-
-
-@dataclass(frozen=True, slots=True)
-class Validity:
-    """Start and goal checked on the exact meshes.
-
-    Attributes:
-        valid: Both free (every pair's distance > 0).
-        where: ``"start"``, ``"goal"`` or ``"start and goal"`` when invalid,
-            else ``""``.
-        body_a, body_b, distance: The closest pair at the worst end and its
-            signed distance [m] (negative: penetration depth).
-    """
-
-    valid: bool
-    where: str
-    body_a: str
-    body_b: str
-    distance: float
-
-
-def check_validity(
-    checker: CollisionChecker, start: np.ndarray, goal: np.ndarray
-) -> Validity:
-    """Whether ``start`` and ``goal`` (nq,) [rad] are free in ``checker``'s scene."""
-    ends = {"start": start, "goal": goal}
-    worst = ("", "", math.inf)
-    hit = []
-    for name, q in ends.items():
-        distances = np.asarray(checker.compute_distances(q))
-        k = int(np.argmin(distances))
-        if distances[k] <= 0.0:
-            hit.append(name)
-        if distances[k] < worst[2]:
-            pair = checker.pairs[k]
-            worst = (pair.body_a, pair.body_b, float(distances[k]))
-    return Validity(not hit, " and ".join(hit), *worst)
 
 
 def load_mbm_robot(resources: Path, name: str) -> Robot:

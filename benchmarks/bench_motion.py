@@ -89,14 +89,12 @@ from benchmarks._motion_peers import (
 from benchmarks._motionbenchmaker import (
     ROBOTS,
     SCENARIOS,
-    check_validity,
     extract_resources,
-    find_problems,
     get_sdist,
     load_mbm_robot,
 )
-from workbench.collision import CollisionChecker, read_scene
-from workbench.motion import read_request
+from workbench.collision import CollisionChecker
+from workbench.motion import check_validity, find_problems
 
 PLANNERS = ("vamp", "ompl", "workbench")
 
@@ -114,12 +112,15 @@ def run_robot(
     Returns:
         ``robot``, ``reference_us`` (before and after) and ``problems``: one
         record per problem (``scenario``, ``index``, ``valid`` (a
-        :class:`Validity` as a dict), ``vamp_valid``, and one :class:`Run` as
-        a dict per planner on valid problems).
+        :class:`workbench.motion.Validity` as a dict), ``vamp_valid``, and
+        one :class:`Run` as a dict per planner on valid problems).
     """
     robot = load_mbm_robot(resources, name)
     problems = find_problems(
-        resources / name / "problems", name, args.scenarios, args.limit
+        resources / name / "problems",
+        robot_name=name,
+        scenarios=args.scenarios,
+        limit=args.limit,
     )
     planners = args.planners
     vamp = VampPeer(name) if {"vamp", "ompl"} & set(planners) else None
@@ -140,10 +141,10 @@ def run_robot(
     reference = [_reference_us()]
     records = []
     for done, problem in enumerate(problems):
-        scene = read_scene(problem.scene)
-        start, goal = read_request(problem.request, robot)
+        scene = problem.scene
+        start, goal = problem.read_request(robot)
         checker = CollisionChecker(robot, scene)
-        validity = check_validity(checker, start, goal)
+        validity = check_validity(robot, problem, checker=checker)
         record: dict[str, Any] = {
             "scenario": problem.scenario,
             "index": problem.index,
@@ -182,9 +183,8 @@ def run_robot(
 def _warm_up(plan: Any, robot: Any, problem: Any) -> None:
     """One untimed plan: the robot's spheres are built and the kernels loaded
     (compiled on a first run) before any problem is timed, as VAMP's are."""
-    scene = read_scene(problem.scene)
-    start, goal = read_request(problem.request, robot)
-    plan(robot, scene, start, goal, seed=0, time_limit=0.05, verify=False)
+    start, goal = problem.read_request(robot)
+    plan(robot, problem.scene, start, goal, seed=0, time_limit=0.05, verify=False)
 
 
 def _reference_us() -> float:

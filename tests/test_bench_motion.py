@@ -1,9 +1,9 @@
 """benchmarks/bench_motion.py (and its _motionbenchmaker, _motion_peers) on tests/data.
 
-The problem reader (both layouts), the validity check on the exact meshes
-(MotionBenchMaker's Panda, provenance in ``tests/data/motionbenchmaker``), the
-exact check of a trajectory, the statistics and the tables; VAMP and OMPL on
-one problem where they are installed.
+The exact check of a trajectory (MotionBenchMaker's Panda, provenance in
+``tests/data/motionbenchmaker``; the problem reader and the validity check are
+the package's, tested in ``test_motion_batch.py``), the statistics and the
+tables; VAMP and OMPL on one problem where they are installed.
 """
 
 from __future__ import annotations
@@ -26,17 +26,11 @@ from benchmarks._motion_peers import (
     get_workbench_plan,
     path_length,
 )
-from benchmarks._motionbenchmaker import (
-    ACCELERATION_LIMITS,
-    Problem,
-    check_validity,
-    find_problems,
-    get_sdist,
-)
+from benchmarks._motionbenchmaker import ACCELERATION_LIMITS, get_sdist
 from benchmarks.bench_motion import format_tables, run_robot, summarise
 from workbench import load_robot
-from workbench.collision import CollisionChecker, Obstacle, Scene, read_scene
-from workbench.motion import read_request, time_scale, verify_trajectory
+from workbench.collision import CollisionChecker, Obstacle, Scene
+from workbench.motion import Problem, find_problems, time_scale, verify_trajectory
 
 DATA = Path(__file__).parent / "data" / "motionbenchmaker"
 MBM_PANDA = DATA / "panda" / "panda.urdf"
@@ -52,86 +46,12 @@ def panda():
 
 
 def _read(problem: Problem, robot):
-    scene = read_scene(problem.scene)
-    start, goal = read_request(problem.request, robot)
-    return scene, start, goal
-
-
-def test_the_flat_layout_of_tests_data_reads_by_scenario_order() -> None:
-    panda = find_problems(DATA / "panda", "panda")
-    assert [(p.scenario, p.index) for p in panda] == [
-        ("table_pick", 1),
-        ("bookshelf_thin", 1),
-        ("cage", 1),
-    ]
-    assert all(p.request.name == f"{p.scenario}_request0001.yaml" for p in panda)
-    ur5 = find_problems(DATA / "ur5", "ur5", scenarios=["bookshelf_tall", "box"])
-    assert [p.scenario for p in ur5] == ["bookshelf_tall", "box"]
-    assert find_problems(DATA / "ur5", "ur5", scenarios=["cage"]) == []
-
-
-def test_motionbenchmakers_layout_reads_with_a_limit(tmp_path: Path) -> None:
-    for scenario in ("cage", "table_pick"):
-        folder = tmp_path / f"{scenario}_panda"
-        folder.mkdir()
-        for index in (2, 1, 10):
-            for kind in ("scene", "request"):
-                source = DATA / "panda" / f"{scenario}_{kind}0001.yaml"
-                shutil.copy(source, folder / f"{kind}{index:04d}.yaml")
-    (tmp_path / "cage_ur5").mkdir()  # another robot's folder: not read
-    for kind in ("scene", "request"):
-        source = DATA / "ur5" / f"box_{kind}0001.yaml"
-        shutil.copy(source, tmp_path / "cage_ur5" / f"{kind}0001.yaml")
-    (tmp_path / "cage_panda" / "request0010.yaml").unlink()  # no request: skipped
-    problems = find_problems(tmp_path, "panda", scenarios=["table_pick", "cage"])
-    assert [(p.scenario, p.index) for p in problems] == [
-        ("table_pick", 1),
-        ("table_pick", 2),
-        ("table_pick", 10),
-        ("cage", 1),
-        ("cage", 2),
-    ]
-    limited = find_problems(tmp_path, "panda", limit=1)
-    assert [(p.scenario, p.index) for p in limited] == [
-        ("table_pick", 1),
-        ("cage", 1),
-    ]
-
-
-@pytest.mark.parametrize("scenario", ["table_pick", "bookshelf_thin", "cage"])
-def test_the_panda_problems_of_tests_data_are_valid_on_the_exact_meshes(
-    panda, scenario: str
-) -> None:
-    (problem,) = find_problems(DATA / "panda", "panda", scenarios=[scenario])
-    scene, start, goal = _read(problem, panda)
-    checker = CollisionChecker(panda, scene)
-    validity = check_validity(checker, start, goal)
-    assert validity.valid and validity.where == ""
-    smallest = min(
-        float(np.min(checker.compute_distances(start))),
-        float(np.min(checker.compute_distances(goal))),
-    )
-    assert validity.distance == smallest > 0.0
-    assert (validity.body_a, validity.body_b) in checker.body_pairs
-
-
-def test_a_start_inside_a_box_is_invalid_with_its_closest_pair(panda) -> None:
-    (problem,) = find_problems(DATA / "panda", "panda", scenarios=["table_pick"])
-    scene, start, goal = _read(problem, panda)
-    hand = panda.fk(start, "panda_hand")
-    block = Obstacle("block", "box", (0.05, 0.05, 0.05), pin.SE3(hand))
-    checker = CollisionChecker(panda, Scene("blocked", (*scene.obstacles, block)))
-    validity = check_validity(checker, start, goal)
-    assert not validity.valid
-    assert validity.where == "start"
-    assert validity.body_b == "block" and validity.body_a.startswith("panda_")
-    assert validity.distance < 0.0
-    both = check_validity(checker, start, start)
-    assert both.where == "start and goal"
+    start, goal = problem.read_request(robot)
+    return problem.scene, start, goal
 
 
 def test_a_trajectory_is_checked_at_quarter_degree_steps(panda) -> None:
-    (problem,) = find_problems(DATA / "panda", "panda", scenarios=["table_pick"])
+    (problem,) = find_problems(DATA / "panda", scenarios=["table_pick"])
     start = _read(problem, panda)[1]
     turn = np.zeros(panda.nq)
     turn[0] = np.deg2rad(40.0)  # the first joint only: within its limits
@@ -229,7 +149,7 @@ def test_vamp_and_ompl_solve_a_table_pick_problem(panda) -> None:
     pytest.importorskip("ompl")
     from benchmarks._motion_peers import OmplPeer, VampPeer
 
-    (problem,) = find_problems(DATA / "panda", "panda", scenarios=["table_pick"])
+    (problem,) = find_problems(DATA / "panda", scenarios=["table_pick"])
     scene, start, goal = _read(problem, panda)
     vamp = VampPeer("panda")
     order = [panda.joint_names.index(j) for j in vamp.joint_names]
@@ -295,7 +215,7 @@ def test_the_tables_say_why_a_valid_problem_is_unsolved() -> None:
 
 
 def test_a_polyline_is_checked_at_quarter_degree_steps(panda) -> None:
-    (problem,) = find_problems(DATA / "panda", "panda", scenarios=["table_pick"])
+    (problem,) = find_problems(DATA / "panda", scenarios=["table_pick"])
     start = _read(problem, panda)[1]
     turn = np.zeros(panda.nq)
     turn[0] = np.deg2rad(20.0)
@@ -328,7 +248,7 @@ class _Plan:
 
 
 def test_the_workbench_column_reads_a_plan_and_its_exact_check(panda) -> None:
-    (problem,) = find_problems(DATA / "panda", "panda", scenarios=["table_pick"])
+    (problem,) = find_problems(DATA / "panda", scenarios=["table_pick"])
     scene, start, _ = _read(problem, panda)
     turn = np.zeros(panda.nq)
     turn[0] = np.deg2rad(10.0)
