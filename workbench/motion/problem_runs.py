@@ -86,7 +86,8 @@ class ScenarioSummary:
         problems, valid, solved: Counts (solved among the valid).
         planning_median, planning_p95, planning_max: Planning time.
         smoothing_median: Time scaling. total_median: Planning + time scaling.
-        verification_median: The exact check of the trajectory.
+        verification_median: The exact check of the trajectory (over the
+            solved problems checked).
         verified: Trajectories checked on the exact meshes (an unsolved one
             refused for a contact too).
         with_contacts, contacts: Of them, those with a contact, and the
@@ -254,7 +255,7 @@ def _summary(name: str, group: list[ProblemResult]) -> ScenarioSummary:
         max(planning, default=math.nan),
         _quantile([r.smoothing_time for r in solved], 0.5),
         _quantile([r.total_time for r in solved], 0.5),
-        _quantile([r.verification_time for r in solved], 0.5),
+        _quantile([r.verification_time for r in solved if r.contacts is not None], 0.5),
         len(checked),
         sum(1 for r in checked if r.contacts),
         sum(r.contacts or 0 for r in checked),
