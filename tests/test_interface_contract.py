@@ -461,6 +461,7 @@ def inputs(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 PICK = "0.5 0.1 0.3 0 1 0 0"
+MBM_PANDA = Path(__file__).parent / "data" / "motionbenchmaker" / "panda"
 PLACE = "0.4 -0.3 0.4 0 1 0 0"
 ZERO6 = "0 0 0 0 0 0"
 REPORT = "report singularities --grid 4 --svd-grid 4 --no-progress --robot"
@@ -504,6 +505,10 @@ JSON_CASES = {
     ),
     "workspace-report": "workspace report {dir}/map.zarr --out {dir}/w.html",
     "demo": "demo --out {dir}/demo --no-plots",
+    "motion-bench": (
+        f"motion bench {MBM_PANDA} --robot {MBM_PANDA}/panda.urdf "
+        "--acceleration-limit 15 --scenario table_pick --no-verify"
+    ),
 }
 
 
