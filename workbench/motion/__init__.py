@@ -4,7 +4,8 @@
 sphere model of the robot (:mod:`.spheres`, :func:`spherize`), checked in
 compiled code against the scene with certified segments (:mod:`.checker`,
 :class:`SphereChecker`), shortened, time-scaled and verified on the exact
-meshes.
+meshes; ``planner="ompl:NAME"`` runs one of OMPL's planners
+(:data:`OMPL_PLANNERS`, :mod:`.ompl_planners`) with the same checker instead.
 :mod:`.requests` reads MoveIt motion requests (start and joint goal) as
 configurations of a robot; MoveIt planning scenes are read by
 :func:`workbench.collision.read_scene`. :mod:`.timing` turns a planner's
@@ -22,7 +23,13 @@ from workbench._lazy import attach
 if TYPE_CHECKING:
     from workbench.motion._polyline import REPEAT_TOL
     from workbench.motion.checker import SphereChecker
-    from workbench.motion.planner import MotionPlan, goal_configurations, plan
+    from workbench.motion.ompl_planners import OMPL_PLANNERS, OPTIMAL_PLANNERS
+    from workbench.motion.planner import (
+        PLANNERS,
+        MotionPlan,
+        goal_configurations,
+        plan,
+    )
     from workbench.motion.requests import MotionRequest, read_request
     from workbench.motion.spheres import LinkSpheres, SphereModel, spherize
     from workbench.motion.timing import (
@@ -35,6 +42,9 @@ if TYPE_CHECKING:
 
 __all__ = [
     "DEFAULT_MAX_STEP",
+    "OMPL_PLANNERS",
+    "OPTIMAL_PLANNERS",
+    "PLANNERS",
     "REPEAT_TOL",
     "WORST_RATIO",
     "LinkSpheres",
