@@ -210,7 +210,7 @@ def test_a_seed_gives_the_same_path(puma, puma_spheres, wall, name) -> None:
 
 
 def test_unknown_planners_are_refused_with_the_names(puma, wall) -> None:
-    with pytest.raises(InputError, match="unknown OMPL planner 'Nope'.*ompl:RRTstar"):
+    with pytest.raises(InputError, match=r"unknown OMPL planner 'Nope'.*ompl:RRTstar"):
         plan(puma, wall, PICK, PLACE, planner="ompl:Nope")
     with pytest.raises(InputError, match="unknown planner 'RRTstar'; rrtconnect or"):
         plan(puma, wall, PICK, PLACE, planner="RRTstar")

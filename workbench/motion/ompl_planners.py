@@ -98,8 +98,7 @@ def _ompl() -> tuple[Any, Any, Any]:
         from ompl import base, geometric, util
     except ImportError as err:
         raise InputError(
-            "the OMPL planners need OMPL: "
-            'pip install "kinematics-workbench[ompl]"'
+            'the OMPL planners need OMPL: pip install "kinematics-workbench[ompl]"'
         ) from err
     return base, geometric, util
 
@@ -159,17 +158,15 @@ def solve_with_ompl(
     def is_valid(state: Any) -> bool:
         return bool(kernel.clearances(as_array(state), *arrays[1:], True, out))
 
-    class CertifiedMotions(base.MotionValidator):  # type: ignore[misc]
-        def checkMotion(self, a: Any, b: Any) -> bool:  # noqa: N802 (OMPL's name)
+    class CertifiedMotions(base.MotionValidator):  # type: ignore[name-defined]
+        def checkMotion(self, a: Any, b: Any) -> bool:  # OMPL's name
             return bool(kernel.motion_free(as_array(a), as_array(b), *arrays, store))
 
     setup.setStateValidityChecker(is_valid)
     validator = CertifiedMotions(info)
     info.setMotionValidator(validator)
     objective = base.PathLengthOptimizationObjective(info)
-    objective.setCostThreshold(
-        base.Cost(0.0 if name in OPTIMAL_PLANNERS else math.inf)
-    )
+    objective.setCostThreshold(base.Cost(0.0 if name in OPTIMAL_PLANNERS else math.inf))
     setup.setOptimizationObjective(objective)
     planner = getattr(geometric, name)(info)
     if hasattr(planner, "setRange"):
