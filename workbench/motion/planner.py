@@ -11,7 +11,9 @@
    closed-form branch within the limits; for seven-axis arms, those of
    :data:`REDUNDANCY_SAMPLES` values of the redundancy parameter spread over
    its feasible range; numerical IK where there is no closed form), every
-   edge certified free by :mod:`workbench.motion._sphere_kernel`;
+   edge certified free by :mod:`workbench.motion._sphere_kernel`
+   (``planner="ompl:NAME"``: OMPL's planner NAME with the same checks instead,
+   :mod:`workbench.motion.ompl_planners`);
 3. shortens the path (greedy reduction, then :data:`SHORTCUTS` random
    shortcuts between points of two segments, each certified);
 4. time-scales it (:func:`~workbench.motion.time_scale`: on the polyline, so
