@@ -1,7 +1,8 @@
 """MotionBenchMaker: the workbench's planner, VAMP and OMPL side by side.
 
 Run: ``python -m benchmarks.bench_motion [--robots panda,ur5]
-[--scenarios table_pick,...] [--limit N] [--planners vamp,ompl,workbench]
+[--scenarios table_pick,...] [--limit N]
+[--planners vamp,ompl,workbench,workbench-ompl]
 [--time-limit 1.0] [--verify workbench,vamp] [--sdist PATH] [--cache DIR]
 [--json OUT]``.
 
@@ -46,6 +47,11 @@ Per robot, scenario and problem, in one run:
   and ``verification_time``, the same check on the same meshes) it is
   counted instead of checking twice. The robots' acceleration limits:
   :data:`ACCELERATION_LIMITS`.
+* **workbench-ompl**: ``workbench.motion.plan(..., planner="ompl:RRTConnect")``
+  from the joint goal: OMPL's RRTConnect (range 1.0) with the workbench's
+  compiled checker behind Python callbacks (state validity and certified
+  motions), then the same shortcuts, time scaling and exact check: the
+  compiled RRT-Connect and OMPL's beside it with the same checker.
 * ``--verify vamp`` checks VAMP's simplified paths on the exact meshes too
   (the polyline at joint steps <= 0.25°, :func:`check_polyline`): VAMP plans
   on spheres, and its paths are judged by the same meshes (slow on the UR5,
@@ -68,6 +74,8 @@ OMPL is: ``pip install ompl==2.0.1``.
 from __future__ import annotations
 
 import argparse
+import functools
+import importlib.util
 import json
 import math
 import sys
@@ -96,7 +104,7 @@ from benchmarks._motionbenchmaker import (
 from workbench.collision import CollisionChecker
 from workbench.motion import check_validity, find_problems
 
-PLANNERS = ("vamp", "ompl", "workbench")
+PLANNERS = ("vamp", "ompl", "workbench", "workbench-ompl")
 
 # --- the run --------------------------------------------------------------
 
@@ -128,16 +136,34 @@ def run_robot(
         None if vamp is None else [robot.joint_names.index(j) for j in vamp.joint_names]
     )
     ompl = OmplPeer(vamp, args.time_limit) if vamp and "ompl" in planners else None
-    plan = get_workbench_plan() if "workbench" in planners else None
-    if "workbench" in planners and plan is None:
+    wanted = {"workbench", "workbench-ompl"} & set(planners)
+    plan = get_workbench_plan() if wanted else None
+    if wanted and plan is None:
         print("workbench.motion.plan is missing: no workbench column", file=sys.stderr)
     ours = (
         None
-        if plan is None
+        if plan is None or "workbench" not in planners
         else WorkbenchPeer(plan, args.time_limit, "workbench" in args.verify)
     )
-    if ours is not None and problems:
+    with_ompl = "workbench-ompl" in planners and plan is not None
+    if with_ompl and importlib.util.find_spec("ompl") is None:
+        print("ompl is not installed: no workbench-ompl column", file=sys.stderr)
+        with_ompl = False
+    ours_ompl = (
+        None
+        if not with_ompl
+        else WorkbenchPeer(
+            functools.partial(plan, planner="ompl:RRTConnect"),
+            args.time_limit,
+            "workbench" in args.verify,
+        )
+    )
+    if plan is not None and problems:
         _warm_up(plan, robot, problems[0])
+        if ours_ompl is not None:
+            _warm_up(
+                functools.partial(plan, planner="ompl:RRTConnect"), robot, problems[0]
+            )
     reference = [_reference_us()]
     records = []
     for done, problem in enumerate(problems):
@@ -173,6 +199,10 @@ def run_robot(
                 record["workbench_pose"] = asdict(
                     ours.run(robot, scene, checker, start, robot.fk(goal), seed)
                 )
+            if ours_ompl is not None:
+                record["workbench_ompl"] = asdict(
+                    ours_ompl.run(robot, scene, checker, start, goal, problem.index)
+                )
         records.append(record)
         if progress is not None:
             progress(done + 1, len(problems))
@@ -200,6 +230,7 @@ COLUMNS = {
     "ompl": "OMPL (Python callback)",
     "workbench": "workbench",
     "workbench_pose": "workbench, pose goal",
+    "workbench_ompl": "workbench-ompl (OMPL RRTConnect, our checker)",
 }
 
 
@@ -292,8 +323,9 @@ def format_tables(result: dict[str, Any], time_limit: float) -> str:
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     ratios = [
-        "| scenario | workbench / VAMP | OMPL / workbench | OMPL / VAMP |",
-        "| --- | --- | --- | --- |",
+        "| scenario | workbench / VAMP | OMPL / workbench | OMPL / VAMP "
+        "| workbench-ompl / workbench |",
+        "| --- | --- | --- | --- | --- |",
     ]
     verify = [
         "| scenario | planner | checked | with contacts | contacts | check median "
@@ -340,7 +372,8 @@ def format_tables(result: dict[str, Any], time_limit: float) -> str:
         ratios.append(
             f"| {scenario} | {_ratio(median['workbench'], median['vamp'])} "
             f"| {_ratio(median['ompl'], median['workbench'])} "
-            f"| {_ratio(median['ompl'], median['vamp'])} |"
+            f"| {_ratio(median['ompl'], median['vamp'])} "
+            f"| {_ratio(median['workbench_ompl'], median['workbench'])} |"
         )
     lines += ["", "Ratios of the median planning times:", "", *ratios]
     if len(verify) > 2:

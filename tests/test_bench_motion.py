@@ -179,7 +179,7 @@ def test_a_robot_runs_from_a_resources_folder(tmp_path: Path) -> None:
     args = argparse.Namespace(
         scenarios=["table_pick", "cage"],
         limit=None,
-        planners=[*planners, "workbench"],
+        planners=[*planners, "workbench", "workbench-ompl"],
         time_limit=1.0,
         verify=["workbench", "vamp"],
     )
@@ -195,6 +195,11 @@ def test_a_robot_runs_from_a_resources_folder(tmp_path: Path) -> None:
             assert record["vamp"]["extra"]["samples"] >= 2
             assert "verify_lower_bound" in record["vamp"]["extra"]
         assert ("workbench" in record) == (get_workbench_plan() is not None)
+        if importlib.util.find_spec("ompl"):  # OMPL's RRTConnect, our checker
+            ours_ompl = record["workbench_ompl"]
+            assert ours_ompl["planning_time"] > 0.0
+            if ours_ompl["solved"]:
+                assert ours_ompl["extra"]["contacts"] == 0
     text = format_tables(result, 1.0)
     assert "| all | 2/2 |" in text
 

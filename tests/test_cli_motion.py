@@ -55,6 +55,7 @@ def test_plans_around_a_wall_and_writes_csv_and_page(capsys, tmp_path: Path) -> 
     assert (code, err) == (0, "")
     result = json.loads(out)
     assert result["solved"] and result["reason"] is None
+    assert result["planner"] == "rrtconnect"
     assert result["min_clearance"] > 0 and result["duration"] > 0
     waypoints = np.array(result["waypoints"])
     np.testing.assert_allclose(waypoints[0], np.radians(paper_data.ANGELES_PICK_Q_DEG))
@@ -96,6 +97,27 @@ def test_a_motion_request_and_a_moveit_scene(capsys) -> None:
     )
 
 
+def test_an_ompl_planner_with_the_same_checker(capsys, tmp_path: Path) -> None:
+    pytest.importorskip("ompl")
+    code, out, err = run(
+        capsys,
+        *BASE,
+        "--scene",
+        str(_wall_scene(tmp_path)),
+        "--start-deg",
+        *PICK,
+        "--goal-deg",
+        *PLACE,
+        "--planner",
+        "ompl:RRTConnect",
+        "--json",
+    )
+    assert (code, err) == (0, "")
+    result = json.loads(out)
+    assert result["planner"] == "ompl:RRTConnect"
+    assert result["solved"] and result["min_clearance"] > 0
+
+
 def test_no_motion_is_exit_3_with_the_reason(capsys, tmp_path: Path) -> None:
     code, out, err = run(
         capsys,
@@ -123,6 +145,10 @@ def test_no_motion_is_exit_3_with_the_reason(capsys, tmp_path: Path) -> None:
         (
             ("--start-deg", *PICK, "--goal-pose", "0", "0", "0", "0", "0", "0", "0"),
             "--goal-pose: quat_wxyz must have unit norm",
+        ),
+        (
+            ("--start-deg", *PICK, "--goal-deg", *PLACE, "--planner", "ompl:Nope"),
+            "unknown planner 'ompl:Nope'; one of rrtconnect, ompl:BFMT",
         ),
     ],
 )

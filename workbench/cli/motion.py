@@ -128,6 +128,15 @@ def register(commands: argparse._SubParsersAction) -> None:
         help="planning budget [s] (default: 1)",
     )
     plan.add_argument(
+        "--planner",
+        type=_planner_name,
+        default="rrtconnect",
+        metavar="NAME",
+        help="rrtconnect (compiled, the default) or ompl:NAME, one of OMPL's "
+        "planners (ompl:RRTstar, ompl:BITstar, …; the [ompl] extra) with the same "
+        "checker",
+    )
+    plan.add_argument(
         "--csv",
         type=Path,
         metavar="FILE",
@@ -167,7 +176,15 @@ def run_plan(args: argparse.Namespace) -> int:
         raise InputError("give the start: --request, --start-deg or --start-pose")
     if goal is None:
         raise InputError("give the goal: --request, --goal-deg or --goal-pose")
-    result = plan(robot, scene, start, goal, seed=args.seed, time_limit=args.time_limit)
+    result = plan(
+        robot,
+        scene,
+        start,
+        goal,
+        seed=args.seed,
+        time_limit=args.time_limit,
+        planner=args.planner,
+    )
     samples = (
         result.trajectory.sample_uniform(args.rate)
         if result.trajectory is not None and outputs
@@ -198,6 +215,17 @@ def run_plan(args: argparse.Namespace) -> int:
         )
         return EXIT_INFEASIBLE
     return 0
+
+
+def _planner_name(text: str) -> str:
+    """``rrtconnect`` or ``ompl:NAME`` with NAME one of OMPL's planners offered."""
+    from workbench.motion import PLANNERS
+
+    if text not in PLANNERS:
+        raise argparse.ArgumentTypeError(
+            f"unknown planner {text!r}; one of {', '.join(PLANNERS)}"
+        )
+    return text
 
 
 def _start_and_goal(
@@ -312,6 +340,7 @@ def _result_keys(
         "iterations": result.iterations,
         "allowances": [list(entry) for entry in result.allowances],
         "seed": args.seed,
+        "planner": args.planner,
         "csv": str(args.csv) if written and args.csv is not None else None,
         "html": str(args.html) if written and args.html is not None else None,
     }

@@ -4,7 +4,8 @@
 sphere model of the robot (:mod:`.spheres`, :func:`spherize`), checked in
 compiled code against the scene with certified segments (:mod:`.checker`,
 :class:`SphereChecker`), shortened, time-scaled and verified on the exact
-meshes.
+meshes; ``planner="ompl:NAME"`` runs one of OMPL's planners
+(:data:`OMPL_PLANNERS`, :mod:`.ompl_planners`) with the same checker instead.
 :mod:`.problems` finds MotionBenchMaker problem sets and judges their
 validity, :mod:`.problem_runs` plans and summarises them (:func:`run_problems`,
 :func:`summarise`), and :mod:`.batch` plans many requests here or on a Dask
@@ -26,7 +27,13 @@ if TYPE_CHECKING:
     from workbench.motion._polyline import REPEAT_TOL
     from workbench.motion.batch import plan_many
     from workbench.motion.checker import SphereChecker
-    from workbench.motion.planner import MotionPlan, goal_configurations, plan
+    from workbench.motion.ompl_planners import OMPL_PLANNERS, OPTIMAL_PLANNERS
+    from workbench.motion.planner import (
+        PLANNERS,
+        MotionPlan,
+        goal_configurations,
+        plan,
+    )
     from workbench.motion.problem_runs import (
         ProblemResult,
         ScenarioSummary,
@@ -52,6 +59,9 @@ if TYPE_CHECKING:
 
 __all__ = [
     "DEFAULT_MAX_STEP",
+    "OMPL_PLANNERS",
+    "OPTIMAL_PLANNERS",
+    "PLANNERS",
     "REPEAT_TOL",
     "WORST_RATIO",
     "LinkSpheres",

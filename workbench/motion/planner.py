@@ -11,7 +11,9 @@
    closed-form branch within the limits; for seven-axis arms, those of
    :data:`REDUNDANCY_SAMPLES` values of the redundancy parameter spread over
    its feasible range; numerical IK where there is no closed form), every
-   edge certified free by :mod:`workbench.motion._sphere_kernel`;
+   edge certified free by :mod:`workbench.motion._sphere_kernel`
+   (``planner="ompl:NAME"``: OMPL's planner NAME with the same checks instead,
+   :mod:`workbench.motion.ompl_planners`);
 3. shortens the path (greedy reduction, then :data:`SHORTCUTS` random
    shortcuts between points of two segments, each certified);
 4. time-scales it (:func:`~workbench.motion.time_scale`: on the polyline, so
@@ -41,6 +43,12 @@ from workbench.model.per_robot import per_robot
 from workbench.model.robot import Robot
 from workbench.motion import _sphere_kernel as kernel
 from workbench.motion.checker import PackedArrays, SphereChecker
+from workbench.motion.ompl_planners import (
+    OMPL_PLANNERS,
+    PREFIX,
+    check_ompl_planner,
+    solve_with_ompl,
+)
 from workbench.motion.spheres import SphereModel, spherize
 from workbench.motion.timing import WaypointTrajectory, time_scale
 from workbench.motion.verify import verify_trajectory
@@ -59,8 +67,9 @@ REDUNDANCY_SAMPLES = 16
 CAPACITY = 50_000
 #: Allowed overlap [m] beyond what the spheres of an entry have at an end.
 ALLOWANCE_MARGIN = 1e-3
-#: Planners :func:`plan` offers.
-PLANNERS = ("rrtconnect",)
+#: Planners :func:`plan` offers: the compiled RRT-Connect, then OMPL's
+#: (:mod:`workbench.motion.ompl_planners`, the ``[ompl]`` extra).
+PLANNERS = ("rrtconnect", *(PREFIX + name for name in OMPL_PLANNERS))
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -87,7 +96,8 @@ class MotionPlan:
             (NaN when unsolved or not verified).
         clearance: The exact-mesh report, None when unsolved or not
             verified.
-        iterations: RRT-Connect iterations.
+        iterations: RRT-Connect iterations; for an OMPL planner, the
+            vertices of its graph.
         detail: One line on what blocked an unsolved request ("" if solved).
         allowances: ``(link, "scene" or link, metres)`` for each entry
             whose spheres overlap at the start or a goal although the exact
@@ -211,8 +221,13 @@ def plan(
             or a tool pose (``pin.SE3`` or a (4, 4) matrix [m]).
         seed: Seed of the planner's random numbers.
         time_limit: Planning budget [s] (wall clock), > 0.
-        iteration_limit: RRT-Connect iterations at most, >= 1.
-        planner: ``"rrtconnect"``.
+        iteration_limit: RRT-Connect iterations at most, >= 1 (not used by
+            the OMPL planners, which stop at the time limit).
+        planner: ``"rrtconnect"`` (compiled, the default) or
+            ``"ompl:NAME"`` for OMPL's planner NAME (:data:`PLANNERS`;
+            :mod:`~workbench.motion.ompl_planners`, the ``[ompl]`` extra),
+            with the same checker behind a Python callback, then the same
+            shortcuts, time scaling and exact check.
         spheres: The sphere model; default :func:`get_spheres`.
         velocity_scale: Fraction of the speed limits the trajectory uses,
             in (0, 1].
@@ -225,12 +240,19 @@ def plan(
         The plan; ``solved`` False with a ``reason`` when no motion was found.
 
     Raises:
-        InputError: Bad arguments (shapes, limits, an unknown planner, a
-            robot without acceleration limits).
+        InputError: Bad arguments (shapes, limits, an unknown planner, an
+            OMPL planner without OMPL installed, a robot without acceleration
+            limits).
     """
     t0 = time.perf_counter()
-    if planner not in PLANNERS:
-        raise InputError(f"unknown planner {planner!r}; one of {', '.join(PLANNERS)}")
+    ompl_name = None
+    if isinstance(planner, str) and planner.startswith(PREFIX):
+        ompl_name = check_ompl_planner(planner)
+    elif planner != "rrtconnect":
+        raise InputError(
+            f"unknown planner {planner!r}; rrtconnect or {PREFIX}NAME, NAME one of "
+            f"{', '.join(OMPL_PLANNERS)}"
+        )
     if not (isinstance(time_limit, int | float) and 0 < time_limit < math.inf):
         raise InputError(
             f"time_limit must be a positive number of seconds, got {time_limit!r}"
@@ -312,13 +334,28 @@ def plan(
         model, scene, np.concatenate([[q_start], goals])
     )
     t_search = time.perf_counter()
-    search = _search(
-        checker, robot, q_start, goals, seed, t_search, time_limit, iteration_limit
-    )
+    if ompl_name is None:
+        search = _search(
+            checker, robot, q_start, goals, seed, t_search, time_limit, iteration_limit
+        )
+    else:
+        search = solve_with_ompl(
+            ompl_name,
+            checker,
+            robot,
+            q_start,
+            goals,
+            seed=seed,
+            time_limit=time_limit,
+        )
     if len(search) == 3:
         reason, detail, iterations = search
         return replace(failed(reason, detail, iterations), allowances=allowances)
     path, iterations = search
+    if ompl_name is not None:
+        arrays = checker.arrays
+        store = np.zeros((kernel.MAX_EVALUATIONS, len(arrays[0])))
+        path = _shorten(path, np.random.default_rng(seed), arrays, store)
     t_planned = time.perf_counter()
     trajectory = time_scale(
         robot,
