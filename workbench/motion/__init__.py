@@ -11,6 +11,8 @@ configurations of a robot; MoveIt planning scenes are read by
 joint-space polyline into a C² trajectory within the joint limits
 (:func:`time_scale`), and :mod:`.verify` checks a trajectory on the exact
 meshes, proven between its samples (:func:`verify_trajectory`).
+:mod:`.around` plans around the scene when a pick-and-place spline collides
+(:func:`plan_around`, :class:`PlannedAround`).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from workbench._lazy import attach
 
 if TYPE_CHECKING:
     from workbench.motion._polyline import REPEAT_TOL
+    from workbench.motion.around import PlannedAround, plan_around
     from workbench.motion.checker import SphereChecker
     from workbench.motion.planner import MotionPlan, goal_configurations, plan
     from workbench.motion.requests import MotionRequest, read_request
@@ -40,11 +43,13 @@ __all__ = [
     "LinkSpheres",
     "MotionPlan",
     "MotionRequest",
+    "PlannedAround",
     "SphereChecker",
     "SphereModel",
     "WaypointTrajectory",
     "goal_configurations",
     "plan",
+    "plan_around",
     "read_request",
     "spherize",
     "time_optimal_duration",
