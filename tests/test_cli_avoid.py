@@ -227,7 +227,7 @@ def test_default_cell_start_touches_the_pedestal(capsys) -> None:
 def test_bad_input_is_exit_2(
     capsys, scene_file: Path, extra: tuple[str, ...], message: str
 ) -> None:
-    code, out, err = run(capsys, *BASE, "--scene", str(scene_file), *extra)
+    code, _out, err = run(capsys, *BASE, "--scene", str(scene_file), *extra)
     assert code == EXIT_BAD_INPUT
     assert message in err and err.count("\n") == 1
 
