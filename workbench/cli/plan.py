@@ -210,9 +210,13 @@ def run_pick_place(args: argparse.Namespace) -> int:
     skipped = get_skip_reason(robot, args)
     around = _plan_around(robot, scene, traj, clearance, args)
     motion = traj if around is None else around.trajectory
-    samples = motion.sample_uniform(args.rate) if args.csv and motion else None
+    samples = (
+        motion.sample_uniform(args.rate) if args.csv and motion is not None else None
+    )
     outputs = (
-        [*csv_files, *([] if args.plot is None else [args.plot])] if motion else []
+        [*csv_files, *([] if args.plot is None else [args.plot])]
+        if motion is not None
+        else []
     )
     with atomic_files(*outputs) as temps:
         staged = dict(zip(outputs, temps, strict=True))
