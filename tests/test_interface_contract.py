@@ -454,6 +454,12 @@ def inputs(tmp_path_factory: pytest.TempPathFactory) -> Path:
     plan = f"plan pick-place --robot puma560 --pick-deg {ZERO6} --place-deg 10 "
     plan += "0 0 0 0 0 --duration 1 --rate 10 --no-collision --csv"
     assert main(["-q", *plan.split(), str(folder / "traj.csv")]) == 0
+    from workbench import load_robot
+    from workbench.collision import get_angeles_obstacle_scene, write_scene
+
+    write_scene(
+        get_angeles_obstacle_scene(load_robot("puma560")), folder / "obstacle.json"
+    )
     (folder / "task.csv").write_text(
         "x,y,z,qx,qy,qz,qw\n0.45,0.1,0.3,1,0,0,0\n0.4,-0.1,0.35,1,0,0,0\n"
     )
@@ -485,6 +491,11 @@ JSON_CASES = {
     "plan-joint-values": (
         "plan pick-place --robot puma560 --pick-deg 0 45 200 -100 30 10 "
         "--place-deg 150 -100 -10 100 -70 170 --duration 10 --rate 20"
+    ),
+    "plan-avoid": (
+        "plan pick-place --robot puma560 --pick-deg 0 45 200 -100 30 10 "
+        "--place-deg 150 -100 -10 100 -70 170 --duration 10 --rate 20 "
+        "--scene {dir}/obstacle.json --acceleration-limit 4 --avoid"
     ),
     "plan-7r-poses": (
         f"plan pick-place --robot iiwa14 --pick-xyz-quat-wxyz {PICK} "

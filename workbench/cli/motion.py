@@ -279,41 +279,9 @@ def _start_from_pose(
 def _write_page(
     robot: Robot, scene: Any, result: Any, samples: Any, path: Path
 ) -> None:
-    from workbench.collision import CollisionChecker
-    from workbench.viz.viewer import Viewer
+    from workbench.viz import write_motion_html
 
-    viewer = Viewer(
-        robot, samples.q[0], title=f"workbench motion: {Path(robot.name).name}"
-    )
-    viewer.show_collisions(CollisionChecker(robot, scene))
-    inner = result.waypoints[1:-1]
-    if len(inner):
-        labels = [f"waypoint{k + 1}" for k in range(len(inner))]
-        viewer.show_ghosts(inner, labels=labels, legend="waypoints", opacity=0.2)
-    viewer.show_frames()
-    viewer.play_trajectory(samples.t, samples.q)
-    if scene is not None and scene.obstacles:
-        _look_from_the_robots_side(viewer, scene)
-    viewer.save_html(path)
-
-
-def _look_from_the_robots_side(viewer: Any, scene: Any) -> None:
-    """Keep the framing's distance, but look from the side away from the scene.
-
-    The default camera may put a shelf or a cage wall between it and the arm.
-    """
-    camera = viewer.get_camera()
-    target = np.array(camera.target)
-    distance = float(np.linalg.norm(np.array(camera.position) - target))
-    centre = np.mean([o.placement.translation for o in scene.obstacles], axis=0)
-    away = target - centre
-    away[2] = 0.0
-    if np.linalg.norm(away) < 1e-6:
-        return
-    elevation = math.radians(35.0)
-    direction = math.cos(elevation) * away / np.linalg.norm(away)
-    direction[2] = math.sin(elevation)
-    viewer.set_camera(target + distance * direction, target, fov_deg=camera.fov_deg)
+    write_motion_html(robot, scene, samples, path, waypoints=result.waypoints)
 
 
 def _result_keys(

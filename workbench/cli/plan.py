@@ -3,7 +3,8 @@
 Pick and place are joint values, or tool poses solved together by
 :func:`workbench.ik.pick_place_configurations` (:mod:`workbench.cli._plan_poses`;
 seven-axis arms at ``--redundancy`` or a value chosen by ``--criterion``, as
-``workbench ik``).
+``workbench ik``). With ``--avoid``, a spline that collides is replaced by a
+motion planned around the scene (:func:`workbench.motion.plan_around`).
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -18,6 +20,7 @@ from workbench.atomic_files import atomic_files, check_outputs
 from workbench.cli._collision import (
     add_collision_arguments,
     check_pick_and_place_path,
+    get_collision_error,
     get_collision_keys,
     get_skip_reason,
     print_collision_summary,
@@ -52,6 +55,12 @@ from workbench.trajectory.csv_io import (
 )
 from workbench.trajectory.normal_spline import DEFAULT_N_POINTS, MIN_N_POINTS
 
+if TYPE_CHECKING:
+    from workbench.collision import PathClearance, Scene
+    from workbench.model.robot import Robot
+    from workbench.motion import PlannedAround
+    from workbench.trajectory import JointTrajectory
+
 DEFAULT_RATE_HZ = 100.0
 #: Largest ``--rate`` [Hz] (duration × rate is bounded by ``MAX_SAMPLES`` too).
 MAX_RATE_HZ = 100_000.0
@@ -59,6 +68,8 @@ MAX_RATE_HZ = 100_000.0
 MAX_DURATION = 1e6
 #: Largest ``--n-points`` (knots of the normal spline).
 MAX_N_POINTS = 100_000
+#: Largest ``--time-limit`` [s] of ``--avoid``.
+MAX_TIME_LIMIT = 3600.0
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -147,6 +158,27 @@ def register(commands: argparse._SubParsersAction) -> None:
         "Angeles' pedestal and pick table for puma560, the pedestal for other DH "
         "models, else none (self-collision only)",
     )
+    pick.add_argument(
+        "--avoid",
+        action="store_true",
+        help="when the spline collides, plan a collision-free motion between the "
+        "same pick and place around the scene instead (workbench.motion.plan_around: "
+        "RRT-Connect, time-scaled within the joint limits, which need "
+        "--acceleration-limit; verified on the exact meshes); --csv and --plot "
+        "then hold that motion; exit 3 when none is found",
+    )
+    pick.add_argument(
+        "--seed",
+        type=bounded_int(0, 2**63 - 1),
+        metavar="N",
+        help="with --avoid: the planner's random seed (default: 0)",
+    )
+    pick.add_argument(
+        "--time-limit",
+        type=bounded_float(MAX_TIME_LIMIT, "s"),
+        metavar="S",
+        help="with --avoid: the planning budget [s] (default: 1)",
+    )
     add_json_flag(pick)
     pick.set_defaults(
         run=run_pick_place,
@@ -160,6 +192,7 @@ def run_pick_place(args: argparse.Namespace) -> int:
     The outputs are checked before any work and written together at the end
     (all or none, :func:`workbench.atomic_files.atomic_files`).
     """
+    _check_avoid_options(args)
     csv_files = [] if args.csv is None else get_output_paths(args.csv)
     check_outputs([*csv_files, args.plot], get_input_paths(args))
     if args.plot is not None:
@@ -175,8 +208,16 @@ def run_pick_place(args: argparse.Namespace) -> int:
     violations = traj.check_limits()
     scene, clearance = check_pick_and_place_path(robot, traj, args, args.rate)
     skipped = get_skip_reason(robot, args)
-    samples = traj.sample_uniform(args.rate) if args.csv else None
-    outputs = [*csv_files, *([] if args.plot is None else [args.plot])]
+    around = _plan_around(robot, scene, traj, clearance, args)
+    motion = traj if around is None else around.trajectory
+    samples = (
+        motion.sample_uniform(args.rate) if args.csv and motion is not None else None
+    )
+    outputs = (
+        [*csv_files, *([] if args.plot is None else [args.plot])]
+        if motion is not None
+        else []
+    )
     with atomic_files(*outputs) as temps:
         staged = dict(zip(outputs, temps, strict=True))
         if samples is not None:
@@ -187,14 +228,17 @@ def run_pick_place(args: argparse.Namespace) -> int:
                 joint_names=robot.joint_names,
                 record=staged[record],
             )
-        if args.plot:
+        if args.plot and motion is not None:
             from workbench.plots.trajectory import plot_joint_trajectory
 
             plot_joint_trajectory(
-                traj,
+                motion,
                 staged[args.plot],
                 title=f"{robot.name}: pick-and-place, T = {traj.duration:g} s "
-                f"(minimum {t_min:.4g} s)",
+                f"(minimum {t_min:.4g} s)"
+                if motion is traj
+                else f"{robot.name}: pick-and-place planned around the scene, "
+                f"{motion.duration:.4g} s",
             )
     result = {
         "robot": robot.name,
@@ -209,24 +253,109 @@ def run_pick_place(args: argparse.Namespace) -> int:
         "peak_velocity": traj.get_extrema(1).peak,
         "peak_acceleration": traj.get_extrema(2).peak,
         "violations": [v.as_dict() for v in violations],
-        "csv": None if args.csv is None else str(args.csv),
+        "csv": None if samples is None else str(args.csv),
         "samples": 0 if samples is None else int(samples.t.size),
-        "plot": None if args.plot is None else str(args.plot),
+        "plot": None if args.plot is None or motion is None else str(args.plot),
         **ik_keys,
         **get_collision_keys(scene, clearance, skipped),
+        "avoided": None
+        if around is None
+        else {**around.as_dict(), "seed": _seed(args), "time_limit": _limit(args)},
     }
     if args.json:
         print_json(result)
     else:
         _print_human(robot, traj, result)
         print_collision_summary(clearance, skipped)
+        _print_avoided(result["avoided"])
     if violations:
         more = f" (and {len(violations) - 1} more)" if len(violations) > 1 else ""
         print(f"workbench: error: {violations[0].message}{more}", file=sys.stderr)
         return EXIT_INFEASIBLE
+    if around is not None:
+        if around.solved:
+            return 0
+        avoided = result["avoided"]
+        print(
+            f"workbench: error: no motion around the scene: {avoided['reason']}: "
+            f"{avoided['detail']} (the spline: {get_collision_error(clearance)})",
+            file=sys.stderr,
+        )
+        return EXIT_INFEASIBLE
     if report_collision_error(clearance):
         return EXIT_INFEASIBLE
     return 0
+
+
+def _check_avoid_options(args: argparse.Namespace) -> None:
+    """Refuse the options of ``--avoid`` without it, and it with ``--no-collision``.
+
+    Raises:
+        InputError: Naming the option.
+    """
+    if not args.avoid:
+        for option, value in (("--seed", args.seed), ("--time-limit", args.time_limit)):
+            if value is not None:
+                raise InputError(f"{option} is an option of --avoid")
+    elif args.no_collision:
+        raise InputError("--avoid and --no-collision contradict each other")
+
+
+def _seed(args: argparse.Namespace) -> int:
+    return 0 if args.seed is None else int(args.seed)
+
+
+def _limit(args: argparse.Namespace) -> float:
+    return 1.0 if args.time_limit is None else float(args.time_limit)
+
+
+def _plan_around(
+    robot: Robot,
+    scene: Scene | None,
+    traj: JointTrajectory,
+    clearance: PathClearance | None,
+    args: argparse.Namespace,
+) -> PlannedAround | None:
+    """With ``--avoid`` and a spline not proven free: the plan around, else None.
+
+    Raises:
+        InputError: ``--avoid`` on a robot without collision geometry (there
+            is nothing to check a motion with), or without acceleration limits.
+    """
+    if not args.avoid:
+        return None
+    if clearance is None:
+        raise InputError(
+            f"--avoid: {robot.name!r} has no collision geometry in its URDF, so "
+            "there is nothing to plan around"
+        )
+    if clearance.collision_free:
+        return None
+    from workbench.motion import plan_around
+
+    return plan_around(
+        robot,
+        scene,
+        traj,
+        clearance=clearance,
+        rate_hz=args.rate,
+        seed=_seed(args),
+        time_limit=_limit(args),
+    )
+
+
+def _print_avoided(avoided: dict[str, Any] | None) -> None:
+    if avoided is None:
+        return
+    if not avoided["solved"]:
+        print(f"no motion around the scene ({avoided['reason']})")
+        return
+    print(
+        f"planned around the scene: {len(avoided['waypoints'])} waypoints, "
+        f"path {avoided['path_length']:.4g} rad, duration {avoided['duration']:.4g} s, "
+        f"min clearance {avoided['min_clearance'] * 1e3:.1f} mm (the spline went "
+        f"{avoided['direct_penetration'] * 1e3:.1f} mm deep)"
+    )
 
 
 def check_plot_format(path: Path) -> None:

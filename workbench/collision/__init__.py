@@ -22,6 +22,7 @@ if TYPE_CHECKING:
     from workbench.collision.checker import CollisionChecker, PairInfo
     from workbench.collision.clearance_report import Contact, PathClearance
     from workbench.collision.paper_scenes import (
+        get_angeles_obstacle_scene,
         get_angeles_scene,
         get_pedestal,
         get_pick_and_place_scene,
@@ -45,6 +46,7 @@ __all__ = [
     "SelfCollisionFilter",
     "check_path",
     "compute_self_collision_filter",
+    "get_angeles_obstacle_scene",
     "get_angeles_scene",
     "get_pedestal",
     "get_pick_and_place_scene",

@@ -17,6 +17,17 @@ so the scene is an assumption built from the model and Table III:
 for his PUMA, the pedestal for other arms generated from a DH table, an empty
 scene (self-collisions only) for any other arm.
 
+:func:`get_angeles_obstacle_scene` adds an obstacle to that cell: a
+:data:`OBSTACLE_SIZE` cube centred where the straight joint motion of
+Table III (the path of Angeles' spline) puts the tool frame halfway, so the
+paper's motion runs through it and a planner has to go around
+(:func:`workbench.motion.plan_around`, ``workbench demo``). In that scene
+``link2`` may touch the pedestal too: the model's upper-arm cylinder cuts the
+pedestal's top edge whenever joint 2 is more than about 24° below the
+horizontal, and Table III's pick puts joint 2 at 45°, its upper limit — a
+contact of the assumed geometry (the drawn pedestal and link cylinders), not
+of the arm, which would otherwise make the paper's pick itself a collision.
+
 Kang's fish-cutting scene (pedestal, table, fish) is built by
 :func:`workbench.tasks.fish_scene.get_fish_cutting_scene`.
 """
@@ -30,7 +41,7 @@ from workbench.collision.scene import Obstacle, Scene
 from workbench.errors import InputError
 from workbench.model.robot import Robot
 from workbench.model.urdf_generator import get_pedestal_cylinder
-from workbench.paper_data import ANGELES_PICK_Q_DEG
+from workbench.paper_data import ANGELES_PICK_Q_DEG, ANGELES_PLACE_Q_DEG
 
 #: Height [m] of the wrist centre above the pick table's top.
 PICK_TABLE_DROP = 0.10
@@ -39,6 +50,11 @@ PICK_TABLE_REACH = 0.10
 PICK_TABLE_SIZE = (0.30, 0.30, 0.04)
 PEDESTAL_COLOR = (0.25, 0.27, 0.3, 1.0)
 TABLE_COLOR = (0.6, 0.45, 0.3, 0.9)
+#: Edges [m] of the obstacle of :func:`get_angeles_obstacle_scene`.
+OBSTACLE_SIZE = (0.10, 0.10, 0.10)
+OBSTACLE_COLOR = (0.8, 0.25, 0.2, 0.9)
+#: Links allowed on the pedestal in :func:`get_angeles_obstacle_scene`.
+OBSTACLE_SCENE_PEDESTAL_LINKS = ("link1", "link2")
 
 
 def get_pedestal(robot: Robot, *, allow: tuple[str, ...] = ("link1",)) -> Obstacle:
@@ -89,6 +105,41 @@ def get_angeles_scene(robot: Robot) -> Scene:
     return Scene("angeles-pick-and-place", (pedestal, table), "Angeles 1988, Sec. V")
 
 
+def get_angeles_obstacle_scene(robot: Robot) -> Scene:
+    """Angeles' cell with a cube on the paper's path (see module docstring).
+
+    The pedestal (``link1`` and ``link2`` allowed on it), the pick table of
+    :func:`get_angeles_scene`, and an ``obstacle``: an axis-aligned
+    :data:`OBSTACLE_SIZE` cube centred at the tool frame's origin halfway
+    along the straight joint motion from Table III's pick to its place.
+
+    Args:
+        robot: A six-joint PUMA model (``puma560``).
+
+    Returns:
+        The scene ``"angeles-obstacle"``, base frame.
+
+    Raises:
+        InputError: If the robot is not a six-joint PUMA model from a DH table.
+    """
+    cell = get_angeles_scene(robot)
+    pedestal = get_pedestal(robot, allow=OBSTACLE_SCENE_PEDESTAL_LINKS)
+    halfway = 0.5 * np.deg2rad(ANGELES_PICK_Q_DEG + ANGELES_PLACE_Q_DEG)
+    cube = Obstacle(
+        "obstacle",
+        "box",
+        OBSTACLE_SIZE,
+        pin.SE3(np.eye(3), robot.fk(halfway).translation),
+        color=OBSTACLE_COLOR,
+    )
+    table = next(o for o in cell.obstacles if o.name == "pick_table")
+    return Scene(
+        "angeles-obstacle",
+        (pedestal, table, cube),
+        "Angeles 1988, Sec. V, with a 10 cm cube on the path of Table III",
+    )
+
+
 def get_pick_and_place_scene(robot: Robot) -> Scene:
     """The default scene of a pick-and-place of ``robot`` (base frame).
 
@@ -109,8 +160,11 @@ def get_pick_and_place_scene(robot: Robot) -> Scene:
 
 
 __all__ = [
+    "OBSTACLE_SCENE_PEDESTAL_LINKS",
+    "OBSTACLE_SIZE",
     "PICK_TABLE_DROP",
     "PICK_TABLE_REACH",
+    "get_angeles_obstacle_scene",
     "get_angeles_scene",
     "get_pedestal",
     "get_pick_and_place_scene",

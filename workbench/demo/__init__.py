@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 from workbench._lazy import attach
 
 if TYPE_CHECKING:
+    from workbench.demo.avoid import format_avoid, run_avoid_demo
     from workbench.demo.base_placement import (
         format_base_placement,
         run_base_placement_demo,
@@ -26,10 +27,12 @@ if TYPE_CHECKING:
 __all__ = [
     "Table2Comparison",
     "compare_table2",
+    "format_avoid",
     "format_base_placement",
     "format_fish_cutting",
     "format_pick_and_place",
     "format_table2",
+    "run_avoid_demo",
     "run_base_placement_demo",
     "run_demo",
     "run_pick_and_place_demo",

@@ -5,8 +5,9 @@ Angeles et al. (1988): Table III through the forward kinematics of the
 (:mod:`workbench.demo.pick_and_place`): IK of Table II, the normal-spline
 trajectory, limits, minimum duration, Cartesian histories, singularities and
 the figures; a coarse workspace map of the arm and the base placement of the
-cell (:mod:`workbench.demo.base_placement`). Kang's fish cutting runs in a
-second process meanwhile.
+cell (:mod:`workbench.demo.base_placement`); Table III's path in the cell with
+an obstacle on it, planned around (:mod:`workbench.demo.avoid`). Kang's fish
+cutting runs in a second process meanwhile.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import numpy.typing as npt
 from workbench import paper_data
 from workbench.atomic_files import remove_temporaries_of_process, write_text_atomic
 from workbench.collision import CollisionChecker, check_path, get_angeles_scene
+from workbench.demo.avoid import run_avoid_demo
 from workbench.demo.base_placement import run_base_placement_demo
 from workbench.demo.pick_and_place import run_pick_and_place_demo
 from workbench.errors import InputError
@@ -378,8 +380,9 @@ def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, An
     Args:
         robot: The ``puma560`` model (Angeles Table I).
         out_dir: Output folder (created).
-        plots: Also write the PNG figures, the 3D preview (``preview.html``)
-            and the singularity report (``singularities.html``): the slow part.
+        plots: Also write the PNG figures, the 3D previews (``preview.html``,
+            ``avoid.html``) and the singularity report (``singularities.html``):
+            the slow part.
             The self-collision filter of the model is always written
             (``<robot>.srdf``).
 
@@ -424,6 +427,7 @@ def run_demo(robot: Robot, out_dir: Path, *, plots: bool = True) -> dict[str, An
             "table2_matches": all(r.matches for r in rows),
             "table2_markdown": table,
             "pick_and_place": run_pick_and_place_demo(robot, out_dir, plots=plots),
+            "avoid": run_avoid_demo(robot, out_dir, plots=plots),
         }
         checker = CollisionChecker(robot, get_angeles_scene(robot))
         write_text_atomic(out_dir / f"{robot.name}.srdf", checker.filter.to_srdf())

@@ -9,12 +9,16 @@ meshes; ``planner="ompl:NAME"`` runs one of OMPL's planners
 :mod:`.problems` finds MotionBenchMaker problem sets and judges their
 validity, :mod:`.problem_runs` plans and summarises them (:func:`run_problems`,
 :func:`summarise`), and :mod:`.batch` plans many requests here or on a Dask
-cluster (:func:`plan_many`). :mod:`.requests` reads MoveIt motion requests
+cluster (:func:`plan_many`). :mod:`.around` replaces a colliding
+pick-and-place spline by a motion planned between its ends (:func:`plan_around`).
+:mod:`.requests` reads MoveIt motion requests
 (start and joint goal) as configurations of a robot; MoveIt planning scenes are read by
 :func:`workbench.collision.read_scene`. :mod:`.timing` turns a planner's
 joint-space polyline into a C² trajectory within the joint limits
 (:func:`time_scale`), and :mod:`.verify` checks a trajectory on the exact
 meshes, proven between its samples (:func:`verify_trajectory`).
+:mod:`.around` plans around the scene when a pick-and-place spline collides
+(:func:`plan_around`, :class:`PlannedAround`).
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from workbench._lazy import attach
 
 if TYPE_CHECKING:
     from workbench.motion._polyline import REPEAT_TOL
+    from workbench.motion.around import PlannedAround, plan_around
     from workbench.motion.batch import plan_many
     from workbench.motion.checker import SphereChecker
     from workbench.motion.ompl_planners import OMPL_PLANNERS, OPTIMAL_PLANNERS
@@ -67,6 +72,7 @@ __all__ = [
     "LinkSpheres",
     "MotionPlan",
     "MotionRequest",
+    "PlannedAround",
     "Problem",
     "ProblemResult",
     "ScenarioSummary",
@@ -79,6 +85,7 @@ __all__ = [
     "goal_configurations",
     "parse_request",
     "plan",
+    "plan_around",
     "plan_many",
     "read_request",
     "run_problem",

@@ -16,6 +16,7 @@ Example::
 """
 
 from workbench.viz import _meshcat  # noqa: F401  (first: quiet import)
+from workbench.viz.motion_page import write_motion_html
 from workbench.viz.preview import write_trajectory_html
 from workbench.viz.redundancy_sweep import (
     MAX_SWEEP,
@@ -47,6 +48,7 @@ __all__ = [
     "make_workspace_viewer",
     "show_redundancy_sweep",
     "spread_over_intervals",
+    "write_motion_html",
     "write_trajectory_html",
     "write_workspace_view",
 ]

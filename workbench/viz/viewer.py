@@ -188,29 +188,38 @@ class Viewer:
         self._legend["targets"] = _legend.triads("targets " + ", ".join(names))
 
     def show_tool_path(
-        self, q: npt.ArrayLike, *, name: str = "tool_path"
+        self,
+        q: npt.ArrayLike,
+        *,
+        name: str = "tool_path",
+        color: npt.ArrayLike = TOOL_PATH_COLOR,
     ) -> FloatArray:
         """Draw the line the tool origin traces through configurations ``q``.
 
         Args:
             q: Configurations, shape (K, nq) [rad].
             name: Scene node name (another name adds another path).
+            color: RGB in [0, 1] of the line. The legend's tool-path entry
+                is for :data:`TOOL_PATH_COLOR`; a line of another colour gets
+                none (add one with :meth:`add_legend`).
 
         Returns:
             The tool positions, shape (K, 3) [m], base frame.
         """
         q = as_configurations(self.robot, q, "q")
+        rgb = tuple(float(c) for c in np.asarray(color, dtype=np.float64))
         points = np.array([self.robot.fk(qk).translation for qk in q])
         node = self._scene[to_node_name(name)]
-        _shapes.draw_polyline(node["line"], points, TOOL_PATH_COLOR)
+        _shapes.draw_polyline(node["line"], points, rgb)
         radius = 0.012 * self._size
         _shapes.draw_marker(node["start"], radius, PATH_START_COLOR)
         node["start"].set_transform(_translation(points[0]))
         _shapes.draw_marker(node["end"], radius, PATH_END_COLOR)
         node["end"].set_transform(_translation(points[-1]))
-        self._legend["tool_path"] = _legend.tool_path(
-            TOOL_PATH_COLOR, PATH_START_COLOR, PATH_END_COLOR
-        )
+        if rgb == tuple(TOOL_PATH_COLOR):
+            self._legend["tool_path"] = _legend.tool_path(
+                TOOL_PATH_COLOR, PATH_START_COLOR, PATH_END_COLOR
+            )
         self._extra_points[f"path:{name}"] = points
         return points
 
