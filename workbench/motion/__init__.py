@@ -9,10 +9,10 @@ meshes; ``planner="ompl:NAME"`` runs one of OMPL's planners
 :mod:`.problems` finds MotionBenchMaker problem sets and judges their
 validity, :mod:`.problem_runs` plans and summarises them (:func:`run_problems`,
 :func:`summarise`), and :mod:`.batch` plans many requests here or on a Dask
-cluster (:func:`plan_many`). :mod:`.requests` reads MoveIt motion requests (start and joint goal) as
-configurations of a robot; MoveIt planning scenes are read by
-:func:`workbench.collision.read_scene`. :mod:`.timing` turns a planner's
-joint-space polyline into a C² trajectory within the joint limits
+cluster (:func:`plan_many`). :mod:`.requests` reads MoveIt motion requests
+(start and joint goal) as configurations of a robot; MoveIt planning scenes
+are read by :func:`workbench.collision.read_scene`. :mod:`.timing` turns a
+planner's joint-space polyline into a C² trajectory within the joint limits
 (:func:`time_scale`), and :mod:`.verify` checks a trajectory on the exact
 meshes, proven between its samples (:func:`verify_trajectory`).
 :mod:`.around` plans around the scene when a pick-and-place spline collides
