@@ -80,6 +80,41 @@ def xacro_argument(text: str) -> tuple[str, str]:
     return name.strip(), value
 
 
+#: Largest ``--time-limit`` [s] of a planner.
+MAX_TIME_LIMIT = 3600.0
+
+
+def add_search_arguments(
+    parser: argparse.ArgumentParser,
+    *,
+    scope: str = "",
+    defaults: bool = True,
+) -> None:
+    """``--seed N`` and ``--time-limit S`` of a motion planner.
+
+    Args:
+        parser: The subcommand's parser.
+        scope: Words before each help text (e.g. ``"with --avoid: "``).
+        defaults: Whether the parsed values default to 0 and 1 s; without,
+            they stay None so that the command can tell whether they were
+            given.
+    """
+    parser.add_argument(
+        "--seed",
+        type=bounded_int(0, 2**63 - 1),
+        default=0 if defaults else None,
+        metavar="N",
+        help=f"{scope}the planner's random seed (default: 0)",
+    )
+    parser.add_argument(
+        "--time-limit",
+        type=bounded_float(MAX_TIME_LIMIT, "s"),
+        default=1.0 if defaults else None,
+        metavar="S",
+        help=f"{scope}the planning budget [s] (default: 1)",
+    )
+
+
 def add_limit_arguments(
     parser: argparse.ArgumentParser, *, acceleration: bool = True
 ) -> None:

@@ -23,15 +23,12 @@ from workbench.cli._common import (
     add_json_flag,
     add_limit_arguments,
     add_robot_argument,
-    bounded_float,
+    add_search_arguments,
     bounded_int,
     load_robot_from_args,
     print_json,
 )
 from workbench.errors import InputError
-
-#: Largest ``--time-limit`` [s].
-MAX_TIME_LIMIT = 3600.0
 
 
 def register(subcommands: argparse._SubParsersAction) -> None:
@@ -71,20 +68,7 @@ def register(subcommands: argparse._SubParsersAction) -> None:
         metavar="N",
         help="at most N problems per scenario (the first ones)",
     )
-    bench.add_argument(
-        "--seed",
-        type=bounded_int(0, 2**63 - 1),
-        default=0,
-        metavar="N",
-        help="random seed of every plan (default: 0)",
-    )
-    bench.add_argument(
-        "--time-limit",
-        type=bounded_float(MAX_TIME_LIMIT, "s"),
-        default=1.0,
-        metavar="S",
-        help="planning budget per problem [s] (default: 1)",
-    )
+    add_search_arguments(bench, scope="per problem: ")
     bench.add_argument(
         "--iteration-limit",
         type=bounded_int(1, 10**9),

@@ -27,8 +27,8 @@ from workbench.cli._common import (
     add_json_flag,
     add_limit_arguments,
     add_robot_argument,
+    add_search_arguments,
     bounded_float,
-    bounded_int,
     finite_float,
     get_input_paths,
     load_robot_from_args,
@@ -42,8 +42,6 @@ from workbench.model.robot import Robot
 
 #: Sample rate [Hz] of ``--csv``.
 DEFAULT_RATE = 100.0
-#: Largest ``--time-limit`` [s].
-MAX_TIME_LIMIT = 3600.0
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -113,20 +111,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         help="goal tool pose [m] (base frame): any closed-form branch within "
         "the limits",
     )
-    plan.add_argument(
-        "--seed",
-        type=bounded_int(0, 2**63 - 1),
-        default=0,
-        metavar="N",
-        help="random seed (default: 0)",
-    )
-    plan.add_argument(
-        "--time-limit",
-        type=bounded_float(MAX_TIME_LIMIT, "s"),
-        default=1.0,
-        metavar="S",
-        help="planning budget [s] (default: 1)",
-    )
+    add_search_arguments(plan)
     plan.add_argument(
         "--planner",
         type=_planner_name,

@@ -31,6 +31,7 @@ from workbench.cli._common import (
     add_json_flag,
     add_limit_arguments,
     add_robot_argument,
+    add_search_arguments,
     bounded_float,
     bounded_int,
     finite_float,
@@ -68,8 +69,6 @@ MAX_RATE_HZ = 100_000.0
 MAX_DURATION = 1e6
 #: Largest ``--n-points`` (knots of the normal spline).
 MAX_N_POINTS = 100_000
-#: Largest ``--time-limit`` [s] of ``--avoid``.
-MAX_TIME_LIMIT = 3600.0
 
 
 def register(commands: argparse._SubParsersAction) -> None:
@@ -167,18 +166,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         "--acceleration-limit; verified on the exact meshes); --csv and --plot "
         "then hold that motion; exit 3 when none is found",
     )
-    pick.add_argument(
-        "--seed",
-        type=bounded_int(0, 2**63 - 1),
-        metavar="N",
-        help="with --avoid: the planner's random seed (default: 0)",
-    )
-    pick.add_argument(
-        "--time-limit",
-        type=bounded_float(MAX_TIME_LIMIT, "s"),
-        metavar="S",
-        help="with --avoid: the planning budget [s] (default: 1)",
-    )
+    add_search_arguments(pick, scope="with --avoid: ", defaults=False)
     add_json_flag(pick)
     pick.set_defaults(
         run=run_pick_place,

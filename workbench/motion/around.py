@@ -27,7 +27,7 @@ from workbench.collision.clearance_report import PathClearance
 from workbench.collision.scene import Scene
 from workbench.errors import InputError
 from workbench.model.robot import Robot
-from workbench.motion.planner import MotionPlan, plan
+from workbench.motion.planner import MotionPlan, plan, require_acceleration_limits
 from workbench.motion.spheres import SphereModel
 from workbench.motion.timing import WaypointTrajectory
 from workbench.trajectory.pick_and_place import JointTrajectory
@@ -236,7 +236,7 @@ def plan_around(
         raise InputError(
             f"clearance must be a PathClearance or None, got {type(clearance).__name__}"
         )
-    _require_acceleration_limits(robot)
+    require_acceleration_limits(robot, "planning around")
     if clearance is None:
         clearance = direct.check_collisions(
             CollisionChecker(robot, scene), float(rate_hz)
@@ -255,21 +255,6 @@ def plan_around(
         )
     )
     return PlannedAround(direct, clearance, planned, float(rate_hz))
-
-
-def _require_acceleration_limits(robot: Robot) -> None:
-    """Refuse a robot whose joints lack the acceleration limits time scaling needs."""
-    unknown = [
-        name
-        for name, a in zip(robot.joint_names, robot.acceleration_limit, strict=True)
-        if not math.isfinite(a)
-    ]
-    if unknown:
-        raise InputError(
-            f"planning around needs acceleration limits; {robot.name!r} has none "
-            f"for {', '.join(unknown)} (--acceleration-limit at the command line, "
-            "Robot.with_limits in Python)"
-        )
 
 
 __all__ = ["DEFAULT_RATE_HZ", "PlannedAround", "plan_around"]

@@ -195,6 +195,25 @@ def goal_configurations(
     return np.array(found)
 
 
+def require_acceleration_limits(robot: Robot, purpose: str) -> None:
+    """Refuse a robot without the acceleration limits the time scaling needs.
+
+    Raises:
+        InputError: Naming ``purpose`` and the joints without a finite limit.
+    """
+    unknown = [
+        name
+        for name, a in zip(robot.joint_names, robot.acceleration_limit, strict=True)
+        if not math.isfinite(a)
+    ]
+    if unknown:
+        raise InputError(
+            f"{purpose} needs acceleration limits; {robot.name!r} has none "
+            f"for {', '.join(unknown)} (--acceleration-limit at the command line, "
+            "Robot.with_limits in Python)"
+        )
+
+
 def plan(
     robot: Robot,
     scene: Scene | None,
@@ -265,17 +284,7 @@ def plan(
         raise InputError(
             f"iteration_limit must be a positive integer, got {iteration_limit!r}"
         )
-    unknown = [
-        name
-        for name, a in zip(robot.joint_names, robot.acceleration_limit, strict=True)
-        if not math.isfinite(a)
-    ]
-    if unknown:
-        raise InputError(
-            f"the time scaling needs acceleration limits; {robot.name!r} has none "
-            f"for {', '.join(unknown)} (--acceleration-limit at the command line, "
-            "Robot.with_limits in Python)"
-        )
+    require_acceleration_limits(robot, "the time scaling")
     q_start = robot.check_configuration(start)
     exact = CollisionChecker(robot, scene)
     model = spheres or get_spheres(robot)
