@@ -134,7 +134,7 @@ def plot_planned_around(
             )
         axj.set_ylabel(f"{robot.joint_names[joint]}\n[deg]", fontsize=9)
         axj.grid(alpha=0.3)
-    axes[0].legend(loc="upper right", fontsize=8, ncols=3)
+    axes[0].legend(loc="best", fontsize=8, ncols=3)
     axes[-1].set_xlabel("t [s]")
     right.suptitle("joint angles", fontsize=10)
     fig.suptitle(
