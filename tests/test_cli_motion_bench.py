@@ -31,7 +31,9 @@ def test_prints_the_table_per_scenario_and_exits_0(capsys) -> None:
     )
     assert code == 0, err
     lines = out.splitlines()
-    assert lines[0] == f"panda: 1 problems of {DATA}, seed 4, time limit 1 s"
+    assert lines[0] == (
+        f"panda: 1 problems of {DATA}, rrtconnect, seed 4, time limit 1 s"
+    )
     assert lines[1].split()[:3] == ["scenario", "valid", "solved"]
     row = lines[2].split()
     assert row[:3] == ["table_pick", "1/1", "1/1"]
@@ -48,6 +50,7 @@ def test_json_has_the_summary_and_each_problem(capsys) -> None:
     keys = json.loads(out)
     assert keys["robot_name"] == "panda" and keys["all_solved"] is True
     assert keys["verified"] is False and keys["scheduler"] is None
+    assert keys["planner"] == "rrtconnect"
     assert [s["scenario"] for s in keys["summary"]] == [
         "table_pick",
         "bookshelf_thin",
@@ -65,6 +68,20 @@ def test_json_has_the_summary_and_each_problem(capsys) -> None:
     assert first["validity"]["valid"] is True and first["contacts"] is None
     assert first["min_clearance"] is None  # NaN (not checked) as null
     assert first["planning_time"] > 0.0 and first["path_length"] > 0.0
+
+
+def test_ompl_planners_run_the_set_through_the_same_checker(capsys) -> None:
+    """``--planner ompl:RRTConnect``: solved, verified, named in the JSON."""
+    pytest.importorskip("ompl")
+    code, out, err = run(
+        capsys, *BENCH, str(DATA), *ROBOT, "--scenario", "table_pick",
+        "--planner", "ompl:RRTConnect", "--time-limit", "5", "--json",
+    )  # fmt: skip
+    assert code == 0, err
+    keys = json.loads(out)
+    assert keys["planner"] == "ompl:RRTConnect" and keys["all_solved"] is True
+    every = keys["summary"][-1]
+    assert (every["solved"], every["verified"], every["with_contacts"]) == (1, 1, 0)
 
 
 def test_an_unsolved_valid_problem_exits_3(capsys, tmp_path: Path) -> None:
@@ -91,6 +108,7 @@ def test_an_unsolved_valid_problem_exits_3(capsys, tmp_path: Path) -> None:
         (("--limit", "0"), "--limit"),
         (("--scheduler", "nowhere"), "is not tcp://HOST:PORT"),
         (("--robot-name", "ur5"), "no problem for robot 'ur5'; it has panda"),
+        (("--planner", "ompl:Nope"), "unknown planner 'ompl:Nope'"),
     ],
 )
 def test_bad_input_exits_2_with_one_line(capsys, argv, fragment) -> None:

@@ -89,8 +89,9 @@ def add_search_arguments(
     *,
     scope: str = "",
     defaults: bool = True,
+    planner: bool = False,
 ) -> None:
-    """``--seed N`` and ``--time-limit S`` of a motion planner.
+    """``--seed N``, ``--time-limit S`` (and ``--planner NAME``) of a motion planner.
 
     Args:
         parser: The subcommand's parser.
@@ -98,6 +99,7 @@ def add_search_arguments(
         defaults: Whether the parsed values default to 0 and 1 s; without,
             they stay None so that the command can tell whether they were
             given.
+        planner: Whether to add ``--planner`` (default ``rrtconnect``).
     """
     parser.add_argument(
         "--seed",
@@ -113,6 +115,27 @@ def add_search_arguments(
         metavar="S",
         help=f"{scope}the planning budget [s] (default: 1)",
     )
+    if planner:
+        parser.add_argument(
+            "--planner",
+            type=_planner_name,
+            default="rrtconnect",
+            metavar="NAME",
+            help="rrtconnect (compiled, the default) or ompl:NAME, one of OMPL's "
+            "planners (ompl:RRTstar, ompl:BITstar, …; the [ompl] extra) with the "
+            "same checker",
+        )
+
+
+def _planner_name(text: str) -> str:
+    """``rrtconnect`` or ``ompl:NAME`` with NAME one of OMPL's planners offered."""
+    from workbench.motion import PLANNERS
+
+    if text not in PLANNERS:
+        raise argparse.ArgumentTypeError(
+            f"unknown planner {text!r}; one of {', '.join(PLANNERS)}"
+        )
+    return text
 
 
 def add_limit_arguments(

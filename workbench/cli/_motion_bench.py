@@ -68,7 +68,7 @@ def register(subcommands: argparse._SubParsersAction) -> None:
         metavar="N",
         help="at most N problems per scenario (the first ones)",
     )
-    add_search_arguments(bench, scope="per problem: ")
+    add_search_arguments(bench, scope="per problem: ", planner=True)
     bench.add_argument(
         "--iteration-limit",
         type=bounded_int(1, 10**9),
@@ -117,6 +117,7 @@ def run_bench(args: argparse.Namespace) -> int:
         robot,
         problems,
         seed=args.seed,
+        planner=args.planner,
         time_limit=args.time_limit,
         iteration_limit=args.iteration_limit,
         pose_goal=args.pose_goal,
@@ -136,6 +137,7 @@ def run_bench(args: argparse.Namespace) -> int:
                 "robot_name": name,
                 "source": str(args.source),
                 "seed": args.seed,
+                "planner": args.planner,
                 "time_limit": args.time_limit,
                 "iteration_limit": args.iteration_limit,
                 "pose_goal": args.pose_goal,
@@ -185,8 +187,9 @@ def _print_table(
     name: str, args: argparse.Namespace, summary: list[Any], results: list[Any]
 ) -> None:
     print(
-        f"{name}: {len(results)} problems of {args.source}, seed {args.seed}, "
-        f"time limit {args.time_limit:g} s" + (", pose goals" if args.pose_goal else "")
+        f"{name}: {len(results)} problems of {args.source}, {args.planner}, "
+        f"seed {args.seed}, time limit {args.time_limit:g} s"
+        + (", pose goals" if args.pose_goal else "")
     )
     head = (
         "scenario", "valid", "solved", "plan median", "plan p95", "plan max",

@@ -111,16 +111,7 @@ def register(commands: argparse._SubParsersAction) -> None:
         help="goal tool pose [m] (base frame): any closed-form branch within "
         "the limits",
     )
-    add_search_arguments(plan)
-    plan.add_argument(
-        "--planner",
-        type=_planner_name,
-        default="rrtconnect",
-        metavar="NAME",
-        help="rrtconnect (compiled, the default) or ompl:NAME, one of OMPL's "
-        "planners (ompl:RRTstar, ompl:BITstar, …; the [ompl] extra) with the same "
-        "checker",
-    )
+    add_search_arguments(plan, planner=True)
     plan.add_argument(
         "--csv",
         type=Path,
@@ -200,17 +191,6 @@ def run_plan(args: argparse.Namespace) -> int:
         )
         return EXIT_INFEASIBLE
     return 0
-
-
-def _planner_name(text: str) -> str:
-    """``rrtconnect`` or ``ompl:NAME`` with NAME one of OMPL's planners offered."""
-    from workbench.motion import PLANNERS
-
-    if text not in PLANNERS:
-        raise argparse.ArgumentTypeError(
-            f"unknown planner {text!r}; one of {', '.join(PLANNERS)}"
-        )
-    return text
 
 
 def _start_and_goal(

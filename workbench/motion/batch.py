@@ -71,6 +71,7 @@ def plan_many(
     seed: int = 0,
     time_limit: float = 1.0,
     iteration_limit: int = 100_000,
+    planner: str = "rrtconnect",
     verify: bool = True,
     scheduler: str | None = None,
     progress: ProgressCallback | None = None,
@@ -86,6 +87,7 @@ def plan_many(
             result does not depend on the others or on where it ran).
         time_limit: Planning budget of each request [s].
         iteration_limit: RRT-Connect iterations of each request at most.
+        planner: ``"rrtconnect"`` or ``"ompl:NAME"`` (:func:`plan`).
         verify: Check each trajectory on the exact meshes.
         scheduler: A Dask scheduler address (``tcp://HOST:PORT``), or None
             to plan in this process, one request after the other.
@@ -113,11 +115,15 @@ def plan_many(
         "seed": seed,
         "time_limit": time_limit,
         "iteration_limit": iteration_limit,
+        "planner": planner,
         "verify": verify,
     }
-    planner = Planner(robot, options)
     return run_many(
-        _plan_request, planner, items, scheduler=scheduler, progress=progress
+        _plan_request,
+        Planner(robot, options),
+        items,
+        scheduler=scheduler,
+        progress=progress,
     )
 
 

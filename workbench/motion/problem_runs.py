@@ -116,6 +116,7 @@ def run_problem(
     seed: int = 0,
     time_limit: float = 1.0,
     iteration_limit: int = 100_000,
+    planner: str = "rrtconnect",
     pose_goal: bool = False,
     verify: bool = True,
 ) -> ProblemResult:
@@ -127,6 +128,7 @@ def run_problem(
         seed: The planner's seed.
         time_limit: Planning budget [s].
         iteration_limit: RRT-Connect iterations at most.
+        planner: ``"rrtconnect"`` or ``"ompl:NAME"`` (:func:`~workbench.motion.plan`).
         pose_goal: Plan to the goal configuration's tool pose
             (``robot.fk(goal)``) instead of to the configuration.
         verify: Check the trajectory on the exact meshes.
@@ -135,7 +137,7 @@ def run_problem(
         InputError: A joint of the robot is missing from the request, or
             :func:`~workbench.motion.plan` refuses the arguments.
     """
-    options = _options(seed, time_limit, iteration_limit, verify)
+    options = _options(seed, time_limit, iteration_limit, planner, verify)
     return _solve(Planner(robot, options, warm=True), problem, pose_goal)
 
 
@@ -146,6 +148,7 @@ def run_problems(
     seed: int = 0,
     time_limit: float = 1.0,
     iteration_limit: int = 100_000,
+    planner: str = "rrtconnect",
     pose_goal: bool = False,
     verify: bool = True,
     scheduler: str | None = None,
@@ -163,6 +166,7 @@ def run_problems(
         seed: The planner's seed, the same for every problem.
         time_limit: Planning budget of each problem [s].
         iteration_limit: RRT-Connect iterations of each problem at most.
+        planner: ``"rrtconnect"`` or ``"ompl:NAME"`` (:func:`~workbench.motion.plan`).
         pose_goal: Plan to the goal configurations' tool poses.
         verify: Check each trajectory on the exact meshes.
         scheduler: A Dask scheduler address (``tcp://HOST:PORT``), or None
@@ -176,7 +180,7 @@ def run_problems(
         InputError: As :func:`run_problem`, or the scheduler cannot be
             reached or has no worker.
     """
-    options = _options(seed, time_limit, iteration_limit, verify)
+    options = _options(seed, time_limit, iteration_limit, planner, verify)
     shared = (Planner(robot, options), pose_goal)
     return run_many(
         _run_task, shared, list(problems), scheduler=scheduler, progress=progress
@@ -189,12 +193,13 @@ def _run_task(shared: tuple[Planner, bool], problem: Problem) -> ProblemResult:
 
 
 def _options(
-    seed: int, time_limit: float, iteration_limit: int, verify: bool
+    seed: int, time_limit: float, iteration_limit: int, planner: str, verify: bool
 ) -> dict[str, Any]:
     return {
         "seed": seed,
         "time_limit": time_limit,
         "iteration_limit": iteration_limit,
+        "planner": planner,
         "verify": verify,
     }
 
