@@ -101,6 +101,7 @@ from benchmarks._motionbenchmaker import (
     get_sdist,
     load_mbm_robot,
 )
+from workbench.cli._common import format_time
 from workbench.collision import CollisionChecker
 from workbench.motion import check_validity, find_problems
 
@@ -281,17 +282,6 @@ def _quantile(values: Sequence[float], q: float) -> float:
     if not values:
         return math.nan
     return float(np.quantile(np.asarray(values, dtype=float), q))
-
-
-def format_time(seconds: float) -> str:
-    """``48 µs``, ``1.3 ms``, ``0.52 s``; ``–`` for NaN."""
-    if math.isnan(seconds):
-        return "–"
-    if seconds < 1e-3:
-        return f"{1e6 * seconds:.0f} µs"
-    if seconds < 1.0:
-        return f"{1e3 * seconds:.3g} ms"
-    return f"{seconds:.3g} s"
 
 
 def _ratio(a: float, b: float) -> str:

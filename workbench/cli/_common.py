@@ -356,6 +356,17 @@ def _to_builtin(value: Any) -> Any:
     raise TypeError(f"not JSON serialisable: {type(value).__name__}")
 
 
+def format_time(seconds: float) -> str:
+    """``48 µs``, ``1.3 ms``, ``0.52 s``; ``–`` for NaN."""
+    if math.isnan(seconds):
+        return "–"
+    if seconds < 1e-3:
+        return f"{1e6 * seconds:.0f} µs"
+    if seconds < 1.0:
+        return f"{1e3 * seconds:.3g} ms"
+    return f"{seconds:.3g} s"
+
+
 def format_vector(values: npt.ArrayLike, digits: int = 6) -> str:
     """Numbers on one line, fixed precision, sign-aligned."""
     return "  ".join(

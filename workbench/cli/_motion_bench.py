@@ -25,6 +25,7 @@ from workbench.cli._common import (
     add_robot_argument,
     add_search_arguments,
     bounded_int,
+    format_time,
     load_robot_from_args,
     print_json,
 )
@@ -170,17 +171,6 @@ def _plain(record: dict[str, Any]) -> dict[str, Any]:
         else value
         for key, value in record.items()
     }
-
-
-def format_time(seconds: float) -> str:
-    """``48 µs``, ``1.3 ms``, ``0.52 s``; ``–`` for NaN."""
-    if math.isnan(seconds):
-        return "–"
-    if seconds < 1e-3:
-        return f"{1e6 * seconds:.0f} µs"
-    if seconds < 1.0:
-        return f"{1e3 * seconds:.3g} ms"
-    return f"{seconds:.3g} s"
 
 
 def _print_table(

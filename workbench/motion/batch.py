@@ -64,6 +64,19 @@ class Planner:
         return plan(self.robot, scene, start, goal, **self.options)
 
 
+def plan_options(
+    seed: int, time_limit: float, iteration_limit: int, planner: str, verify: bool
+) -> dict[str, Any]:
+    """The keyword arguments of :func:`~workbench.motion.plan` a Planner passes on."""
+    return {
+        "seed": seed,
+        "time_limit": time_limit,
+        "iteration_limit": iteration_limit,
+        "planner": planner,
+        "verify": verify,
+    }
+
+
 def plan_many(
     robot: Robot,
     requests: Iterable[Request],
@@ -111,13 +124,7 @@ def plan_many(
         if not isinstance(goal, pin.SE3):
             goal = np.asarray(goal, dtype=np.float64)
         items.append((scene, np.asarray(start, dtype=np.float64), goal))
-    options = {
-        "seed": seed,
-        "time_limit": time_limit,
-        "iteration_limit": iteration_limit,
-        "planner": planner,
-        "verify": verify,
-    }
+    options = plan_options(seed, time_limit, iteration_limit, planner, verify)
     return run_many(
         _plan_request,
         Planner(robot, options),

@@ -14,12 +14,11 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from workbench.model.robot import Robot
-from workbench.motion.batch import Planner, run_many
+from workbench.motion.batch import Planner, plan_options, run_many
 from workbench.motion.problems import Problem, Validity, check_validity
 from workbench.progress import ProgressCallback
 
@@ -137,7 +136,7 @@ def run_problem(
         InputError: A joint of the robot is missing from the request, or
             :func:`~workbench.motion.plan` refuses the arguments.
     """
-    options = _options(seed, time_limit, iteration_limit, planner, verify)
+    options = plan_options(seed, time_limit, iteration_limit, planner, verify)
     return _solve(Planner(robot, options, warm=True), problem, pose_goal)
 
 
@@ -180,7 +179,7 @@ def run_problems(
         InputError: As :func:`run_problem`, or the scheduler cannot be
             reached or has no worker.
     """
-    options = _options(seed, time_limit, iteration_limit, planner, verify)
+    options = plan_options(seed, time_limit, iteration_limit, planner, verify)
     shared = (Planner(robot, options), pose_goal)
     return run_many(
         _run_task, shared, list(problems), scheduler=scheduler, progress=progress
@@ -190,18 +189,6 @@ def run_problems(
 def _run_task(shared: tuple[Planner, bool], problem: Problem) -> ProblemResult:
     planner, pose_goal = shared
     return _solve(planner, problem, pose_goal)
-
-
-def _options(
-    seed: int, time_limit: float, iteration_limit: int, planner: str, verify: bool
-) -> dict[str, Any]:
-    return {
-        "seed": seed,
-        "time_limit": time_limit,
-        "iteration_limit": iteration_limit,
-        "planner": planner,
-        "verify": verify,
-    }
 
 
 def _solve(planner: Planner, problem: Problem, pose_goal: bool) -> ProblemResult:
