@@ -165,6 +165,41 @@ def test_every_point_of_every_triangle_is_inside(ur5_spheres) -> None:
         assert np.all(gap.min(axis=1) <= EXACT_TOL), geometry.name
 
 
+def test_the_spheres_of_closed_meshes_reach_at_most_the_tolerance(
+    ur5_spheres,
+) -> None:
+    """The UR5's meshes are closed: every link's excess is within 2 cm."""
+    for link in ur5_spheres.links:
+        assert link.excess <= ur5_spheres.tolerance + EXACT_TOL, link.link
+
+
+def _cube_with_a_hole(half: float) -> tuple[np.ndarray, np.ndarray]:
+    """A cube's 12 triangles, one of them left out (a hole)."""
+    corners = np.array(
+        [[x, y, z] for x in (-half, half) for y in (-half, half) for z in (-half, half)]
+    )
+    faces = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4)]
+    faces.append((1, 5, 7, 3))
+    tris = [t for a, b, c, d in faces for t in ((a, b, c), (a, c, d))]
+    return corners, np.array(tris[:-1])
+
+
+@pytest.mark.parametrize("holed", [False, True])
+def test_a_cube_is_covered_by_few_spheres_even_with_a_hole(holed) -> None:
+    """Deep spheres on the medial axis, found by the winding number if holed."""
+    from workbench.motion.spheres import _cover_mesh, _surface_samples
+
+    vertices, tris = _cube_with_a_hole(0.05)
+    if not holed:
+        tris = np.concatenate([tris, [[1, 7, 3]]])
+    centers, radii, _ = _cover_mesh(vertices, tris, 0.02)
+    points, deltas = _surface_samples(vertices, tris, 0.001)
+    gap = np.linalg.norm(points[:, None] - centers[None], axis=2) - radii
+    assert np.all(gap.min(axis=1) <= EXACT_TOL)
+    assert len(radii) <= 40
+    assert radii.max() > 0.05  # a sphere about the inside, not only the skin
+
+
 def test_spherize_refuses_a_bad_tolerance(puma) -> None:
     for bad in (0, -1.0, math.nan, math.inf, "1"):
         with pytest.raises(InputError, match="tolerance"):

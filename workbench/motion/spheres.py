@@ -9,11 +9,15 @@ the frame of the link's joint:
   within :math:`\delta = \ell/\sqrt3` of a sample (:math:`\ell` the longest
   grid edge of its triangle: the farthest point of a triangle from its three
   corners is its circumcentre or, for an obtuse one, the middle of its long
-  edge, both within :math:`\ell/\sqrt3`). The samples and the vertices are
-  grouped by k-means, and each group gets the smallest of two spheres (about
-  its centroid and about the centre of its bounding box) that holds all its
-  points, grown by its :math:`\delta`. So **every vertex is inside, and so
-  is every point of every triangle**.
+  edge, both within :math:`\ell/\sqrt3`). A sphere about a point inside
+  the mesh with radius :math:`u + \rho` (:math:`u` its distance to the
+  nearest sample) reaches at most :math:`\rho + \delta` beyond the mesh;
+  candidates on the ridge of :math:`u` (the medial axis, where such spheres
+  are largest) are chosen by greedy set cover until every sample, grown by
+  its :math:`\delta`, is inside one, with :math:`\rho` the tolerance less
+  the largest :math:`\delta`. What the ridge spheres miss (thin walls,
+  flat meshes) gets spheres of radius ``tolerance`` about samples. So
+  **every vertex is inside, and so is every point of every triangle**.
 * **Boxes** are cut into sub-boxes no longer than :math:`\sqrt2` times their
   shortest edge, each covered by its circumscribed sphere; **cylinders and
   capsules** into slabs along the axis, each covered by the sphere through its
@@ -28,8 +32,7 @@ The spheres reach beyond the geometry: the **excess** of a link is the
 largest distance from a point of its spheres' surfaces (:data:`EXCESS_SAMPLES`
 Fibonacci points each) outside the geometry's convex hull to the nearest
 surface sample, an upper bound of how far, at those points, the spheres
-reach beyond the geometry. The number of spheres of a mesh grows (up to
-:data:`MAX_SPHERES`) until its excess is at most ``tolerance``.
+reach beyond the geometry; it is within ``tolerance`` for a closed mesh.
 """
 
 from __future__ import annotations
@@ -52,12 +55,13 @@ IntArray = npt.NDArray[np.int64]
 DEFAULT_TOLERANCE = 0.02
 #: Longest edge [m] of the sampling grid on a mesh's triangles.
 SAMPLE_SPACING = 0.006
-#: Largest number of spheres of one mesh.
-MAX_SPHERES = 16
-#: Spacing [m] of the grid of points inside a mesh that k-means groups.
-GRID_SPACING = 0.01
-#: Seed of the k-means grouping (the spheres are the same on every run).
-KMEANS_SEED = 0
+#: Spacing [m] of the grid whose ridge points are the candidate centres.
+RIDGE_GRID = 0.005
+#: Most grid steps along a mesh's longest side (coarser steps beyond).
+RIDGE_CELLS = 128
+#: A grid point is on the ridge when the depth rises by less than this
+#: fraction of the step towards each of its 26 neighbours.
+RIDGE_RISE = 0.6
 #: Points sampled on each sphere to measure the excess.
 EXCESS_SAMPLES = 96
 
@@ -230,90 +234,140 @@ def _surface_samples(
 def _cover_mesh(
     vertices: FloatArray, triangles: IntArray, tolerance: float
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Spheres about k volume clusters, each holding its Voronoi cell's samples.
+    """Spheres on the ridge of the depth, chosen by greedy set cover.
 
-    The points of a :data:`GRID_SPACING` grid inside the mesh (generalised
-    winding number > 1/2, robust to small holes; the surface samples for a
-    mesh that encloses none) are grouped by k-means; the sphere of a group is
-    centred at its centroid and holds every surface sample nearer to that
-    centroid than to any other, grown by the sample's δ. k grows until the
-    excess is at most ``tolerance`` or k = :data:`MAX_SPHERES`.
+    A sphere about a point ``c`` inside the mesh with radius
+    ``u(c) + reach`` (``u`` the distance to the nearest surface sample)
+    reaches at most ``reach`` plus the samples' δ beyond the geometry (the
+    ball of radius ``u`` is inside it); moving ``c`` up the gradient of ``u``
+    grows the sphere by as much as it moves, so only centres on the ridge of
+    ``u`` (the medial axis) are worth proposing. The candidates are the
+    points of a :data:`RIDGE_GRID` grid that no neighbour dominates (the
+    grid's distance transform to the sampled surface rising by less than
+    0.9 of the step towards every neighbour) and that lie inside the mesh
+    (generalised winding number > 1/2, robust to small holes); the greedy
+    set cover (:func:`workbench.motion._cover_kernel.greedy_cover`) picks
+    from them until every sample they can hold is held. The samples left
+    (thin walls, flat meshes) are split at the median along their principal
+    axis until each group's sphere has a radius of at most
+    ``tolerance / 2`` (so reaches at most ``tolerance`` beyond them).
     """
-    from scipy.cluster.vq import kmeans2
+    from scipy import ndimage
     from scipy.spatial import cKDTree
+
+    from workbench.motion._cover_kernel import greedy_cover, winding_numbers
 
     if len(vertices) == 0 or len(triangles) == 0:
         raise InputError("a collision mesh has no triangles")
     points, deltas = _surface_samples(vertices, triangles, SAMPLE_SPACING)
-    tree = cKDTree(points)
-    outside = _OutsideHull(points, tree)
+    reach = max(tolerance - float(deltas.max()), tolerance / 2.0)
     lo, hi = points.min(axis=0), points.max(axis=0)
-    axes = [np.arange(lo[i], hi[i] + GRID_SPACING, GRID_SPACING) for i in range(3)]
-    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    volume = grid[_winding_number(grid, vertices[triangles]) > 0.5]
-    if len(volume) < MAX_SPHERES:
-        volume = points
-    k, best = 1, None
-    while True:
-        if k == 1:
-            centroids = volume.mean(axis=0, keepdims=True)
-        else:
-            centroids, _ = kmeans2(volume, k, seed=KMEANS_SEED, minit="++")
-        depth, _ = tree.query(centroids)
-        # Each sample goes to the sphere it makes reach least beyond the
-        # surface: |p - c| - depth(c), depth the centre's distance to it.
-        owner = np.empty(len(points), dtype=np.int64)
-        for k0 in range(0, len(points), 4096):
-            block = points[k0 : k0 + 4096]
-            cost = np.linalg.norm(block[:, None] - centroids[None], axis=2) - depth
-            owner[k0 : k0 + 4096] = np.argmin(cost, axis=1)
-        radii = np.zeros(len(centroids))
-        np.maximum.at(
-            radii, owner, np.linalg.norm(points - centroids[owner], axis=1) + deltas
+    step = max(RIDGE_GRID, float(np.max(hi - lo)) / RIDGE_CELLS)
+    lo = lo - step
+    shape = tuple(int(n) for n in np.ceil((hi - lo) / step).astype(int) + 2)
+    # The surface's cells, closed by one dilation (samples are closer than
+    # two steps), and the cells they enclose.
+    wall = np.zeros(shape, dtype=bool)
+    cell = np.rint((points - lo) / step).astype(np.int64)
+    wall[cell[:, 0], cell[:, 1], cell[:, 2]] = True
+    wall = ndimage.binary_dilation(wall, np.ones((3, 3, 3), dtype=bool))
+    inside = ndimage.binary_fill_holes(wall) & ~wall
+    holed = not inside.any()
+    if holed:
+        # A hole: the generalised winding number decides, on every other
+        # grid point (the candidates need not follow the surface closely).
+        coarse = np.argwhere(np.ones(tuple((n + 1) // 2 for n in shape), bool))
+        winding = np.zeros(len(coarse))
+        winding_numbers(
+            np.ascontiguousarray(lo + 2.0 * step * coarse.astype(np.float64)),
+            np.ascontiguousarray(vertices[triangles]),
+            winding,
         )
-        used = np.unique(owner)
-        centers, radii = centroids[used], radii[used]
-        excess = max(
-            outside.excess(c, float(r)) for c, r in zip(centers, radii, strict=True)
+        solid = (winding > 0.5).reshape(tuple((n + 1) // 2 for n in shape))
+        inside = (
+            ~wall
+            & solid.repeat(2, 0)
+            .repeat(2, 1)
+            .repeat(2, 2)[: shape[0], : shape[1], : shape[2]]
         )
-        if best is None or excess < best[2]:
-            best = (centers, radii, excess)
-        if excess <= tolerance or k >= MAX_SPHERES:
-            break
-        k = min(MAX_SPHERES, k + max(1, k // 3))
-    return best[0], best[1], points
+    depth = ndimage.distance_transform_edt(inside)
+    ridge = inside.copy()
+    padded = np.pad(depth, 1)
+    for offset in np.ndindex(3, 3, 3):
+        d = np.array(offset) - 1
+        if not d.any():
+            continue
+        neighbour = padded[
+            1 + d[0] : 1 + d[0] + shape[0],
+            1 + d[1] : 1 + d[1] + shape[1],
+            1 + d[2] : 1 + d[2] + shape[2],
+        ]
+        ridge &= neighbour - depth < RIDGE_RISE * float(np.linalg.norm(d))
+    centers = lo + step * np.argwhere(ridge).astype(np.float64)
+    if holed and len(centers):  # each candidate itself inside
+        winding = np.zeros(len(centers))
+        winding_numbers(
+            np.ascontiguousarray(centers),
+            np.ascontiguousarray(vertices[triangles]),
+            winding,
+        )
+        centers = centers[winding > 0.5]
+    tree = cKDTree(points)
+    held = np.zeros(len(points), dtype=bool)
+    if len(centers):
+        gap, _ = tree.query(centers)
+        radii = gap + reach
+        chosen = np.zeros(len(centers), dtype=np.int64)
+        taken = greedy_cover(
+            np.ascontiguousarray(centers), radii, points, deltas, held, chosen
+        )
+        centers, radii = centers[chosen[:taken]], radii[chosen[:taken]]
+    else:
+        centers, radii = np.zeros((0, 3)), np.zeros(0)
+    # Samples no ridge sphere holds (thin walls, flat meshes): spheres of
+    # radius ``tolerance`` about samples (they reach at most that far from
+    # the surface), one candidate per grid cell, chosen the same way.
+    left = np.flatnonzero(~held)
+    _, first = np.unique(cell[left], axis=0, return_index=True)
+    around = np.ascontiguousarray(points[left[first]])
+    chosen = np.zeros(len(around), dtype=np.int64)
+    taken = greedy_cover(
+        around, np.full(len(around), tolerance), points, deltas, held, chosen
+    )
+    extra = _split_cover(points[~held], deltas[~held], tolerance / 2.0)
+    return (
+        np.concatenate([centers, around[chosen[:taken]], extra[0]]),
+        np.concatenate([radii, np.full(taken, tolerance), extra[1]]),
+        points,
+    )
 
 
-def _winding_number(points: FloatArray, corners: FloatArray) -> FloatArray:
-    """Generalised winding number (P,) of a triangle soup (T, 3, 3) at points."""
-    out = np.zeros(len(points))
-    for k in range(0, len(points), 256):
-        a, b, c = (
-            corners[None, :, i, :] - points[k : k + 256, None, :] for i in range(3)
-        )
-        la, lb, lc = (np.linalg.norm(x, axis=2) for x in (a, b, c))
-        det = np.einsum("ptj,ptj->pt", a, np.cross(b, c))
-        dots = (
-            la * lb * lc
-            + np.einsum("ptj,ptj->pt", a, b) * lc
-            + np.einsum("ptj,ptj->pt", b, c) * la
-            + np.einsum("ptj,ptj->pt", c, a) * lb
-        )
-        out[k : k + 256] = np.abs(np.sum(np.arctan2(det, dots), axis=1)) / (2 * math.pi)
-    return out
+def _split_cover(
+    points: FloatArray, deltas: FloatArray, largest: float
+) -> tuple[FloatArray, FloatArray]:
+    """Spheres of radius <= ``largest`` (or about one sample) holding samples.
 
-
-def _group_sphere(
-    points: FloatArray, deltas: FloatArray, group: IntArray
-) -> tuple[FloatArray, float]:
-    """The smaller of the spheres about the centroid and the box centre."""
-    members, delta = points[group], deltas[group]
-    best_center, best_radius = members[0], math.inf
-    for center in (members.mean(axis=0), 0.5 * (members.min(0) + members.max(0))):
-        radius = float(np.max(np.linalg.norm(members - center, axis=1) + delta))
-        if radius < best_radius:
-            best_center, best_radius = center, radius
-    return best_center, best_radius
+    A group's sphere is about its bounding box's centre; a group whose sphere
+    is too large is split at the median along its principal axis.
+    """
+    centers, radii = [], []
+    groups = [np.arange(len(points))] if len(points) else []
+    while groups:
+        group = groups.pop()
+        members = points[group]
+        center = 0.5 * (members.min(axis=0) + members.max(axis=0))
+        radius = float(np.max(np.linalg.norm(members - center, axis=1) + deltas[group]))
+        if radius <= largest or len(group) == 1:
+            centers.append(center)
+            radii.append(radius)
+            continue
+        offsets = members - members.mean(axis=0)
+        along = offsets @ np.linalg.svd(offsets, full_matrices=False)[2][0]
+        low = along <= np.median(along)
+        if low.all():
+            low = np.arange(len(group)) < len(group) // 2
+        groups += [group[low], group[~low]]
+    return np.array(centers).reshape(-1, 3), np.array(radii)
 
 
 class _OutsideHull:
@@ -440,7 +494,7 @@ def _excess(centers: FloatArray, radii: FloatArray, samples: FloatArray) -> floa
 
 __all__ = [
     "DEFAULT_TOLERANCE",
-    "MAX_SPHERES",
+    "RIDGE_GRID",
     "SAMPLE_SPACING",
     "LinkSpheres",
     "SphereModel",
