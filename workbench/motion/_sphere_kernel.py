@@ -198,6 +198,23 @@ def _distance(
     return out
 
 
+@helper(forceinline=True)
+def _place_group(
+    rot: FloatArray,
+    pos: FloatArray,
+    g: int,
+    gfirst: IntArray,
+    gplaced: BoolArray,
+    scenter: FloatArray,
+    world: FloatArray,
+) -> None:
+    """Place the spheres of group ``g`` in ``world`` once per evaluation."""
+    if not gplaced[g]:
+        for s in range(gfirst[g], gfirst[g + 1]):
+            _place(rot, pos, scenter[s], world[s])
+        gplaced[g] = True
+
+
 @helper()
 def _clearances(
     q: FloatArray,
@@ -224,22 +241,28 @@ def _clearances(
     With ``stop``, returns at the first contact (later entries unset).
     """
     free = True
-    (n_joints, n_links, n_spheres, n_pairs, n_obstacles) = (
+    (n_joints, n_links, n_spheres, n_pairs, n_obstacles, n_groups) = (
         sizes[0],
         sizes[1],
         sizes[2],
         sizes[3],
         sizes[4],
+        sizes[6],
     )
     jparent = robot_int[0:n_joints]
     jq = robot_int[n_joints : 2 * n_joints]
     ljoint = robot_int[2 * n_joints : 2 * n_joints + n_links]
-    lfirst = robot_int[2 * n_joints + n_links : 2 * n_joints + 2 * n_links + 1]
+    # (each link's first sphere is next; the groups index the spheres)
     base = 2 * n_joints + 2 * n_links + 1
     pa = robot_int[base : base + n_pairs]
     pb = robot_int[base + n_pairs : base + 2 * n_pairs]
     lscene = robot_int[base + 2 * n_pairs : base + 2 * n_pairs + n_links]
-    allowed = robot_int[base + 2 * n_pairs + n_links :].reshape(n_links, -1)
+    base += 2 * n_pairs + n_links
+    width = max(1, n_obstacles)
+    allowed = robot_int[base : base + n_links * width].reshape(n_links, width)
+    base += n_links * width
+    lgroup = robot_int[base : base + n_links + 1]
+    gfirst = robot_int[base + n_links + 1 : base + n_links + 2 + n_groups]
     f = 0
     jrot = robot_float[f : f + 9 * n_joints].reshape(n_joints, 3, 3)
     f += 9 * n_joints
@@ -256,6 +279,10 @@ def _clearances(
     sradius = robot_float[f : f + n_spheres]
     f += n_spheres
     allow = robot_float[f : f + n_links + n_pairs]
+    f += n_links + n_pairs
+    gcenter = robot_float[f : f + 3 * n_groups].reshape(n_groups, 3)
+    f += 3 * n_groups
+    gradius = robot_float[f : f + n_groups]
     okind = scene_int[0:n_obstacles]
     ofirst = scene_int[n_obstacles : 2 * n_obstacles + 1]
     orot = scene_float[0 : 9 * n_obstacles].reshape(n_obstacles, 3, 3)
@@ -269,7 +296,9 @@ def _clearances(
         j = ljoint[li]
         _place(frame_rot[j], frame_pos[j], lcenter[li], bound[li])
     world = np.empty((n_spheres, 3))
+    gworld = np.empty((n_groups, 3))
     placed = np.zeros(n_links, dtype=np.bool_)
+    gplaced = np.zeros(n_groups, dtype=np.bool_)
     for li in range(n_links):
         best = math.inf
         if lscene[li] and need[li] > -math.inf:
@@ -285,16 +314,18 @@ def _clearances(
                 )
                 bounds[li, o] = d
                 if d < need[li]:
+                    j = ljoint[li]
                     if not placed[li]:
-                        j = ljoint[li]
-                        for s in range(lfirst[li], lfirst[li + 1]):
-                            _place(frame_rot[j], frame_pos[j], scenter[s], world[s])
+                        for g in range(lgroup[li], lgroup[li + 1]):
+                            _place(frame_rot[j], frame_pos[j], gcenter[g], gworld[g])
                         placed[li] = True
                     d = math.inf
-                    for s in range(lfirst[li], lfirst[li + 1]):
-                        ds = (
+                    for g in range(lgroup[li], lgroup[li + 1]):
+                        # A group whose bounding sphere is no nearer than the
+                        # nearest sphere so far cannot lower the minimum.
+                        dg = (
                             _distance(
-                                world[s],
+                                gworld[g],
                                 o,
                                 okind,
                                 orot,
@@ -302,12 +333,39 @@ def _clearances(
                                 osize,
                                 ofirst,
                                 tris,
-                                d + sradius[s] - allow[li],
+                                d + gradius[g] - allow[li],
                             )
-                            - sradius[s]
+                            - gradius[g]
                             + allow[li]
                         )
-                        d = min(d, ds)
+                        if dg >= d:
+                            continue
+                        _place_group(
+                            frame_rot[j],
+                            frame_pos[j],
+                            g,
+                            gfirst,
+                            gplaced,
+                            scenter,
+                            world,
+                        )
+                        for s in range(gfirst[g], gfirst[g + 1]):
+                            ds = (
+                                _distance(
+                                    world[s],
+                                    o,
+                                    okind,
+                                    orot,
+                                    opos,
+                                    osize,
+                                    ofirst,
+                                    tris,
+                                    d + sradius[s] - allow[li],
+                                )
+                                - sradius[s]
+                                + allow[li]
+                            )
+                            d = min(d, ds)
                         if d < 0.0 and stop:
                             out[li] = d
                             return False
@@ -325,20 +383,43 @@ def _clearances(
             for li in (a, b):
                 if not placed[li]:
                     j = ljoint[li]
-                    for s in range(lfirst[li], lfirst[li + 1]):
-                        _place(frame_rot[j], frame_pos[j], scenter[s], world[s])
+                    for g in range(lgroup[li], lgroup[li + 1]):
+                        _place(frame_rot[j], frame_pos[j], gcenter[g], gworld[g])
                     placed[li] = True
             d = math.inf
             limit = need[n_links + k]
-            for s in range(lfirst[a], lfirst[a + 1]):
-                # A sphere of a far from b's bounding sphere is far from b.
-                coarse = _gap(world[s], bound[b]) - sradius[s] - lradius[b] + slack
-                if coarse >= limit:
+            for ga in range(lgroup[a], lgroup[a + 1]):
+                # A group of a far from b's bounding sphere is far from b.
+                coarse = _gap(gworld[ga], bound[b]) - gradius[ga] - lradius[b] + slack
+                if coarse >= limit or coarse >= d:
                     d = min(d, coarse)
                     continue
-                for t in range(lfirst[b], lfirst[b + 1]):
-                    gap = _gap(world[s], world[t]) - sradius[s] - sradius[t]
-                    d = min(d, gap + slack)
+                for gb in range(lgroup[b], lgroup[b + 1]):
+                    near = _gap(gworld[ga], gworld[gb]) - gradius[ga] - gradius[gb]
+                    if near + slack >= d:
+                        continue
+                    _place_group(
+                        frame_rot[ljoint[a]],
+                        frame_pos[ljoint[a]],
+                        ga,
+                        gfirst,
+                        gplaced,
+                        scenter,
+                        world,
+                    )
+                    _place_group(
+                        frame_rot[ljoint[b]],
+                        frame_pos[ljoint[b]],
+                        gb,
+                        gfirst,
+                        gplaced,
+                        scenter,
+                        world,
+                    )
+                    for s in range(gfirst[ga], gfirst[ga + 1]):
+                        for t in range(gfirst[gb], gfirst[gb + 1]):
+                            gap = _gap(world[s], world[t]) - sradius[s] - sradius[t]
+                            d = min(d, gap + slack)
             if d < 0.0 and stop:
                 out[n_links + k] = d
                 return False

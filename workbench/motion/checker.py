@@ -12,6 +12,7 @@ obstacle's ``allow`` list is honoured.
 
 from __future__ import annotations
 
+import itertools
 from typing import NamedTuple
 
 import numpy as np
@@ -196,16 +197,27 @@ def _pack_robot(
     pairs = _pairs(spheres)
     pa = np.array([names.index(a) for a, _ in pairs], dtype=np.int64)
     pb = np.array([names.index(b) for _, b in pairs], dtype=np.int64)
+    # Each link's spheres in groups of at most GROUP_SIZE near ones, each group
+    # with its bounding sphere: the kernel skips a group that cannot come nearer.
+    orders, group_first, group_center, group_radius = [], [0], [], []
+    link_groups = [0]
+    for link in links:
+        order, groups = _groups(link.centers)
+        orders.append(order)
+        for group in groups:
+            center, radius = _bounding_sphere(
+                link.centers[order[group]], link.radii[order[group]]
+            )
+            group_center.append(center)
+            group_radius.append(radius)
+            group_first.append(group_first[-1] + len(group))
+        link_groups.append(link_groups[-1] + len(groups))
     first = np.cumsum([0] + [len(link.radii) for link in links]).astype(np.int64)
     bound_center, bound_radius = [], []
     for link in links:
-        lo = (link.centers - link.radii[:, None]).min(axis=0)
-        hi = (link.centers + link.radii[:, None]).max(axis=0)
-        center = 0.5 * (lo + hi)
+        center, radius = _bounding_sphere(link.centers, link.radii)
         bound_center.append(center)
-        bound_radius.append(
-            float(np.max(np.linalg.norm(link.centers - center, axis=1) + link.radii))
-        )
+        bound_radius.append(radius)
     parents = np.array(model.parents, dtype=np.int64)
     parents[0] = -1
     jq = np.array([max(model.joints[j].idx_q, 0) for j in range(model.njoints)])
@@ -219,6 +231,8 @@ def _pack_robot(
             pb,
             np.array([link.joint != 0 for link in links], dtype=np.int64),
             allowed.ravel(),
+            np.array(link_groups, dtype=np.int64),
+            np.array(group_first, dtype=np.int64),
         ]
     ).astype(np.int64)
     rotations = np.array([p.rotation for p in model.jointPlacements])
@@ -230,9 +244,15 @@ def _pack_robot(
             axes.ravel(),
             np.array(bound_center).ravel(),
             np.array(bound_radius),
-            np.concatenate([link.centers for link in links]).ravel(),
-            np.concatenate([link.radii for link in links]),
+            np.concatenate(
+                [link.centers[o] for link, o in zip(links, orders, strict=True)]
+            ).ravel(),
+            np.concatenate(
+                [link.radii[o] for link, o in zip(links, orders, strict=True)]
+            ),
             allowance,
+            np.array(group_center).ravel(),
+            np.array(group_radius),
         ]
     )
     # Lever arm of link l about joint i [m/rad]: a bound on the distance of
@@ -276,8 +296,44 @@ def _pack_robot(
         len(pairs),
         len(scene.obstacles),
         model.nv,
+        len(group_radius),
     ]
     return robot_int, robot_float, np.ascontiguousarray(levers), sizes
+
+
+#: Most spheres of one group of a link (the kernel's middle level).
+GROUP_SIZE = 8
+
+
+def _groups(centers: FloatArray) -> tuple[IntArray, list[IntArray]]:
+    """An order of the spheres and its groups (ranges) of <= GROUP_SIZE.
+
+    Groups are split at the median along their principal axis, so that each
+    holds near spheres.
+    """
+    pending, done = [np.arange(len(centers))], []
+    while pending:
+        group = pending.pop()
+        if len(group) <= GROUP_SIZE:
+            done.append(group)
+            continue
+        offsets = centers[group] - centers[group].mean(axis=0)
+        along = offsets @ np.linalg.svd(offsets, full_matrices=False)[2][0]
+        order = group[np.argsort(along, kind="stable")]
+        pending += [order[len(order) // 2 :], order[: len(order) // 2]]
+    order = np.concatenate(done) if done else np.zeros(0, dtype=np.int64)
+    starts = np.cumsum([0] + [len(g) for g in done])
+    return order, [np.arange(a, b) for a, b in itertools.pairwise(starts)]
+
+
+def _bounding_sphere(
+    centers: FloatArray, radii: FloatArray
+) -> tuple[FloatArray, float]:
+    """A sphere (centre (3,) [m], radius [m]) holding the given spheres."""
+    lo = (centers - radii[:, None]).min(axis=0)
+    hi = (centers + radii[:, None]).max(axis=0)
+    center = 0.5 * (lo + hi)
+    return center, float(np.max(np.linalg.norm(centers - center, axis=1) + radii))
 
 
 def _pack_scene(scene: Scene) -> tuple[IntArray, FloatArray, FloatArray]:
