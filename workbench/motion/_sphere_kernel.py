@@ -8,7 +8,9 @@ this module only computes.
 distance to the scene (every obstacle it is not allowed to touch) and every
 checked link pair one of its distance: first from the link's bounding sphere,
 then, where that bound is below what the caller needs, from the link's own
-spheres (each inside the bounding sphere, so never nearer). Signed distances
+spheres (each inside the bounding sphere, so never nearer), visited by groups
+of near spheres: a group whose bounding sphere is no nearer than the nearest
+sphere so far is skipped (the minimum stays exact). Signed distances
 of a sphere centre to boxes, cylinders and spheres are exact; to a mesh it is
 the unsigned distance to its triangles.
 
