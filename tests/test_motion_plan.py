@@ -193,7 +193,7 @@ def test_a_cube_is_covered_by_few_spheres_even_with_a_hole(holed) -> None:
     if not holed:
         tris = np.concatenate([tris, [[1, 7, 3]]])
     centers, radii, _ = _cover_mesh(vertices, tris, 0.02)
-    points, deltas = _surface_samples(vertices, tris, 0.001)
+    points, _ = _surface_samples(vertices, tris, 0.001)
     gap = np.linalg.norm(points[:, None] - centers[None], axis=2) - radii
     assert np.all(gap.min(axis=1) <= EXACT_TOL)
     assert len(radii) <= 40

@@ -218,6 +218,26 @@ def test_ghosts_one_node_per_branch_without_base(puma) -> None:
         viewer.show_ghosts([q, flip], labels=["one"])
 
 
+def test_ghosts_of_the_collision_geometry(puma) -> None:
+    """``collision=True`` draws each ghost with the collision model's objects."""
+    q = np.deg2rad(Q_DEG)
+    drawn = {}
+    for collision in (False, True):
+        viewer = Viewer(puma)
+        viewer.show_ghosts([q], labels=["g"], collision=collision)
+        objects = by_path(page_commands(viewer.render_html()), "set_object")
+        drawn[collision] = {
+            p.rsplit("/", 1)[1] for p in objects if p.startswith("/meshcat/ghosts/g/")
+        }
+    collision_names = {g.name for g in puma.collision_model.geometryObjects}
+    visual_names = {g.name for g in puma.visual_model.geometryObjects}
+    assert drawn[True] and drawn[True] <= collision_names
+    assert drawn[False] <= visual_names
+    viewer = Viewer(puma)
+    viewer.show_ghosts([q], labels=["g"], collision=True)
+    assert "ghosts drawn with the collision geometry" in viewer.render_html()
+
+
 def test_targets_frames_and_visibility(puma) -> None:
     viewer = Viewer(puma)
     target = puma.fk(np.deg2rad(Q_DEG))

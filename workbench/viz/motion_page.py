@@ -1,7 +1,8 @@
 """The page of a planned motion in its scene (``motion plan --html``, the demo).
 
 The motion plays as an animation with the scene drawn and contacts coloured,
-the planner's inner waypoints as translucent ghosts, the tool frame as a
+the planner's inner waypoints as translucent ghosts (of the collision
+geometry: what the planner checked, and light), the tool frame as a
 triad, and, optionally, the tool path of another motion (e.g. the direct
 spline the plan replaces) as a second line for comparison. The camera keeps
 the default framing's distance but looks from the side away from the
@@ -70,7 +71,9 @@ def write_motion_html(
     inner = inner[1:-1]
     if len(inner):
         labels = [f"waypoint{k + 1}" for k in range(len(inner))]
-        viewer.show_ghosts(inner, labels=labels, legend="waypoints", opacity=0.2)
+        viewer.show_ghosts(
+            inner, labels=labels, legend="waypoints", opacity=0.2, collision=True
+        )
     viewer.show_frames()
     viewer.play_trajectory(samples.t, samples.q)
     if compared is not None:

@@ -231,6 +231,7 @@ class Viewer:
         opacity: float = 0.3,
         colors: npt.ArrayLike | None = None,
         legend: str | None = None,
+        collision: bool = False,
     ) -> None:
         """Draw translucent copies of the arm, e.g. every IK branch of one pose.
 
@@ -249,6 +250,9 @@ class Viewer:
                 scale of a value); default :data:`GHOST_COLORS`, cycled.
             legend: HTML of the legend's ghost section (e.g. the colour
                 scale); default one row per label.
+            collision: Draw them with the collision geometry (what a
+                collision check sees, and far lighter in the page than
+                detailed visual meshes) rather than the visual one.
 
         Raises:
             DimensionError: If the configurations are not (M, nq), or the
@@ -268,7 +272,10 @@ class Viewer:
             if rgb.shape != (len(qs), 3):
                 raise DimensionError("colors", (len(qs), 3), rgb.shape)
         self._scene["ghosts"].delete()
-        geometry, visual = get_colorable_geometry(self.robot)
+        if collision and self.robot.collision_model.ngeoms:
+            geometry, visual = self.robot.collision_model, False
+        else:
+            geometry, visual = get_colorable_geometry(self.robot)
         points = [np.zeros((0, 3))]
         for i, (qk, label) in enumerate(zip(qs, labels, strict=True)):
             rgba = [*(float(c) for c in rgb[i]), float(opacity)]
@@ -287,7 +294,9 @@ class Viewer:
         entry = legend or _legend.ghosts(labels, rgb.tolist())
         if not visual:
             entry += (
-                "<div>ghosts drawn with the collision geometry (the visual "
+                "<div>ghosts drawn with the collision geometry</div>"
+                if collision
+                else "<div>ghosts drawn with the collision geometry (the visual "
                 "meshes keep their own colours)</div>"
             )
         self._legend["ghosts"] = entry
