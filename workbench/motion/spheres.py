@@ -242,15 +242,16 @@ def _cover_mesh(
     ball of radius ``u`` is inside it); moving ``c`` up the gradient of ``u``
     grows the sphere by as much as it moves, so only centres on the ridge of
     ``u`` (the medial axis) are worth proposing. The candidates are the
-    points of a :data:`RIDGE_GRID` grid that no neighbour dominates (the
-    grid's distance transform to the sampled surface rising by less than
-    0.9 of the step towards every neighbour) and that lie inside the mesh
-    (generalised winding number > 1/2, robust to small holes); the greedy
-    set cover (:func:`workbench.motion._cover_kernel.greedy_cover`) picks
-    from them until every sample they can hold is held. The samples left
-    (thin walls, flat meshes) are split at the median along their principal
-    axis until each group's sphere has a radius of at most
-    ``tolerance / 2`` (so reaches at most ``tolerance`` beyond them).
+    points of a :data:`RIDGE_GRID` grid inside the mesh (the cells that the
+    sampled surface's cells enclose or, for a mesh with holes, a generalised
+    winding number > 1/2) at which the grid's distance transform rises by
+    less than :data:`RIDGE_RISE` of the step towards every neighbour; the
+    greedy set cover (:func:`workbench.motion._cover_kernel.greedy_cover`)
+    picks from them until every sample they can hold is held. The samples
+    left (thin walls, flat meshes) get spheres of radius ``tolerance`` about
+    samples, chosen the same way; whatever a small tolerance still leaves is
+    split at the median along its principal axis until each group's sphere
+    has a radius of at most ``tolerance / 2``.
     """
     from scipy import ndimage
     from scipy.spatial import cKDTree
