@@ -201,20 +201,51 @@ def _distance(
 
 
 @helper(forceinline=True)
-def _place_group(
+def _place_once(
     rot: FloatArray,
     pos: FloatArray,
-    g: int,
-    gfirst: IntArray,
-    gplaced: BoolArray,
-    scenter: FloatArray,
+    k: int,
+    first: IntArray,
+    placed: BoolArray,
+    local: FloatArray,
     world: FloatArray,
 ) -> None:
-    """Place the spheres of group ``g`` in ``world`` once per evaluation."""
-    if not gplaced[g]:
-        for s in range(gfirst[g], gfirst[g + 1]):
-            _place(rot, pos, scenter[s], world[s])
-        gplaced[g] = True
+    """Place points ``first[k]:first[k + 1]`` of ``local`` in ``world``, once.
+
+    Used for a link's group centres (``k`` a link) and a group's spheres
+    (``k`` a group); ``placed[k]`` records that it was done.
+    """
+    if not placed[k]:
+        for s in range(first[k], first[k + 1]):
+            _place(rot, pos, local[s], world[s])
+        placed[k] = True
+
+
+@helper(forceinline=True)
+def _sphere_distance(
+    center: FloatArray,
+    radius: float,
+    slack: float,
+    o: int,
+    okind: IntArray,
+    orot: FloatArray,
+    opos: FloatArray,
+    osize: FloatArray,
+    ofirst: IntArray,
+    tris: FloatArray,
+    best: float,
+) -> float:
+    """Distance [m] of a sphere to obstacle o plus ``slack`` (an allowance).
+
+    A mesh's may return early with a value >= ``best`` (see :func:`_distance`).
+    """
+    return (
+        _distance(
+            center, o, okind, orot, opos, osize, ofirst, tris, best + radius - slack
+        )
+        - radius
+        + slack
+    )
 
 
 @helper()
@@ -254,8 +285,7 @@ def _clearances(
     jparent = robot_int[0:n_joints]
     jq = robot_int[n_joints : 2 * n_joints]
     ljoint = robot_int[2 * n_joints : 2 * n_joints + n_links]
-    # (each link's first sphere is next; the groups index the spheres)
-    base = 2 * n_joints + 2 * n_links + 1
+    base = 2 * n_joints + n_links
     pa = robot_int[base : base + n_pairs]
     pb = robot_int[base + n_pairs : base + 2 * n_pairs]
     lscene = robot_int[base + 2 * n_pairs : base + 2 * n_pairs + n_links]
@@ -307,42 +337,45 @@ def _clearances(
             for o in range(n_obstacles):
                 if allowed[li, o] or skip[li, o]:
                     continue
-                d = (
-                    _distance(
-                        bound[li], o, okind, orot, opos, osize, ofirst, tris, math.inf
-                    )
-                    - lradius[li]
-                    + allow[li]
+                d = _sphere_distance(
+                    bound[li],
+                    lradius[li],
+                    allow[li],
+                    o,
+                    okind,
+                    orot,
+                    opos,
+                    osize,
+                    ofirst,
+                    tris,
+                    math.inf,
                 )
                 bounds[li, o] = d
                 if d < need[li]:
                     j = ljoint[li]
-                    if not placed[li]:
-                        for g in range(lgroup[li], lgroup[li + 1]):
-                            _place(frame_rot[j], frame_pos[j], gcenter[g], gworld[g])
-                        placed[li] = True
+                    _place_once(
+                        frame_rot[j], frame_pos[j], li, lgroup, placed, gcenter, gworld
+                    )
                     d = math.inf
                     for g in range(lgroup[li], lgroup[li + 1]):
                         # A group whose bounding sphere is no nearer than the
                         # nearest sphere so far cannot lower the minimum.
-                        dg = (
-                            _distance(
-                                gworld[g],
-                                o,
-                                okind,
-                                orot,
-                                opos,
-                                osize,
-                                ofirst,
-                                tris,
-                                d + gradius[g] - allow[li],
-                            )
-                            - gradius[g]
-                            + allow[li]
+                        dg = _sphere_distance(
+                            gworld[g],
+                            gradius[g],
+                            allow[li],
+                            o,
+                            okind,
+                            orot,
+                            opos,
+                            osize,
+                            ofirst,
+                            tris,
+                            d,
                         )
                         if dg >= d:
                             continue
-                        _place_group(
+                        _place_once(
                             frame_rot[j],
                             frame_pos[j],
                             g,
@@ -352,20 +385,18 @@ def _clearances(
                             world,
                         )
                         for s in range(gfirst[g], gfirst[g + 1]):
-                            ds = (
-                                _distance(
-                                    world[s],
-                                    o,
-                                    okind,
-                                    orot,
-                                    opos,
-                                    osize,
-                                    ofirst,
-                                    tris,
-                                    d + sradius[s] - allow[li],
-                                )
-                                - sradius[s]
-                                + allow[li]
+                            ds = _sphere_distance(
+                                world[s],
+                                sradius[s],
+                                allow[li],
+                                o,
+                                okind,
+                                orot,
+                                opos,
+                                osize,
+                                ofirst,
+                                tris,
+                                d,
                             )
                             d = min(d, ds)
                         if d < 0.0 and stop:
@@ -383,11 +414,10 @@ def _clearances(
         d = _gap(bound[a], bound[b]) - lradius[a] - lradius[b] + slack
         if d < need[n_links + k]:
             for li in (a, b):
-                if not placed[li]:
-                    j = ljoint[li]
-                    for g in range(lgroup[li], lgroup[li + 1]):
-                        _place(frame_rot[j], frame_pos[j], gcenter[g], gworld[g])
-                    placed[li] = True
+                j = ljoint[li]
+                _place_once(
+                    frame_rot[j], frame_pos[j], li, lgroup, placed, gcenter, gworld
+                )
             d = math.inf
             limit = need[n_links + k]
             for ga in range(lgroup[a], lgroup[a + 1]):
@@ -400,7 +430,7 @@ def _clearances(
                     near = _gap(gworld[ga], gworld[gb]) - gradius[ga] - gradius[gb]
                     if near + slack >= d:
                         continue
-                    _place_group(
+                    _place_once(
                         frame_rot[ljoint[a]],
                         frame_pos[ljoint[a]],
                         ga,
@@ -409,7 +439,7 @@ def _clearances(
                         scenter,
                         world,
                     )
-                    _place_group(
+                    _place_once(
                         frame_rot[ljoint[b]],
                         frame_pos[ljoint[b]],
                         gb,

@@ -212,7 +212,6 @@ def _pack_robot(
             group_radius.append(radius)
             group_first.append(group_first[-1] + len(group))
         link_groups.append(link_groups[-1] + len(groups))
-    first = np.cumsum([0] + [len(link.radii) for link in links]).astype(np.int64)
     bound_center, bound_radius = [], []
     for link in links:
         center, radius = _bounding_sphere(link.centers, link.radii)
@@ -226,7 +225,6 @@ def _pack_robot(
             parents,
             jq,
             np.array([link.joint for link in links], dtype=np.int64),
-            first,
             pa,
             pb,
             np.array([link.joint != 0 for link in links], dtype=np.int64),
@@ -292,7 +290,7 @@ def _pack_robot(
     sizes = [
         model.njoints,
         len(links),
-        int(first[-1]),
+        group_first[-1],
         len(pairs),
         len(scene.obstacles),
         model.nv,

@@ -274,6 +274,7 @@ def _cover_mesh(
     wall = ndimage.binary_dilation(wall, np.ones((3, 3, 3), dtype=bool))
     inside = ndimage.binary_fill_holes(wall) & ~wall
     holed = not inside.any()
+    corners = np.ascontiguousarray(vertices[triangles])
     if holed:
         # A hole: the generalised winding number decides, on every other
         # grid point (the candidates need not follow the surface closely).
@@ -281,7 +282,7 @@ def _cover_mesh(
         winding = np.zeros(len(coarse))
         winding_numbers(
             np.ascontiguousarray(lo + 2.0 * step * coarse.astype(np.float64)),
-            np.ascontiguousarray(vertices[triangles]),
+            corners,
             winding,
         )
         solid = (winding > 0.5).reshape(tuple((n + 1) // 2 for n in shape))
@@ -309,7 +310,7 @@ def _cover_mesh(
         winding = np.zeros(len(centers))
         winding_numbers(
             np.ascontiguousarray(centers),
-            np.ascontiguousarray(vertices[triangles]),
+            corners,
             winding,
         )
         centers = centers[winding > 0.5]
