@@ -269,6 +269,76 @@ def test_compiled_clearances_equal_numpy(ur5_spheres, fractions) -> None:
         assert got.min() < 0
 
 
+def _point_triangle_distances(points: np.ndarray, tris: np.ndarray) -> np.ndarray:
+    """Distance (P,) [m] of each point to the nearest triangle (T, 3, 3).
+
+    Independent of the kernel's region tests: the projection onto the plane
+    where it falls inside (barycentric coordinates), else the nearest of the
+    three edges (clamped segment projections).
+    """
+    p = points[:, None, None, :]  # (P, 1, 1, 3)
+    a, b, c = tris[:, 0], tris[:, 1], tris[:, 2]
+    normal = np.cross(b - a, c - a)
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    height = np.einsum("ptk,tk->pt", p[:, :, 0] - a, normal)
+    foot = p[:, :, 0] - height[..., None] * normal  # (P, T, 3)
+    inside = np.ones(height.shape, dtype=bool)
+    for u, v in ((a, b), (b, c), (c, a)):
+        inside &= np.einsum("ptk,tk->pt", np.cross(v - u, foot - u), normal) >= 0
+    starts = np.stack([a, b, c], axis=1)  # (T, 3, 3): edge starts
+    ends = np.stack([b, c, a], axis=1)
+    edge = ends - starts
+    along = np.einsum("ptek,tek->pte", p - starts, edge) / np.einsum(
+        "tek,tek->te", edge, edge
+    )
+    nearest = starts + np.clip(along, 0.0, 1.0)[..., None] * edge
+    to_edges = np.linalg.norm(p - nearest, axis=3).min(axis=2)
+    return np.where(inside, np.abs(height), to_edges).min(axis=1)
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.lists(st.floats(-1.0, 1.0), min_size=6, max_size=6))
+def test_compiled_mesh_clearances_equal_numpy(ur5_spheres, fractions) -> None:
+    """A mesh obstacle: the distance to its nearest triangle, minus the radius."""
+    robot = ur5_spheres.robot
+    q = 0.5 * (robot.lower + robot.upper) + 0.5 * np.array(fractions) * (
+        robot.upper - robot.lower
+    )
+    vertices = np.array(
+        [[0.0, 0.0, 0.0], [0.4, 0.0, 0.1], [0.1, 0.3, 0.0], [0.1, 0.1, 0.35]]
+    )
+    triangles = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]])
+    placement = pin.SE3(
+        pin.utils.rpyToMatrix(0.4, 0.1, -0.6), np.array([0.3, 0.1, 0.2])
+    )
+    tetra = Obstacle(
+        "tetra",
+        "mesh",
+        (1.0, 1.0, 1.0),
+        placement,
+        vertices=vertices,
+        triangles=triangles,
+    )
+    checker = SphereChecker(ur5_spheres, Scene("tetra", (tetra,)))
+    got = checker.clearances(q)[: len(checker.links)]
+    data = robot.model.createData()
+    pin.forwardKinematics(robot.model, data, q)
+    world_tris = vertices[triangles] @ placement.rotation.T + placement.translation
+    for li, link in enumerate(ur5_spheres.links):
+        if link.joint == 0:
+            assert got[li] == math.inf
+            continue
+        centers = (
+            link.centers @ data.oMi[link.joint].rotation.T
+            + data.oMi[link.joint].translation
+        )
+        expected = np.min(_point_triangle_distances(centers, world_tris) - link.radii)
+        if expected > 0:
+            assert got[li] == pytest.approx(expected, abs=EXACT_TOL)
+        else:
+            assert got[li] < 0
+
+
 def test_sphere_contacts_include_every_exact_contact(
     ur5_spheres, ur5_allowance
 ) -> None:

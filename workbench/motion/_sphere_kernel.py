@@ -116,41 +116,56 @@ def _gap(a: FloatArray, b: FloatArray) -> float:
 
 
 @helper(forceinline=True)
-def _point_triangle(
-    p: FloatArray, a: FloatArray, b: FloatArray, c: FloatArray
-) -> float:
-    """Distance [m] from point p to triangle abc (Ericson, 5.1.5)."""
-    ab, ac, ap = b - a, c - a, p - a
-    d1, d2 = ab @ ap, ac @ ap
+def _norm(x: float, y: float, z: float) -> float:
+    """Length of the vector (x, y, z)."""
+    return math.sqrt(x * x + y * y + z * z)
+
+
+@helper(forceinline=True)
+def _point_triangle(px: float, py: float, pz: float, tri: FloatArray) -> float:
+    """Distance [m] from point p to the triangle tri (3, 3) (Ericson, 5.1.5).
+
+    In scalars: array temporaries would allocate, and their cleanup slows
+    every caller that inlines this, whether or not it reaches a mesh.
+    """
+    ax, ay, az = tri[0, 0], tri[0, 1], tri[0, 2]
+    abx, aby, abz = tri[1, 0] - ax, tri[1, 1] - ay, tri[1, 2] - az
+    acx, acy, acz = tri[2, 0] - ax, tri[2, 1] - ay, tri[2, 2] - az
+    apx, apy, apz = px - ax, py - ay, pz - az
+    d1 = abx * apx + aby * apy + abz * apz
+    d2 = acx * apx + acy * apy + acz * apz
     if d1 <= 0.0 and d2 <= 0.0:
-        return math.sqrt(ap @ ap)
-    bp = p - b
-    d3, d4 = ab @ bp, ac @ bp
+        return _norm(apx, apy, apz)
+    bpx, bpy, bpz = apx - abx, apy - aby, apz - abz
+    d3 = abx * bpx + aby * bpy + abz * bpz
+    d4 = acx * bpx + acy * bpy + acz * bpz
     if d3 >= 0.0 and d4 <= d3:
-        return math.sqrt(bp @ bp)
+        return _norm(bpx, bpy, bpz)
     vc = d1 * d4 - d3 * d2
     if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
         v = d1 / (d1 - d3)
-        e = ap - v * ab
-        return math.sqrt(e @ e)
-    cp = p - c
-    d5, d6 = ab @ cp, ac @ cp
+        return _norm(apx - v * abx, apy - v * aby, apz - v * abz)
+    cpx, cpy, cpz = apx - acx, apy - acy, apz - acz
+    d5 = abx * cpx + aby * cpy + abz * cpz
+    d6 = acx * cpx + acy * cpy + acz * cpz
     if d6 >= 0.0 and d5 <= d6:
-        return math.sqrt(cp @ cp)
+        return _norm(cpx, cpy, cpz)
     vb = d5 * d2 - d1 * d6
     if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
         w = d2 / (d2 - d6)
-        e = ap - w * ac
-        return math.sqrt(e @ e)
+        return _norm(apx - w * acx, apy - w * acy, apz - w * acz)
     va = d3 * d6 - d5 * d4
     if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
         w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
-        e = p - (b + w * (c - b))
-        return math.sqrt(e @ e)
+        # p - (b + w (c - b)) = bp - w (ac - ab)
+        return _norm(
+            bpx - w * (acx - abx), bpy - w * (acy - aby), bpz - w * (acz - abz)
+        )
     denom = 1.0 / (va + vb + vc)
     v, w = vb * denom, vc * denom
-    e = ap - ab * v - ac * w
-    return math.sqrt(e @ e)
+    return _norm(
+        apx - abx * v - acx * w, apy - aby * v - acy * w, apz - abz * v - acz * w
+    )
 
 
 @helper(forceinline=True)
@@ -192,11 +207,9 @@ def _distance(
     bound = math.sqrt(dx * dx + dy * dy + dz * dz) - osize[o, 0]
     if bound >= best:
         return bound
-    local = np.empty(3)
-    local[0], local[1], local[2] = lx, ly, lz
     out = math.inf
     for t in range(ofirst[o], ofirst[o + 1]):
-        out = min(out, _point_triangle(local, tris[t, 0], tris[t, 1], tris[t, 2]))
+        out = min(out, _point_triangle(lx, ly, lz, tris[t]))
     return out
 
 
@@ -246,6 +259,20 @@ def _sphere_distance(
         - radius
         + slack
     )
+
+
+@helper(forceinline=True)
+def _limit(need: float, bound: float, radius: float) -> float:
+    """How far to refine an entry whose bounding spheres show ``bound`` [m].
+
+    Its spheres (inside bounding spheres of total radius ``radius``) are
+    never more than ``bound + 2 radius`` clear, so a finite ``need`` beyond
+    that cannot be shown: refine only to find contacts (0). An infinite
+    ``need`` asks for the exact minimum.
+    """
+    if need == math.inf or need <= bound + 2.0 * radius:
+        return need
+    return 0.0
 
 
 @helper()
@@ -351,7 +378,8 @@ def _clearances(
                     math.inf,
                 )
                 bounds[li, o] = d
-                if d < need[li]:
+                limit = _limit(need[li], d, lradius[li])
+                if d < limit:
                     j = ljoint[li]
                     _place_once(
                         frame_rot[j], frame_pos[j], li, lgroup, placed, gcenter, gworld
@@ -373,7 +401,8 @@ def _clearances(
                             tris,
                             d,
                         )
-                        if dg >= d:
+                        if dg >= d or dg >= limit:
+                            d = min(d, dg)
                             continue
                         _place_once(
                             frame_rot[j],
@@ -412,14 +441,14 @@ def _clearances(
         a, b = pa[k], pb[k]
         slack = allow[n_links + k]
         d = _gap(bound[a], bound[b]) - lradius[a] - lradius[b] + slack
-        if d < need[n_links + k]:
+        limit = _limit(need[n_links + k], d, lradius[a] + lradius[b])
+        if d < limit:
             for li in (a, b):
                 j = ljoint[li]
                 _place_once(
                     frame_rot[j], frame_pos[j], li, lgroup, placed, gcenter, gworld
                 )
             d = math.inf
-            limit = need[n_links + k]
             for ga in range(lgroup[a], lgroup[a + 1]):
                 # A group of a far from b's bounding sphere is far from b.
                 coarse = _gap(gworld[ga], bound[b]) - gradius[ga] - lradius[b] + slack
@@ -427,8 +456,11 @@ def _clearances(
                     d = min(d, coarse)
                     continue
                 for gb in range(lgroup[b], lgroup[b + 1]):
-                    near = _gap(gworld[ga], gworld[gb]) - gradius[ga] - gradius[gb]
-                    if near + slack >= d:
+                    near = (
+                        _gap(gworld[ga], gworld[gb]) - gradius[ga] - gradius[gb] + slack
+                    )
+                    if near >= d or near >= limit:
+                        d = min(d, near)
                         continue
                     _place_once(
                         frame_rot[ljoint[a]],
@@ -449,9 +481,18 @@ def _clearances(
                         world,
                     )
                     for s in range(gfirst[ga], gfirst[ga + 1]):
+                        # A sphere far from the group is far from its spheres.
+                        far = _gap(world[s], gworld[gb]) - sradius[s] - gradius[gb]
+                        if far + slack >= d or far + slack >= limit:
+                            d = min(d, far + slack)
+                            continue
                         for t in range(gfirst[gb], gfirst[gb + 1]):
                             gap = _gap(world[s], world[t]) - sradius[s] - sradius[t]
                             d = min(d, gap + slack)
+                    if d < 0.0 and stop:
+                        break
+                if d < 0.0 and stop:
+                    break
             if d < 0.0 and stop:
                 out[n_links + k] = d
                 return False
