@@ -508,8 +508,18 @@ def test_an_allowance_lets_an_entry_overlap_that_much_and_no_more(
     assert overlap == pytest.approx(-0.005, abs=EXACT_TOL) or overlap < -0.005
     allowance[link3] = -overlap + 0.001
     assert SphereChecker(puma_spheres, ball, allowance=allowance).is_free(q)
+    assert SphereChecker(puma_spheres, ball).with_allowance(allowance).is_free(q)
     allowance[link3] = -overlap - 0.001
     assert not SphereChecker(puma_spheres, ball, allowance=allowance).is_free(q)
+    # with_allowance repacks only the allowance: the same arrays as a new checker.
+    reused = SphereChecker(puma_spheres, ball).with_allowance(allowance)
+    for got, expected in zip(
+        reused.arrays,
+        SphereChecker(puma_spheres, ball, allowance=allowance).arrays,
+        strict=True,
+    ):
+        np.testing.assert_array_equal(got, expected)
+    np.testing.assert_array_equal(reused.allowance, allowance)
     for bad in (
         np.zeros(entries + 1),
         np.full(entries, -1.0),
@@ -517,3 +527,5 @@ def test_an_allowance_lets_an_entry_overlap_that_much_and_no_more(
     ):
         with pytest.raises(InputError, match="allowance"):
             SphereChecker(puma_spheres, ball, allowance=bad)
+        with pytest.raises(InputError, match="allowance"):
+            plain.with_allowance(bad)

@@ -10,7 +10,10 @@ checked link pair one of its distance: first from the link's bounding sphere,
 then, where that bound is below what the caller needs, from the link's own
 spheres (each inside the bounding sphere, so never nearer), visited by groups
 of near spheres: a group whose bounding sphere is no nearer than the nearest
-sphere so far is skipped (the minimum stays exact). Signed distances
+sphere so far, or already shows the need, is skipped (its bound kept). A need
+the spheres cannot show (beyond the bound plus twice the radius,
+:func:`_limit`) is not refined for; they are visited only for contacts.
+Signed distances
 of a sphere centre to boxes, cylinders and spheres are exact; to a mesh it is
 the unsigned distance to its triangles.
 
@@ -700,6 +703,23 @@ def _nearest(nodes: FloatArray, count: int, q: FloatArray) -> int:
     return index
 
 
+@helper(forceinline=True)
+def _steer(
+    q_from: FloatArray, target: FloatArray, step: float, out: FloatArray
+) -> bool:
+    """Set out (nq,) to the point at most ``step`` [rad] from q_from to target.
+
+    Returns whether that point is the target itself.
+    """
+    delta = target - q_from
+    length = math.sqrt(delta @ delta)
+    reached = length <= step
+    scale = 1.0 if reached else step / length
+    for i in range(len(out)):
+        out[i] = q_from[i] + scale * delta[i]
+    return reached
+
+
 @entry_point(
     outputs=("nodes", "parents", "counts", "state", "store"),
     contiguous=_PACKED,
@@ -745,7 +765,7 @@ def grow_trees(
     """
     n = nodes.shape[2]
     capacity = nodes.shape[1]
-    q_new = np.empty(n)
+    q_new, q = np.empty(n), np.empty(n)
     for row in range(len(uniforms)):
         if state[0] == 1:
             return
@@ -756,10 +776,7 @@ def grow_trees(
             return
         target = lower + uniforms[row] * (upper - lower)
         near = _nearest(nodes[a], counts[a], target)
-        delta = target - nodes[a, near]
-        length = math.sqrt(delta @ delta)
-        scale = min(1.0, step / length) if length > 0.0 else 0.0
-        q_new[:] = nodes[a, near] + scale * delta
+        _steer(nodes[a, near], target, step, q_new)
         if not _motion_free(
             nodes[a, near],
             q_new,
@@ -780,11 +797,7 @@ def grow_trees(
         # Connect tree b to q_new.
         tip = _nearest(nodes[b], counts[b], q_new)
         while counts[b] + 1 < capacity:
-            delta = q_new - nodes[b, tip]
-            length = math.sqrt(delta @ delta)
-            reached = length <= step
-            scale = 1.0 if reached else step / length
-            q = nodes[b, tip] + scale * delta
+            reached = _steer(nodes[b, tip], q_new, step, q)
             if not _motion_free(
                 nodes[b, tip],
                 q,

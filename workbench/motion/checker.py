@@ -12,6 +12,7 @@ obstacle's ``allow`` list is honoured.
 
 from __future__ import annotations
 
+import copy
 import itertools
 from typing import NamedTuple
 
@@ -83,26 +84,29 @@ class SphereChecker:
         self.links = tuple(link.link for link in spheres.links)
         self.pairs = _pairs(spheres)
         n_entries = len(self.links) + len(self.pairs)
-        if allowance is None:
-            allowance = np.zeros(n_entries)
-        allowed = np.array(allowance, dtype=np.float64)
-        if (
-            allowed.shape != (n_entries,)
-            or not np.all(np.isfinite(allowed))
-            or np.any(allowed < 0)
-        ):
-            raise InputError(
-                f"allowance must be {n_entries} finite values >= 0 [m] (links, then "
-                f"pairs), got shape {allowed.shape}"
-            )
-        allowed.setflags(write=False)
-        self.allowance = allowed
+        self.allowance = _check_allowance(
+            np.zeros(n_entries) if allowance is None else allowance, n_entries
+        )
         self._robot_int, self._robot_float, self._levers, sizes = _pack_robot(
-            spheres, self.scene, allowed
+            spheres, self.scene, self.allowance
         )
         self._scene_int, self._scene_float, self._tris = _pack_scene(self.scene)
         self._sizes = np.array(sizes, dtype=np.int64)
         self._store = np.zeros((kernel.MAX_EVALUATIONS, len(self._levers)))
+
+    def with_allowance(self, allowance: npt.ArrayLike) -> SphereChecker:
+        """This checker with another allowance (L + P,) [m], packed once.
+
+        Raises:
+            InputError: If the allowance is not (L + P,) finite values >= 0.
+        """
+        allowed = _check_allowance(allowance, len(self._levers))
+        out = copy.copy(self)
+        out.allowance = allowed
+        out._robot_float = self._robot_float.copy()
+        out._robot_float[_allowance_slice(self._sizes)] = allowed
+        out._store = np.zeros_like(self._store)
+        return out
 
     @property
     def arrays(self) -> PackedArrays:
@@ -141,6 +145,28 @@ class SphereChecker:
         robot = self.spheres.robot
         a, b = robot.check_configuration(qa), robot.check_configuration(qb)
         return bool(kernel.motion_free(a, b, *self.arrays, self._store))
+
+
+def _check_allowance(allowance: npt.ArrayLike, n_entries: int) -> FloatArray:
+    allowed = np.array(allowance, dtype=np.float64)
+    if (
+        allowed.shape != (n_entries,)
+        or not np.all(np.isfinite(allowed))
+        or np.any(allowed < 0)
+    ):
+        raise InputError(
+            f"allowance must be {n_entries} finite values >= 0 [m] (links, then "
+            f"pairs), got shape {allowed.shape}"
+        )
+    allowed.setflags(write=False)
+    return allowed
+
+
+def _allowance_slice(sizes: IntArray) -> slice:
+    """Where ``robot_float`` holds the allowance (the kernel's packing order)."""
+    n_joints, n_links, n_spheres, n_pairs = (int(x) for x in sizes[:4])
+    start = 15 * n_joints + 4 * n_links + 4 * n_spheres
+    return slice(start, start + n_links + n_pairs)
 
 
 def _pairs(spheres: SphereModel) -> tuple[tuple[str, str], ...]:

@@ -416,7 +416,7 @@ def _allowing_checker(
     allowances = tuple(
         (a, b, float(overlap[k])) for k, (a, b) in enumerate(names) if overlap[k] > 0
     )
-    return SphereChecker(model, scene, allowance=overlap), allowances
+    return checker.with_allowance(overlap), allowances
 
 
 def _search(
