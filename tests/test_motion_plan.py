@@ -339,6 +339,28 @@ def test_compiled_mesh_clearances_equal_numpy(ur5_spheres, fractions) -> None:
             assert got[li] < 0
 
 
+@settings(max_examples=40, deadline=None)
+@given(
+    st.lists(st.floats(-1.0, 1.0), min_size=6, max_size=6),
+    st.lists(st.floats(-1.0, 1.0), min_size=6, max_size=6),
+)
+def test_no_clearance_changes_faster_than_its_levers(
+    ur5_spheres, fractions, step
+) -> None:
+    """|c(q + dq) - c(q)| <= levers @ |dq| for every link and pair (the bound
+    the certified segments rest on, pairs' levers from the nearer side)."""
+    robot = ur5_spheres.robot
+    q = 0.5 * (robot.lower + robot.upper) + 0.5 * np.array(fractions) * (
+        robot.upper - robot.lower
+    )
+    dq = 0.3 * np.array(step)
+    checker = SphereChecker(ur5_spheres, _mixed_scene())
+    before, after = checker.clearances(q), checker.clearances(q + dq)
+    bound = checker.arrays.levers @ np.abs(dq)
+    finite = np.isfinite(before)
+    assert np.all(np.abs(after - before)[finite] <= bound[finite] + EXACT_TOL)
+
+
 def test_sphere_contacts_include_every_exact_contact(
     ur5_spheres, ur5_allowance
 ) -> None:

@@ -25,7 +25,7 @@ from workbench.collision.self_filter import compute_self_collision_filter
 from workbench.errors import InputError
 from workbench.model.per_robot import per_robot
 from workbench.motion import _sphere_kernel as kernel
-from workbench.motion.spheres import SphereModel, mesh_triangles
+from workbench.motion.spheres import LinkSpheres, SphereModel, mesh_triangles
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -312,6 +312,20 @@ def _pack_robot(
             joint = int(model.parents[joint])
     apart = carried[pa] ^ carried[pb]
     pair_levers = np.where(apart, link_levers[pa] + link_levers[pb], 0.0)
+    # Such a joint turns one link about its axis relative to the other, which
+    # is the other turning the opposite way: its points' distance from that
+    # axis bounds the change too, and the smaller of the two counts.
+    for k, (a, b) in enumerate(zip(pa, pb, strict=True)):
+        for j in range(1, model.njoints):
+            v = model.joints[j].idx_v
+            if apart[k, v]:
+                still = b if carried[a, v] else a
+                pair_levers[k, v] = min(
+                    pair_levers[k, v],
+                    _lever_from_the_other_side(
+                        model, links[still], bound_center[still], j, axes, offsets
+                    ),
+                )
     levers = np.concatenate([link_levers, pair_levers.reshape(-1, model.nv)])
     sizes = [
         model.njoints,
@@ -323,6 +337,47 @@ def _pack_robot(
         len(group_radius),
     ]
     return robot_int, robot_float, np.ascontiguousarray(levers), sizes
+
+
+def _lever_from_the_other_side(
+    model: pin.Model,
+    link: LinkSpheres,
+    bound_center: FloatArray,
+    joint: int,
+    axes: FloatArray,
+    offsets: FloatArray,
+) -> float:
+    """How far [m/rad] a link's centres can be from a joint's axis not carrying it.
+
+    A bound on the distance of the link's sphere centres (and bounding
+    centre) from the axis of ``joint``, in any configuration: exact when the
+    joint hangs on the link's own joint (its axis fixed in the link's frame),
+    else the centres' distance from the link's joint origin plus the chain of
+    offsets between the two joint origins.
+    """
+    points = np.vstack([link.centers, bound_center])
+    own = link.joint
+    if int(model.parents[joint]) == own:
+        placement = model.jointPlacements[joint]
+        axis = placement.rotation @ axes[joint]
+        return float(
+            np.max(
+                np.linalg.norm(np.cross(points - placement.translation, axis), axis=1)
+            )
+        )
+    chain = {}
+    length, j = 0.0, own
+    while True:
+        chain[j] = length
+        if j == 0:
+            break
+        length += offsets[j]
+        j = int(model.parents[j])
+    length, j = 0.0, joint
+    while j not in chain:
+        length += offsets[j]
+        j = int(model.parents[j])
+    return float(np.max(np.linalg.norm(points, axis=1))) + chain[j] + length
 
 
 #: Most spheres of one group of a link (the kernel's middle level).
