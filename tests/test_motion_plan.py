@@ -251,13 +251,17 @@ def _numpy_clearances(checker: SphereChecker, q: np.ndarray) -> np.ndarray:
     return np.array(out)
 
 
+def _within_limits(robot: wb.Robot, fractions: list[float]) -> np.ndarray:
+    """The configuration at ``fractions`` in [-1, 1] of each joint's half range."""
+    middle, half = 0.5 * (robot.lower + robot.upper), 0.5 * (robot.upper - robot.lower)
+    return middle + np.array(fractions) * half
+
+
 @settings(max_examples=40, deadline=None)
 @given(st.lists(st.floats(-1.0, 1.0), min_size=6, max_size=6))
 def test_compiled_clearances_equal_numpy(ur5_spheres, fractions) -> None:
     robot = ur5_spheres.robot
-    q = 0.5 * (robot.lower + robot.upper) + 0.5 * np.array(fractions) * (
-        robot.upper - robot.lower
-    )
+    q = _within_limits(robot, fractions)
     checker = SphereChecker(ur5_spheres, _mixed_scene())
     expected = _numpy_clearances(checker, q)
     got = checker.clearances(q)
@@ -301,9 +305,7 @@ def _point_triangle_distances(points: np.ndarray, tris: np.ndarray) -> np.ndarra
 def test_compiled_mesh_clearances_equal_numpy(ur5_spheres, fractions) -> None:
     """A mesh obstacle: the distance to its nearest triangle, minus the radius."""
     robot = ur5_spheres.robot
-    q = 0.5 * (robot.lower + robot.upper) + 0.5 * np.array(fractions) * (
-        robot.upper - robot.lower
-    )
+    q = _within_limits(robot, fractions)
     vertices = np.array(
         [[0.0, 0.0, 0.0], [0.4, 0.0, 0.1], [0.1, 0.3, 0.0], [0.1, 0.1, 0.35]]
     )
@@ -350,9 +352,7 @@ def test_no_clearance_changes_faster_than_its_levers(
     """|c(q + dq) - c(q)| <= levers @ |dq| for every link and pair (the bound
     the certified segments rest on, pairs' levers from the nearer side)."""
     robot = ur5_spheres.robot
-    q = 0.5 * (robot.lower + robot.upper) + 0.5 * np.array(fractions) * (
-        robot.upper - robot.lower
-    )
+    q = _within_limits(robot, fractions)
     dq = 0.3 * np.array(step)
     checker = SphereChecker(ur5_spheres, _mixed_scene())
     before, after = checker.clearances(q), checker.clearances(q + dq)
