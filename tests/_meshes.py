@@ -98,3 +98,40 @@ def write_meshes_of(urdf_text: str, folder_of: dict[str, Path]) -> list[Path]:
         else:
             written.append(write_stl(path))
     return written
+
+
+def write_mixed_obj(path: Path, size: float = 1.0) -> Path:
+    """A cube [m] as OBJ whose faces give texture coordinates in one group only.
+
+    As in the Franka Panda's visual meshes: ``f v/vt/vn`` in the first group,
+    ``f v//vn`` in the second, which the browser's OBJ loader cannot merge.
+    """
+    h = 0.5 * size
+    corners = [(x, y, z) for x in (-h, h) for y in (-h, h) for z in (-h, h)]
+    quads = [
+        (0, 1, 3, 2),
+        (4, 6, 7, 5),
+        (0, 4, 5, 1),
+        (2, 3, 7, 6),
+        (0, 2, 6, 4),
+        (1, 5, 7, 3),
+    ]
+    normals = [(-1, 0, 0), (1, 0, 0), (0, -1, 0), (0, 1, 0), (0, 0, -1), (0, 0, 1)]
+    lines = [f"v {x} {y} {z}" for x, y, z in corners]
+    lines += ["vt 0 0", "vt 1 0", "vt 1 1"]
+    lines += [f"vn {x} {y} {z}" for x, y, z in normals]
+    for k, (a, b, c, d) in enumerate(quads):
+        if k == 0:
+            lines.append("g textured")
+        elif k == 3:
+            lines.append("g plain")
+        for tri in ((a, b, c), (a, c, d)):
+            if k < 3:
+                lines.append(
+                    "f "
+                    + " ".join(f"{v + 1}/{i + 1}/{k + 1}" for i, v in enumerate(tri))
+                )
+            else:
+                lines.append("f " + " ".join(f"{v + 1}//{k + 1}" for v in tri))
+    path.write_text("\n".join(lines) + "\n")
+    return path

@@ -13,6 +13,7 @@ from tests._meshes import write_dae, write_stl
 from workbench import load_robot
 from workbench.model.mesh_files import (
     UP_AXIS_ROTATIONS,
+    get_obj_with_uniform_faces,
     get_stl_with_normals,
     read_collada_frame,
 )
@@ -128,3 +129,27 @@ def test_zero_normals_are_computed_from_the_vertex_order(
     np.testing.assert_allclose(normals, unit, atol=1e-6)  # (float32 in the file)
     centre = vertices.mean(axis=1)
     assert np.all(np.einsum("ij,ij->i", normals, centre) > 0)  # outward on the box
+
+
+def test_an_obj_with_texture_coordinates_in_part_loses_them(tmp_path: Path) -> None:
+    from tests._meshes import write_mixed_obj
+
+    path = write_mixed_obj(tmp_path / "mixed.obj")
+    text = get_obj_with_uniform_faces(path)
+    assert text is not None and "vt" not in text
+    faces = [line.split()[1:] for line in text.splitlines() if line.startswith("f ")]
+    assert len(faces) == 12 and all("//" in v for face in faces for v in face)
+    original = path.read_text().splitlines()
+    kept = [line for line in original if not line.startswith(("vt", "f "))]
+    assert [line for line in text.splitlines() if not line.startswith("f ")] == kept
+    # The same vertices and normals, face by face.
+    before = [
+        [(v.split("/")[0], v.split("/")[2]) for v in line.split()[1:]]
+        for line in original
+        if line.startswith("f ")
+    ]
+    assert [[tuple(v.split("//")) for v in face] for face in faces] == before
+    uniform = tmp_path / "uniform.obj"
+    uniform.write_text(text)
+    assert get_obj_with_uniform_faces(uniform) is None
+    assert get_obj_with_uniform_faces(tmp_path / "missing.obj") is None

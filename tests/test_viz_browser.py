@@ -244,6 +244,24 @@ def test_an_arm_whose_meshes_are_in_inches_is_framed_and_drawn(
     assert diff[~margin].sum() <= 0.01 * diff.sum(), "the arm is drawn off its box"
 
 
+def test_obj_meshes_with_texture_coordinates_in_part_are_drawn(
+    chromium, tmp_path
+) -> None:
+    from tests._meshes import write_mixed_obj
+
+    def mesh_of(i: int) -> Path:
+        return write_mixed_obj(tmp_path / f"l{i}.obj", size=0.2)
+
+    robot = load_robot(_boxed_arm(tmp_path, mesh_of))
+    viewer = Viewer(robot, np.array([0.3, 0.4, -0.8]))
+    with_arm = screenshot(
+        chromium, viewer.render_html(legend=False), tmp_path / "a.png"
+    )
+    viewer.set_visible("robot", False)
+    empty = screenshot(chromium, viewer.render_html(legend=False), tmp_path / "e.png")
+    assert changed(with_arm, empty).mean() > 0.02, "the arm is drawn"
+
+
 def test_stl_meshes_without_normals_are_shaded_in_colour(chromium, tmp_path) -> None:
     from tests._meshes import write_stl
 

@@ -15,6 +15,13 @@ packages:
   mesh with them, black. :func:`get_stl_with_normals` gives the file's
   triangles with each facet's normal computed from its vertices (their order),
   for the page to draw.
+
+And one the page itself cannot read: an OBJ file whose faces give texture
+coordinates in some groups and not in others (``f 1/1/1`` and ``f 1//1``, as
+in the Franka Panda's visual meshes): three.js merges the groups' geometries
+only when they have the same attributes, and the page drops the whole mesh.
+:func:`get_obj_with_uniform_faces` gives the file without its texture
+coordinates (the page colours the mesh; it draws no textures).
 """
 
 from __future__ import annotations
@@ -128,6 +135,44 @@ def get_stl_with_normals(path: str | Path) -> bytes | None:
     return header + struct.pack("<I", len(triangles)) + records.tobytes()
 
 
+def get_obj_with_uniform_faces(path: str | Path) -> str | None:
+    """The OBJ file without texture coordinates, if only some faces give them.
+
+    Returns:
+        The file's text with its ``vt`` lines dropped and every face vertex
+        ``v/vt/vn`` written ``v//vn`` (``v/vt``: ``v``), or None when every
+        face gives texture coordinates or none does (or the file cannot be
+        read as text).
+    """
+    try:
+        lines = Path(path).read_text().splitlines()
+    except (OSError, UnicodeDecodeError):
+        return None
+    kinds = set()
+    for line in lines:
+        if line.startswith("f "):
+            for vertex in line.split()[1:]:
+                parts = vertex.split("/")
+                kinds.add(len(parts) > 1 and parts[1] != "")
+            if len(kinds) > 1:
+                break
+    if len(kinds) < 2:
+        return None
+    out = []
+    for line in lines:
+        if line.startswith("vt"):
+            continue
+        if line.startswith("f "):
+            vertices = []
+            for vertex in line.split()[1:]:
+                parts = vertex.split("/")
+                normal = parts[2] if len(parts) > 2 else ""
+                vertices.append(f"{parts[0]}//{normal}" if normal else parts[0])
+            line = "f " + " ".join(vertices)
+        out.append(line)
+    return "\n".join(out) + "\n"
+
+
 def _read_stl(path: Path) -> tuple[FloatArray | None, FloatArray | None]:
     """``(triangles (T, 3, 3), normals (T, 3))`` of an ASCII or binary STL."""
     try:
@@ -169,6 +214,7 @@ def _read_stl(path: Path) -> tuple[FloatArray | None, FloatArray | None]:
 __all__ = [
     "UP_AXIS_ROTATIONS",
     "ZERO_NORMAL_TOL",
+    "get_obj_with_uniform_faces",
     "get_stl_with_normals",
     "honour_collada_frames",
     "read_collada_frame",

@@ -13,7 +13,10 @@ import pinocchio as pin
 from pinocchio.visualize import MeshcatVisualizer
 
 from workbench.errors import DimensionError, NonFiniteError, URDFLoadError
-from workbench.model.mesh_files import get_stl_with_normals
+from workbench.model.mesh_files import (
+    get_obj_with_uniform_faces,
+    get_stl_with_normals,
+)
 from workbench.model.robot import Robot
 
 FloatArray = npt.NDArray[np.float64]
@@ -38,11 +41,13 @@ def _corners(geometry: pin.GeometryObject) -> FloatArray:
 
 
 class _Visualizer(MeshcatVisualizer):
-    """Pinocchio's Meshcat visualiser, STL meshes drawn with their facet normals.
+    """Pinocchio's Meshcat visualiser, STL and OBJ meshes as the page reads them.
 
     An STL file whose normals are zero is sent as the same triangles with
     normals computed from the vertices (:func:`get_stl_with_normals`): the page
-    shades with the file's normals, and zero ones draw the mesh black.
+    shades with the file's normals, and zero ones draw the mesh black. An OBJ
+    file whose faces give texture coordinates only in part is sent without
+    them (:func:`get_obj_with_uniform_faces`): the page drops such a mesh.
     """
 
     def loadMeshFromFile(self, geometry_object: pin.GeometryObject) -> object:
@@ -51,6 +56,10 @@ class _Visualizer(MeshcatVisualizer):
             fixed = get_stl_with_normals(path)
             if fixed is not None:
                 return meshcat.geometry.StlMeshGeometry.from_stream(io.BytesIO(fixed))
+        if path.lower().endswith(".obj"):
+            text = get_obj_with_uniform_faces(path)
+            if text is not None:
+                return meshcat.geometry.ObjMeshGeometry.from_stream(io.StringIO(text))
         return super().loadMeshFromFile(geometry_object)  # type: ignore[misc]
 
 

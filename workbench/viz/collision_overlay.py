@@ -10,6 +10,7 @@ the closest points of the closest pair (node ``closest/``).
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import meshcat
@@ -20,6 +21,7 @@ import pinocchio as pin
 
 from workbench.collision import CollisionChecker, Obstacle
 from workbench.collision.self_filter import get_link_name
+from workbench.model.mesh_files import get_obj_with_uniform_faces
 from workbench.viz._arm import Arm, to_node_name
 from workbench.viz._shapes import _rgb_int
 
@@ -45,6 +47,9 @@ def _geometry(obstacle: Obstacle) -> tuple[mg.Geometry, pin.SE3]:
         vertices = obstacle.vertices * np.array(obstacle.size)
         return mg.TriangularMeshGeometry(vertices, obstacle.triangles), scale
     suffix = Path(obstacle.mesh_file).suffix.lower()
+    text = get_obj_with_uniform_faces(obstacle.mesh_file) if suffix == ".obj" else None
+    if text is not None:  # the page cannot merge faces with and without UVs
+        return mg.ObjMeshGeometry.from_stream(io.StringIO(text)), scale
     loader = {".obj": mg.ObjMeshGeometry, ".dae": mg.DaeMeshGeometry}
     return loader.get(suffix, mg.StlMeshGeometry).from_file(
         str(obstacle.mesh_file)
