@@ -112,16 +112,15 @@ def _place(
 
 
 @helper(forceinline=True)
-def _gap(a: FloatArray, b: FloatArray) -> float:
-    """Distance [m] between two points (3,)."""
-    x, y, z = a[0] - b[0], a[1] - b[1], a[2] - b[2]
+def _norm(x: float, y: float, z: float) -> float:
+    """Length of the vector (x, y, z)."""
     return math.sqrt(x * x + y * y + z * z)
 
 
 @helper(forceinline=True)
-def _norm(x: float, y: float, z: float) -> float:
-    """Length of the vector (x, y, z)."""
-    return math.sqrt(x * x + y * y + z * z)
+def _gap(a: FloatArray, b: FloatArray) -> float:
+    """Distance [m] between two points (3,)."""
+    return _norm(a[0] - b[0], a[1] - b[1], a[2] - b[2])
 
 
 @helper(forceinline=True)
@@ -206,8 +205,8 @@ def _distance(
         outside = math.sqrt(max(radial, 0.0) ** 2 + max(axial, 0.0) ** 2)
         return outside + min(max(radial, axial), 0.0)
     if kind == SPHERE:
-        return math.sqrt(dx * dx + dy * dy + dz * dz) - osize[o, 0]
-    bound = math.sqrt(dx * dx + dy * dy + dz * dz) - osize[o, 0]
+        return _norm(dx, dy, dz) - osize[o, 0]
+    bound = _norm(dx, dy, dz) - osize[o, 0]
     if bound >= best:
         return bound
     out = math.inf
@@ -485,9 +484,14 @@ def _clearances(
                     )
                     for s in range(gfirst[ga], gfirst[ga + 1]):
                         # A sphere far from the group is far from its spheres.
-                        far = _gap(world[s], gworld[gb]) - sradius[s] - gradius[gb]
-                        if far + slack >= d or far + slack >= limit:
-                            d = min(d, far + slack)
+                        far = (
+                            _gap(world[s], gworld[gb])
+                            - sradius[s]
+                            - gradius[gb]
+                            + slack
+                        )
+                        if far >= d or far >= limit:
+                            d = min(d, far)
                             continue
                         for t in range(gfirst[gb], gfirst[gb + 1]):
                             gap = _gap(world[s], world[t]) - sradius[s] - sradius[t]

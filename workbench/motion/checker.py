@@ -25,7 +25,7 @@ from workbench.collision.self_filter import compute_self_collision_filter
 from workbench.errors import InputError
 from workbench.model.per_robot import per_robot
 from workbench.motion import _sphere_kernel as kernel
-from workbench.motion.spheres import LinkSpheres, SphereModel, mesh_triangles
+from workbench.motion.spheres import SphereModel, mesh_triangles
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -87,9 +87,13 @@ class SphereChecker:
         self.allowance = _check_allowance(
             np.zeros(n_entries) if allowance is None else allowance, n_entries
         )
-        self._robot_int, self._robot_float, self._levers, sizes = _pack_robot(
-            spheres, self.scene, self.allowance
-        )
+        (
+            self._robot_int,
+            self._robot_float,
+            self._levers,
+            sizes,
+            self._allowance_at,
+        ) = _pack_robot(spheres, self.scene, self.allowance)
         self._scene_int, self._scene_float, self._tris = _pack_scene(self.scene)
         self._sizes = np.array(sizes, dtype=np.int64)
         self._store = np.zeros((kernel.MAX_EVALUATIONS, len(self._levers)))
@@ -104,7 +108,7 @@ class SphereChecker:
         out = copy.copy(self)
         out.allowance = allowed
         out._robot_float = self._robot_float.copy()
-        out._robot_float[_allowance_slice(self._sizes)] = allowed
+        out._robot_float[self._allowance_at] = allowed
         out._store = np.zeros_like(self._store)
         return out
 
@@ -162,13 +166,6 @@ def _check_allowance(allowance: npt.ArrayLike, n_entries: int) -> FloatArray:
     return allowed
 
 
-def _allowance_slice(sizes: IntArray) -> slice:
-    """Where ``robot_float`` holds the allowance (the kernel's packing order)."""
-    n_joints, n_links, n_spheres, n_pairs = (int(x) for x in sizes[:4])
-    start = 15 * n_joints + 4 * n_links + 4 * n_spheres
-    return slice(start, start + n_links + n_pairs)
-
-
 def _pairs(spheres: SphereModel) -> tuple[tuple[str, str], ...]:
     robot = spheres.robot
     checked = _filter(robot)
@@ -186,7 +183,7 @@ def _pairs(spheres: SphereModel) -> tuple[tuple[str, str], ...]:
 
 def _pack_robot(
     spheres: SphereModel, scene: Scene, allowance: FloatArray
-) -> tuple[IntArray, FloatArray, FloatArray, list[int]]:
+) -> tuple[IntArray, FloatArray, FloatArray, list[int], slice]:
     robot = spheres.robot
     model = robot.model
     if model.nq != model.nv:
@@ -261,19 +258,22 @@ def _pack_robot(
     ).astype(np.int64)
     rotations = np.array([p.rotation for p in model.jointPlacements])
     positions = np.array([p.translation for p in model.jointPlacements])
+    before_allowance = [
+        rotations.ravel(),
+        positions.ravel(),
+        axes.ravel(),
+        np.array(bound_center).ravel(),
+        np.array(bound_radius),
+        np.concatenate(
+            [link.centers[o] for link, o in zip(links, orders, strict=True)]
+        ).ravel(),
+        np.concatenate([link.radii[o] for link, o in zip(links, orders, strict=True)]),
+    ]
+    start = sum(part.size for part in before_allowance)
+    allowance_at = slice(start, start + len(allowance))
     robot_float = np.concatenate(
         [
-            rotations.ravel(),
-            positions.ravel(),
-            axes.ravel(),
-            np.array(bound_center).ravel(),
-            np.array(bound_radius),
-            np.concatenate(
-                [link.centers[o] for link, o in zip(links, orders, strict=True)]
-            ).ravel(),
-            np.concatenate(
-                [link.radii[o] for link, o in zip(links, orders, strict=True)]
-            ),
+            *before_allowance,
             allowance,
             np.array(group_center).ravel(),
             np.array(group_radius),
@@ -285,11 +285,14 @@ def _pack_robot(
     # the distance of the next joint's origin from that axis plus the chain
     # of offsets below (d(x, axis) <= d(o, axis) + |x - o|).
     offsets = np.linalg.norm(positions, axis=1)
+    link_points = [
+        np.vstack([link.centers, bound_center[li]]) for li, link in enumerate(links)
+    ]
     link_levers = np.zeros((len(links), model.nv))
     for li, link in enumerate(links):
         if link.joint == 0:
             continue
-        points = np.vstack([link.centers, bound_center[li]])
+        points = link_points[li]
         joint = link.joint
         link_levers[li, model.joints[joint].idx_v] = np.max(
             np.linalg.norm(np.cross(points, axes[joint]), axis=1)
@@ -311,21 +314,23 @@ def _pack_robot(
             carried[li, model.joints[joint].idx_v] = True
             joint = int(model.parents[joint])
     apart = carried[pa] ^ carried[pb]
-    pair_levers = np.where(apart, link_levers[pa] + link_levers[pb], 0.0)
     # Such a joint turns one link about its axis relative to the other, which
     # is the other turning the opposite way: its points' distance from that
     # axis bounds the change too, and the smaller of the two counts.
-    for k, (a, b) in enumerate(zip(pa, pb, strict=True)):
+    far = np.full((len(links), model.nv), np.inf)
+    for li, link in enumerate(links):
         for j in range(1, model.njoints):
             v = model.joints[j].idx_v
-            if apart[k, v]:
-                still = b if carried[a, v] else a
-                pair_levers[k, v] = min(
-                    pair_levers[k, v],
-                    _lever_from_the_other_side(
-                        model, links[still], bound_center[still], j, axes, offsets
-                    ),
+            if not carried[li, v]:
+                far[li, v] = _lever_from_the_other_side(
+                    model, link.joint, link_points[li], j, axes, offsets
                 )
+    still = np.where(carried[pa], pb[:, None], pa[:, None])  # (P, nv)
+    pair_levers = np.where(
+        apart,
+        np.minimum(link_levers[pa] + link_levers[pb], far[still, np.arange(model.nv)]),
+        0.0,
+    )
     levers = np.concatenate([link_levers, pair_levers.reshape(-1, model.nv)])
     sizes = [
         model.njoints,
@@ -336,27 +341,25 @@ def _pack_robot(
         model.nv,
         len(group_radius),
     ]
-    return robot_int, robot_float, np.ascontiguousarray(levers), sizes
+    return robot_int, robot_float, np.ascontiguousarray(levers), sizes, allowance_at
 
 
 def _lever_from_the_other_side(
     model: pin.Model,
-    link: LinkSpheres,
-    bound_center: FloatArray,
+    own: int,
+    points: FloatArray,
     joint: int,
     axes: FloatArray,
     offsets: FloatArray,
 ) -> float:
     """How far [m/rad] a link's centres can be from a joint's axis not carrying it.
 
-    A bound on the distance of the link's sphere centres (and bounding
-    centre) from the axis of ``joint``, in any configuration: exact when the
-    joint hangs on the link's own joint (its axis fixed in the link's frame),
-    else the centres' distance from the link's joint origin plus the chain of
-    offsets between the two joint origins.
+    A bound on the distance of ``points`` (N, 3) [m] (the sphere centres and
+    bounding centre of a link on joint ``own``, in its frame) from the axis of
+    ``joint``, in any configuration: exact when the joint hangs on ``own``
+    (its axis fixed in the link's frame), else their distance from the joint
+    origin plus the chain of offsets between the two joint origins.
     """
-    points = np.vstack([link.centers, bound_center])
-    own = link.joint
     if int(model.parents[joint]) == own:
         placement = model.jointPlacements[joint]
         axis = placement.rotation @ axes[joint]
