@@ -327,3 +327,84 @@ def test_ur5_meshes_are_checked(rng) -> None:
     report = check_path(checker, [0.0, 2.0], [up, down])
     assert "table" in {c.body_b for c in report.contacts}
     assert check_path(checker, [0.0], [up]).collision_free
+
+
+def _at(x: float, y: float, z: float) -> pin.SE3:
+    return pin.SE3(np.eye(3), np.array([x, y, z]))
+
+
+#: Agreement [m] of two penetration depths coal computes from different warm starts.
+PENETRATION_TOL = 1e-6
+
+
+def _ur5_on_a_table():
+    """The UR5 (meshes) over a table top and beside a post (boxes, a cylinder)."""
+    ur5 = load_robot("ur5")
+    scene = Scene(
+        "table",
+        (
+            Obstacle("table", "box", (1.2, 1.2, 0.02), _at(0.0, 0.0, -0.02)),
+            Obstacle("post", "cylinder", (0.05, 0.8), _at(0.45, 0.2, 0.4)),
+        ),
+    )
+    return ur5, CollisionChecker(ur5, scene)
+
+
+@pytest.fixture(scope="module")
+def ur5_table():
+    return _ur5_on_a_table()
+
+
+@given(seed=st.integers(0, 10_000))
+def test_hull_bounds_never_exceed_the_mesh_distances(ur5_table, seed) -> None:
+    ur5, checker = ur5_table
+    for q in random_configurations(ur5, np.random.default_rng(seed), 3):
+        exact = checker.compute_distances(q)
+        lower = checker.compute_lower_bounds(q)
+        assert np.all(lower <= exact + DISTANCE_TOL)
+
+
+def test_path_clearance_is_the_least_over_every_pair_at_every_sample(
+    ur5_table,
+) -> None:
+    ur5, checker = ur5_table
+    rng = np.random.default_rng(7)
+    up = np.array([0.0, -1.57, 0.0, -1.57, 0.0, 0.0])
+    side = np.array([1.5, -1.2, 0.8, -1.57, 1.0, 0.0])  # 13 mm from the post
+    for q0, q1 in [(up, side), *(random_configurations(ur5, rng, 2) for _ in range(2))]:
+        t = np.linspace(0.0, 1.0, 65)
+        q = q0 + t[:, None] * (q1 - q0)
+        report = check_path(checker, t, q)
+        brute = np.array([checker.compute_distances(qk) for qk in q])
+        # a penetration depth (EPA) depends on coal's warm start to ~1e-8
+        tol = DISTANCE_TOL if brute.min() > 0.0 else PENETRATION_TOL
+        # the least over the samples, or less between them (a refinement)
+        assert report.min_clearance <= brute.min() + tol
+        if report.t in t:
+            assert report.min_clearance == pytest.approx(brute.min(), abs=tol)
+        assert report.lower_bound <= report.min_clearance + DISTANCE_TOL
+        pairs = checker.body_pairs
+        touching = {pairs[p] for p in np.flatnonzero(brute.min(axis=0) <= 0)}
+        assert {(c.body_a, c.body_b) for c in report.contacts} >= touching
+        if touching:
+            assert not report.collision_free
+
+
+def test_a_flat_mesh_bounds_itself(ur5_table) -> None:
+    """Qhull cannot wrap a flat mesh: it stays a mesh (coal's Qhull call on it
+    would end the process), and the bounds still hold."""
+    ur5, _ = ur5_table
+    sheet = Obstacle(
+        "sheet",
+        "mesh",
+        (1.0, 1.0, 1.0),
+        _at(0.4, 0.0, 0.3),
+        vertices=np.array([[0, 0, 0], [0.3, 0, 0], [0, 0.3, 0], [0.3, 0.3, 0.0]]),
+        triangles=np.array([[0, 1, 2], [1, 3, 2]]),
+    )
+    checker = CollisionChecker(ur5, Scene("sheet", (sheet,)))
+    q = np.array([0.0, -1.57, 0.0, -1.57, 0.0, 0.0])
+    exact = checker.compute_distances(q)
+    lower = checker.compute_lower_bounds(q)
+    assert np.all(lower <= exact + DISTANCE_TOL)
+    assert check_path(checker, [0.0, 1.0], [q, q + 0.2]).min_clearance > 0.0

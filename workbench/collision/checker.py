@@ -16,6 +16,12 @@ p_k| + r_g` (the joint offsets along the chain, plus the radius of the body's
 bounding box about its joint), so the distance of the pair changes by at most
 :math:`\sum_i L_{p,i} |\Delta q_i|` when joint :math:`i` travels
 :math:`|\Delta q_i|`.
+
+:meth:`CollisionChecker.compute_lower_bounds` gives each pair a cheap lower
+bound of its distance: that of the convex hulls of its meshes (a mesh lies in
+its hull, so nothing of it is nearer than the hull; primitives stay
+themselves). A hull of a few hundred vertices costs coal a few µs where a
+mesh of 40 000 triangles near a large box costs milliseconds.
 """
 
 from __future__ import annotations
@@ -114,6 +120,7 @@ class CollisionChecker:
         self.data = model.createData()
         self.pairs = tuple(pairs)
         self.levers = self._compute_levers()
+        self._hulls: tuple[pin.GeometryModel, pin.GeometryData] | None = None
 
     def _add_obstacles(self, geometry: pin.GeometryModel, links: set[str]) -> list[int]:
         ids = []
@@ -215,6 +222,20 @@ class CollisionChecker:
         )
         return np.array([r.min_distance for r in self.geometry_data.distanceResults])
 
+    def compute_lower_bounds(self, q: FloatArray) -> FloatArray:
+        """Lower bounds (P,) [m] of every pair's distance at a checked ``q``.
+
+        The distances of the pairs with each mesh replaced by its convex hull
+        (module docstring), built on the first call; equal to
+        :meth:`compute_raw_distances` for pairs of primitives. Not affected by
+        :meth:`set_active`.
+        """
+        if self._hulls is None:
+            self._hulls = _hull_model(self.geometry_model)
+        model, data = self._hulls
+        pin.computeDistances(self.robot.model, self.data, model, data, q)
+        return np.array([r.min_distance for r in data.distanceResults])
+
     def compute_pair_distance(self, q: FloatArray, k: int) -> float:
         """Distance [m] of pair ``k`` alone at a checked ``q``, no validation."""
         pin.updateGeometryPlacements(
@@ -238,6 +259,40 @@ class CollisionChecker:
             self.robot.model, self.data, self.geometry_model, self.geometry_data, q
         )
         return [pin.SE3(m) for m in self.geometry_data.oMg]
+
+
+def _hull_model(
+    geometry: pin.GeometryModel,
+) -> tuple[pin.GeometryModel, pin.GeometryData]:
+    """``geometry`` with every mesh replaced by its convex hull, same pairs.
+
+    A mesh that Qhull cannot wrap (flat, or fewer than four points) stays
+    itself: SciPy's Qhull is asked first, with coal's options, because coal's
+    own call does not return from such a mesh (the process ends).
+    """
+    from scipy.spatial import ConvexHull, QhullError
+
+    hulls = pin.GeometryModel()
+    for g in geometry.geometryObjects:
+        shape = g.geometry
+        if hasattr(shape, "num_tris"):  # a coal BVH mesh
+            if shape.convex is None:
+                try:
+                    ConvexHull(np.asarray(shape.vertices()), qhull_options="Qt")
+                except (QhullError, ValueError):
+                    pass
+                else:
+                    shape.buildConvexHull(True, "Qt")
+            shape = shape.convex or shape
+        hulls.addGeometryObject(
+            pin.GeometryObject(g.name, g.parentJoint, g.parentFrame, g.placement, shape)
+        )
+    for pair in geometry.collisionPairs:
+        hulls.addCollisionPair(pin.CollisionPair(pair.first, pair.second))
+    data = pin.GeometryData(hulls)
+    for request in data.distanceRequests:
+        request.gjk_tolerance = GJK_TOLERANCE
+    return hulls, data
 
 
 def _index_pairs(n: int) -> list[tuple[int, int]]:
