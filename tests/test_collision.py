@@ -362,6 +362,12 @@ def test_hull_bounds_never_exceed_the_mesh_distances(ur5_table, seed) -> None:
         exact = checker.compute_distances(q)
         lower = checker.compute_lower_bounds(q)
         assert np.all(lower <= exact + DISTANCE_TOL)
+        k, least = checker.compute_least_distance(q)
+        # the least exact distance, and a pair in contact when one is
+        tol = DISTANCE_TOL if exact.min() > 0.0 else PENETRATION_TOL
+        assert least == pytest.approx(exact.min(), abs=tol)
+        assert exact[k] == pytest.approx(least, abs=tol)
+        assert (least <= 0.0) == (exact.min() <= 0.0)
 
 
 def test_path_clearance_is_the_least_over_every_pair_at_every_sample(

@@ -235,8 +235,7 @@ def _start_from_pose(
         raise InputError(f"--start-pose is out of reach: {err}") from None
     checker = CollisionChecker(robot, scene)
     for q in candidates:
-        distances = checker.compute_distances(q)
-        if not distances.size or distances.min() > 0:
+        if checker.compute_least_distance(q)[1] > 0.0:
             return np.array(q)
     return np.array(candidates[0])  # in collision: plan() says so
 

@@ -26,6 +26,7 @@ mesh of 40 000 triangles near a large box costs milliseconds.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -235,6 +236,35 @@ class CollisionChecker:
         model, data = self._hulls
         pin.computeDistances(self.robot.model, self.data, model, data, q)
         return np.array([r.min_distance for r in data.distanceResults])
+
+    def compute_least_distance(self, q: npt.ArrayLike) -> tuple[int, float]:
+        """The pair nearest to contact at ``q`` and its exact distance [m].
+
+        Exact distances are computed only for the pairs whose hull bound
+        (:meth:`compute_lower_bounds`) is at most the least exact distance
+        found, or 0, so the least is exact and a pair in contact is found
+        (the deepest, when several touch). ``(-1, inf)`` without pairs.
+        Leaves every pair active.
+        """
+        q = self.robot.check_configuration(q)
+        if not self.pairs:
+            return -1, math.inf
+        lower = self.compute_lower_bounds(q)
+        exact = np.full(len(self.pairs), np.nan)
+        k = int(np.argmin(lower))
+        exact[k] = self.compute_pair_distance(q, k)
+        try:
+            while True:
+                reach = max(float(np.nanmin(exact)), 0.0) + 10.0 * GJK_TOLERANCE
+                need = (lower <= reach) & np.isnan(exact)
+                if not need.any():
+                    break
+                self.set_active(need)
+                exact[need] = self.compute_raw_distances(q)[need]
+        finally:
+            self.set_active(None)
+        k = int(np.nanargmin(exact))
+        return k, float(exact[k])
 
     def compute_pair_distance(self, q: FloatArray, k: int) -> float:
         """Distance [m] of pair ``k`` alone at a checked ``q``, no validation."""

@@ -324,19 +324,13 @@ def plan(
                 f"or a tool pose, got shape {raw.shape}"
             )
         goals = np.array([robot.check_configuration(q) for q in goals])
-    start_distance = exact.compute_distances(q_start)
-    if start_distance.size and start_distance.min() <= 0.0:
-        k = int(np.argmin(start_distance))
+    k, least = exact.compute_least_distance(q_start)
+    if least <= 0.0:
         a, b = exact.body_pairs[k]
         return failed("start in collision", f"{a} touches {b} at the start")
-    free_goals = []
-    for q in goals:
-        d = exact.compute_distances(q)
-        if not d.size or d.min() > 0.0:
-            free_goals.append(q)
+    free_goals = [q for q in goals if exact.compute_least_distance(q)[1] > 0.0]
     if not free_goals:
-        d = exact.compute_distances(goals[0])
-        a, b = exact.body_pairs[int(np.argmin(d))]
+        a, b = exact.body_pairs[exact.compute_least_distance(goals[0])[0]]
         return failed("goal in collision", f"{a} touches {b} at the goal")
     goals = np.array(free_goals)
     checker, allowances = _allowing_checker(

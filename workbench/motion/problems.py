@@ -33,7 +33,6 @@ from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 from typing import Any
 
-import numpy as np
 import yaml
 
 from workbench.collision import CollisionChecker, Scene
@@ -310,13 +309,12 @@ def check_validity(
     worst = ("", "", math.inf)
     hit = []
     for name, q in (("start", start), ("goal", goal)):
-        distances = np.asarray(checker.compute_distances(q))
-        if not distances.size:
+        k, least = checker.compute_least_distance(q)
+        if k < 0:
             continue
-        k = int(np.argmin(distances))
-        if distances[k] <= 0.0:
+        if least <= 0.0:
             hit.append(name)
-        if distances[k] < worst[2]:
+        if least < worst[2]:
             a, b = checker.body_pairs[k]
-            worst = (a, b, float(distances[k]))
+            worst = (a, b, least)
     return Validity(not hit, " and ".join(hit), *worst)
