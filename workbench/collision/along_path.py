@@ -183,7 +183,7 @@ class _PathCheck:
         self.cumulative = cumulative
         self.between = between
         self.distances = np.full((t.size, len(checker.pairs)), np.nan)  # exact
-        self.lower = np.full_like(self.distances, np.nan)  # hulls', coarse samples
+        self.lower = np.full_like(self.distances, np.nan)  # the hulls' bounds
         self.extra: list[tuple[float, int, float]] = []  # (t, pair, distance)
         self.bounds: list[float] = []
         self.evaluations = 0
@@ -255,28 +255,46 @@ class _PathCheck:
             self._split(int(p), int(a[j]), int(b[j]))
 
     def _split(self, p: int, lo: int, hi: int) -> None:
-        """Branch and bound over the samples of pair ``p`` in ``[lo, hi]``."""
+        """Branch and bound over the samples of pair ``p`` in ``[lo, hi]``.
+
+        A sample is bounded by the hulls first and measured exactly where the
+        bound may be the least (at most the threshold) or an interval between
+        two neighbouring samples needs its ends (module docstring).
+        """
         d = self.distances
-        self._exact(lo, p)
-        self._exact(hi, p)
         stack = [(lo, hi)]
         while stack:
             lo, hi = stack.pop()
             motion = float((self.cumulative[hi] - self.cumulative[lo]) @ self.levers[p])
-            bound = 0.5 * (d[lo, p] + d[hi, p] - motion) - DISTANCE_TOL
+            bound = 0.5 * (self._value(lo, p) + self._value(hi, p) - motion)
+            bound -= DISTANCE_TOL
             if bound > self.threshold or (hi - lo == 1 and bound > 0.0):
                 self.bounds.append(bound)
             elif hi - lo == 1:
-                if d[lo, p] > 0.0 and d[hi, p] > 0.0:
+                if np.isnan(d[lo, p]) or np.isnan(d[hi, p]):  # bounded only
+                    self._exact(lo, p)
+                    self._exact(hi, p)
+                    stack.append((lo, hi))
+                elif d[lo, p] > 0.0 and d[hi, p] > 0.0:
                     self.bounds.append(self._bisect(p, lo, hi))
                 else:  # a contact at a sample: the bound only says how deep
                     self.bounds.append(bound)
             else:
                 mid = (lo + hi) // 2
-                d[mid, p] = self.checker.compute_pair_distance(self.q[mid], p)
-                self.evaluations += 1
-                self.threshold = min(self.threshold, max(d[mid, p], 0.0))
+                self._measure(mid, p)
                 stack += [(mid, hi), (lo, mid)]
+
+    def _value(self, k: int, p: int) -> float:
+        """Pair ``p``'s exact distance at sample ``k`` if measured, else its bound."""
+        value = self.distances[k, p]
+        return float(self.lower[k, p] if np.isnan(value) else value)
+
+    def _measure(self, k: int, p: int) -> None:
+        """Bound pair ``p`` at sample ``k`` by the hulls; exactly if it may be least."""
+        self.lower[k, p] = self.checker.compute_pair_lower_bound(self.q[k], p)
+        if self.lower[k, p] <= self.threshold + DISTANCE_TOL:
+            self._exact(k, p)
+            self.threshold = min(self.threshold, max(self.distances[k, p], 0.0))
 
     def _bisect(self, p: int, lo: int, hi: int) -> float:
         """Refine pair ``p`` between samples ``lo`` and ``hi``; its lower bound."""

@@ -231,11 +231,21 @@ class CollisionChecker:
         :meth:`compute_raw_distances` for pairs of primitives. Not affected by
         :meth:`set_active`.
         """
-        if self._hulls is None:
-            self._hulls = _hull_model(self.geometry_model)
-        model, data = self._hulls
+        model, data = self._hull_pair()
         pin.computeDistances(self.robot.model, self.data, model, data, q)
         return np.array([r.min_distance for r in data.distanceResults])
+
+    def compute_pair_lower_bound(self, q: FloatArray, k: int) -> float:
+        """Pair ``k``'s hull bound [m] alone at a checked ``q``, no validation."""
+        model, data = self._hull_pair()
+        pin.updateGeometryPlacements(self.robot.model, self.data, model, data, q)
+        return float(pin.computeDistance(model, data, int(k)).min_distance)
+
+    def _hull_pair(self) -> tuple[pin.GeometryModel, pin.GeometryData]:
+        """The hull model and its data (:func:`_hull_model`), built on first use."""
+        if self._hulls is None:
+            self._hulls = _hull_model(self.geometry_model)
+        return self._hulls
 
     def compute_least_distance(self, q: npt.ArrayLike) -> tuple[int, float]:
         """The pair nearest to contact at ``q`` and its exact distance [m].
