@@ -15,6 +15,7 @@ from workbench.collision import CollisionChecker
 from workbench.collision.scene import Obstacle, Scene
 from workbench.errors import InputError
 from workbench.motion import SphereChecker, goal_configurations, plan, spherize
+from workbench.motion.planner import ALLOWANCE_MARGIN
 from workbench.motion.spheres import mesh_triangles
 from workbench.paper_data import ANGELES_PICK_Q_DEG, ANGELES_PLACE_Q_DEG
 
@@ -552,3 +553,53 @@ def test_an_allowance_lets_an_entry_overlap_that_much_and_no_more(
             SphereChecker(puma_spheres, ball, allowance=bad)
         with pytest.raises(InputError, match="allowance"):
             plain.with_allowance(bad)
+
+
+def test_a_trajectory_the_judge_refuses_is_planned_again_on_narrow_margins(
+    monkeypatch, ur5_spheres
+) -> None:
+    """With verify, allowances first get half the exact clearance at the ends;
+    a trajectory the exact check refuses is planned again with 1 mm margins."""
+    import dataclasses
+    from pathlib import Path
+
+    from workbench.motion import planner as planner_module
+    from workbench.motion.problems import find_problems
+
+    ur5 = ur5_spheres.robot.with_limits(acceleration_limit=np.full(6, 10.0))
+    data = Path(__file__).parent / "data" / "motionbenchmaker" / "ur5"
+    problem = find_problems(data, scenarios=["box"])[0]
+    start, goal = problem.read_request(ur5)
+    plain = SphereChecker(ur5_spheres, problem.scene)
+    lowest = np.minimum(plain.clearances(start), plain.clearances(goal))
+    names = [(link, "scene") for link in plain.links] + list(plain.pairs)
+    overlap = {names[k]: -lowest[k] for k in np.flatnonzero(lowest < 0)}
+    assert overlap  # the base and the upper arm's spheres overlap at the ends
+
+    def margins(result) -> dict:
+        return {(a, b): m - overlap[(a, b)] for a, b, m in result.allowances}
+
+    wide = plan(ur5, problem.scene, start, goal, spheres=ur5_spheres, time_limit=5)
+    assert wide.solved and max(margins(wide).values()) > ALLOWANCE_MARGIN
+    assert min(margins(wide).values()) >= ALLOWANCE_MARGIN - EXACT_TOL
+
+    verdicts = []
+    real = planner_module.verify_trajectory
+
+    def refuse_first(exact, trajectory):
+        report = real(exact, trajectory)
+        verdicts.append(report)
+        if len(verdicts) == 1:
+            return dataclasses.replace(report, lower_bound=-1.0)  # not proven
+        return report
+
+    monkeypatch.setattr(planner_module, "verify_trajectory", refuse_first)
+    again = plan(ur5, problem.scene, start, goal, spheres=ur5_spheres, time_limit=5)
+    assert len(verdicts) == 2 and again.solved and again.clearance is verdicts[1]
+    np.testing.assert_allclose(
+        list(margins(again).values()), ALLOWANCE_MARGIN, atol=EXACT_TOL
+    )
+    narrow = plan(
+        ur5, problem.scene, start, goal, spheres=ur5_spheres, time_limit=5, verify=False
+    )
+    assert margins(narrow) == pytest.approx(margins(again))

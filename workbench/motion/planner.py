@@ -5,7 +5,9 @@
 1. checks the start and the goals on the exact meshes (coal, the project's
    :class:`~workbench.collision.CollisionChecker`); where their spheres
    overlap there, the overlap becomes that entry's allowance along the
-   motion (:data:`ALLOWANCE_MARGIN` more, no deeper);
+   motion (a margin more, no deeper: with ``verify``, first
+   :data:`ALLOWANCE_SHARE` of the entry's exact clearance at the ends, and
+   :data:`ALLOWANCE_MARGIN` when the exact check refuses that trajectory);
 2. grows two trees (Kuffner & LaValle's RRT-Connect, compiled): from the
    start, and from every goal configuration (a tool-pose goal becomes every
    closed-form branch within the limits; for seven-axis arms, those of
@@ -65,8 +67,13 @@ SHORTCUTS = 64
 REDUNDANCY_SAMPLES = 16
 #: Nodes each tree can hold.
 CAPACITY = 50_000
-#: Allowed overlap [m] beyond what the spheres of an entry have at an end.
+#: Allowed overlap [m] beyond what the spheres of an entry have at an end, at least.
 ALLOWANCE_MARGIN = 1e-3
+#: With ``verify``, the first attempt allows an entry beyond its overlap this
+#: share of its exact clearance at the ends (when more than ALLOWANCE_MARGIN);
+#: a trajectory the exact check then refuses is planned again with
+#: ALLOWANCE_MARGIN alone, in the rest of the time limit.
+ALLOWANCE_SHARE = 0.5
 #: Planners :func:`plan` offers: the compiled RRT-Connect, then OMPL's
 #: (:mod:`workbench.motion.ompl_planners`, the ``[ompl]`` extra).
 PLANNERS = ("rrtconnect", *(PREFIX + name for name in OMPL_PLANNERS))
@@ -101,9 +108,9 @@ class MotionPlan:
         detail: One line on what blocked an unsolved request ("" if solved).
         allowances: ``(link, "scene" or link, metres)`` for each entry
             whose spheres overlap at the start or a goal although the exact
-            meshes are apart there: they may overlap that much (plus
-            :data:`ALLOWANCE_MARGIN`) along the motion and no more; the exact
-            check of the trajectory judges the rest.
+            meshes are apart there: they may overlap that much plus a margin
+            along the motion and no more (module docstring); the exact check
+            of the trajectory judges the rest.
     """
 
     solved: bool
@@ -333,43 +340,58 @@ def plan(
         a, b = exact.body_pairs[exact.compute_least_distance(goals[0])[0]]
         return failed("goal in collision", f"{a} touches {b} at the goal")
     goals = np.array(free_goals)
-    checker, allowances = _allowing_checker(
-        model, scene, np.concatenate([[q_start], goals])
-    )
+    ends = np.concatenate([[q_start], goals])
+    plain = SphereChecker(model, scene)
+    lowest = np.min([plain.clearances(q) for q in ends], axis=0)
+    margins = [np.full(len(lowest), ALLOWANCE_MARGIN)]
+    if verify and (lowest < 0.0).any():  # wider margins first, the judge after
+        wide = ALLOWANCE_SHARE * _entry_distances(plain, exact, ends, lowest < 0.0)
+        if (wide > ALLOWANCE_MARGIN).any():
+            margins.insert(0, np.maximum(wide, ALLOWANCE_MARGIN))
     t_search = time.perf_counter()
-    if ompl_name is None:
-        search = _search(
-            checker, robot, q_start, goals, seed, t_search, time_limit, iteration_limit
-        )
-    else:
-        search = solve_with_ompl(
-            ompl_name,
-            checker,
+    spent = [0.0, 0.0, 0.0]  # planning, time scaling, verification [s]
+    for attempt, margin in enumerate(margins):
+        checker, allowances = _allowing_checker(plain, lowest, margin)
+        budget = time_limit - spent[0]
+        t_attempt = time.perf_counter()
+        if ompl_name is None:
+            search = _search(
+                checker, robot, q_start, goals, seed, t_attempt, budget, iteration_limit
+            )
+        else:
+            search = solve_with_ompl(
+                ompl_name,
+                checker,
+                robot,
+                q_start,
+                goals,
+                seed=seed,
+                time_limit=budget,
+            )
+        if len(search) == 3:
+            reason, detail, iterations = search
+            return replace(failed(reason, detail, iterations), allowances=allowances)
+        path, iterations = search
+        if ompl_name is not None:
+            arrays = checker.arrays
+            store = np.zeros((kernel.MAX_EVALUATIONS, len(arrays[0])))
+            path = _shorten(path, np.random.default_rng(seed), arrays, store)
+        t_planned = time.perf_counter()
+        trajectory = time_scale(
             robot,
-            q_start,
-            goals,
-            seed=seed,
-            time_limit=time_limit,
+            path,
+            velocity_scale=velocity_scale,
+            acceleration_scale=acceleration_scale,
         )
-    if len(search) == 3:
-        reason, detail, iterations = search
-        return replace(failed(reason, detail, iterations), allowances=allowances)
-    path, iterations = search
-    if ompl_name is not None:
-        arrays = checker.arrays
-        store = np.zeros((kernel.MAX_EVALUATIONS, len(arrays[0])))
-        path = _shorten(path, np.random.default_rng(seed), arrays, store)
-    t_planned = time.perf_counter()
-    trajectory = time_scale(
-        robot,
-        path,
-        velocity_scale=velocity_scale,
-        acceleration_scale=acceleration_scale,
-    )
-    t_scaled = time.perf_counter()
-    report = verify_trajectory(exact, trajectory) if verify else None
-    t_verified = time.perf_counter()
-    free = report is None or report.collision_free
+        t_scaled = time.perf_counter()
+        report = verify_trajectory(exact, trajectory) if verify else None
+        t_verified = time.perf_counter()
+        spent[0] += t_planned - t_attempt
+        spent[1] += t_scaled - t_planned
+        spent[2] += t_verified - t_scaled
+        free = report is None or report.collision_free
+        if free or attempt == len(margins) - 1 or spent[0] >= time_limit:
+            break
     path.setflags(write=False)
     goal_reached = np.array(path[-1])
     goal_reached.setflags(write=False)
@@ -380,9 +402,9 @@ def plan(
         trajectory,
         goal_reached,
         t_search - t0,
-        t_planned - t_search,
-        t_scaled - t_planned,
-        t_verified - t_scaled,
+        spent[0],
+        spent[1],
+        spent[2],
         math.nan if report is None else float(report.min_clearance),
         report,
         iterations,
@@ -394,23 +416,61 @@ def plan(
 
 
 def _allowing_checker(
-    model: SphereModel, scene: Scene | None, ends: FloatArray
+    plain: SphereChecker, lowest: FloatArray, margin: FloatArray
 ) -> tuple[SphereChecker, tuple[tuple[str, str, float], ...]]:
     """The checker that allows each entry the overlap it has at an end.
 
     The ends are free on the exact meshes (checked before), so an overlap of
-    their spheres is the spheres' excess, not a contact.
+    their spheres is the spheres' excess, not a contact: the entry may overlap
+    that much plus its ``margin`` along the motion.
+
+    Args:
+        plain: The checker without allowance.
+        lowest: (L + P,) [m], each entry's least sphere clearance over the ends.
+        margin: (L + P,) [m], what each overlapping entry may overlap more.
     """
-    checker = SphereChecker(model, scene)
-    lowest = np.min([checker.clearances(q) for q in ends], axis=0)
-    overlap = np.where(lowest < 0.0, ALLOWANCE_MARGIN - lowest, 0.0)
+    overlap = np.where(lowest < 0.0, margin - lowest, 0.0)
     if not overlap.any():
-        return checker, ()
-    names = [(link, "scene") for link in checker.links] + list(checker.pairs)
+        return plain, ()
+    names = [(link, "scene") for link in plain.links] + list(plain.pairs)
     allowances = tuple(
         (a, b, float(overlap[k])) for k, (a, b) in enumerate(names) if overlap[k] > 0
     )
-    return checker.with_allowance(overlap), allowances
+    return plain.with_allowance(overlap), allowances
+
+
+def _entry_distances(
+    checker: SphereChecker,
+    exact: CollisionChecker,
+    ends: FloatArray,
+    wanted: npt.NDArray[np.bool_],
+) -> FloatArray:
+    """The least exact distance [m] over the ends of the ``wanted`` entries.
+
+    An entry of ``checker`` (L + P,) is a link against the scene (its scene
+    pairs in ``exact``) or a link pair; the others, and an entry without an
+    exact pair, get 0.
+    """
+    index: dict[str | frozenset[str], int] = {
+        link: k for k, link in enumerate(checker.links)
+    }
+    offset = len(checker.links)
+    index.update({frozenset(pair): offset + k for k, pair in enumerate(checker.pairs)})
+    owner = np.full(len(exact.pairs), -1)
+    for j, pair in enumerate(exact.pairs):
+        key = (
+            pair.body_a
+            if pair.kind == "scene"
+            else frozenset((pair.body_a, pair.body_b))
+        )
+        owner[j] = index.get(key, -1)
+    active = (owner >= 0) & wanted[np.maximum(owner, 0)]
+    out = np.full(len(wanted), np.inf)
+    if active.any():
+        for q in ends:
+            distances = exact.compute_distances(q, active=active)
+            np.minimum.at(out, owner[active], distances[active])
+    return np.where(np.isfinite(out) & wanted, out, 0.0)
 
 
 def _search(
