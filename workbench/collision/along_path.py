@@ -27,8 +27,10 @@ bound that costs coal a few µs); the exact distance is computed there for the
 pairs whose bound is at most the smallest exact distance found (or 0), in
 rounds until no bound is, so the smallest exact distance over the coarse
 samples and every contact at them are found. The samples in between are
-computed for the pairs whose lower bound over the coarse interval (from the
-exact distances or the hulls' at its ends) could reach that distance (or 0).
+visited for the pairs whose lower bound over the coarse interval (from the
+exact distances or the hulls' at its ends) could reach that distance (or 0);
+a visited sample is bounded by the hulls too and measured exactly where that
+bound could, or where an interval between neighbouring samples is bisected.
 The smallest distance over the samples is therefore exactly the one a check
 of every pair at every sample finds, and ``lower_bound`` holds for the whole
 continuous path.
