@@ -196,26 +196,11 @@ class _PathCheck:
         See the module docstring. Returns the least exact distance [m].
         """
         lower = np.array([self.checker.compute_lower_bounds(self.q[k]) for k in coarse])
+        exact = self.checker._measure_where_least(self.q[coarse], lower)
         self.lower[coarse] = lower
-        c, p = np.unravel_index(np.argmin(lower), lower.shape)
-        k = coarse[c]
-        self.distances[k, p] = self.checker.compute_pair_distance(self.q[k], int(p))
-        self.evaluations += 1
-        best = float(self.distances[k, p])
-        while True:
-            need = (lower <= max(best, 0.0) + DISTANCE_TOL) & np.isnan(
-                self.distances[coarse]
-            )
-            if not need.any():
-                return best
-            for c in np.flatnonzero(need.any(axis=1)):
-                mask, k = need[c], coarse[c]
-                self.checker.set_active(mask)
-                self.distances[k, mask] = self.checker.compute_raw_distances(self.q[k])[
-                    mask
-                ]
-                self.evaluations += int(np.count_nonzero(mask))
-                best = min(best, float(np.min(self.distances[k, mask])))
+        self.distances[coarse] = exact
+        self.evaluations += int(np.count_nonzero(~np.isnan(exact)))
+        return float(np.nanmin(exact))
 
     def _motion(self, a: npt.NDArray[np.int64], b: npt.NDArray[np.int64]) -> FloatArray:
         return (self.cumulative[b] - self.cumulative[a]) @ self.levers.T
@@ -234,15 +219,11 @@ class _PathCheck:
     def run(self) -> PathClearance:
         k_total = self.distances.shape[0]
         coarse = np.unique(np.r_[np.arange(0, k_total, COARSE_STRIDE), k_total - 1])
-        try:
-            threshold = max(self._evaluate_coarse(coarse), 0.0)
-            self.checker.set_active(None)
-            if k_total > 1:
-                self._check_intervals(coarse, threshold)
-            else:
-                self.bounds.append(float(np.min(self._known(coarse)[0])))
-        finally:
-            self.checker.set_active(None)
+        threshold = max(self._evaluate_coarse(coarse), 0.0)
+        if k_total > 1:
+            self._check_intervals(coarse, threshold)
+        else:
+            self.bounds.append(float(np.min(self._known(coarse)[0])))
         return self._report()
 
     def _check_intervals(self, coarse: npt.NDArray[np.int64], threshold: float) -> None:

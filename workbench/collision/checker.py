@@ -259,22 +259,34 @@ class CollisionChecker:
         q = self.robot.check_configuration(q)
         if not self.pairs:
             return -1, math.inf
-        lower = self.compute_lower_bounds(q)
-        exact = np.full(len(self.pairs), np.nan)
-        k = int(np.argmin(lower))
-        exact[k] = self.compute_pair_distance(q, k)
+        exact = self._measure_where_least(q[None], self.compute_lower_bounds(q)[None])
+        k = int(np.nanargmin(exact[0]))
+        return k, float(exact[0, k])
+
+    def _measure_where_least(self, qs: FloatArray, lower: FloatArray) -> FloatArray:
+        """Exact distances (S, P) [m] where a bound may be the least, NaN elsewhere.
+
+        ``lower`` (S, P) holds the hull bounds of the pairs at the checked
+        configurations ``qs`` (S, nq). A pair at a configuration is measured
+        when its bound is at most the least exact distance found over all of
+        them, or 0, in rounds until none is: the least exact distance, and
+        every contact, are then among the measured ones. Leaves every pair
+        active (also :mod:`~workbench.collision.along_path`'s coarse samples).
+        """
+        exact = np.full(lower.shape, np.nan)
+        s, k = np.unravel_index(np.argmin(lower), lower.shape)
+        exact[s, k] = self.compute_pair_distance(qs[s], int(k))
         try:
             while True:
                 reach = max(float(np.nanmin(exact)), 0.0) + 10.0 * GJK_TOLERANCE
                 need = (lower <= reach) & np.isnan(exact)
                 if not need.any():
-                    break
-                self.set_active(need)
-                exact[need] = self.compute_raw_distances(q)[need]
+                    return exact
+                for s in np.flatnonzero(need.any(axis=1)):
+                    self.set_active(need[s])
+                    exact[s, need[s]] = self.compute_raw_distances(qs[s])[need[s]]
         finally:
             self.set_active(None)
-        k = int(np.nanargmin(exact))
-        return k, float(exact[k])
 
     def compute_pair_distance(self, q: FloatArray, k: int) -> float:
         """Distance [m] of pair ``k`` alone at a checked ``q``, no validation."""
