@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import heapq
 import math
 
 import numpy as np
@@ -199,6 +200,61 @@ def test_a_cube_is_covered_by_few_spheres_even_with_a_hole(holed) -> None:
     assert np.all(gap.min(axis=1) <= EXACT_TOL)
     assert len(radii) <= 40
     assert radii.max() > 0.05  # a sphere about the inside, not only the skin
+
+
+def _plain_greedy(centers, radii, points, deltas, held):
+    """The lazy greedy set cover in plain Python, every sample visited."""
+    inside = [
+        set(
+            np.flatnonzero(
+                (radii[i] - deltas >= 0)
+                & (
+                    np.sum((points - centers[i]) ** 2, axis=1)
+                    <= (radii[i] - deltas) ** 2
+                )
+            ).tolist()
+        )
+        for i in range(len(centers))
+    ]
+    free = set(np.flatnonzero(~held).tolist())
+    heap = [(-len(inside[i] & free), i) for i in range(len(centers))]
+    heap = [item for item in heap if item[0] < 0]
+    heapq.heapify(heap)
+    chosen = []
+    while heap:
+        _, i = heapq.heappop(heap)
+        count = len(inside[i] & free)
+        if count == 0:
+            continue
+        if heap and -heap[0][0] > count:
+            heapq.heappush(heap, (-count, i))
+            continue
+        chosen.append(i)
+        free -= inside[i]
+    return chosen, free
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(0, 60), st.integers(1, 400))
+def test_the_greedy_cover_equals_a_plain_one(seed, n_centers, n_points) -> None:
+    """The compiled cover, which visits only the grid cells a sphere meets,
+    picks the same spheres in the same order as one that visits every sample."""
+    from workbench.motion._cover_kernel import greedy_cover
+
+    rng = np.random.default_rng(seed)
+    points = rng.uniform(-0.1, 0.1, (n_points, 3)) * rng.uniform(0.01, 1.0, 3)
+    deltas = rng.uniform(0.0, 0.004, n_points)
+    centers = rng.uniform(-0.1, 0.1, (n_centers, 3))
+    radii = rng.uniform(0.001, 0.08, n_centers)
+    held = rng.random(n_points) < 0.2
+    expected, free = _plain_greedy(centers, radii, points, deltas, held)
+    out = held.copy()
+    chosen = np.zeros(n_centers, dtype=np.int64)
+    taken = greedy_cover(
+        centers, radii, np.ascontiguousarray(points), deltas, out, chosen
+    )
+    assert chosen[:taken].tolist() == expected
+    assert set(np.flatnonzero(~out).tolist()) == free
 
 
 def test_spherize_refuses_a_bad_tolerance(puma) -> None:
