@@ -257,6 +257,27 @@ def test_the_greedy_cover_equals_a_plain_one(seed, n_centers, n_points) -> None:
     assert set(np.flatnonzero(~out).tolist()) == free
 
 
+def test_surface_samples_are_each_triangles_grid_in_order() -> None:
+    """The batched samples equal a triangle-by-triangle grid, point for point."""
+    from workbench.motion.spheres import _surface_samples
+
+    rng = np.random.default_rng(3)
+    vertices = rng.uniform(-0.05, 0.05, (40, 3))
+    triangles = rng.integers(0, 40, (60, 3))
+    triangles[0] = (5, 5, 5)  # a degenerate one
+    points, deltas = [vertices], [np.zeros(len(vertices))]
+    for a, b, c in vertices[triangles]:
+        longest = max(math.dist(a, b), math.dist(b, c), math.dist(c, a))
+        n = max(1, math.ceil(longest / 0.006))
+        for i in range(n + 1):
+            for j in range(n + 1 - i):
+                points.append([a + i / n * (b - a) + j / n * (c - a)])
+                deltas.append([longest / n / math.sqrt(3.0)])
+    got_points, got_deltas = _surface_samples(vertices, triangles, 0.006)
+    np.testing.assert_allclose(got_points, np.concatenate(points), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(got_deltas, np.concatenate(deltas), rtol=1e-14)
+
+
 def test_spherize_refuses_a_bad_tolerance(puma) -> None:
     for bad in (0, -1.0, math.nan, math.inf, "1"):
         with pytest.raises(InputError, match="tolerance"):

@@ -216,19 +216,43 @@ def mesh_triangles(shape: object) -> IntArray:
 def _surface_samples(
     vertices: FloatArray, triangles: IntArray, spacing: float
 ) -> tuple[FloatArray, FloatArray]:
-    """Grid points on every triangle and each point's coverage radius δ [m]."""
-    points, deltas = [vertices], [np.zeros(len(vertices))]
-    for a, b, c in vertices[triangles]:
-        longest = max(
-            np.linalg.norm(b - a), np.linalg.norm(c - b), np.linalg.norm(a - c)
+    """Grid points on every triangle and each point's coverage radius δ [m].
+
+    The vertices first, then each triangle's grid (n + 1 points along an edge,
+    n the least with its longest edge / n <= ``spacing``), triangle by
+    triangle; the triangles of one n are computed together.
+    """
+    corners = vertices[triangles]  # (T, 3, 3)
+    a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
+    longest = np.maximum.reduce(
+        [
+            np.sqrt(np.sum((b - a) ** 2, axis=1)),
+            np.sqrt(np.sum((c - b) ** 2, axis=1)),
+            np.sqrt(np.sum((a - c) ** 2, axis=1)),
+        ]
+    )
+    n = np.maximum(1, np.ceil(longest / spacing)).astype(np.int64)
+    count = (n + 1) * (n + 2) // 2  # grid points of each triangle
+    first = len(vertices) + np.concatenate([[0], np.cumsum(count)[:-1]])
+    total = len(vertices) + int(count.sum())
+    points = np.empty((total, 3))
+    deltas = np.empty(total)
+    points[: len(vertices)] = vertices
+    deltas[: len(vertices)] = 0.0
+    for size in np.unique(n):
+        i, j = np.meshgrid(np.arange(size + 1), np.arange(size + 1), indexing="ij")
+        keep = i + j <= size
+        u, v = i[keep] / size, j[keep] / size
+        chosen = np.flatnonzero(n == size)
+        at = (first[chosen][:, None] + np.arange(len(u))).ravel()
+        block = (
+            a[chosen, None]
+            + u[None, :, None] * (b - a)[chosen, None]
+            + v[None, :, None] * (c - a)[chosen, None]
         )
-        n = max(1, math.ceil(longest / spacing))
-        i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
-        keep = i + j <= n
-        u, v = i[keep] / n, j[keep] / n
-        points.append(a + np.outer(u, b - a) + np.outer(v, c - a))
-        deltas.append(np.full(len(u), longest / n / math.sqrt(3.0)))
-    return np.concatenate(points), np.concatenate(deltas)
+        points[at] = block.reshape(-1, 3)
+        deltas[at] = np.repeat(longest[chosen] / size / math.sqrt(3.0), len(u))
+    return points, deltas
 
 
 def _cover_mesh(
