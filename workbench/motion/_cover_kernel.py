@@ -60,13 +60,13 @@ def _count(
     its cell size ``grid[3]`` [m]. Only the cells the sphere meets are visited.
     """
     size = grid[3]
-    reach = radius + 1e-9 * size  # (the cell's bounds are rounded)
-    lo0 = max(0, math.floor((center[0] - radius - grid[0]) / size))
-    lo1 = max(0, math.floor((center[1] - radius - grid[1]) / size))
-    lo2 = max(0, math.floor((center[2] - radius - grid[2]) / size))
-    hi0 = min(dims[0] - 1, math.floor((center[0] + radius - grid[0]) / size))
-    hi1 = min(dims[1] - 1, math.floor((center[1] + radius - grid[1]) / size))
-    hi2 = min(dims[2] - 1, math.floor((center[2] + radius - grid[2]) / size))
+    reach = radius + 1e-9 * size  # (a cell's bounds and index are rounded)
+    lo0 = max(0, math.floor((center[0] - reach - grid[0]) / size))
+    lo1 = max(0, math.floor((center[1] - reach - grid[1]) / size))
+    lo2 = max(0, math.floor((center[2] - reach - grid[2]) / size))
+    hi0 = min(dims[0] - 1, math.floor((center[0] + reach - grid[0]) / size))
+    hi1 = min(dims[1] - 1, math.floor((center[1] + reach - grid[1]) / size))
+    hi2 = min(dims[2] - 1, math.floor((center[2] + reach - grid[2]) / size))
     count = 0
     for i in range(lo0, hi0 + 1):
         x = grid[0] + i * size
