@@ -205,10 +205,13 @@ class _PathCheck:
     def _motion(self, a: npt.NDArray[np.int64], b: npt.NDArray[np.int64]) -> FloatArray:
         return (self.cumulative[b] - self.cumulative[a]) @ self.levers.T
 
-    def _known(self, k: npt.NDArray[np.int64]) -> FloatArray:
-        """The exact distances at samples ``k`` where computed, else the hulls'."""
-        d = self.distances[k]
-        return np.where(np.isnan(d), self.lower[k], d)
+    def _known(self, k: Any, p: Any = slice(None)) -> FloatArray:
+        """Exact distances at samples ``k``, pairs ``p``, where known, else the hulls'.
+
+        ``k`` and ``p`` index as numpy's indices do (ints, arrays, slices).
+        """
+        d = self.distances[k, p]
+        return np.where(np.isnan(d), self.lower[k, p], d)
 
     def _exact(self, k: int, p: int) -> None:
         """Compute pair ``p``'s exact distance at sample ``k`` if not known."""
@@ -249,8 +252,8 @@ class _PathCheck:
         while stack:
             lo, hi = stack.pop()
             motion = float((self.cumulative[hi] - self.cumulative[lo]) @ self.levers[p])
-            bound = 0.5 * (self._value(lo, p) + self._value(hi, p) - motion)
-            bound -= DISTANCE_TOL
+            ends = self._known(lo, p) + self._known(hi, p)
+            bound = 0.5 * (float(ends) - motion) - DISTANCE_TOL
             if bound > self.threshold or (hi - lo == 1 and bound > 0.0):
                 self.bounds.append(bound)
             elif hi - lo == 1:
@@ -266,11 +269,6 @@ class _PathCheck:
                 mid = (lo + hi) // 2
                 self._measure(mid, p)
                 stack += [(mid, hi), (lo, mid)]
-
-    def _value(self, k: int, p: int) -> float:
-        """Pair ``p``'s exact distance at sample ``k`` if measured, else its bound."""
-        value = self.distances[k, p]
-        return float(self.lower[k, p] if np.isnan(value) else value)
 
     def _measure(self, k: int, p: int) -> None:
         """Bound pair ``p`` at sample ``k`` by the hulls; exactly if it may be least."""

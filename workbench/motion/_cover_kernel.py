@@ -45,20 +45,17 @@ MAX_CELLS = 1 << 21
 def _count(
     center: FloatArray,
     radius: float,
-    points: FloatArray,
-    deltas: FloatArray,
-    held: BoolArray,
-    grid: FloatArray,
-    dims: IntArray,
-    start: IntArray,
+    bins: tuple[FloatArray, FloatArray, BoolArray, FloatArray, IntArray, IntArray],
     mark: bool,
 ) -> int:
     """Samples not yet held that the sphere holds; with ``mark``, hold them.
 
-    ``points``, ``deltas`` and ``held`` are in cell order: the samples of cell
-    c are ``start[c]:start[c + 1]``, the grid's corner is ``grid[:3]`` and
-    its cell size ``grid[3]`` [m]. Only the cells the sphere meets are visited.
+    ``bins`` is ``(points, deltas, held, grid, dims, start)``: the samples in
+    cell order (those of cell c are ``start[c]:start[c + 1]``), the grid's
+    corner ``grid[:3]`` and cell size ``grid[3]`` [m] and its cells per axis.
+    Only the cells the sphere meets are visited.
     """
+    points, deltas, held, grid, dims, start = bins
     size = grid[3]
     reach = radius + 1e-9 * size  # (a cell's bounds and index are rounded)
     lo0 = max(0, math.floor((center[0] - reach - grid[0]) / size))
@@ -155,36 +152,17 @@ def greedy_cover(
         sorted_points[n] = points[order[n]]
         sorted_deltas[n] = deltas[order[n]]
         sorted_held[n] = held[order[n]]
+    bins = (sorted_points, sorted_deltas, sorted_held, grid, dims, start)
     heap = [(0, 0) for _ in range(0)]
     for i in range(centers.shape[0]):
-        count = _count(
-            centers[i],
-            radii[i],
-            sorted_points,
-            sorted_deltas,
-            sorted_held,
-            grid,
-            dims,
-            start,
-            False,
-        )
+        count = _count(centers[i], radii[i], bins, False)
         if count > 0:
             heap.append((-count, i))
     heapq.heapify(heap)
     taken = 0
     while len(heap) > 0:
         _, i = heapq.heappop(heap)
-        count = _count(
-            centers[i],
-            radii[i],
-            sorted_points,
-            sorted_deltas,
-            sorted_held,
-            grid,
-            dims,
-            start,
-            False,
-        )
+        count = _count(centers[i], radii[i], bins, False)
         if count == 0:
             continue
         if len(heap) > 0 and -heap[0][0] > count:
@@ -192,17 +170,7 @@ def greedy_cover(
             continue
         chosen[taken] = i
         taken += 1
-        _count(
-            centers[i],
-            radii[i],
-            sorted_points,
-            sorted_deltas,
-            sorted_held,
-            grid,
-            dims,
-            start,
-            True,
-        )
+        _count(centers[i], radii[i], bins, True)
     for n in range(n_points):
         held[order[n]] = sorted_held[n]
     return taken

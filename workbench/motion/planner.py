@@ -335,9 +335,10 @@ def plan(
     if least <= 0.0:
         a, b = exact.body_pairs[k]
         return failed("start in collision", f"{a} touches {b} at the start")
-    free_goals = [q for q in goals if exact.compute_least_distance(q)[1] > 0.0]
+    nearest = [exact.compute_least_distance(q) for q in goals]
+    free_goals = [q for q, (_, d) in zip(goals, nearest, strict=True) if d > 0.0]
     if not free_goals:
-        a, b = exact.body_pairs[exact.compute_least_distance(goals[0])[0]]
+        a, b = exact.body_pairs[nearest[0][0]]
         return failed("goal in collision", f"{a} touches {b} at the goal")
     goals = np.array(free_goals)
     ends = np.concatenate([[q_start], goals])
