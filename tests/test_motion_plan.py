@@ -15,7 +15,14 @@ import workbench as wb
 from workbench.collision import CollisionChecker
 from workbench.collision.scene import Obstacle, Scene
 from workbench.errors import InputError
-from workbench.motion import SphereChecker, goal_configurations, plan, spherize
+from workbench.motion import (
+    SphereChecker,
+    get_pair_tables,
+    goal_configurations,
+    plan,
+    spherize,
+)
+from workbench.motion.pair_tables import SHARE
 from workbench.motion.planner import ALLOWANCE_MARGIN
 from workbench.motion.spheres import mesh_triangles
 from workbench.paper_data import ANGELES_PICK_Q_DEG, ANGELES_PLACE_Q_DEG
@@ -635,8 +642,9 @@ def test_an_allowance_lets_an_entry_overlap_that_much_and_no_more(
 def test_a_trajectory_the_judge_refuses_is_planned_again_on_narrow_margins(
     monkeypatch, ur5_spheres
 ) -> None:
-    """With verify, allowances first get half the exact clearance at the ends;
-    a trajectory the exact check refuses is planned again with 1 mm margins."""
+    """With verify, the inseparable pairs first get their tables and the other
+    allowances half the exact clearance at the ends; a trajectory the exact
+    check refuses is planned again without tables, on 1 mm margins."""
     import dataclasses
     from pathlib import Path
 
@@ -656,9 +664,13 @@ def test_a_trajectory_the_judge_refuses_is_planned_again_on_narrow_margins(
     def margins(result) -> dict:
         return {(a, b): m - overlap[(a, b)] for a, b, m in result.allowances}
 
+    tabled = set(get_pair_tables(ur5_spheres).pairs)
+    assert ("base_link", "upper_arm_link") in tabled
     wide = plan(ur5, problem.scene, start, goal, spheres=ur5_spheres, time_limit=5)
-    assert wide.solved and max(margins(wide).values()) > ALLOWANCE_MARGIN
-    assert min(margins(wide).values()) >= ALLOWANCE_MARGIN - EXACT_TOL
+    assert wide.solved
+    # the tables' pairs overlap no more at the ends than they are allowed to
+    assert not tabled & {(a, b) for a, b, _ in wide.allowances}
+    assert all(m >= ALLOWANCE_MARGIN - EXACT_TOL for m in margins(wide).values())
 
     verdicts = []
     real = planner_module.verify_trajectory
@@ -680,3 +692,87 @@ def test_a_trajectory_the_judge_refuses_is_planned_again_on_narrow_margins(
         ur5, problem.scene, start, goal, spheres=ur5_spheres, time_limit=5, verify=False
     )
     assert margins(narrow) == pytest.approx(margins(again))
+
+
+@pytest.fixture(scope="module")
+def ur5_tables(ur5_spheres):
+    return get_pair_tables(ur5_spheres)
+
+
+def _table_value(tables, k: int, q: np.ndarray) -> float:
+    """Pair k's table value at q, the nearest node's, in plain Python."""
+    if tables.start[k] < 0:
+        return 0.0
+    index = 0
+    for i in range(2):
+        j = tables.joint[k, i]
+        if j < 0:
+            break
+        n = tables.cells[k, i]
+        cell = math.floor((q[j] - tables.lower[k, i]) / tables.step[k, i])
+        cell = cell % n if tables.periodic[k, i] else min(max(cell, 0), n - 1)
+        index = index * n + cell
+    return float(tables.values[tables.start[k] + index])
+
+
+def test_the_inseparable_pairs_get_tables_of_half_their_exact_distance(
+    ur5_spheres, ur5_tables
+) -> None:
+    """The UR5's pairs whose spheres overlap almost everywhere while the meshes
+    are apart get tables; at a node the pair's clearance is then its spheres'
+    or half the meshes' distance (a bound of it), whichever is more."""
+    robot = ur5_spheres.robot
+    assert {("base_link", "upper_arm_link"), ("forearm_link", "wrist_2_link")} <= set(
+        ur5_tables.pairs
+    )
+    plain = SphereChecker(ur5_spheres)
+    tabled = SphereChecker(ur5_spheres, pair_tables=ur5_tables)
+    exact = CollisionChecker(robot, None)
+    rng = np.random.default_rng(3)
+    n_links = len(plain.links)
+    for pair in ur5_tables.pairs:
+        k = plain.pairs.index(pair)
+        measured = [
+            i for i, p in enumerate(exact.pairs) if {p.body_a, p.body_b} == set(pair)
+        ]
+        width = int(np.sum(ur5_tables.joint[k] >= 0))
+        joints = ur5_tables.joint[k, :width]
+        lower, step = ur5_tables.lower[k, :width], ur5_tables.step[k, :width]
+        for _ in range(6):
+            cells = rng.integers(0, ur5_tables.cells[k, :width])
+            q = np.clip(np.zeros(robot.nq), robot.lower, robot.upper)
+            q[joints] = lower + (cells + 0.5) * step  # a node
+            d = min(exact.compute_pair_distance(q, i) for i in measured)
+            g = plain.clearances(q)[n_links + k]
+            c = tabled.clearances(q)[n_links + k]
+            assert g - EXACT_TOL <= c <= max(g, SHARE * d) + EXACT_TOL
+            if d <= 0.0:
+                assert c == pytest.approx(g, abs=EXACT_TOL)
+    # most of the sampled configurations were refused by these pairs, now few
+    qs = rng.uniform(robot.lower, robot.upper, size=(100, robot.nq))
+    base_arm = n_links + plain.pairs.index(("base_link", "upper_arm_link"))
+    before = np.mean([plain.clearances(q)[base_arm] < 0.0 for q in qs])
+    after = np.mean([tabled.clearances(q)[base_arm] < 0.0 for q in qs])
+    assert before > 0.9 and after < 0.1
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.floats(-1.0, 1.0), min_size=6, max_size=6))
+def test_a_tables_value_is_that_of_the_nearest_node(
+    ur5_spheres, ur5_tables, fractions
+) -> None:
+    """The kernel adds each pair's table value at the node nearest q (wrapped
+    on joints of a full turn), and nothing to pairs without one."""
+    q = _within_limits(ur5_spheres.robot, fractions)
+    plain = SphereChecker(ur5_spheres).clearances(q)
+    tabled = SphereChecker(ur5_spheres, pair_tables=ur5_tables).clearances(q)
+    n_links = len(ur5_spheres.links)
+    np.testing.assert_array_equal(tabled[:n_links], plain[:n_links])
+    for k in range(len(plain) - n_links):
+        added = tabled[n_links + k] - plain[n_links + k]
+        assert added == pytest.approx(_table_value(ur5_tables, k, q), abs=1e-12)
+
+
+def test_pair_tables_must_fit_the_checker(puma_spheres, ur5_tables) -> None:
+    with pytest.raises(InputError, match="pair_tables"):
+        SphereChecker(puma_spheres, pair_tables=ur5_tables)

@@ -3,8 +3,10 @@
 :func:`plan` is the one door (:mod:`.plan`): RRT-Connect on a conservative
 sphere model of the robot (:mod:`.spheres`, :func:`spherize`), checked in
 compiled code against the scene with certified segments (:mod:`.checker`,
-:class:`SphereChecker`), shortened, time-scaled and verified on the exact
-meshes; ``planner="ompl:NAME"`` runs one of OMPL's planners
+:class:`SphereChecker`; the pairs its spheres cannot separate get allowance
+tables over their relative joints, :mod:`.pair_tables`), shortened,
+time-scaled and verified on the exact meshes; ``planner="ompl:NAME"`` runs
+one of OMPL's planners
 (:data:`OMPL_PLANNERS`, :mod:`.ompl_planners`) with the same checker instead.
 :mod:`.problems` finds MotionBenchMaker problem sets and judges their
 validity, :mod:`.problem_runs` plans and summarises them (:func:`run_problems`,
@@ -31,9 +33,11 @@ if TYPE_CHECKING:
     from workbench.motion.batch import plan_many
     from workbench.motion.checker import SphereChecker
     from workbench.motion.ompl_planners import OMPL_PLANNERS, OPTIMAL_PLANNERS
+    from workbench.motion.pair_tables import PairTables, build_pair_tables
     from workbench.motion.planner import (
         PLANNERS,
         MotionPlan,
+        get_pair_tables,
         goal_configurations,
         plan,
     )
@@ -70,6 +74,7 @@ __all__ = [
     "LinkSpheres",
     "MotionPlan",
     "MotionRequest",
+    "PairTables",
     "PlannedAround",
     "Problem",
     "ProblemResult",
@@ -78,8 +83,10 @@ __all__ = [
     "SphereModel",
     "Validity",
     "WaypointTrajectory",
+    "build_pair_tables",
     "check_validity",
     "find_problems",
+    "get_pair_tables",
     "goal_configurations",
     "parse_request",
     "plan",

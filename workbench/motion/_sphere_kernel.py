@@ -19,7 +19,9 @@ the unsigned distance to its triangles.
 
 **Allowances.** Each entry may carry an allowance [m] added to its
 clearance: the spheres may overlap by that much (where they overlap at the
-start or goal while the exact meshes are apart) and no more.
+start or goal while the exact meshes are apart) and no more. A pair with a
+table (:mod:`workbench.motion.pair_tables`) adds the table's value at the
+node nearest to its one or two relative joints (:func:`_table_allowance`).
 
 **Certified motions.** Along the straight joint segment from
 :math:`q_a` to :math:`q_b` a point of link :math:`l` moves by at most
@@ -277,6 +279,40 @@ def _limit(need: float, bound: float, radius: float) -> float:
     return 0.0
 
 
+@helper(forceinline=True)
+def _table_allowance(
+    q: FloatArray,
+    k: int,
+    tstart: IntArray,
+    tjoint: IntArray,
+    tcells: IntArray,
+    tperiodic: IntArray,
+    tlower: FloatArray,
+    tstep: FloatArray,
+    tvalues: FloatArray,
+) -> float:
+    """Pair k's allowance [m] at q: its table's value at the nearest node.
+
+    0 for a pair without a table (:mod:`workbench.motion.pair_tables`).
+    """
+    start = tstart[k]
+    if start < 0:
+        return 0.0
+    index = 0
+    for i in range(2 * k, 2 * k + 2):
+        j = tjoint[i]
+        if j < 0:
+            break
+        n = tcells[i]
+        c = math.floor((q[j] - tlower[i]) / tstep[i])
+        if tperiodic[i]:
+            c %= n
+        else:
+            c = min(max(c, 0), n - 1)
+        index = index * n + c
+    return tvalues[start + index]
+
+
 @helper()
 def _clearances(
     q: FloatArray,
@@ -324,6 +360,11 @@ def _clearances(
     base += n_links * width
     lgroup = robot_int[base : base + n_links + 1]
     gfirst = robot_int[base + n_links + 1 : base + n_links + 2 + n_groups]
+    base += n_links + 2 + n_groups
+    tstart = robot_int[base : base + n_pairs]
+    tjoint = robot_int[base + n_pairs : base + 3 * n_pairs]
+    tcells = robot_int[base + 3 * n_pairs : base + 5 * n_pairs]
+    tperiodic = robot_int[base + 5 * n_pairs : base + 7 * n_pairs]
     f = 0
     jrot = robot_float[f : f + 9 * n_joints].reshape(n_joints, 3, 3)
     f += 9 * n_joints
@@ -344,6 +385,10 @@ def _clearances(
     gcenter = robot_float[f : f + 3 * n_groups].reshape(n_groups, 3)
     f += 3 * n_groups
     gradius = robot_float[f : f + n_groups]
+    f += n_groups
+    tlower = robot_float[f : f + 2 * n_pairs]
+    tstep = robot_float[f + 2 * n_pairs : f + 4 * n_pairs]
+    tvalues = robot_float[f + 4 * n_pairs : f + 4 * n_pairs + sizes[7]]
     okind = scene_int[0:n_obstacles]
     ofirst = scene_int[n_obstacles : 2 * n_obstacles + 1]
     orot = scene_float[0 : 9 * n_obstacles].reshape(n_obstacles, 3, 3)
@@ -441,7 +486,9 @@ def _clearances(
             out[n_links + k] = math.inf
             continue
         a, b = pa[k], pb[k]
-        slack = allow[n_links + k]
+        slack = allow[n_links + k] + _table_allowance(
+            q, k, tstart, tjoint, tcells, tperiodic, tlower, tstep, tvalues
+        )
         d = _gap(bound[a], bound[b]) - lradius[a] - lradius[b] + slack
         limit = _limit(need[n_links + k], d, lradius[a] + lradius[b])
         if d < limit:

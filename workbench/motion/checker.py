@@ -25,7 +25,8 @@ from workbench.collision.self_filter import compute_self_collision_filter
 from workbench.errors import InputError
 from workbench.model.per_robot import per_robot
 from workbench.motion import _sphere_kernel as kernel
-from workbench.motion.spheres import SphereModel, mesh_triangles
+from workbench.motion.pair_tables import PairTables, no_tables
+from workbench.motion.spheres import LinkSpheres, SphereModel, mesh_triangles
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -59,17 +60,23 @@ class SphereChecker:
             spheres of that entry may overlap (:func:`~workbench.motion.plan`
             allows the overlap they have at the start or a goal where the
             exact meshes are apart, and no more); default none.
+        pair_tables: Allowance tables of the pairs whose spheres overlap over
+            their one or two relative joints
+            (:func:`~workbench.motion.pair_tables.build_pair_tables`,
+            aligned with :attr:`pairs`), added to ``allowance``; default none.
 
     Attributes:
-        spheres, scene: As given.
+        spheres, scene, pair_tables: As given (``pair_tables``: none for
+            every pair when not given).
         allowance: (L + P,) [m], read-only.
         links: Link names, in the order of the clearance entries.
         pairs: Checked link pairs ``(link_a, link_b)``, after the links.
 
     Raises:
         InputError: If the robot has a joint other than a revolute one with
-            one coordinate, an obstacle's ``allow`` names no link, or the
-            allowance is not (L + P,) finite values >= 0.
+            one coordinate, an obstacle's ``allow`` names no link, the
+            allowance is not (L + P,) finite values >= 0, or ``pair_tables``
+            are for another number of pairs.
     """
 
     def __init__(
@@ -78,11 +85,18 @@ class SphereChecker:
         scene: Scene | None = None,
         *,
         allowance: npt.ArrayLike | None = None,
+        pair_tables: PairTables | None = None,
     ) -> None:
         self.spheres = spheres
         self.scene = scene or Scene("empty")
         self.links = tuple(link.link for link in spheres.links)
         self.pairs = _pairs(spheres)
+        self.pair_tables = pair_tables or no_tables(len(self.pairs))
+        if len(self.pair_tables.start) != len(self.pairs):
+            raise InputError(
+                f"pair_tables hold {len(self.pair_tables.start)} pairs; this "
+                f"checker has {len(self.pairs)}"
+            )
         n_entries = len(self.links) + len(self.pairs)
         self.allowance = _check_allowance(
             np.zeros(n_entries) if allowance is None else allowance, n_entries
@@ -93,7 +107,7 @@ class SphereChecker:
             self._levers,
             sizes,
             self._allowance_at,
-        ) = _pack_robot(spheres, self.scene, self.allowance)
+        ) = _pack_robot(spheres, self.scene, self.allowance, self.pair_tables)
         self._scene_int, self._scene_float, self._tris = _pack_scene(self.scene)
         self._sizes = np.array(sizes, dtype=np.int64)
         self._store = np.zeros((kernel.MAX_EVALUATIONS, len(self._levers)))
@@ -182,7 +196,7 @@ def _pairs(spheres: SphereModel) -> tuple[tuple[str, str], ...]:
 
 
 def _pack_robot(
-    spheres: SphereModel, scene: Scene, allowance: FloatArray
+    spheres: SphereModel, scene: Scene, allowance: FloatArray, tables: PairTables
 ) -> tuple[IntArray, FloatArray, FloatArray, list[int], slice]:
     robot = spheres.robot
     model = robot.model
@@ -254,6 +268,10 @@ def _pack_robot(
             allowed.ravel(),
             np.array(link_groups, dtype=np.int64),
             np.array(group_first, dtype=np.int64),
+            tables.start,
+            tables.joint.ravel(),
+            tables.cells.ravel(),
+            tables.periodic.ravel(),
         ]
     ).astype(np.int64)
     rotations = np.array([p.rotation for p in model.jointPlacements])
@@ -277,8 +295,49 @@ def _pack_robot(
             allowance,
             np.array(group_center).ravel(),
             np.array(group_radius),
+            tables.lower.ravel(),
+            tables.step.ravel(),
+            tables.values,
         ]
     )
+    levers = _levers(model, links, bound_center, axes, positions, pa, pb)
+    # A pair with a table is judged by its meshes' distance: its geometry's
+    # speed bounds how fast that changes.
+    tabled = np.flatnonzero(tables.start >= 0)
+    if len(tabled):
+        padded = _levers(model, links, bound_center, axes, positions, pa, pb, pad=True)
+        levers[len(links) + tabled] = padded[len(links) + tabled]
+    sizes = [
+        model.njoints,
+        len(links),
+        group_first[-1],
+        len(pairs),
+        len(scene.obstacles),
+        model.nv,
+        len(group_radius),
+        len(tables.values),
+    ]
+    return robot_int, robot_float, np.ascontiguousarray(levers), sizes, allowance_at
+
+
+def _levers(
+    model: pin.Model,
+    links: tuple[LinkSpheres, ...],
+    bound_center: list[FloatArray],
+    axes: FloatArray,
+    positions: FloatArray,
+    pa: IntArray,
+    pb: IntArray,
+    *,
+    pad: bool = False,
+) -> FloatArray:
+    """Lever arms (L + P, nv) [m/rad] of the links, then of the checked pairs.
+
+    Entry (e, i) bounds how fast a clearance of entry e changes when joint i
+    turns: the speed of the sphere centres, the kernels' motion bound. With
+    ``pad``, of every point of the spheres (each lever grows by the link's
+    largest radius), so of the link's geometry, which they hold.
+    """
     # Lever arm of link l about joint i [m/rad]: a bound on the distance of
     # its sphere centres (and bounding centre) from the axis of joint i, in
     # any configuration: from its own joint's axis exactly; from an ancestor's,
@@ -314,6 +373,9 @@ def _pack_robot(
             carried[li, model.joints[joint].idx_v] = True
             joint = int(model.parents[joint])
     apart = carried[pa] ^ carried[pb]
+    grow = np.array([float(link.radii.max(initial=0.0)) for link in links])
+    if pad:
+        link_levers += grow[:, None] * carried
     # Such a joint turns one link about its axis relative to the other, which
     # is the other turning the opposite way: its points' distance from that
     # axis bounds the change too, and the smaller of the two counts.
@@ -324,24 +386,14 @@ def _pack_robot(
             if not carried[li, v]:
                 far[li, v] = _lever_from_the_other_side(
                     model, link.joint, link_points[li], j, axes, offsets
-                )
+                ) + (grow[li] if pad else 0.0)
     still = np.where(carried[pa], pb[:, None], pa[:, None])  # (P, nv)
     pair_levers = np.where(
         apart,
         np.minimum(link_levers[pa] + link_levers[pb], far[still, np.arange(model.nv)]),
         0.0,
     )
-    levers = np.concatenate([link_levers, pair_levers.reshape(-1, model.nv)])
-    sizes = [
-        model.njoints,
-        len(links),
-        group_first[-1],
-        len(pairs),
-        len(scene.obstacles),
-        model.nv,
-        len(group_radius),
-    ]
-    return robot_int, robot_float, np.ascontiguousarray(levers), sizes, allowance_at
+    return np.concatenate([link_levers, pair_levers.reshape(-1, model.nv)])
 
 
 def _lever_from_the_other_side(

@@ -8,6 +8,9 @@
    motion (a margin more, no deeper: with ``verify``, first
    :data:`ALLOWANCE_SHARE` of the entry's exact clearance at the ends, and
    :data:`ALLOWANCE_MARGIN` when the exact check refuses that trajectory);
+   with ``verify`` the pairs the spheres cannot separate also first get
+   their tables (:func:`get_pair_tables`, :mod:`workbench.motion.pair_tables`),
+   dropped with the wider margins;
 2. grows two trees (Kuffner & LaValle's RRT-Connect, compiled): from the
    start, and from every goal configuration (a tool-pose goal becomes every
    closed-form branch within the limits; for seven-axis arms, those of
@@ -29,6 +32,7 @@ time limit is checked between batches of :data:`BATCH` iterations).
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass, field, replace
@@ -51,6 +55,7 @@ from workbench.motion.ompl_planners import (
     check_ompl_planner,
     solve_with_ompl,
 )
+from workbench.motion.pair_tables import PairTables, build_pair_tables
 from workbench.motion.spheres import SphereModel, spherize
 from workbench.motion.timing import WaypointTrajectory, time_scale
 from workbench.motion.verify import verify_trajectory
@@ -138,6 +143,18 @@ class MotionPlan:
 def get_spheres(robot: Robot) -> SphereModel:
     """The robot's default sphere model, built once per robot object."""
     return spherize(robot)
+
+
+@functools.lru_cache(maxsize=4)
+def get_pair_tables(spheres: SphereModel) -> PairTables:
+    """The allowance tables of a sphere model's pairs, built once per model.
+
+    :mod:`workbench.motion.pair_tables`; the exact distances are the robot's
+    own, without a scene.
+    """
+    return build_pair_tables(
+        SphereChecker(spheres), CollisionChecker(spheres.robot, None)
+    )
 
 
 def goal_configurations(
@@ -342,19 +359,31 @@ def plan(
         return failed("goal in collision", f"{a} touches {b} at the goal")
     goals = np.array(free_goals)
     ends = np.concatenate([[q_start], goals])
-    plain = SphereChecker(model, scene)
-    lowest = np.min([plain.clearances(q) for q in ends], axis=0)
-    margins = [np.full(len(lowest), ALLOWANCE_MARGIN)]
-    if verify and (lowest < 0.0).any():  # wider margins first, the judge after
-        wide = ALLOWANCE_SHARE * _entry_distances(plain, exact, ends, lowest < 0.0)
-        if (wide > ALLOWANCE_MARGIN).any():
-            margins.insert(0, np.maximum(wide, ALLOWANCE_MARGIN))
+
+    def narrow() -> tuple[SphereChecker, FloatArray, FloatArray]:
+        plain = SphereChecker(model, scene)
+        lowest = np.min([plain.clearances(q) for q in ends], axis=0)
+        return plain, lowest, np.full(len(lowest), ALLOWANCE_MARGIN)
+
+    attempts = [narrow]
+    if verify:  # the tables and wider margins first, the judge after
+        tables = get_pair_tables(model)
+        first = SphereChecker(model, scene, pair_tables=tables)
+        least = np.min([first.clearances(q) for q in ends], axis=0)
+        wide = np.maximum(
+            ALLOWANCE_SHARE * _entry_distances(first, exact, ends, least < 0.0),
+            ALLOWANCE_MARGIN,
+        )
+        if tables.pairs or (wide > ALLOWANCE_MARGIN).any():
+            attempts.insert(0, lambda: (first, least, wide))
+        else:  # the same as the narrow attempt, already packed
+            attempts = [lambda: (first, least, wide)]
     t_search = time.perf_counter()
     spent = [0.0, 0.0, 0.0]  # planning, time scaling, verification [s]
-    for attempt, margin in enumerate(margins):
-        checker, allowances = _allowing_checker(plain, lowest, margin)
-        budget = time_limit - spent[0]
+    for attempt, prepare in enumerate(attempts):
         t_attempt = time.perf_counter()
+        checker, allowances = _allowing_checker(*prepare())
+        budget = time_limit - spent[0] - (time.perf_counter() - t_attempt)
         if ompl_name is None:
             search = _search(
                 checker, robot, q_start, goals, seed, t_attempt, budget, iteration_limit
@@ -391,7 +420,7 @@ def plan(
         spent[1] += t_scaled - t_planned
         spent[2] += t_verified - t_scaled
         free = report is None or report.collision_free
-        if free or attempt == len(margins) - 1 or spent[0] >= time_limit:
+        if free or attempt == len(attempts) - 1 or spent[0] >= time_limit:
             break
     path.setflags(write=False)
     goal_reached = np.array(path[-1])
