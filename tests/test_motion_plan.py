@@ -700,9 +700,9 @@ def ur5_tables(ur5_spheres):
 
 
 def _table_value(tables, k: int, q: np.ndarray) -> float:
-    """Pair k's table value at q, the nearest node's, in plain Python."""
+    """Pair k's table value at q, the nearest node's, in plain Python (NaN: none)."""
     if tables.start[k] < 0:
-        return 0.0
+        return math.nan
     index = 0
     for i in range(2):
         j = tables.joint[k, i]
@@ -720,7 +720,8 @@ def test_the_inseparable_pairs_get_tables_of_half_their_exact_distance(
 ) -> None:
     """The UR5's pairs whose spheres overlap almost everywhere while the meshes
     are apart get tables; at a node the pair's clearance is then its spheres'
-    or half the meshes' distance (a bound of it), whichever is more."""
+    or half the meshes' distance (a bound of it), whichever is more, and its
+    spheres' where the meshes touch."""
     robot = ur5_spheres.robot
     assert {("base_link", "upper_arm_link"), ("forearm_link", "wrist_2_link")} <= set(
         ur5_tables.pairs
@@ -761,16 +762,21 @@ def test_the_inseparable_pairs_get_tables_of_half_their_exact_distance(
 def test_a_tables_value_is_that_of_the_nearest_node(
     ur5_spheres, ur5_tables, fractions
 ) -> None:
-    """The kernel adds each pair's table value at the node nearest q (wrapped
-    on joints of a full turn), and nothing to pairs without one."""
+    """A pair with a table takes its value at the node nearest q (wrapped on
+    joints of a full turn), plus its allowance; the others, and a pair at a
+    node where its meshes touch (NaN), keep their spheres' clearance."""
     q = _within_limits(ur5_spheres.robot, fractions)
     plain = SphereChecker(ur5_spheres).clearances(q)
-    tabled = SphereChecker(ur5_spheres, pair_tables=ur5_tables).clearances(q)
+    allowance = np.full(len(plain), 0.002)
+    tabled = SphereChecker(
+        ur5_spheres, allowance=allowance, pair_tables=ur5_tables
+    ).clearances(q)
     n_links = len(ur5_spheres.links)
-    np.testing.assert_array_equal(tabled[:n_links], plain[:n_links])
+    np.testing.assert_allclose(tabled[:n_links], plain[:n_links] + 0.002, atol=1e-12)
     for k in range(len(plain) - n_links):
-        added = tabled[n_links + k] - plain[n_links + k]
-        assert added == pytest.approx(_table_value(ur5_tables, k, q), abs=1e-12)
+        value = _table_value(ur5_tables, k, q)
+        expected = plain[n_links + k] if math.isnan(value) else value
+        assert tabled[n_links + k] == pytest.approx(expected + 0.002, abs=1e-12)
 
 
 def test_pair_tables_must_fit_the_checker(puma_spheres, ur5_tables) -> None:

@@ -20,8 +20,9 @@ the unsigned distance to its triangles.
 **Allowances.** Each entry may carry an allowance [m] added to its
 clearance: the spheres may overlap by that much (where they overlap at the
 start or goal while the exact meshes are apart) and no more. A pair with a
-table (:mod:`workbench.motion.pair_tables`) adds the table's value at the
-node nearest to its one or two relative joints (:func:`_table_allowance`).
+table (:mod:`workbench.motion.pair_tables`) takes the table's clearance at
+the node nearest to its one or two relative joints (:func:`_table_clearance`)
+instead of its spheres', where its meshes are apart at that node.
 
 **Certified motions.** Along the straight joint segment from
 :math:`q_a` to :math:`q_b` a point of link :math:`l` moves by at most
@@ -280,7 +281,7 @@ def _limit(need: float, bound: float, radius: float) -> float:
 
 
 @helper(forceinline=True)
-def _table_allowance(
+def _table_clearance(
     q: FloatArray,
     k: int,
     tstart: IntArray,
@@ -291,13 +292,14 @@ def _table_allowance(
     tstep: FloatArray,
     tvalues: FloatArray,
 ) -> float:
-    """Pair k's allowance [m] at q: its table's value at the nearest node.
+    """Pair k's clearance [m] at q: its table's value at the nearest node.
 
-    0 for a pair without a table (:mod:`workbench.motion.pair_tables`).
+    NaN for a pair without a table, or where its meshes touch at that node
+    (:mod:`workbench.motion.pair_tables`): its spheres tell then.
     """
     start = tstart[k]
     if start < 0:
-        return 0.0
+        return math.nan
     index = 0
     for i in range(2 * k, 2 * k + 2):
         j = tjoint[i]
@@ -485,10 +487,18 @@ def _clearances(
         if need[n_links + k] == -math.inf:
             out[n_links + k] = math.inf
             continue
-        a, b = pa[k], pb[k]
-        slack = allow[n_links + k] + _table_allowance(
+        slack = allow[n_links + k]
+        table = _table_clearance(
             q, k, tstart, tjoint, tcells, tperiodic, tlower, tstep, tvalues
         )
+        if table == table:  # the table's node tells (no sphere is visited)
+            out[n_links + k] = table + slack
+            if table + slack < 0.0:
+                free = False
+                if stop:
+                    return False
+            continue
+        a, b = pa[k], pb[k]
         d = _gap(bound[a], bound[b]) - lradius[a] - lradius[b] + slack
         limit = _limit(need[n_links + k], d, lradius[a] + lradius[b])
         if d < limit:

@@ -60,10 +60,11 @@ class SphereChecker:
             spheres of that entry may overlap (:func:`~workbench.motion.plan`
             allows the overlap they have at the start or a goal where the
             exact meshes are apart, and no more); default none.
-        pair_tables: Allowance tables of the pairs whose spheres overlap over
-            their one or two relative joints
+        pair_tables: Clearance tables of the pairs whose spheres overlap
+            over their one or two relative joints
             (:func:`~workbench.motion.pair_tables.build_pair_tables`,
-            aligned with :attr:`pairs`), added to ``allowance``; default none.
+            aligned with :attr:`pairs`): such a pair's clearance is its
+            table's at the nearest node plus its allowance; default none.
 
     Attributes:
         spheres, scene, pair_tables: As given (``pair_tables``: none for

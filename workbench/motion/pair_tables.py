@@ -1,4 +1,4 @@
-r"""Allowances of link pairs whose spheres overlap, over their relative joints.
+r"""Clearance tables of link pairs whose spheres overlap, over their relative joints.
 
 Links near each other in the chain are often closer than the spheres' excess
 (``spheres.DEFAULT_TOLERANCE``): the spheres of the UR5's base and upper arm,
@@ -7,25 +7,28 @@ are 1–3 cm apart. The planner lets an entry overlap as much as it does at the
 start and the goal, plus a margin (:func:`~workbench.motion.plan`), which for
 such a pair closes much of the configuration space: 61–79 % of the samples
 of VAMP's paths through MotionBenchMaker's UR5 cage are refused by these
-pairs alone (``docs/motion.md``).
+pairs alone (``docs/motion.md``), and their spheres are the dearest part of
+an evaluation.
 
 A pair whose relative pose depends on one or two joints (those that move one
 of its links and not the other) gets a table over those joints instead: at
 each node of a grid (:data:`STEP_1D`, :data:`STEP_2D`; a joint with a range of
-a turn or more is periodic), the allowance that makes the pair's clearance
-there :data:`SHARE` of the exact meshes' distance (coal),
+a turn or more is periodic) its clearance,
 
-.. math:: A = \max(0, \sigma d - g) \text{ where } d > 0, \quad A = 0
-   \text{ where the meshes touch},
+.. math:: c = \max(g, \sigma d) \text{ where } d > 0, \quad
+   c = \text{NaN where the meshes touch},
 
-with :math:`d` the exact distance and :math:`g` the spheres' clearance at the
-node. The kernel adds the value of the nearest node
-(:mod:`workbench.motion._sphere_kernel`). Only pairs whose spheres overlap at
-a node of a coarser screening grid (:data:`SCREEN_STEP`) get a table.
+with :math:`d` the exact distance of its meshes (coal; their convex hulls'
+bound where that is positive) and :math:`g` its spheres' clearance at the
+node, :math:`\sigma` = :data:`SHARE`. The kernel takes the value of the
+nearest node, plus the pair's allowance, without visiting its spheres; at a
+NaN node the spheres tell (:mod:`workbench.motion._sphere_kernel`). Only pairs
+whose spheres overlap at a quarter or more of the nodes of a coarser
+screening grid (:data:`SCREEN_STEP`, :data:`INSEPARABLE`) get a table.
 
-Like the ends' allowances this is no guarantee between the nodes: the exact
-check of the trajectory judges the motion, and a trajectory it refuses is
-planned again without the tables (:func:`~workbench.motion.plan`).
+The tables are no certificate between the nodes: the exact check of the
+trajectory judges the motion, and a trajectory it refuses is planned again
+without them (:func:`~workbench.motion.plan`).
 """
 
 from __future__ import annotations
@@ -57,7 +60,7 @@ SCREEN_STEP = math.radians(15.0)
 #: screening nodes or more (spheres that overlap at fewer are near contacts
 #: of the meshes, not the spheres' excess).
 INSEPARABLE = 0.25
-#: The share of the exact distance a table makes the pair's clearance.
+#: The share of the exact distance a table gives as the pair's clearance.
 SHARE = 0.5
 #: Most joints a pair's table may span.
 MAX_JOINTS = 2
@@ -73,8 +76,8 @@ class PairTables(NamedTuple):
         periodic: (P, 2) 1 where the joint's grid spans a turn.
         lower: (P, 2) [rad] where each joint's grid starts.
         step: (P, 2) [rad] its cell width (a node at each cell's centre).
-        values: (N,) [m], the allowances of every table, the first joint's
-            cells slowest.
+        values: (N,) [m], the clearances of every table at its nodes (NaN
+            where the meshes touch), the first joint's cells slowest.
         pairs: The pairs with a table, by link names.
     """
 
@@ -153,7 +156,7 @@ def build_pair_tables(checker: SphereChecker, exact: CollisionChecker) -> PairTa
             for row, k in enumerate(chosen):
                 d = _distance(exact, node, exact_pairs[frozenset(pairs[k])])
                 g = clear[n_links + k]
-                table[row, n] = max(0.0, SHARE * d - g) if d > 0.0 else 0.0
+                table[row, n] = max(g, SHARE * d) if d > 0.0 else math.nan
         lower, step, cells, periodic = grid
         for row, k in enumerate(chosen):
             width = len(joints)

@@ -147,7 +147,7 @@ def get_spheres(robot: Robot) -> SphereModel:
 
 @functools.lru_cache(maxsize=4)
 def get_pair_tables(spheres: SphereModel) -> PairTables:
-    """The allowance tables of a sphere model's pairs, built once per model.
+    """The clearance tables of a sphere model's pairs, built once per model.
 
     :mod:`workbench.motion.pair_tables`; the exact distances are the robot's
     own, without a scene.
@@ -381,9 +381,9 @@ def plan(
     t_search = time.perf_counter()
     spent = [0.0, 0.0, 0.0]  # planning, time scaling, verification [s]
     for attempt, prepare in enumerate(attempts):
-        t_attempt = time.perf_counter()
+        t_attempt = time.perf_counter()  # (the packing counts as planning)
         checker, allowances = _allowing_checker(*prepare())
-        budget = time_limit - spent[0] - (time.perf_counter() - t_attempt)
+        budget = time_limit - spent[0]
         if ompl_name is None:
             search = _search(
                 checker, robot, q_start, goals, seed, t_attempt, budget, iteration_limit
@@ -396,7 +396,7 @@ def plan(
                 q_start,
                 goals,
                 seed=seed,
-                time_limit=budget,
+                time_limit=budget - (time.perf_counter() - t_attempt),
             )
         if len(search) == 3:
             reason, detail, iterations = search
