@@ -34,7 +34,7 @@ without them (:func:`~workbench.motion.plan`).
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -42,9 +42,7 @@ import pinocchio as pin
 
 from workbench.collision.checker import CollisionChecker
 from workbench.model.robot import Robot
-
-if TYPE_CHECKING:
-    from workbench.motion.checker import SphereChecker
+from workbench.motion.spheres import SphereModel
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -53,8 +51,8 @@ IntArray = npt.NDArray[np.int64]
 STEP_1D = math.radians(2.0)
 #: Grid step [rad] of a pair that two joints move.
 STEP_2D = math.radians(5.0)
-#: Grid step [rad] of the screening: a pair gets a table when its spheres
-#: overlap at one of these nodes.
+#: Grid step [rad] of the screening, whose nodes decide which pairs get a
+#: table (:data:`INSEPARABLE`).
 SCREEN_STEP = math.radians(15.0)
 #: A pair gets a table when its spheres overlap at this share of the
 #: screening nodes or more (spheres that overlap at fewer are near contacts
@@ -91,6 +89,17 @@ class PairTables(NamedTuple):
     pairs: tuple[tuple[str, str], ...]
 
 
+class SphereClearances(Protocol):
+    """What the tables read of a sphere checker (``SphereChecker``)."""
+
+    spheres: SphereModel
+    pairs: tuple[tuple[str, str], ...]
+
+    def clearances(self, q: npt.ArrayLike) -> FloatArray:
+        """Clearances (L + P,) [m] of the links, then of the pairs, at ``q``."""
+        ...
+
+
 def no_tables(n_pairs: int) -> PairTables:
     """Tables for none of ``n_pairs`` pairs."""
     return PairTables(
@@ -105,7 +114,7 @@ def no_tables(n_pairs: int) -> PairTables:
     )
 
 
-def build_pair_tables(checker: SphereChecker, exact: CollisionChecker) -> PairTables:
+def build_pair_tables(checker: SphereClearances, exact: CollisionChecker) -> PairTables:
     """The tables of the pairs of ``checker`` that need one (module docstring).
 
     Args:
