@@ -3,7 +3,7 @@
 :func:`plan` is the one door (:mod:`.plan`): RRT-Connect on a conservative
 sphere model of the robot (:mod:`.spheres`, :func:`spherize`), checked in
 compiled code against the scene with certified segments (:mod:`.checker`,
-:class:`SphereChecker`; the pairs its spheres cannot separate get allowance
+:class:`SphereChecker`; the pairs its spheres cannot separate get clearance
 tables over their relative joints, :mod:`.pair_tables`), shortened,
 time-scaled and verified on the exact meshes; ``planner="ompl:NAME"`` runs
 one of OMPL's planners

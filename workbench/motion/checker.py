@@ -301,13 +301,11 @@ def _pack_robot(
             tables.values,
         ]
     )
-    levers = _levers(model, links, bound_center, axes, positions, pa, pb)
     # A pair with a table is judged by its meshes' distance: its geometry's
     # speed bounds how fast that changes.
-    tabled = np.flatnonzero(tables.start >= 0)
-    if len(tabled):
-        padded = _levers(model, links, bound_center, axes, positions, pa, pb, pad=True)
-        levers[len(links) + tabled] = padded[len(links) + tabled]
+    levers = _levers(
+        model, links, bound_center, axes, positions, pa, pb, tables.start >= 0
+    )
     sizes = [
         model.njoints,
         len(links),
@@ -329,15 +327,15 @@ def _levers(
     positions: FloatArray,
     pa: IntArray,
     pb: IntArray,
-    *,
-    pad: bool = False,
+    padded: npt.NDArray[np.bool_],
 ) -> FloatArray:
     """Lever arms (L + P, nv) [m/rad] of the links, then of the checked pairs.
 
     Entry (e, i) bounds how fast a clearance of entry e changes when joint i
-    turns: the speed of the sphere centres, the kernels' motion bound. With
-    ``pad``, of every point of the spheres (each lever grows by the link's
-    largest radius), so of the link's geometry, which they hold.
+    turns: the speed of the sphere centres, the kernels' motion bound. For
+    the pairs marked in ``padded`` (P,), of every point of their spheres (the
+    levers of each link grown by its largest radius), so of the links'
+    geometry, which they hold.
     """
     # Lever arm of link l about joint i [m/rad]: a bound on the distance of
     # its sphere centres (and bounding centre) from the axis of joint i, in
@@ -375,8 +373,6 @@ def _levers(
             joint = int(model.parents[joint])
     apart = carried[pa] ^ carried[pb]
     grow = np.array([float(link.radii.max(initial=0.0)) for link in links])
-    if pad:
-        link_levers += grow[:, None] * carried
     # Such a joint turns one link about its axis relative to the other, which
     # is the other turning the opposite way: its points' distance from that
     # axis bounds the change too, and the smaller of the two counts.
@@ -387,12 +383,14 @@ def _levers(
             if not carried[li, v]:
                 far[li, v] = _lever_from_the_other_side(
                     model, link.joint, link_points[li], j, axes, offsets
-                ) + (grow[li] if pad else 0.0)
+                )
     still = np.where(carried[pa], pb[:, None], pa[:, None])  # (P, nv)
+    columns = np.arange(model.nv)
+    pair_levers = np.minimum(link_levers[pa] + link_levers[pb], far[still, columns])
+    grown = link_levers + grow[:, None] * carried
+    pair_grown = np.minimum(grown[pa] + grown[pb], far[still, columns] + grow[still])
     pair_levers = np.where(
-        apart,
-        np.minimum(link_levers[pa] + link_levers[pb], far[still, np.arange(model.nv)]),
-        0.0,
+        apart, np.where(padded[:, None], pair_grown, pair_levers), 0.0
     )
     return np.concatenate([link_levers, pair_levers.reshape(-1, model.nv)])
 

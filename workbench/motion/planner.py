@@ -360,24 +360,28 @@ def plan(
     goals = np.array(free_goals)
     ends = np.concatenate([[q_start], goals])
 
-    def narrow() -> tuple[SphereChecker, FloatArray, FloatArray]:
+    # With verify: the pairs' tables and wider margins first, the judge after,
+    # then the spheres alone on narrow margins (a second checker only when
+    # the first has tables).
+    tables = get_pair_tables(model) if verify else None
+    tabled = tables is not None and bool(tables.pairs)
+    first = SphereChecker(model, scene, pair_tables=tables)
+    least = np.min([first.clearances(q) for q in ends], axis=0)
+    narrow = np.full(len(least), ALLOWANCE_MARGIN)
+
+    def without_tables() -> tuple[SphereChecker, FloatArray, FloatArray]:
         plain = SphereChecker(model, scene)
         lowest = np.min([plain.clearances(q) for q in ends], axis=0)
-        return plain, lowest, np.full(len(lowest), ALLOWANCE_MARGIN)
+        return plain, lowest, narrow
 
-    attempts = [narrow]
-    if verify:  # the tables and wider margins first, the judge after
-        tables = get_pair_tables(model)
-        first = SphereChecker(model, scene, pair_tables=tables)
-        least = np.min([first.clearances(q) for q in ends], axis=0)
+    attempts = [without_tables if tabled else lambda: (first, least, narrow)]
+    if verify:
         wide = np.maximum(
             ALLOWANCE_SHARE * _entry_distances(first, exact, ends, least < 0.0),
             ALLOWANCE_MARGIN,
         )
-        if tables.pairs or (wide > ALLOWANCE_MARGIN).any():
+        if tabled or (wide > ALLOWANCE_MARGIN).any():
             attempts.insert(0, lambda: (first, least, wide))
-        else:  # the same as the narrow attempt, already packed
-            attempts = [lambda: (first, least, wide)]
     t_search = time.perf_counter()
     spent = [0.0, 0.0, 0.0]  # planning, time scaling, verification [s]
     for attempt, prepare in enumerate(attempts):
