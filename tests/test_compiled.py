@@ -9,6 +9,7 @@ import shutil
 import subprocess
 import sys
 import textwrap
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +19,9 @@ from numba.core import types
 import workbench
 from workbench import _compiled, _dispatchers
 from workbench._compiled import entry_point, helper, interpreted, source_digest
+
+#: [rad] the Python source of a kernel against its compiled code (libm, FMA).
+ATOL_INTERPRETED = 1e-12
 
 
 @helper(forceinline=True)
@@ -449,3 +453,98 @@ def test_a_strided_array_is_refused_where_layout_c_is_declared(tmp_path: Path) -
     assert first == "TypeError: total: x must be C-contiguous arrays"
     assert second.startswith("TypeError: No matching definition")
     assert contiguous == "90.0"
+
+
+def test_compile_in_background_runs_python_until_the_thread_is_done() -> None:
+    """True while the thread runs, for at most PYTHON_CALLS calls; then it waits."""
+    release, ran = threading.Event(), []
+
+    def warm_up() -> None:
+        ran.append(_compiled.compile_in_background(key, warm_up))  # its own thread
+        release.wait(timeout=60)
+
+    key = ("test", "held")
+    assert _compiled.compile_in_background(key, warm_up)
+    with interpreted():  # the call runs as Python anyway
+        assert not _compiled.compile_in_background(key, warm_up)
+    for _ in range(_compiled.PYTHON_CALLS - 1):
+        assert _compiled.compile_in_background(key, warm_up)
+    threading.Timer(0.2, release.set).start()
+    assert not _compiled.compile_in_background(key, warm_up)  # waited
+    assert release.is_set() and ran == [False]
+    assert not _compiled.compile_in_background(key, warm_up)
+
+
+def test_compile_in_background_swallows_the_warm_up_error() -> None:
+    """A failing warm-up ends its thread; the caller's own call raises."""
+
+    def warm_up() -> None:
+        raise RuntimeError("no compile")
+
+    key = ("test", "failing")
+    _compiled.compile_in_background(key, warm_up)
+    _compiled.wait_for_background()
+    assert not _compiled.compile_in_background(key, warm_up)
+
+
+_FIRST_SOLVE = """
+import sys, threading
+import numpy as np
+from workbench import load_robot
+from workbench._compiled import PYTHON_CALLS, is_compiled, wait_for_background
+from workbench.ik import analytic, get_solver
+from workbench.ik import _puma_kernel
+
+robot = load_robot("puma560")
+rng = np.random.default_rng(3)
+poses = [robot.fk(rng.uniform(robot.lower, robot.upper)).homogeneous for _ in range(3)]
+first = [analytic(robot, pose).q for pose in poses]
+assert not is_compiled(_puma_kernel.solve_pose)  # the Python source answered
+threads = [t.name for t in threading.enumerate() if t.name.startswith("workbench")]
+assert threads, threading.enumerate()
+for _ in range(PYTHON_CALLS):  # the last of them waits for the compile
+    analytic(robot, poses[0])
+assert is_compiled(_puma_kernel.solve_pose)
+assert not any(t.is_alive() for t in threading.enumerate() if t.name in threads)
+later = [analytic(robot, pose).q for pose in poses]
+solver = get_solver(robot)
+assert solver._solve_pose != solver._first_solve_pose  # the compiled entry now
+np.savez(sys.argv[1], first=np.array(first), later=np.array(later))
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.subprocess
+def test_the_first_solve_runs_as_python_while_its_kernels_compile(
+    tmp_path: Path,
+) -> None:
+    """Empty cache: ``ik.analytic`` answers at once, the compile goes on behind.
+
+    The first calls run the Python source (nothing compiled when they return,
+    a compile thread alive), the same answers as the compiled code after it;
+    the notice says the compile runs in the background; the cache is written
+    (a second process says nothing).
+    """
+    script = tmp_path / "first_solve.py"
+    script.write_text(_FIRST_SOLVE)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    env.pop("WORKBENCH_PROGRESS", None)
+
+    def run() -> str:
+        done = subprocess.run(
+            [sys.executable, str(script), str(tmp_path / "q.npz")],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=600,
+            cwd=Path(__file__).parents[1],
+        )
+        assert done.returncode == 0, done.stderr
+        return done.stderr
+
+    said = run()
+    assert said.startswith("workbench: compiling the Numba kernels"), said
+    assert said.rstrip("\n").endswith(_compiled.IN_BACKGROUND), said
+    q = np.load(tmp_path / "q.npz")
+    np.testing.assert_allclose(q["first"], q["later"], rtol=0, atol=ATOL_INTERPRETED)
+    assert run() == ""  # loaded from the cache the thread wrote

@@ -29,7 +29,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from workbench._compiled import get_built
+from workbench._compiled import get_built, is_interpreting
 from workbench.errors import InputError
 from workbench.ik import _chain_kernel as kernel
 from workbench.model.per_robot import per_robot
@@ -138,15 +138,16 @@ class Chain:
             starts.copy(),
         )
         self.run_no_seeds = (np.empty((16, 0), np.float32), np.empty((0, n)))
-        # Load (or compile) the kernel now, not under a solve's time budget,
-        # with arguments of the types of numeric's calls.
-        warm_up = (
-            self.run_inputs[0], np.eye(4), self.run_inputs[1],
-            self.fresh_state.reshape(1, -1).copy(), 0, 0.0, 0, False,
-            *self.run_no_seeds, True, FULL_POSE, kernel.PART_POSE,
-        )  # fmt: skip
-        kernel.run(*warm_up)
-        self.run = compiled_entry(kernel.run, warm_up)
+        # kernel.run's compiled code after the first call (numeric starts its
+        # time budget after that call, which compiles or loads the kernel)
+        self.run: Any = self._first_run
+
+    def _first_run(self, *args: Any) -> Any:
+        """``kernel.run``, then its compiled code for later calls (see ``run``)."""
+        result = kernel.run(*args)
+        if not is_interpreting():
+            self.run = compiled_entry(kernel.run, args)
+        return result
 
     def to_chain(self, q: FloatArray) -> FloatArray:
         """Chain coordinates (..., n) of configurations ``q`` (..., nq); new array."""

@@ -53,6 +53,7 @@ Seven-axis labels: :data:`~workbench.ik.SRS_BRANCHES`,
 
 from __future__ import annotations
 
+import functools
 import math
 import threading
 import types
@@ -63,6 +64,12 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from workbench._compiled import (
+    compile_in_background,
+    interpreted,
+    is_compiled,
+    is_interpreting,
+)
 from workbench.errors import (
     DimensionError,
     InputError,
@@ -142,7 +149,7 @@ class Solver:
     __slots__ = (
         "__weakref__", "_arm_angle_geometry", "_indices", "_intervals",
         "_kernel", "_name", "_refine", "_refine_pose", "_robot", "_slack",
-        "_solve_pose", "_work", "branches",
+        "_solve_pose", "_warm", "_work", "branches",
         "family", "geometry", "nq", "parameter", "parameter_range",
     )  # fmt: skip
 
@@ -164,6 +171,8 @@ class Solver:
         self._solve_pose: Any = self._first_solve_pose
         # the refinement's refine_pose (calibrated arms), likewise
         self._refine_pose: Any = self._first_refine_pose
+        # whether this process has the compiled kernels of solve (_compiling)
+        self._warm = False
         self._robot = weakref.ref(robot)
         self._name = robot.name  # for the messages
         # the model's chain when it differs from the idealised structure
@@ -258,6 +267,9 @@ class Solver:
         else:
             pose = np.array(pose_rows(target))  # every check, with its error
         prev = _NO_PREVIOUS if q_previous is None else self._previous(q_previous)
+        if not self._warm and self._compiling(pose, redundancy):
+            with interpreted():  # milliseconds, while the kernels compile
+                return self.solve(pose, redundancy=redundancy, q_previous=q_previous)
         if self.parameter is None:
             if redundancy is not None:
                 raise self._no_redundancy()
@@ -289,6 +301,53 @@ class Solver:
                     raise UnreachableError(0.0, (0.0, 0.0), "model")
         return _solutions(q, flags, self.branches, redundancy, events)
 
+    def _compiling(self, pose: FloatArray, redundancy: float | None) -> bool:
+        """Whether :meth:`solve`'s kernels compile in a background thread now.
+
+        The first solve of a process whose kernels are not compiled (nor
+        loaded from the cache) yet starts that thread, which runs them once on
+        a copy of ``pose`` (``_compiled.compile_in_background``); this solve
+        and the next ones run as Python (under a millisecond each, the same
+        results to the last bits) until it has finished, instead of waiting
+        the seconds of a first compile. A solve within ``interpreted`` runs as
+        Python anyway.
+        """
+        if is_interpreting():
+            return False
+        refine = refine_pose if self.parameter is None else refine_redundant.refine_pose
+        if is_compiled(self._kernel.solve_pose) and (
+            self._refine is None or is_compiled(refine)
+        ):
+            self._warm = True
+            return False
+        if self.parameter is not None and redundancy is None:
+            lo, hi = self.parameter_range or (0.0, 0.0)
+            redundancy = 0.5 * (lo + hi)
+        key = (self.family.name, self._refine is not None)
+        warm_up = functools.partial(self._warm_up, pose.copy(), redundancy)
+        if compile_in_background(key, warm_up):
+            return True
+        self._warm = True  # (a compile that failed raises in the call itself)
+        return False
+
+    def _warm_up(self, pose: FloatArray, redundancy: float | None) -> None:
+        """Call :meth:`solve`'s kernels once on ``pose`` (compiling them)."""
+        q = np.full((len(self._indices), self.nq), np.nan)
+        flags = np.zeros(len(self._indices), dtype=np.uint8)
+        if redundancy is None:
+            status = self._kernel.solve_pose(
+                self.geometry, pose, _NO_PREVIOUS, q, flags, True
+            )
+        else:
+            status = self._kernel.solve_pose(
+                self.geometry, pose, redundancy, _NO_PREVIOUS, q, flags, True
+            )
+        if self._refine is None:
+            return
+        if status != OK:  # nothing to carry, but the kernel compiles all the same
+            q[:], flags[:] = np.nan, 0
+        self._refined(self._refine, pose, redundancy, q, flags)
+
     def _first_solve_pose(self, *args: Any) -> int:
         """The kernel's ``solve_pose``, then its compiled code for later calls.
 
@@ -300,7 +359,8 @@ class Solver:
         entry point is called directly (``_chain.compiled_entry``).
         """
         status = int(self._kernel.solve_pose(*args))
-        self._solve_pose = compiled_entry(self._kernel.solve_pose, args)
+        if not is_interpreting():
+            self._solve_pose = compiled_entry(self._kernel.solve_pose, args)
         return status
 
     def _first_refine_pose(self, *args: Any) -> int:
@@ -311,7 +371,8 @@ class Solver:
         """
         kernel = refine_pose if self.parameter is None else refine_redundant.refine_pose
         events = int(kernel(*args))
-        self._refine_pose = compiled_entry(kernel, args)
+        if not is_interpreting():
+            self._refine_pose = compiled_entry(kernel, args)
         return events
 
     def solve_arrays(
