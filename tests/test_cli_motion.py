@@ -66,6 +66,23 @@ def test_plans_around_a_wall_and_writes_csv_and_page(capsys, tmp_path: Path) -> 
     assert "<html" in page.lower() and "wall" in page
 
 
+def test_the_sphere_cover_is_counted_on_stderr(capsys, tmp_path, monkeypatch) -> None:
+    """A first plan builds the robot's spheres (seconds on a real arm): its
+    count goes to stderr with the other progress lines, and none with -q."""
+    from workbench import progress
+
+    monkeypatch.setenv("WORKBENCH_PROGRESS", "1")
+    monkeypatch.setattr(progress, "PROGRESS_DELAY", 0.0)
+    monkeypatch.setattr(progress, "COUNT_INTERVAL", 0.0)
+    n = len(wb.load_robot("puma560").collision_model.geometryObjects)
+    argv = [*BASE, "--start-deg", *PICK, "--goal-deg", *PLACE, "--json"]
+    code, out, err = run(capsys, *argv)
+    assert code == 0 and json.loads(out)["solved"]
+    assert f"workbench: motion plan: sphere cover: {n}/{n} steps (100%)" in err
+    code, _, err = run(capsys, "-q", *argv)
+    assert code == 0 and "sphere cover" not in err
+
+
 @pytest.mark.slow  # the Panda's spheres take seconds to build
 def test_a_motion_request_and_a_moveit_scene(capsys) -> None:
     code, out, err = run(

@@ -94,19 +94,24 @@ def _assert_certified_and_exact(result, spheres, scene, start, goal) -> None:
     assert result.clearance.lower_bound > 0 and result.min_clearance > 0
     np.testing.assert_array_equal(result.waypoints[0], start)
     np.testing.assert_array_equal(result.waypoints[-1], goal)
-    checker = SphereChecker(spheres, scene, allowance=_allowance(result, spheres))
+    checker = SphereChecker(spheres, scene, **_allowance(result, spheres, scene))
     for a, b in zip(result.waypoints[:-1], result.waypoints[1:], strict=True):
         assert checker.is_segment_free(a, b)
 
 
-def _allowance(result, spheres) -> np.ndarray:
-    """The allowance plan() used, from ``result.allowances``."""
-    checker = SphereChecker(spheres)
-    names = [(link, "scene") for link in checker.links] + list(checker.pairs)
-    allowance = np.zeros(len(names))
+def _allowance(result, spheres, scene) -> dict[str, np.ndarray]:
+    """The allowances plan() used, from ``result.allowances``."""
+    checker = SphereChecker(spheres, scene)
+    links, obstacles = checker.links, [o.name for o in scene.obstacles]
+    pairs = list(checker.pairs)
+    allowance = np.zeros(len(links) + len(pairs))
+    by_obstacle = np.zeros((len(links), len(obstacles)))
     for a, b, metres in result.allowances:
-        allowance[names.index((a, b))] = metres
-    return allowance
+        if (a, b) in pairs:
+            allowance[len(links) + pairs.index((a, b))] = metres
+        else:
+            by_obstacle[links.index(a), obstacles.index(b)] = metres
+    return {"allowance": allowance, "obstacle_allowance": by_obstacle}
 
 
 def test_the_planners_are_offered_and_exist_in_the_wheel() -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import heapq
 import math
 
@@ -22,7 +23,7 @@ from workbench.motion import (
     plan,
     spherize,
 )
-from workbench.motion.pair_tables import SHARE
+from workbench.motion.pair_tables import SHARE, build_pair_tables
 from workbench.motion.planner import ALLOWANCE_MARGIN
 from workbench.motion.spheres import mesh_triangles
 from workbench.paper_data import ANGELES_PICK_Q_DEG, ANGELES_PLACE_Q_DEG
@@ -291,41 +292,55 @@ def test_spherize_refuses_a_bad_tolerance(puma) -> None:
             spherize(puma, tolerance=bad)  # type: ignore[arg-type]
 
 
-def _numpy_clearances(checker: SphereChecker, q: np.ndarray) -> np.ndarray:
-    """Every sphere against every obstacle and pair, in numpy (exact formulas)."""
+def _placed_spheres(checker: SphereChecker, q: np.ndarray) -> list[np.ndarray]:
+    """Each link's sphere centres (S, 3) [m] in the base frame, in numpy."""
     model = checker.spheres
     robot = model.robot
     data = robot.model.createData()
     pin.forwardKinematics(robot.model, data, q)
-    world = [
+    return [
         x.centers @ data.oMi[x.joint].rotation.T + data.oMi[x.joint].translation
         for x in model.links
     ]
-    out = []
-    for li, link in enumerate(model.links):
-        best = math.inf
-        if link.joint != 0:
-            for o in checker.scene.obstacles:
-                local = (world[li] - o.placement.translation) @ o.placement.rotation
-                if o.shape == "box":
-                    e = np.abs(local) - 0.5 * np.array(o.size)
-                    d = np.linalg.norm(np.maximum(e, 0), axis=1) + np.minimum(
-                        e.max(axis=1), 0
-                    )
-                elif o.shape == "cylinder":
-                    e = np.column_stack(
-                        [
-                            np.hypot(local[:, 0], local[:, 1]) - o.size[0],
-                            np.abs(local[:, 2]) - 0.5 * o.size[1],
-                        ]
-                    )
-                    d = np.linalg.norm(np.maximum(e, 0), axis=1) + np.minimum(
-                        e.max(axis=1), 0
-                    )
-                else:
-                    d = np.linalg.norm(local, axis=1) - o.size[0]
-                best = min(best, float(np.min(d - link.radii)))
-        out.append(best)
+
+
+def _numpy_obstacle_clearances(checker: SphereChecker, q: np.ndarray) -> np.ndarray:
+    """Every link's spheres against every obstacle (L, O), in numpy (exact formulas)."""
+    world = _placed_spheres(checker, q)
+    obstacles = checker.scene.obstacles
+    out = np.full((len(world), len(obstacles)), np.inf)
+    for li, link in enumerate(checker.spheres.links):
+        if link.joint == 0:
+            continue
+        for k, o in enumerate(obstacles):
+            local = (world[li] - o.placement.translation) @ o.placement.rotation
+            if o.shape == "box":
+                e = np.abs(local) - 0.5 * np.array(o.size)
+                d = np.linalg.norm(np.maximum(e, 0), axis=1) + np.minimum(
+                    e.max(axis=1), 0
+                )
+            elif o.shape == "cylinder":
+                e = np.column_stack(
+                    [
+                        np.hypot(local[:, 0], local[:, 1]) - o.size[0],
+                        np.abs(local[:, 2]) - 0.5 * o.size[1],
+                    ]
+                )
+                d = np.linalg.norm(np.maximum(e, 0), axis=1) + np.minimum(
+                    e.max(axis=1), 0
+                )
+            else:
+                d = np.linalg.norm(local, axis=1) - o.size[0]
+            out[li, k] = float(np.min(d - link.radii))
+    return out + checker.allowance[: len(world), None] + checker.obstacle_allowance
+
+
+def _numpy_clearances(checker: SphereChecker, q: np.ndarray) -> np.ndarray:
+    """Every sphere against every obstacle and pair, in numpy (exact formulas)."""
+    model = checker.spheres
+    world = _placed_spheres(checker, q)
+    by_obstacle = _numpy_obstacle_clearances(checker, q)
+    out = list(by_obstacle.min(axis=1, initial=np.inf))
     names = [x.link for x in model.links]
     for a, b in checker.pairs:
         i, j = names.index(a), names.index(b)
@@ -333,7 +348,9 @@ def _numpy_clearances(checker: SphereChecker, q: np.ndarray) -> np.ndarray:
         out.append(
             float(np.min(gap - model.links[i].radii[:, None] - model.links[j].radii))
         )
-    return np.array(out)
+    return np.array(out) + np.concatenate(
+        [np.zeros(len(names)), checker.allowance[len(names) :]]
+    )
 
 
 def _within_limits(robot: wb.Robot, fractions: list[float]) -> np.ndarray:
@@ -356,6 +373,37 @@ def test_compiled_clearances_equal_numpy(ur5_spheres, fractions) -> None:
     else:
         assert not checker.is_free(q)
         assert got.min() < 0
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    st.lists(st.floats(-1.0, 1.0), min_size=6, max_size=6),
+    st.integers(0, 2**32 - 1),
+)
+def test_each_link_obstacle_clearance_equals_numpy(
+    ur5_spheres, fractions, seed
+) -> None:
+    """``obstacle_clearances`` (L, O): every link's spheres against each obstacle
+    alone, its allowances added; their least per link is the link's entry of
+    ``clearances``."""
+    robot = ur5_spheres.robot
+    q = _within_limits(robot, fractions)
+    rng = np.random.default_rng(seed)
+    plain = SphereChecker(ur5_spheres, _mixed_scene())
+    n_links = len(plain.links)
+    allowance = np.zeros(n_links + len(plain.pairs))
+    allowance[:n_links] = rng.uniform(0.0, 0.01, n_links)
+    checker = plain.with_allowance(
+        allowance, rng.uniform(0.0, 0.05, plain.obstacle_allowance.shape)
+    )
+    got = checker.obstacle_clearances(q)
+    np.testing.assert_allclose(
+        got, _numpy_obstacle_clearances(checker, q), atol=EXACT_TOL, rtol=0
+    )
+    assert np.isinf(got[[link.joint == 0 for link in ur5_spheres.links]]).all()
+    np.testing.assert_allclose(
+        checker.clearances(q)[:n_links], got.min(axis=1), atol=EXACT_TOL, rtol=0
+    )
 
 
 def _point_triangle_distances(points: np.ndarray, tris: np.ndarray) -> np.ndarray:
@@ -639,13 +687,124 @@ def test_an_allowance_lets_an_entry_overlap_that_much_and_no_more(
             plain.with_allowance(bad)
 
 
+def test_an_obstacle_allowance_lets_a_link_overlap_that_obstacle_only(
+    puma_spheres,
+) -> None:
+    """A link's allowance against one obstacle lets it overlap that one and
+    no other (the fingers may overlap the can they grasp, not the shelf); the
+    link's own allowance counts against every obstacle."""
+    q = np.zeros(6)
+    plain = SphereChecker(puma_spheres)
+    centres, radii = puma_spheres.placed(q)
+    link3 = plain.links.index("link3")
+    first = sum(len(x.radii) for x in puma_spheres.links[:link3])
+    outward = centres[first] / np.linalg.norm(centres[first])
+    side = np.cross(outward, [0.0, 0.0, 1.0])
+    side /= np.linalg.norm(side)
+    balls = tuple(
+        Obstacle(
+            name,
+            "sphere",
+            (0.02,),
+            pin.SE3(np.eye(3), centres[first] + d * (radii[first] + 0.015)),
+        )
+        for name, d in (("can", outward), ("shelf", side))
+    )
+    scene = Scene("two balls", balls)
+    checker = SphereChecker(puma_spheres, scene)
+    overlap = checker.obstacle_clearances(q)[link3]
+    assert (overlap < -0.004).all()
+    by_obstacle = np.zeros((len(plain.links), 2))
+    by_obstacle[link3, 0] = -overlap[0] + 0.001
+    entries = np.zeros(len(plain.links) + len(plain.pairs))
+    can_only = checker.with_allowance(entries, by_obstacle)
+    np.testing.assert_allclose(
+        can_only.obstacle_clearances(q)[link3], [0.001, overlap[1]], atol=EXACT_TOL
+    )
+    assert not can_only.is_free(q)
+    by_obstacle[link3, 1] = -overlap[1] + 0.001
+    assert checker.with_allowance(entries, by_obstacle).is_free(q)
+    entries[link3] = -overlap.min() + 0.001  # against every obstacle
+    assert SphereChecker(puma_spheres, scene, allowance=entries).is_free(q)
+    # an obstacle that allows the link: not checked against it (inf)
+    shelf_allows = dataclasses.replace(balls[1], allow=("link3",))
+    allowing = SphereChecker(puma_spheres, Scene("allowing", (balls[0], shelf_allows)))
+    got = allowing.obstacle_clearances(q)
+    assert got[link3, 1] == math.inf and got[link3, 0] == pytest.approx(overlap[0])
+    # with_allowance repacks only the allowances: the arrays of a new checker
+    for got, expected in zip(
+        can_only.arrays,
+        SphereChecker(
+            puma_spheres,
+            scene,
+            obstacle_allowance=can_only.obstacle_allowance,
+        ).arrays,
+        strict=True,
+    ):
+        np.testing.assert_array_equal(got, expected)
+    for bad in (np.zeros((len(plain.links), 3)), np.full((len(plain.links), 2), -1.0)):
+        with pytest.raises(InputError, match="links × obstacles"):
+            SphereChecker(puma_spheres, scene, obstacle_allowance=bad)
+        with pytest.raises(InputError, match="links × obstacles"):
+            checker.with_allowance(np.zeros(len(entries)), bad)
+
+
+def test_a_tight_end_gets_the_tools_certified_retreats_as_branches(
+    puma, puma_spheres
+) -> None:
+    """Where a link holding an allowance ends in the scene's spheres, the
+    tool's straight retreats along its frame's axes (the longest of
+    ESCAPE_DISTANCES certified free each way) seed that end's tree."""
+    from workbench.motion import _sphere_kernel as kernel
+    from workbench.motion import planner as planner_module
+
+    q = np.radians([20.0, -30.0, 40.0, 10.0, 30.0, 0.0])
+    centres, radii = puma_spheres.placed(q)
+    link6 = [x.link for x in puma_spheres.links].index("link6")
+    first = sum(len(x.radii) for x in puma_spheres.links[:link6])
+    own = slice(first, first + len(puma_spheres.links[link6].radii))
+    tip = first + int(np.argmax(np.linalg.norm(centres[own] - centres[first], axis=1)))
+    outward = centres[tip] - puma.fk(q).translation
+    outward /= np.linalg.norm(outward)
+    centre = centres[tip] + outward * (radii[tip] + 0.02 - 0.005)
+    ball = Scene(
+        "ball", (Obstacle("can", "sphere", (0.02,), pin.SE3(np.eye(3), centre)),)
+    )
+    plain = SphereChecker(puma_spheres, ball)
+    overlap = plain.obstacle_clearances(q)[link6, 0]
+    assert overlap < 0.0
+    store = np.zeros((kernel.MAX_EVALUATIONS, len(plain.arrays[0])))
+    assert planner_module._escapes(plain, puma, q, store) == []  # no allowance
+    by_obstacle = np.zeros(plain.obstacle_allowance.shape)
+    by_obstacle[link6, 0] = -overlap + ALLOWANCE_MARGIN
+    tight = plain.with_allowance(np.zeros(len(plain.allowance)), by_obstacle)
+    escapes = planner_module._escapes(tight, puma, q, store)
+    assert 1 <= len(escapes) <= 6
+    jacobian = puma.jacobian_local(q)
+    moves = set()
+    for escape in escapes:
+        assert tight.is_segment_free(q, escape)
+        assert np.all(escape >= puma.lower) and np.all(escape <= puma.upper)
+        # a straight tool move to first order: J dq = (v, 0), v along one axis
+        twist = jacobian @ (escape - q)
+        axis = int(np.argmax(np.abs(twist[:3])))
+        expected = np.zeros(6)
+        expected[axis] = twist[axis]
+        np.testing.assert_allclose(twist, expected, rtol=0, atol=EXACT_TOL)
+        assert (
+            min(abs(abs(twist[axis]) - d) for d in planner_module.ESCAPE_DISTANCES)
+            < EXACT_TOL
+        )
+        moves.add((axis, np.sign(twist[axis])))
+    assert len(moves) == len(escapes)  # one per axis and way
+
+
 def test_a_trajectory_the_judge_refuses_is_planned_again_on_narrow_margins(
     monkeypatch, ur5_spheres
 ) -> None:
     """With verify, the inseparable pairs first get their tables and the other
     allowances half the exact clearance at the ends; a trajectory the exact
     check refuses is planned again without tables, on 1 mm margins."""
-    import dataclasses
     from pathlib import Path
 
     from workbench.motion import planner as planner_module
@@ -657,9 +816,18 @@ def test_a_trajectory_the_judge_refuses_is_planned_again_on_narrow_margins(
     start, goal = problem.read_request(ur5)
     plain = SphereChecker(ur5_spheres, problem.scene)
     lowest = np.minimum(plain.clearances(start), plain.clearances(goal))
-    names = [(link, "scene") for link in plain.links] + list(plain.pairs)
-    overlap = {names[k]: -lowest[k] for k in np.flatnonzero(lowest < 0)}
+    n_links = len(plain.links)
+    overlap = {
+        plain.pairs[k - n_links]: -lowest[k]
+        for k in np.flatnonzero(lowest < 0)
+        if k >= n_links
+    }
     assert overlap  # the base and the upper arm's spheres overlap at the ends
+    by_obstacle = np.minimum(
+        plain.obstacle_clearances(start), plain.obstacle_clearances(goal)
+    )
+    for li, o in zip(*np.nonzero(by_obstacle < 0), strict=True):
+        overlap[plain.links[li], problem.scene.obstacles[o].name] = -by_obstacle[li, o]
 
     def margins(result) -> dict:
         return {(a, b): m - overlap[(a, b)] for a, b, m in result.allowances}
@@ -713,6 +881,48 @@ def _table_value(tables, k: int, q: np.ndarray) -> float:
         cell = cell % n if tables.periodic[k, i] else min(max(cell, 0), n - 1)
         index = index * n + cell
     return float(tables.values[tables.start[k] + index])
+
+
+@pytest.mark.slow  # the UR5's tables again: 2 s
+def test_the_table_build_counts_every_node(ur5_spheres, ur5_tables) -> None:
+    """``progress(done, total)`` after each node of the tables, to the end, where
+    ``total`` is every tabled joint group's node count; the tables are the same."""
+    calls: list[tuple[int, int]] = []
+    tables = build_pair_tables(
+        SphereChecker(ur5_spheres),
+        CollisionChecker(ur5_spheres.robot, None),
+        progress=lambda done, total: calls.append((done, total)),
+    )
+    nodes = {}
+    for k in np.flatnonzero(tables.start >= 0):
+        used = tables.joint[k] >= 0
+        nodes[tuple(tables.joint[k][used])] = int(np.prod(tables.cells[k][used]))
+    total = sum(nodes.values())
+    assert total > 100
+    assert calls == [(done, total) for done in range(1, total + 1)]
+    assert tables.pairs == ur5_tables.pairs
+    for mine, cached in zip(tables[:-1], ur5_tables[:-1], strict=True):
+        np.testing.assert_array_equal(mine, cached)
+
+
+def test_a_first_plan_counts_its_sphere_cover_once_per_robot() -> None:
+    """``plan(progress=...)`` hears ``("sphere cover", done, total)`` per
+    geometry while the robot's spheres are built, and nothing once they are
+    (the PUMA's pairs need no table: no ``"pair tables"`` stage)."""
+    robot = wb.load_robot("puma560").with_limits(acceleration_limit=np.full(6, 4.0))
+    calls: list[tuple[str, int, int]] = []
+
+    def heard(stage: str, done: int, total: int) -> None:
+        calls.append((stage, done, total))
+
+    first = plan(robot, None, PICK, PLACE, progress=heard, verify=True)
+    n = len(robot.collision_model.geometryObjects)
+    assert first.solved
+    assert calls == [("sphere cover", done, n) for done in range(1, n + 1)]
+    calls.clear()
+    again = plan(robot, None, PICK, PLACE, progress=heard)
+    assert calls == []
+    np.testing.assert_array_equal(again.waypoints, first.waypoints)
 
 
 def test_the_inseparable_pairs_get_tables_of_half_their_exact_distance(

@@ -44,6 +44,10 @@ from workbench._sigint import block_interrupts_in_this_thread
 #: ``progress(done, total)``: what every long job calls after each chunk of
 #: work (``done`` of ``total`` steps); :meth:`Progress.count` is one.
 ProgressCallback = Callable[[int, int], None]
+#: ``progress(stage, done, total)``: a job of several stages, each counted on
+#: its own (``stage`` names it: the singularity report's maps, a motion plan's
+#: sphere cover and pair tables); :meth:`Progress.stages` makes one.
+StageProgress = Callable[[str, int, int], None]
 
 PROGRESS_DELAY = 1.0  # [s] before a running job prints its line
 #: Seconds between two count lines on a stream that is no terminal (a log file).
@@ -181,6 +185,19 @@ class Progress:
             else:
                 self._write(line + "\n")
 
+    def stages(self, label: str, unit: str = "steps") -> StageProgress:
+        """A :data:`StageProgress` counting each stage as ``"label: stage"``.
+
+        Args:
+            label: What the job does (``"motion plan"``).
+            unit: What a step is, for the lines (``"points"``).
+        """
+
+        def count(stage: str, done: int, total: int) -> None:
+            self.count(done, total, unit=unit, label=f"{label}: {stage}")
+
+        return count
+
     def _get_stream(self) -> TextIO:
         return self._stream if self._stream is not None else sys.stderr
 
@@ -277,4 +294,5 @@ __all__ = [
     "REDRAW_INTERVAL",
     "Progress",
     "ProgressCallback",
+    "StageProgress",
 ]

@@ -160,6 +160,7 @@ def run_plan(args: argparse.Namespace) -> int:
         seed=args.seed,
         time_limit=args.time_limit,
         planner=args.planner,
+        progress=args.progress.stages("motion plan"),
     )
     samples = (
         result.trajectory.sample_uniform(args.rate)

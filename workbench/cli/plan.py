@@ -329,6 +329,7 @@ def _plan_around(
         rate_hz=args.rate,
         seed=_seed(args),
         time_limit=_limit(args),
+        progress=args.progress.stages("plan --avoid"),
     )
 
 

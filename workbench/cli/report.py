@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable
 from pathlib import Path
 
 from workbench.atomic_files import check_outputs, write_text_atomic
@@ -15,7 +14,6 @@ from workbench.cli._common import (
     load_robot_from_args,
     print_json,
 )
-from workbench.progress import Progress
 from workbench.trajectory.csv_io import read_trajectory_csv
 
 #: Largest ``--grid`` (points per axis of the det J map).
@@ -77,16 +75,6 @@ def register(commands: argparse._SubParsersAction) -> None:
     )
 
 
-def _per_stage(progress: Progress) -> Callable[[str, int, int], None]:
-    """The report's ``progress(stage, done, total)``: counts of each map's points."""
-
-    def count(stage: str, done: int, total: int) -> None:
-        label = f"report singularities: {stage}"
-        progress.count(done, total, unit="points", label=label)
-
-    return count
-
-
 def run_singularities(args: argparse.Namespace) -> int:
     """Build and write the singularity report; returns the exit code."""
     from workbench.reports.singularity_report import build_singularity_report
@@ -105,7 +93,9 @@ def run_singularities(args: argparse.Namespace) -> int:
         grid_size=args.grid,
         svd_grid_size=args.svd_grid,
         trajectory=trajectory,
-        progress=None if args.no_progress else _per_stage(args.progress),
+        progress=None
+        if args.no_progress
+        else args.progress.stages("report singularities", unit="points"),
     )
     write_text_atomic(out, report.html)
     summary = {"out": str(out), **report.summary}

@@ -19,7 +19,9 @@ the unsigned distance to its triangles.
 
 **Allowances.** Each entry may carry an allowance [m] added to its
 clearance: the spheres may overlap by that much (where they overlap at the
-start or goal while the exact meshes are apart) and no more. A pair with a
+start or goal while the exact meshes are apart) and no more. A link's
+allowance against the scene is held per obstacle (``lallow[l, o]``: the
+fingers may overlap the object they grasp, not the shelf beside it). A pair with a
 table (:mod:`workbench.motion.pair_tables`) takes the table's clearance at
 the node nearest to its one or two relative joints (:func:`_table_clearance`)
 instead of its spheres', where its meshes are apart at that node.
@@ -391,6 +393,8 @@ def _clearances(
     tlower = robot_float[f : f + 2 * n_pairs]
     tstep = robot_float[f + 2 * n_pairs : f + 4 * n_pairs]
     tvalues = robot_float[f + 4 * n_pairs : f + 4 * n_pairs + sizes[7]]
+    f += 4 * n_pairs + sizes[7]
+    lallow = robot_float[f : f + n_links * width].reshape(n_links, width)
     okind = scene_int[0:n_obstacles]
     ofirst = scene_int[n_obstacles : 2 * n_obstacles + 1]
     orot = scene_float[0 : 9 * n_obstacles].reshape(n_obstacles, 3, 3)
@@ -416,7 +420,7 @@ def _clearances(
                 d = _sphere_distance(
                     bound[li],
                     lradius[li],
-                    allow[li],
+                    lallow[li, o],
                     o,
                     okind,
                     orot,
@@ -440,7 +444,7 @@ def _clearances(
                         dg = _sphere_distance(
                             gworld[g],
                             gradius[g],
-                            allow[li],
+                            lallow[li, o],
                             o,
                             okind,
                             orot,
@@ -466,7 +470,7 @@ def _clearances(
                             ds = _sphere_distance(
                                 world[s],
                                 sradius[s],
-                                allow[li],
+                                lallow[li, o],
                                 o,
                                 okind,
                                 orot,

@@ -30,6 +30,7 @@ from workbench.model.robot import Robot
 from workbench.motion.planner import MotionPlan, plan, require_acceleration_limits
 from workbench.motion.spheres import SphereModel
 from workbench.motion.timing import WaypointTrajectory
+from workbench.progress import StageProgress
 from workbench.trajectory.pick_and_place import JointTrajectory
 
 FloatArray = npt.NDArray[np.float64]
@@ -129,7 +130,7 @@ class PlannedAround:
         direct_duration`` [s]``, waypoints`` (K, nq) [rad]``, path_length``
         [rad]``, duration`` [s]``, min_clearance, clearance_lower_bound`` [m]``,
         setup_time, planning_time, smoothing_time, verification_time`` [s]``,
-        iterations, allowances`` (``[link, "scene" or link, m]``); numbers that
+        iterations, allowances`` (``[link, obstacle or link, m]``); numbers that
         do not exist (no motion found, no plan needed) are None.
         """
         result = self.plan
@@ -184,6 +185,7 @@ def plan_around(
     seed: int = 0,
     time_limit: float = 1.0,
     spheres: SphereModel | None = None,
+    progress: StageProgress | None = None,
 ) -> PlannedAround:
     """A collision-free motion from the pick to the place of a colliding spline.
 
@@ -203,6 +205,9 @@ def plan_around(
         time_limit: Planning budget [s], > 0.
         spheres: The sphere model; default the robot's
             (:func:`workbench.motion.planner.get_spheres`).
+        progress: Called as ``progress(stage, done, total)`` while the
+            robot's sphere model and pair tables are built
+            (:func:`workbench.motion.plan`).
 
     Returns:
         The record. When ``direct`` is proven free, ``plan`` is None and the
@@ -252,6 +257,7 @@ def plan_around(
             seed=seed,
             time_limit=time_limit,
             spheres=spheres,
+            progress=progress,
         )
     )
     return PlannedAround(direct, clearance, planned, float(rate_hz))

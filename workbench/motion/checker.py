@@ -57,9 +57,13 @@ class SphereChecker:
         spheres: The robot's sphere model (:func:`~workbench.motion.spherize`).
         scene: Static obstacles in the base frame; default none.
         allowance: Per clearance entry (L + P,) [m], >= 0: how far the
-            spheres of that entry may overlap (:func:`~workbench.motion.plan`
-            allows the overlap they have at the start or a goal where the
-            exact meshes are apart, and no more); default none.
+            spheres of that entry may overlap (a link's: every obstacle);
+            default none.
+        obstacle_allowance: Per link and obstacle (L, O) [m], >= 0, added to
+            the link's allowance against that obstacle alone
+            (:func:`~workbench.motion.plan` allows each link–obstacle pair and
+            each link pair the overlap it has at the start or a goal where
+            the exact meshes are apart, and no more); default none.
         pair_tables: Clearance tables of the pairs whose spheres overlap
             over their one or two relative joints
             (:func:`~workbench.motion.pair_tables.build_pair_tables`,
@@ -70,14 +74,15 @@ class SphereChecker:
         spheres, scene, pair_tables: As given (``pair_tables``: none for
             every pair when not given).
         allowance: (L + P,) [m], read-only.
+        obstacle_allowance: (L, O) [m], read-only.
         links: Link names, in the order of the clearance entries.
         pairs: Checked link pairs ``(link_a, link_b)``, after the links.
 
     Raises:
         InputError: If the robot has a joint other than a revolute one with
-            one coordinate, an obstacle's ``allow`` names no link, the
-            allowance is not (L + P,) finite values >= 0, or ``pair_tables``
-            are for another number of pairs.
+            one coordinate, an obstacle's ``allow`` names no link, an
+            allowance is not of its shape or not finite and >= 0, or
+            ``pair_tables`` are for another number of pairs.
     """
 
     def __init__(
@@ -86,6 +91,7 @@ class SphereChecker:
         scene: Scene | None = None,
         *,
         allowance: npt.ArrayLike | None = None,
+        obstacle_allowance: npt.ArrayLike | None = None,
         pair_tables: PairTables | None = None,
     ) -> None:
         self.spheres = spheres
@@ -100,7 +106,12 @@ class SphereChecker:
             )
         n_entries = len(self.links) + len(self.pairs)
         self.allowance = _check_allowance(
-            np.zeros(n_entries) if allowance is None else allowance, n_entries
+            np.zeros(n_entries) if allowance is None else allowance, (n_entries,)
+        )
+        shape = (len(self.links), len(self.scene.obstacles))
+        self.obstacle_allowance = _check_allowance(
+            np.zeros(shape) if obstacle_allowance is None else obstacle_allowance,
+            shape,
         )
         (
             self._robot_int,
@@ -108,22 +119,41 @@ class SphereChecker:
             self._levers,
             sizes,
             self._allowance_at,
-        ) = _pack_robot(spheres, self.scene, self.allowance, self.pair_tables)
+            self._obstacle_allowance_at,
+            self._allowed_at,
+        ) = _pack_robot(
+            spheres,
+            self.scene,
+            self.allowance,
+            self.obstacle_allowance,
+            self.pair_tables,
+        )
         self._scene_int, self._scene_float, self._tris = _pack_scene(self.scene)
         self._sizes = np.array(sizes, dtype=np.int64)
         self._store = np.zeros((kernel.MAX_EVALUATIONS, len(self._levers)))
 
-    def with_allowance(self, allowance: npt.ArrayLike) -> SphereChecker:
-        """This checker with another allowance (L + P,) [m], packed once.
+    def with_allowance(
+        self, allowance: npt.ArrayLike, obstacle_allowance: npt.ArrayLike | None = None
+    ) -> SphereChecker:
+        """This checker with other allowances (L + P,), (L, O) [m], packed once.
 
         Raises:
-            InputError: If the allowance is not (L + P,) finite values >= 0.
+            InputError: If an allowance is not of its shape, finite and >= 0.
         """
-        allowed = _check_allowance(allowance, len(self._levers))
+        allowed = _check_allowance(allowance, self.allowance.shape)
+        by_obstacle = _check_allowance(
+            np.zeros(self.obstacle_allowance.shape)
+            if obstacle_allowance is None
+            else obstacle_allowance,
+            self.obstacle_allowance.shape,
+        )
         out = copy.copy(self)
-        out.allowance = allowed
+        out.allowance, out.obstacle_allowance = allowed, by_obstacle
         out._robot_float = self._robot_float.copy()
         out._robot_float[self._allowance_at] = allowed
+        out._robot_float[self._obstacle_allowance_at] = _per_obstacle(
+            allowed, by_obstacle
+        ).ravel()
         out._store = np.zeros_like(self._store)
         return out
 
@@ -153,6 +183,32 @@ class SphereChecker:
         kernel.clearances(q, *self.arrays[1:], False, out)
         return out
 
+    def obstacle_clearances(self, q: npt.ArrayLike) -> FloatArray:
+        """Clearance of every link to every obstacle [m] at ``q``.
+
+        One evaluation per obstacle, the others left out (as an obstacle's
+        ``allow`` leaves a link out): for the ends of a motion, not its
+        inside.
+
+        Returns:
+            (L, O): links (:attr:`links`) by the scene's obstacles, each with
+            its allowances; inf where a link is not checked against an
+            obstacle (on the fixed base, or in the obstacle's ``allow``).
+        """
+        q = self.spheres.robot.check_configuration(q)
+        out = np.full(self.obstacle_allowance.shape, np.inf)
+        n_links, n_obstacles = len(self.links), len(self.scene.obstacles)
+        robot_int = self._robot_int.copy()
+        allowed = robot_int[self._allowed_at].reshape(n_links, max(1, n_obstacles))
+        given = allowed.copy()
+        entries = np.empty(len(self._levers))
+        for o in range(n_obstacles):
+            allowed[:] = 1
+            allowed[:, o] = given[:, o]
+            kernel.clearances(q, robot_int, *self.arrays[2:], False, entries)
+            out[:, o] = entries[:n_links]
+        return out
+
     def is_free(self, q: npt.ArrayLike) -> bool:
         """Whether no sphere touches an obstacle or a checked link at ``q``."""
         q = self.spheres.robot.check_configuration(q)
@@ -166,19 +222,32 @@ class SphereChecker:
         return bool(kernel.motion_free(a, b, *self.arrays, self._store))
 
 
-def _check_allowance(allowance: npt.ArrayLike, n_entries: int) -> FloatArray:
-    allowed = np.array(allowance, dtype=np.float64)
+def _check_allowance(allowance: npt.ArrayLike, shape: tuple[int, ...]) -> FloatArray:
+    try:
+        allowed = np.array(allowance, dtype=np.float64)
+    except (TypeError, ValueError):
+        allowed = np.full(1, np.nan)
     if (
-        allowed.shape != (n_entries,)
+        allowed.shape != shape
         or not np.all(np.isfinite(allowed))
         or np.any(allowed < 0)
     ):
-        raise InputError(
-            f"allowance must be {n_entries} finite values >= 0 [m] (links, then "
-            f"pairs), got shape {allowed.shape}"
+        what = (
+            f"{shape[0]} finite values >= 0 [m] (links, then pairs)"
+            if len(shape) == 1
+            else f"({shape[0]}, {shape[1]}) finite values >= 0 [m] (links × obstacles)"
         )
+        raise InputError(f"allowance must be {what}, got shape {allowed.shape}")
     allowed.setflags(write=False)
     return allowed
+
+
+def _per_obstacle(allowance: FloatArray, obstacle_allowance: FloatArray) -> FloatArray:
+    """Each link's allowance against each obstacle (L, max(1, O)) [m], packed."""
+    n_links = len(obstacle_allowance)
+    out = np.repeat(allowance[:n_links, None], max(1, obstacle_allowance.shape[1]), 1)
+    out[:, : obstacle_allowance.shape[1]] += obstacle_allowance
+    return out
 
 
 def _pairs(spheres: SphereModel) -> tuple[tuple[str, str], ...]:
@@ -197,8 +266,12 @@ def _pairs(spheres: SphereModel) -> tuple[tuple[str, str], ...]:
 
 
 def _pack_robot(
-    spheres: SphereModel, scene: Scene, allowance: FloatArray, tables: PairTables
-) -> tuple[IntArray, FloatArray, FloatArray, list[int], slice]:
+    spheres: SphereModel,
+    scene: Scene,
+    allowance: FloatArray,
+    obstacle_allowance: FloatArray,
+    tables: PairTables,
+) -> tuple[IntArray, FloatArray, FloatArray, list[int], slice, slice, slice]:
     robot = spheres.robot
     model = robot.model
     if model.nq != model.nv:
@@ -233,6 +306,8 @@ def _pack_robot(
             if name in names:
                 allowed[names.index(name), o] = 1
     pairs = _pairs(spheres)
+    start = model.njoints * 2 + len(links) * 2 + len(pairs) * 2
+    allowed_at = slice(start, start + allowed.size)
     pa = np.array([names.index(a) for a, _ in pairs], dtype=np.int64)
     pb = np.array([names.index(b) for _, b in pairs], dtype=np.int64)
     # Each link's spheres in groups of at most GROUP_SIZE near ones, each group
@@ -301,6 +376,11 @@ def _pack_robot(
             tables.values,
         ]
     )
+    per_obstacle = _per_obstacle(allowance, obstacle_allowance).ravel()
+    obstacle_allowance_at = slice(
+        len(robot_float), len(robot_float) + per_obstacle.size
+    )
+    robot_float = np.concatenate([robot_float, per_obstacle])
     # A pair with a table is judged by its meshes' distance: its geometry's
     # speed bounds how fast that changes.
     levers = _levers(
@@ -316,7 +396,15 @@ def _pack_robot(
         len(group_radius),
         len(tables.values),
     ]
-    return robot_int, robot_float, np.ascontiguousarray(levers), sizes, allowance_at
+    return (
+        robot_int,
+        robot_float,
+        np.ascontiguousarray(levers),
+        sizes,
+        allowance_at,
+        obstacle_allowance_at,
+        allowed_at,
+    )
 
 
 def _levers(

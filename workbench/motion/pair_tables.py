@@ -43,6 +43,7 @@ import pinocchio as pin
 from workbench.collision.checker import CollisionChecker
 from workbench.model.robot import Robot
 from workbench.motion.spheres import SphereModel
+from workbench.progress import ProgressCallback
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -114,13 +115,21 @@ def no_tables(n_pairs: int) -> PairTables:
     )
 
 
-def build_pair_tables(checker: SphereClearances, exact: CollisionChecker) -> PairTables:
+def build_pair_tables(
+    checker: SphereClearances,
+    exact: CollisionChecker,
+    *,
+    progress: ProgressCallback | None = None,
+) -> PairTables:
     """The tables of the pairs of ``checker`` that need one (module docstring).
 
     Args:
         checker: A :class:`~workbench.motion.checker.SphereChecker` without
             scene or allowance (its pairs and sphere clearances are read).
         exact: The robot's exact checker without scene (its pair distances).
+        progress: Called as ``progress(done, total)`` after each node of the
+            tables (the screening, whose sphere clearances are cheap, decides
+            their number first; a UR5's ~1500 nodes take seconds).
 
     Returns:
         The packed tables, aligned with ``checker.pairs``.
@@ -142,9 +151,7 @@ def build_pair_tables(checker: SphereClearances, exact: CollisionChecker) -> Pai
     exact_pairs: dict[frozenset[str], list[int]] = {}
     for i, pair in enumerate(exact.pairs):
         exact_pairs.setdefault(frozenset((pair.body_a, pair.body_b)), []).append(i)
-    values: list[FloatArray] = []
-    offset = 0
-    named = []
+    chosen_by_joints: dict[tuple[int, ...], list[int]] = {}
     for joints, members in by_joints.items():
         screen = _nodes(base, joints, _grid(robot, joints, SCREEN_STEP))
         overlap = np.zeros(len(members))
@@ -156,9 +163,19 @@ def build_pair_tables(checker: SphereClearances, exact: CollisionChecker) -> Pai
             for k, o in zip(members, overlap, strict=True)
             if o >= INSEPARABLE * len(screen) and frozenset(pairs[k]) in exact_pairs
         ]
-        if not chosen:
-            continue
-        grid = _grid(robot, joints, STEP_2D if len(joints) == 2 else STEP_1D)
+        if chosen:
+            chosen_by_joints[joints] = chosen
+    grids = {
+        joints: _grid(robot, joints, STEP_2D if len(joints) == 2 else STEP_1D)
+        for joints in chosen_by_joints
+    }
+    total = sum(int(np.prod(grid[2])) for grid in grids.values())
+    done = 0
+    values: list[FloatArray] = []
+    offset = 0
+    named = []
+    for joints, chosen in chosen_by_joints.items():
+        grid = grids[joints]
         table = np.empty((len(chosen), int(np.prod(grid[2]))))
         for n, node in enumerate(_nodes(base, joints, grid)):
             clear = checker.clearances(node)
@@ -166,6 +183,9 @@ def build_pair_tables(checker: SphereClearances, exact: CollisionChecker) -> Pai
                 d = _distance(exact, node, exact_pairs[frozenset(pairs[k])])
                 g = clear[n_links + k]
                 table[row, n] = max(g, SHARE * d) if d > 0.0 else math.nan
+            done += 1
+            if progress is not None:
+                progress(done, total)
         lower, step, cells, periodic = grid
         for row, k in enumerate(chosen):
             width = len(joints)

@@ -5,7 +5,8 @@
 1. checks the start and the goals on the exact meshes (coal, the project's
    :class:`~workbench.collision.CollisionChecker`); where their spheres
    overlap there, the overlap becomes that entry's allowance along the
-   motion (a margin more, no deeper: with ``verify``, first
+   motion (a link against that obstacle only, not the whole scene; a
+   margin more, no deeper: with ``verify``, first
    :data:`ALLOWANCE_SHARE` of the entry's exact clearance at the ends, and
    :data:`ALLOWANCE_MARGIN` when the exact check refuses that trajectory);
    with ``verify`` the pairs the spheres cannot separate also first get
@@ -35,6 +36,7 @@ from __future__ import annotations
 import functools
 import math
 import time
+import weakref
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -59,6 +61,7 @@ from workbench.motion.pair_tables import PairTables, build_pair_tables
 from workbench.motion.spheres import SphereModel, spherize
 from workbench.motion.timing import WaypointTrajectory, time_scale
 from workbench.motion.verify import verify_trajectory
+from workbench.progress import ProgressCallback, StageProgress
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -72,6 +75,12 @@ SHORTCUTS = 64
 REDUNDANCY_SAMPLES = 16
 #: Nodes each tree can hold.
 CAPACITY = 50_000
+#: Distances [m] of the tool's retreats from a tight end, longest first
+#: (:func:`_escapes`).
+ESCAPE_DISTANCES = (0.1, 0.05, 0.02)
+#: An end is tight when a link holding an allowance has a sphere clearance to
+#: the scene, allowance included, below this [m].
+ESCAPE_GATE = 0.01
 #: Allowed overlap [m] beyond what the spheres of an entry have at an end, at least.
 ALLOWANCE_MARGIN = 1e-3
 #: With ``verify``, the first attempt allows an entry beyond its overlap this
@@ -111,11 +120,12 @@ class MotionPlan:
         iterations: RRT-Connect iterations; for an OMPL planner, the
             vertices of its graph.
         detail: One line on what blocked an unsolved request ("" if solved).
-        allowances: ``(link, "scene" or link, metres)`` for each entry
-            whose spheres overlap at the start or a goal although the exact
-            meshes are apart there: they may overlap that much plus a margin
-            along the motion and no more (module docstring); the exact check
-            of the trajectory judges the rest.
+        allowances: ``(link, obstacle or link, metres)`` for each link
+            against an obstacle and each link pair whose spheres overlap at
+            the start or a goal although the exact meshes are apart there:
+            they may overlap that much plus a margin along the motion and no
+            more (module docstring); the exact check of the trajectory
+            judges the rest.
     """
 
     solved: bool
@@ -140,21 +150,56 @@ class MotionPlan:
 
 
 @per_robot
-def get_spheres(robot: Robot) -> SphereModel:
-    """The robot's default sphere model, built once per robot object."""
-    return spherize(robot)
+def _built(robot: Robot) -> dict[str, SphereModel]:
+    """The robot's default sphere model once built (``"spheres"``), per robot."""
+    return {}
 
 
-@functools.lru_cache(maxsize=4)
-def get_pair_tables(spheres: SphereModel) -> PairTables:
+def get_spheres(
+    robot: Robot, *, progress: ProgressCallback | None = None
+) -> SphereModel:
+    """The robot's default sphere model, built once per robot object.
+
+    Args:
+        robot: The robot.
+        progress: Called as ``progress(done, total)`` while the model is
+            built (:func:`~workbench.motion.spherize`); not when it is cached.
+    """
+    built = _built(robot)
+    if "spheres" not in built:
+        built["spheres"] = spherize(robot, progress=progress)
+    return built["spheres"]
+
+
+#: The tables of the sphere models seen, held as long as their model is.
+_TABLES: weakref.WeakKeyDictionary[SphereModel, PairTables] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def get_pair_tables(
+    spheres: SphereModel, *, progress: ProgressCallback | None = None
+) -> PairTables:
     """The clearance tables of a sphere model's pairs, built once per model.
 
     :mod:`workbench.motion.pair_tables`; the exact distances are the robot's
     own, without a scene.
+
+    Args:
+        spheres: The sphere model.
+        progress: Called as ``progress(done, total)`` while the tables are
+            built (:func:`~workbench.motion.pair_tables.build_pair_tables`);
+            not when they are cached.
     """
-    return build_pair_tables(
-        SphereChecker(spheres), CollisionChecker(spheres.robot, None)
-    )
+    tables = _TABLES.get(spheres)
+    if tables is None:
+        tables = build_pair_tables(
+            SphereChecker(spheres),
+            CollisionChecker(spheres.robot, None),
+            progress=progress,
+        )
+        _TABLES[spheres] = tables
+    return tables
 
 
 def goal_configurations(
@@ -252,6 +297,7 @@ def plan(
     velocity_scale: float = 1.0,
     acceleration_scale: float = 1.0,
     verify: bool = True,
+    progress: StageProgress | None = None,
 ) -> MotionPlan:
     """A collision-free, time-scaled motion from ``start`` to ``goal``.
 
@@ -278,6 +324,10 @@ def plan(
         verify: Check the trajectory on the exact meshes
             (:func:`~workbench.motion.verify_trajectory`); a motion that
             fails it is not ``solved``.
+        progress: Called as ``progress(stage, done, total)`` while the
+            robot's sphere model (stage ``"sphere cover"``, per geometry) and
+            its pair tables (``"pair tables"``, per node) are built, once per
+            robot: a UR5 takes about 3 s, MotionBenchMaker's 8 s.
 
     Returns:
         The plan; ``solved`` False with a ``reason`` when no motion was found.
@@ -311,7 +361,7 @@ def plan(
     require_acceleration_limits(robot, "the time scaling")
     q_start = robot.check_configuration(start)
     exact = CollisionChecker(robot, scene)
-    model = spheres or get_spheres(robot)
+    model = spheres or get_spheres(robot, progress=_stage(progress, "sphere cover"))
     empty = np.zeros((0, robot.nq))
 
     t_search = math.inf
@@ -363,25 +413,34 @@ def plan(
     # With verify: the pairs' tables and wider margins first, the judge after,
     # then the spheres alone on narrow margins (a second checker only when
     # the first has tables).
-    tables = get_pair_tables(model) if verify else None
+    tables = (
+        get_pair_tables(model, progress=_stage(progress, "pair tables"))
+        if verify
+        else None
+    )
     tabled = tables is not None and bool(tables.pairs)
     first = SphereChecker(model, scene, pair_tables=tables)
-    least = np.min([first.clearances(q) for q in ends], axis=0)
-    narrow = np.full(len(least), ALLOWANCE_MARGIN)
+    lowest = _end_clearances(first, ends)
+    narrow = (
+        np.full(lowest[0].shape, ALLOWANCE_MARGIN),
+        np.full(lowest[1].shape, ALLOWANCE_MARGIN),
+    )
 
-    def without_tables() -> tuple[SphereChecker, FloatArray, FloatArray]:
+    def without_tables() -> tuple[SphereChecker, EndValues, EndValues]:
         plain = SphereChecker(model, scene)
-        lowest = np.min([plain.clearances(q) for q in ends], axis=0)
-        return plain, lowest, narrow
+        return plain, _end_clearances(plain, ends), narrow
 
-    attempts = [without_tables if tabled else lambda: (first, least, narrow)]
+    attempts = [without_tables if tabled else lambda: (first, lowest, narrow)]
     if verify:
-        wide = np.maximum(
-            ALLOWANCE_SHARE * _entry_distances(first, exact, ends, least < 0.0),
-            ALLOWANCE_MARGIN,
+        distances = _end_distances(
+            first, exact, ends, (lowest[0] < 0.0, lowest[1] < 0.0)
         )
-        if tabled or (wide > ALLOWANCE_MARGIN).any():
-            attempts.insert(0, lambda: (first, least, wide))
+        wide = (
+            np.maximum(ALLOWANCE_SHARE * distances[0], ALLOWANCE_MARGIN),
+            np.maximum(ALLOWANCE_SHARE * distances[1], ALLOWANCE_MARGIN),
+        )
+        if tabled or any((w > ALLOWANCE_MARGIN).any() for w in wide):
+            attempts.insert(0, lambda: (first, lowest, wide))
     t_search = time.perf_counter()
     spent = [0.0, 0.0, 0.0]  # planning, time scaling, verification [s]
     for attempt, prepare in enumerate(attempts):
@@ -449,62 +508,103 @@ def plan(
     )
 
 
+def _stage(progress: StageProgress | None, stage: str) -> ProgressCallback | None:
+    """``progress`` for one stage: ``progress(stage, done, total)``."""
+    return None if progress is None else functools.partial(progress, stage)
+
+
+#: Values at the ends of a motion: per clearance entry (L + P,) and per
+#: link–obstacle pair (L, O) [m].
+EndValues = tuple[FloatArray, FloatArray]
+
+
+def _end_clearances(checker: SphereChecker, ends: FloatArray) -> EndValues:
+    """The least sphere clearances over the ends: entries, link–obstacle pairs.
+
+    A link–obstacle pair's is computed only at the ends where its link
+    overlaps the scene (elsewhere it is no less than the link's entry, >= 0,
+    and gets no allowance).
+    """
+    entries = np.array([checker.clearances(q) for q in ends])
+    n_links = len(checker.links)
+    by_obstacle = np.full((n_links, len(checker.scene.obstacles)), np.inf)
+    for q, at_q in zip(ends, entries, strict=True):
+        if (at_q[:n_links] < 0.0).any():
+            np.minimum(by_obstacle, checker.obstacle_clearances(q), out=by_obstacle)
+    return entries.min(axis=0), by_obstacle
+
+
 def _allowing_checker(
-    plain: SphereChecker, lowest: FloatArray, margin: FloatArray
+    plain: SphereChecker, lowest: EndValues, margin: EndValues
 ) -> tuple[SphereChecker, tuple[tuple[str, str, float], ...]]:
-    """The checker that allows each entry the overlap it has at an end.
+    """The checker that allows each pair the overlap it has at an end.
 
     The ends are free on the exact meshes (checked before), so an overlap of
-    their spheres is the spheres' excess, not a contact: the entry may overlap
-    that much plus its ``margin`` along the motion.
+    their spheres is the spheres' excess, not a contact: that link pair, or
+    that link against that obstacle (not the whole scene), may overlap that
+    much plus its ``margin`` along the motion.
 
     Args:
         plain: The checker without allowance.
-        lowest: (L + P,) [m], each entry's least sphere clearance over the ends.
-        margin: (L + P,) [m], what each overlapping entry may overlap more.
+        lowest: Each entry's and each link–obstacle pair's least sphere
+            clearance over the ends (:func:`_end_clearances`).
+        margin: What each overlapping one may overlap more, the same shapes.
     """
-    overlap = np.where(lowest < 0.0, margin - lowest, 0.0)
-    if not overlap.any():
-        return plain, ()
-    names = [(link, "scene") for link in plain.links] + list(plain.pairs)
-    allowances = tuple(
-        (a, b, float(overlap[k])) for k, (a, b) in enumerate(names) if overlap[k] > 0
+    n_links = len(plain.links)
+    entries, by_obstacle = (
+        np.where(low < 0.0, more - low, 0.0)
+        for low, more in zip(lowest, margin, strict=True)
     )
-    return plain.with_allowance(overlap), allowances
+    entries[:n_links] = 0.0  # a link against the scene: per obstacle
+    if not (entries.any() or by_obstacle.any()):
+        return plain, ()
+    obstacles = [obstacle.name for obstacle in plain.scene.obstacles]
+    allowances = tuple(
+        (plain.links[li], obstacles[o], float(by_obstacle[li, o]))
+        for li, o in zip(*np.nonzero(by_obstacle), strict=True)
+    ) + tuple(
+        (a, b, float(entries[n_links + k]))
+        for k, (a, b) in enumerate(plain.pairs)
+        if entries[n_links + k] > 0
+    )
+    return plain.with_allowance(entries, by_obstacle), allowances
 
 
-def _entry_distances(
+def _end_distances(
     checker: SphereChecker,
     exact: CollisionChecker,
     ends: FloatArray,
-    wanted: npt.NDArray[np.bool_],
-) -> FloatArray:
-    """The least exact distance [m] over the ends of the ``wanted`` entries.
+    wanted: tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]],
+) -> EndValues:
+    """The least exact distances [m] over the ends of the ``wanted`` pairs.
 
-    An entry of ``checker`` (L + P,) is a link against the scene (its scene
-    pairs in ``exact``) or a link pair; the others, and an entry without an
-    exact pair, get 0.
+    ``wanted`` and the result are (L + P,) for the link pairs (after the
+    links' entries, which are not used) and (L, O) for the link–obstacle
+    pairs; the others, and a pair without an exact one, get 0.
     """
-    index: dict[str | frozenset[str], int] = {
-        link: k for k, link in enumerate(checker.links)
-    }
-    offset = len(checker.links)
-    index.update({frozenset(pair): offset + k for k, pair in enumerate(checker.pairs)})
-    owner = np.full(len(exact.pairs), -1)
+    n_links = len(checker.links)
+    links = {link: li for li, link in enumerate(checker.links)}
+    obstacles = {obstacle.name: o for o, obstacle in enumerate(checker.scene.obstacles)}
+    pairs = {frozenset(pair): k for k, pair in enumerate(checker.pairs)}
+    flat = np.concatenate([wanted[0][n_links:], wanted[1].ravel()])
+    owner = np.full(len(exact.pairs), -1)  # index into flat
     for j, pair in enumerate(exact.pairs):
-        key = (
-            pair.body_a
-            if pair.kind == "scene"
-            else frozenset((pair.body_a, pair.body_b))
-        )
-        owner[j] = index.get(key, -1)
-    active = (owner >= 0) & wanted[np.maximum(owner, 0)]
-    out = np.full(len(wanted), np.inf)
+        if pair.kind == "scene":
+            li, o = links.get(pair.body_a, -1), obstacles.get(pair.body_b, -1)
+            if li >= 0 and o >= 0:
+                owner[j] = len(checker.pairs) + li * wanted[1].shape[1] + o
+        else:
+            owner[j] = pairs.get(frozenset((pair.body_a, pair.body_b)), -1)
+    active = (owner >= 0) & flat[np.maximum(owner, 0)]
+    out = np.full(len(flat), np.inf)
     if active.any():
         for q in ends:
             distances = exact.compute_distances(q, active=active)
             np.minimum.at(out, owner[active], distances[active])
-    return np.where(np.isfinite(out) & wanted, out, 0.0)
+    out = np.where(np.isfinite(out) & flat, out, 0.0)
+    entries = np.zeros(len(wanted[0]))
+    entries[n_links:] = out[: len(checker.pairs)]
+    return entries, out[len(checker.pairs) :].reshape(wanted[1].shape)
 
 
 def _search(
@@ -525,12 +625,23 @@ def _search(
     for q in goals:  # a straight segment first
         if kernel.motion_free(q_start, q, *arrays, store):
             return _shorten(np.array([q_start, q]), rng, arrays, store), 0
-    capacity = min(CAPACITY, iteration_limit * 8 + len(goals) + 1)
+    roots = (q_start[None], goals)
+    escapes = [[_escapes(checker, robot, q, store) for q in tree] for tree in roots]
+    seeded = max(
+        len(tree) + sum(map(len, e)) for tree, e in zip(roots, escapes, strict=True)
+    )
+    capacity = min(max(CAPACITY, 2 * seeded), iteration_limit * 8 + seeded + 1)
     nodes = np.zeros((2, capacity, n))
     parents = np.full((2, capacity), -1, dtype=np.int64)
-    nodes[0, 0] = q_start
-    nodes[1, : len(goals)] = goals
-    counts = np.array([1, len(goals)], dtype=np.int64)
+    counts = np.zeros(2, dtype=np.int64)
+    for k in (0, 1):
+        nodes[k, : len(roots[k])] = roots[k]
+        counts[k] = len(roots[k])
+        for root, branches in enumerate(escapes[k]):
+            for q in branches:
+                nodes[k, counts[k]] = q
+                parents[k, counts[k]] = root
+                counts[k] += 1
     state = np.zeros(4, dtype=np.int64)
     lower, upper = np.array(robot.lower), np.array(robot.upper)
     while True:
@@ -551,6 +662,41 @@ def _search(
     half = [_branch(nodes[k], parents[k], int(state[1 + k])) for k in (0, 1)]
     path = np.concatenate([half[0][::-1], half[1][1:]])
     return _shorten(path, rng, arrays, store), int(state[3])
+
+
+def _escapes(
+    checker: SphereChecker, robot: Robot, q: FloatArray, store: FloatArray
+) -> list[FloatArray]:
+    """Tool retreats from a tight end: first branches of its tree.
+
+    At an end where a link's spheres overlap the scene (the link holds an
+    allowance there: the fingers about the can they reach for), most
+    directions of joint space lead deeper, so random extensions seldom leave
+    it. Along each axis of the tool frame, both ways, the tool's longest
+    straight move of :data:`ESCAPE_DISTANCES` (first order, ``J⁺ v``, clipped
+    to the limits) that is certified free becomes a child of the end in its
+    tree.
+    """
+    n_links = len(checker.links)
+    allowed = (checker.allowance[:n_links] > 0.0) | checker.obstacle_allowance.any(
+        axis=1
+    )
+    entries = checker.clearances(q)[:n_links]
+    if not (allowed & (entries < ESCAPE_GATE)).any():
+        return []
+    inverse = np.linalg.pinv(robot.jacobian_local(q))
+    arrays = checker.arrays
+    out = []
+    for axis in range(3):
+        for sign in (1.0, -1.0):
+            for distance in ESCAPE_DISTANCES:
+                twist = np.zeros(6)
+                twist[axis] = sign * distance
+                escape = np.clip(q + inverse @ twist, robot.lower, robot.upper)
+                if kernel.motion_free(q, escape, *arrays, store):
+                    out.append(escape)
+                    break
+    return out
 
 
 def _branch(nodes: FloatArray, parents: npt.NDArray[np.int64], tip: int) -> FloatArray:

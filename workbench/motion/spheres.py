@@ -47,6 +47,7 @@ import pinocchio as pin
 from workbench.collision.self_filter import get_link_name
 from workbench.errors import InputError
 from workbench.model.robot import Robot
+from workbench.progress import ProgressCallback
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -86,7 +87,7 @@ class LinkSpheres:
     excess: float
 
 
-@dataclass(frozen=True, slots=True, eq=False)
+@dataclass(frozen=True, slots=True, eq=False, weakref_slot=True)
 class SphereModel:
     """The spheres of every link with collision geometry.
 
@@ -118,12 +119,19 @@ class SphereModel:
         return np.concatenate(centers), np.concatenate([x.radii for x in self.links])
 
 
-def spherize(robot: Robot, *, tolerance: float = DEFAULT_TOLERANCE) -> SphereModel:
+def spherize(
+    robot: Robot,
+    *,
+    tolerance: float = DEFAULT_TOLERANCE,
+    progress: ProgressCallback | None = None,
+) -> SphereModel:
     """Cover every link's collision geometry with spheres (module docstring).
 
     Args:
         robot: The robot; its collision model is read.
         tolerance: Largest excess [m] of a mesh's spheres, > 0.
+        progress: Called as ``progress(done, total)`` after each geometry
+            (a mesh of tens of thousands of triangles takes seconds).
 
     Returns:
         The sphere model.
@@ -142,10 +150,12 @@ def spherize(robot: Robot, *, tolerance: float = DEFAULT_TOLERANCE) -> SphereMod
         raise InputError(f"robot {robot.name!r} has no collision geometry")
     grouped: dict[str, list[tuple[FloatArray, FloatArray, float]]] = {}
     joints: dict[str, int] = {}
-    for geometry in objects:
+    for done, geometry in enumerate(objects, start=1):
         link = get_link_name(robot.model, geometry)
         joints[link] = int(geometry.parentJoint)
         grouped.setdefault(link, []).append(_cover(geometry, float(tolerance)))
+        if progress is not None:
+            progress(done, len(objects))
     links = []
     for link, parts in grouped.items():
         links.append(

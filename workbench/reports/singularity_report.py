@@ -28,6 +28,7 @@ import numpy.typing as npt
 
 from workbench.atomic_files import write_text_atomic
 from workbench.model.robot import Robot
+from workbench.progress import StageProgress
 from workbench.reports.html_report import HtmlReport
 from workbench.singularities.along_path import find_closest_approaches
 from workbench.singularities.conditions import (
@@ -50,7 +51,7 @@ from workbench.singularities.measures import (
 
 FloatArray = npt.NDArray[np.float64]
 #: ``progress(stage, done, total)``.
-ReportProgress = Callable[[str, int, int], None]
+ReportProgress = StageProgress
 
 #: Grid side for robots without the analytic determinant (one Pinocchio call
 #: per point), whatever ``grid_size`` asks.
