@@ -6,9 +6,9 @@
    :class:`~workbench.collision.CollisionChecker`); where their spheres
    overlap there, the overlap becomes that entry's allowance along the
    motion (a link against that obstacle only, not the whole scene; a
-   margin more, no deeper: with ``verify``, first
-   :data:`ALLOWANCE_SHARE` of the entry's exact clearance at the ends, and
-   :data:`ALLOWANCE_MARGIN` when the exact check refuses that trajectory);
+   margin more, no deeper: :data:`ALLOWANCE_MARGIN`; with ``verify`` a link
+   pair first gets :data:`ALLOWANCE_SHARE` of its exact clearance at the
+   ends, and the margin when the exact check refuses that trajectory);
    with ``verify`` the pairs the spheres cannot separate also first get
    their tables (:func:`get_pair_tables`, :mod:`workbench.motion.pair_tables`),
    dropped with the wider margins;
@@ -432,12 +432,14 @@ def plan(
 
     attempts = [without_tables if tabled else lambda: (first, lowest, narrow)]
     if verify:
+        # Wider margins for the link pairs only: a link against an obstacle
+        # (fingers about the can they grasp) keeps 1 mm (docs/motion.md).
         distances = _end_distances(
-            first, exact, ends, (lowest[0] < 0.0, lowest[1] < 0.0)
+            first, exact, ends, (lowest[0] < 0.0, np.zeros(lowest[1].shape, bool))
         )
         wide = (
             np.maximum(ALLOWANCE_SHARE * distances[0], ALLOWANCE_MARGIN),
-            np.maximum(ALLOWANCE_SHARE * distances[1], ALLOWANCE_MARGIN),
+            narrow[1],
         )
         if tabled or any((w > ALLOWANCE_MARGIN).any() for w in wide):
             attempts.insert(0, lambda: (first, lowest, wide))
@@ -445,11 +447,22 @@ def plan(
     spent = [0.0, 0.0, 0.0]  # planning, time scaling, verification [s]
     for attempt, prepare in enumerate(attempts):
         t_attempt = time.perf_counter()  # (the packing counts as planning)
-        checker, allowances = _allowing_checker(*prepare())
+        plain, lowest_here, margin = prepare()
+        checker, allowances = _allowing_checker(plain, lowest_here, margin)
         budget = time_limit - spent[0]
         if ompl_name is None:
+            # the retreats go no deeper than the narrow margins allow
+            retreats = _allowing_checker(plain, lowest_here, narrow)[0]
             search = _search(
-                checker, robot, q_start, goals, seed, t_attempt, budget, iteration_limit
+                checker,
+                retreats,
+                robot,
+                q_start,
+                goals,
+                seed,
+                t_attempt,
+                budget,
+                iteration_limit,
             )
         else:
             search = solve_with_ompl(
@@ -609,6 +622,7 @@ def _end_distances(
 
 def _search(
     checker: SphereChecker,
+    retreats: SphereChecker,
     robot: Robot,
     q_start: FloatArray,
     goals: FloatArray,
@@ -617,7 +631,11 @@ def _search(
     time_limit: float,
     iteration_limit: int,
 ) -> tuple[FloatArray, int] | tuple[str, str, int]:
-    """RRT-Connect and shortcutting; the path or (reason, detail, iterations)."""
+    """RRT-Connect and shortcutting; the path or (reason, detail, iterations).
+
+    ``retreats`` certifies the ends' retreats (:func:`_escapes`): ``checker``
+    with narrower allowances, so that they are free for ``checker`` too.
+    """
     n = robot.nq
     arrays = checker.arrays
     store = np.zeros((kernel.MAX_EVALUATIONS, len(arrays[0])))
@@ -626,7 +644,7 @@ def _search(
         if kernel.motion_free(q_start, q, *arrays, store):
             return _shorten(np.array([q_start, q]), rng, arrays, store), 0
     roots = (q_start[None], goals)
-    escapes = [[_escapes(checker, robot, q, store) for q in tree] for tree in roots]
+    escapes = [[_escapes(retreats, robot, q, store) for q in tree] for tree in roots]
     seeded = max(
         len(tree) + sum(map(len, e)) for tree, e in zip(roots, escapes, strict=True)
     )
